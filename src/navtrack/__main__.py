@@ -1,0 +1,3 @@
+from navtrack.cli import main
+
+raise SystemExit(main())

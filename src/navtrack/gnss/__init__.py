@@ -1,0 +1,1 @@
+"""GNSS: file readers, satellite orbits and clocks, corrections and positioning."""
