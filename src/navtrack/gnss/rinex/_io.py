@@ -1,0 +1,104 @@
+"""Opening RINEX and SP3 files: decompression and format sniffing, shared by every reader."""
+
+from __future__ import annotations
+
+import bz2
+import gzip
+from dataclasses import dataclass
+from os import fspath
+from pathlib import Path
+
+from navtrack._typing import StrPath
+from navtrack.errors import FileFormatError, MissingDependencyError
+
+_GZIP_MAGIC = b"\x1f\x8b"
+_LZW_MAGIC = b"\x1f\x9d"
+_BZ2_MAGIC = b"BZh"
+
+
+def read_bytes(path: StrPath) -> bytes:
+    """Whole content of a (possibly compressed) text file as bytes.
+
+    gzip and bzip2 are handled by the standard library; Unix ``.Z`` and Hatanaka (Compact RINEX,
+    ``.crx``/``.##d``) need the ``hatanaka`` package (``navtrack[crx]``). The compression is
+    recognised from the content, not the file name.
+
+    Raises
+    ------
+    FileFormatError
+        For an empty file or a damaged compressed stream.
+    """
+    raw = Path(path).read_bytes()
+    try:
+        if raw.startswith(_GZIP_MAGIC):
+            raw = gzip.decompress(raw)
+        elif raw.startswith(_BZ2_MAGIC):
+            raw = bz2.decompress(raw)
+        elif raw.startswith(_LZW_MAGIC):
+            raw = _hatanaka_decompress(path, raw)
+    except (OSError, EOFError, ValueError) as exc:
+        raise FileFormatError(path, None, f"damaged compressed file ({exc})") from exc
+    if raw[60:71] == b"CRINEX VERS":
+        raw = _hatanaka_decompress(path, raw)
+    if not raw.strip():
+        raise FileFormatError(path, None, "empty file")
+    return raw
+
+
+def _hatanaka_decompress(path: StrPath, raw: bytes) -> bytes:
+    try:
+        import hatanaka
+    except ImportError:
+        raise MissingDependencyError("hatanaka", "crx", f"reading {fspath(path)}") from None
+    try:
+        return bytes(hatanaka.decompress(raw))
+    except Exception as exc:  # hatanaka raises its own exception types
+        raise FileFormatError(path, None, f"cannot decompress ({exc})") from exc
+
+
+@dataclass(frozen=True, slots=True)
+class FileKind:
+    """What a file is, from its first line.
+
+    Attributes
+    ----------
+    format : {"rinex", "sp3"}
+    version : float
+        RINEX version (2.10, 3.04, ...) or SP3 version letter's number (a=1, c=3, d=4).
+    file_type : str
+        RINEX file type letter (``O`` observation, ``N`` navigation, ``G`` GLONASS navigation,
+        ...) or the SP3 version letter.
+    system : str
+        RINEX satellite system letter (``M`` mixed; blank means GPS) or ``""`` for SP3.
+    """
+
+    format: str
+    version: float
+    file_type: str
+    system: str
+
+
+def sniff(path: StrPath, data: bytes) -> FileKind:
+    """Identify a RINEX or SP3 file from its first line.
+
+    Raises
+    ------
+    FileFormatError
+        When the first line is neither a ``RINEX VERSION / TYPE`` record nor an SP3 header.
+    """
+    first = data.split(b"\n", 1)[0].rstrip(b"\r").decode("ascii", "replace")
+    if first.startswith("#") and len(first) > 2 and first[1] in "abcd":
+        return FileKind("sp3", float("abcd".index(first[1]) + 1), first[1], "")
+    if first[60:].startswith("RINEX VERSION / TYPE"):
+        try:
+            version = float(first[:9])
+        except ValueError:
+            raise FileFormatError(path, 1, f"unreadable RINEX version {first[:9]!r}") from None
+        file_type = first[20:21].upper()
+        system = first[40:41].upper() or "G"
+        if version < 2 or version >= 5:
+            raise FileFormatError(path, 1, f"unsupported RINEX version {version}")
+        return FileKind("rinex", version, file_type, system if system.strip() else "G")
+    raise FileFormatError(
+        path, 1, "not a RINEX file (no 'RINEX VERSION / TYPE' in line 1) nor an SP3 file"
+    )
