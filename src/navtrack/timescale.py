@@ -69,8 +69,13 @@ def gps_seconds(t: ArrayLike) -> FloatArray:
     -------
     ndarray of float64, shape of ``t``
     """
-    dt = np.asarray(t, dtype="datetime64[ns]")
-    return np.asarray((dt - GPS_EPOCH) / np.timedelta64(1, "ns") * 1e-9, dtype=float)
+    ns = (np.asarray(t, dtype="datetime64[ns]") - GPS_EPOCH).astype(np.int64)
+    # Whole and fractional seconds separately, so a time like 00:48:00.004 gives the float
+    # nearest to its decimal value (as the RINEX readers' field arithmetic does).
+    return np.asarray(ns // 1_000_000_000 + (ns % 1_000_000_000) / 1e9, dtype=float)
+
+
+_GPS_EPOCH_ORDINAL = _dt.date(1980, 1, 6).toordinal()
 
 
 def calendar_gps_seconds(
@@ -79,9 +84,6 @@ def calendar_gps_seconds(
     """GPS seconds of one GPST calendar time given by its fields (fast scalar path)."""
     days = _dt.date(year, month, day).toordinal() - _GPS_EPOCH_ORDINAL
     return days * 86400.0 + hour * 3600.0 + minute * 60.0 + second
-
-
-_GPS_EPOCH_ORDINAL = _dt.date(1980, 1, 6).toordinal()
 
 
 def to_datetime64(t_gps_s: ArrayLike) -> np.ndarray:
