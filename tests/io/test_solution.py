@@ -350,3 +350,23 @@ def test_empty_and_single_epoch_frames(tmp_path: Path) -> None:
     assert root.find("k:Document/k:Placemark/k:Point/k:coordinates", KML_NS) is not None
     root = ET.parse(write_solution(one, tmp_path / "one.gpx")).getroot()
     assert len(root.findall("g:trk/g:trkseg/g:trkpt", GPX_NS)) == 1
+
+
+def test_nmea_rmc_dates_against_pynmea2(solution: pd.DataFrame, tmp_path: Path) -> None:
+    pynmea2 = pytest.importorskip("pynmea2")
+    # Move the frame to just before a UTC midnight: 2021-03-19T23:59:58 UTC = ...:00:16 GPST.
+    sol = solution.assign(t_gps_s=solution["t_gps_s"] - solution["t_gps_s"][0] + 1300233616.0)
+    lines = write_solution(sol, tmp_path / "r.nmea", nmea_rmc=True).read_text().splitlines()
+    assert len(lines) == 2 * len(sol)
+    msgs = [pynmea2.parse(s, check=True) for s in lines]
+    assert [m.sentence_type for m in msgs[:4]] == ["GGA", "RMC", "GGA", "RMC"]
+    rmc = msgs[1::2]
+    assert str(rmc[0].datestamp) == "2021-03-19"
+    assert str(rmc[0].timestamp)[:8] == "23:59:58"
+    assert str(rmc[2].datestamp) == "2021-03-20"  # two seconds later, the next UTC day
+    assert str(rmc[2].timestamp)[:8] == "00:00:00"
+    assert rmc[0].status == "A"
+    assert rmc[FAILED_ROWS[0]].status == "V"
+    assert rmc[0].latitude == pytest.approx(msgs[0].latitude, abs=1e-12)
+    assert rmc[0].mode_indicator == "A"
+    assert all(len(s) + 2 <= 82 for s in lines)

@@ -89,6 +89,8 @@ _CSV_DECIMALS = {
 # RTKLIB solution quality Q -> NMEA GGA fix quality (NMEA 0183: 1 GPS fix, 2 differential,
 # 4 RTK fixed, 5 RTK float). PPP (Q=6) has no NMEA code; its ambiguities are float, so 5.
 _RTKLIB_Q_TO_GGA = {1: 4, 2: 5, 3: 2, 4: 2, 5: 1, 6: 5}
+# GGA fix quality -> RMC mode indicator (NMEA 0183 v2.3+).
+_GGA_TO_MODE = {1: "A", 2: "D", 4: "R", 5: "F"}
 
 
 # --------------------------------------------------------------------------------------------
@@ -281,6 +283,7 @@ def write_solution(
     *,
     ok_status: object = "ok",
     talker: str = "GP",
+    nmea_rmc: bool = False,
 ) -> Path:
     """Write a solution frame in the format its file suffix names.
 
@@ -305,7 +308,7 @@ def write_solution(
             epochs (or mapped from RTKLIB's ``q`` column: 1->4, 2->5, 3/4->2, 5->1, 6->5), 0 and
             empty position fields otherwise, satellites used, HDOP from a ``hdop`` column when
             there is one, **otherwise PDOP** in the HDOP field, altitude = ellipsoidal height
-            with geoid separation 0. GGA carries no date.
+            with geoid separation 0. GGA carries no date (``nmea_rmc=True`` adds RMC).
         ``.kml``
             KML 2.2 document with the valid epochs as one ``LineString`` clamped to the ground.
         ``.gpx``
@@ -319,6 +322,8 @@ def write_solution(
         ``status`` value marking a valid fix (compared as is and, case-insensitively, by name).
     talker : str, default "GP"
         NMEA talker id (two letters; ``"GN"`` for multi-GNSS).
+    nmea_rmc : bool, default False
+        NMEA only: follow each GGA with an RMC sentence, which carries the UTC date.
 
     Returns
     -------
@@ -355,7 +360,7 @@ def write_solution(
         ok = _ok_mask(cols["status"], ok_status) & np.isfinite(llh).all(axis=1)
         t = _float(df["t_gps_s"])
         if suffix == ".nmea":
-            text = "".join(s + "\r\n" for s in nmea_gga(cols, t, ok, talker=talker))
+            text = "".join(s + "\r\n" for s in nmea_gga(cols, t, ok, talker=talker, rmc=nmea_rmc))
         elif suffix == ".kml":
             text = _kml(cols, ok)
         else:
@@ -456,9 +461,19 @@ def _ddmm(value_deg: FloatArray, deg_width: int, decimals: int) -> list[str]:
 
 
 def nmea_gga(
-    cols: Mapping[str, np.ndarray], t_gps_s: FloatArray, ok: BoolArray, *, talker: str = "GP"
+    cols: Mapping[str, np.ndarray],
+    t_gps_s: FloatArray,
+    ok: BoolArray,
+    *,
+    talker: str = "GP",
+    rmc: bool = False,
 ) -> list[str]:
-    """GGA sentences (with ``$`` and checksum, without line ends) of a solution table.
+    """GGA sentences (with ``$`` and checksum, without line ends) of a solution table, each
+    followed by an RMC sentence when ``rmc`` is true.
+
+    RMC carries the UTC date; its status is A (valid) or V (void), speed and course are empty,
+    and the mode indicator (NMEA 2.3) follows the GGA quality: A autonomous, D differential,
+    R RTK fixed, F RTK float, N not valid.
 
     Parameters
     ----------
@@ -470,10 +485,12 @@ def nmea_gga(
         Rows with a valid fix; the others get quality 0 and empty position fields.
     talker : str
         Two-letter talker id.
+    rmc : bool
+        Also write RMC sentences.
 
     Returns
     -------
-    list of str, length n
+    list of str, length n (2 n with RMC)
     """
     n = len(t_gps_s)
     utc_cs = np.round(timescale.gps_to_utc(t_gps_s) * 100.0).astype(np.int64)
@@ -484,6 +501,13 @@ def nmea_gga(
         f"{h:02d}{m:02d}{c // 100:02d}.{c % 100:02d}"
         for h, m, c in zip(hh.tolist(), mm.tolist(), cs.tolist(), strict=True)
     ]
+    dates: list[str] = []
+    if rmc:
+        days = timescale.GPS_EPOCH.astype("datetime64[D]") + (utc_cs // 8_640_000).astype(
+            "timedelta64[D]"
+        )
+        iso = np.datetime_as_string(days).tolist()  # YYYY-MM-DD
+        dates = [f"{d[8:10]}{d[5:7]}{d[2:4]}" for d in iso]
     lat = _float(cols["lat_deg"])
     lon = _float(cols["lon_deg"])
     h = _float(cols["h_m"])
@@ -512,6 +536,12 @@ def nmea_gga(
         else:
             pos = f",,,,0,{sats[i]},{dops[i]},,M,,M"
         bodies.append(f"{talker}GGA,{times[i]},{pos},,")
+        if rmc:
+            where = f"{lat_s[i]},{ns[i]},{lon_s[i]},{ew[i]}" if ok[i] else ",,,"
+            bodies.append(
+                f"{talker}RMC,{times[i]},{'A' if ok[i] else 'V'},{where},,,{dates[i]},,,"
+                f"{_GGA_TO_MODE.get(int(quality[i]), 'N')}"
+            )
     sums = nmea_checksums(bodies)
     return [f"${b}*{c:02X}" for b, c in zip(bodies, sums.tolist(), strict=True)]
 
