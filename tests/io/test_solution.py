@@ -17,6 +17,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
 
 from navtrack.io.rtklib import read_pos, to_solution_frame
 from navtrack.io.solution import (
@@ -370,3 +373,33 @@ def test_nmea_rmc_dates_against_pynmea2(solution: pd.DataFrame, tmp_path: Path) 
     assert rmc[0].latitude == pytest.approx(msgs[0].latitude, abs=1e-12)
     assert rmc[0].mode_indicator == "A"
     assert all(len(s) + 2 <= 82 for s in lines)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    lat=hnp.arrays(np.float64, 20, elements=st.floats(-89.999999, 89.999999)),
+    lon=hnp.arrays(np.float64, 20, elements=st.floats(-179.999999, 179.999999)),
+)
+def test_nmea_angles_round_trip(lat: np.ndarray, lon: np.ndarray) -> None:
+    # Property: ddmm.mmmmmm fields decode (independently, here) to the input within the
+    # written resolution (0.5e-6 arc minute), with minutes always below 60.
+    import tempfile
+
+    n = lat.size
+    df = {
+        "t_gps_s": 1.3e9 + np.arange(n),
+        "lat_deg": lat,
+        "lon_deg": lon,
+        "h_m": np.zeros(n),
+        "status": np.array(["ok"] * n),
+    }
+    with tempfile.TemporaryDirectory() as tmp:
+        lines = write_solution(df, Path(tmp) / "p.nmea").read_text().splitlines()
+    for line, la, lo in zip(lines, lat, lon, strict=True):
+        f = line.split(",")
+        for field, hemi, width, want, neg in ((f[2], f[3], 2, la, "S"), (f[4], f[5], 3, lo, "W")):
+            deg, minutes = int(field[:width]), float(field[width:])
+            assert 0.0 <= minutes < 60.0
+            assert len(field) == width + 9
+            value = (deg + minutes / 60.0) * (-1 if hemi == neg else 1)
+            assert abs(value - want) <= 0.5e-6 / 60.0 + 1e-12
