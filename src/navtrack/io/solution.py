@@ -1,8 +1,9 @@
 """Positioning solution files: CSV and Parquet tables, NMEA GGA, KML and GPX tracks.
 
-A *solution frame* is a pandas DataFrame with one row per epoch (see :func:`write_solution` for
-its columns). :func:`write_solution` picks the file format from the suffix; :func:`read_solution`
-reads navtrack's own CSV and Parquet tables back.
+A *solution frame* is a pandas DataFrame, or any mapping of column names to 1-D arrays, with
+one row per epoch (see :func:`solution_columns` for its columns). :func:`write_solution` picks
+the file format from the suffix; :func:`read_solution` reads navtrack's own CSV and Parquet
+tables back.
 
 Heights: navtrack writes WGS-84 **ellipsoidal** heights everywhere. Where a format expects a
 height above mean sea level (NMEA GGA altitude, GPX ``ele``), the ellipsoidal height is written
@@ -40,6 +41,7 @@ __all__ = [
     "SOLUTION_COLUMNS",
     "nmea_checksums",
     "nmea_gga",
+    "ok_mask",
     "read_solution",
     "solution_columns",
     "solution_table",
@@ -243,9 +245,10 @@ def _frame(cols: dict[str, np.ndarray]) -> pd.DataFrame:
     return table
 
 
-def _ok_mask(status: Any, ok_status: object) -> BoolArray:
-    """Epochs whose status marks a valid fix (equal to ``ok_status`` or, for enumerations and
-    strings, named like it regardless of case)."""
+def ok_mask(status: Any, ok_status: object = "ok") -> BoolArray:
+    """Epochs whose ``status`` marks a valid fix: equal to ``ok_status`` or, for strings and
+    enumerations, named like it regardless of case. Returns a bool array of the length of
+    ``status``."""
     target = str(ok_status).lower()
     arr = np.asarray(status)
     if arr.dtype.kind == "U":
@@ -363,7 +366,7 @@ def write_solution(
         text = _csv(cols)
     else:
         llh = np.stack([cols["lat_deg"], cols["lon_deg"], cols["h_m"]], axis=-1)
-        ok = _ok_mask(cols["status"], ok_status) & np.isfinite(llh).all(axis=1)
+        ok = ok_mask(cols["status"], ok_status) & np.isfinite(llh).all(axis=1)
         t = _float(df["t_gps_s"])
         if suffix == ".nmea":
             text = "".join(s + "\r\n" for s in nmea_gga(cols, t, ok, talker=talker, rmc=nmea_rmc))
