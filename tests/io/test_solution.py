@@ -403,3 +403,34 @@ def test_nmea_angles_round_trip(lat: np.ndarray, lon: np.ndarray) -> None:
             assert len(field) == width + 9
             value = (deg + minutes / 60.0) * (-1 if hemi == neg else 1)
             assert abs(value - want) <= 0.5e-6 / 60.0 + 1e-12
+
+
+def test_gpx_point_children_follow_schema_order(solution: pd.DataFrame, tmp_path: Path) -> None:
+    # GPX 1.1 wptType is an xsd:sequence: ele, time, magvar, geoidheight, name, cmt, desc, src,
+    # link, sym, type, fix, sat, hdop, vdop, pdop, ageofdgpsdata, dgpsid, extensions.
+    order = [
+        "ele",
+        "time",
+        "magvar",
+        "geoidheight",
+        "name",
+        "cmt",
+        "desc",
+        "src",
+        "link",
+        "sym",
+        "type",
+        "fix",
+        "sat",
+        "hdop",
+        "vdop",
+        "pdop",
+        "ageofdgpsdata",
+        "dgpsid",
+    ]
+    sol = solution.assign(hdop=1.1, vdop=1.7)
+    root = ET.parse(write_solution(sol, tmp_path / "o.gpx")).getroot()
+    pt = root.find("g:trk/g:trkseg/g:trkpt", GPX_NS)
+    tags = [child.tag.split("}")[1] for child in pt]
+    assert tags == ["ele", "time", "geoidheight", "fix", "sat", "hdop", "vdop", "pdop"]
+    assert [order.index(t) for t in tags] == sorted(order.index(t) for t in tags)
