@@ -430,7 +430,8 @@ def _scan_v3(
         except (ValueError, IndexError) as exc:
             if not lenient:
                 raise FileFormatError(path, j + 1, f"malformed epoch record ({exc})") from None
-            _skip(scan, j, nxt, "malformed epoch record" if j == starts[pos] else "")
+            scan.skipped.append(SkippedLine(line=j + 1, reason=f"malformed epoch record ({exc})"))
+            _skip(scan, j + 1, nxt, "data line of a malformed epoch record")
             i = nxt
             pos += 1
             continue
@@ -495,6 +496,7 @@ def _scan_v2(
     seg = len(segments) - 1
     per_sat = (len(segments[seg].obs_types["G"]) + 4) // 5
     days: dict[bytes, int] = {}
+    previous = (-1, 0, 0, 0)  # last data epoch: record line, satellites, first/stop data line
     i = body
     while i < end:
         rec = lines[i]
@@ -521,6 +523,7 @@ def _scan_v2(
                 t_cal = _NAN
         except ValueError as exc:
             if not lenient:
+                _missing_v2_data_line(path, lines, previous)
                 raise FileFormatError(path, i + 1, f"malformed epoch record ({exc})") from None
             scan.skipped.append(SkippedLine(line=i + 1, reason=f"malformed epoch record ({exc})"))
             i += 1
@@ -569,7 +572,10 @@ def _scan_v2(
                     f"({count * per_sat} data lines) but the file ends after {end - first}",
                 )
             take = (end - first) // per_sat
-            _skip(scan, first + take * per_sat, end, "epoch cut short by the end of the file")
+            scan.skipped.append(SkippedLine(
+                line=i + 1, reason=f"epoch cut short: {take} of {count} satellites"
+            ))
+            _skip(scan, first + take * per_sat, end, "incomplete record at the end of the file")
             stop = end
         scan.t_cal_s.append(t_cal)
         scan.flag.append(flag)
@@ -580,7 +586,21 @@ def _scan_v2(
         scan.data.extend(lines[first : first + take * per_sat])
         scan.rec_sat.extend(sats[:take])
         scan.rec_lines.extend([per_sat] * take)
+        previous = (i, count, first, stop)
         i = stop
+
+
+def _missing_v2_data_line(
+    path: StrPath, lines: list[bytes], previous: tuple[int, int, int, int]
+) -> None:
+    """Explain a malformed epoch record by a data line missing from the epoch before it."""
+    rec, count, first, stop = previous
+    for j in range(first, stop):
+        if _V2_EPOCH.match(lines[j]):
+            raise FileFormatError(
+                path, rec + 1, f"epoch record announces {count} satellites but fewer data lines "
+                f"follow: line {j + 1}, read as its data, is an epoch record",
+            )
 
 
 # ------------------------------------------------------------------------------- decoding
@@ -751,7 +771,7 @@ def _assemble(
     for m in np.flatnonzero(bad.any(axis=1)).tolist():
         k = int(np.argmax(bad[m]))
         text = mat[m, lead + _FIELD * k : lead + _FIELD * (k + 1)].tobytes().decode("ascii", "replace")
-        problem.setdefault(m, f"not a number in observation field {k + 1}: {text!r}")
+        problem.setdefault(m, f"malformed observation field {k + 1}: {text!r}")
     surplus = ~blank & (code < 0)
     for m in np.flatnonzero(surplus.any(axis=1) & declared[row]).tolist():
         problem.setdefault(m, "more observations than observation types"
