@@ -28,31 +28,77 @@ from navtrack.timescale import calendar_gps_seconds, gps_seconds
 #  first epoch, last epoch (GPST), interval s): shared/data/gnss/README.md sections 1-4.
 SHARED = {
     "0759": (
-        "rtklib_gsi0759/07590920.05o", 120, 11, (7, 9), {"G": ("L1", "C1", "L2", "P2")},
-        "2005-04-02T00:00:00", "2005-04-02T00:59:30.005", 30.0,
+        "rtklib_gsi0759/07590920.05o",
+        120,
+        11,
+        (7, 9),
+        {"G": ("L1", "C1", "L2", "P2")},
+        "2005-04-02T00:00:00",
+        "2005-04-02T00:59:30.005",
+        30.0,
     ),
     "ARL1": (
-        "gpstk_arl1/arlm200a.15o", 120, 11, (8, 11),
+        "gpstk_arl1/arlm200a.15o",
+        120,
+        11,
+        (8, 11),
         {"G": ("L1", "L2", "C1", "C2", "P1", "P2", "D1", "D2", "S1", "S2")},
-        "2015-07-19T00:00:00", "2015-07-19T00:59:30", 30.0,
+        "2015-07-19T00:00:00",
+        "2015-07-19T00:59:30",
+        30.0,
     ),
     "SEPT": (
-        "cssrlib_sept/SEPT078M.21O", 900, 26, (23, 26),
+        "cssrlib_sept/SEPT078M.21O",
+        900,
+        26,
+        (23, 26),
         {
-            "G": tuple("C1C L1C S1C C1W S1W C2W L2W S2W C2L L2L S2L C5Q L5Q S5Q".split()),
-            "E": tuple("C1C L1C S1C C5Q L5Q S5Q C7Q L7Q S7Q C8Q L8Q S8Q".split()),
-            "J": tuple("C1C L1C S1C C2L L2L S2L C5Q L5Q S5Q".split()),
+            "G": tuple(
+                [
+                    "C1C",
+                    "L1C",
+                    "S1C",
+                    "C1W",
+                    "S1W",
+                    "C2W",
+                    "L2W",
+                    "S2W",
+                    "C2L",
+                    "L2L",
+                    "S2L",
+                    "C5Q",
+                    "L5Q",
+                    "S5Q",
+                ]
+            ),
+            "E": tuple(
+                ["C1C", "L1C", "S1C", "C5Q", "L5Q", "S5Q", "C7Q", "L7Q", "S7Q", "C8Q", "L8Q", "S8Q"]
+            ),
+            "J": tuple(["C1C", "L1C", "S1C", "C2L", "L2L", "S2L", "C5Q", "L5Q", "S5Q"]),
         },
-        "2021-03-19T12:00:00", "2021-03-19T12:14:59", 1.0,
+        "2021-03-19T12:00:00",
+        "2021-03-19T12:14:59",
+        1.0,
     ),
     "yamatogawa_rover": (
-        "gogps_yamatogawa/yamatogawa_rover.obs", 203, None, (8, 10),
-        {"G": ("C1", "L1", "S1", "D1")}, "2010-01-06T05:57:03", "2010-01-06T06:00:26", None,
+        "gogps_yamatogawa/yamatogawa_rover.obs",
+        203,
+        None,
+        (8, 10),
+        {"G": ("C1", "L1", "S1", "D1")},
+        "2010-01-06T05:57:03",
+        "2010-01-06T06:00:26",
+        None,
     ),
     "yamatogawa_master": (
-        "gogps_yamatogawa/yamatogawa_master.obs", 193, 9, (9, 9),
+        "gogps_yamatogawa/yamatogawa_master.obs",
+        193,
+        9,
+        (9, 9),
         {"G": ("C1", "P2", "L1", "L2", "S1", "S2")},
-        "2010-01-06T05:57:14", "2010-01-06T06:00:26", None,
+        "2010-01-06T05:57:14",
+        "2010-01-06T06:00:26",
+        None,
     ),
 }
 
@@ -90,7 +136,7 @@ def test_yamatogawa_rover_sats(gnss_data: Path) -> None:
     # (first epoch, line 13) plus others later.
     obs = read_obs(gnss_data / "gogps_yamatogawa/yamatogawa_rover.obs")
     first = [s for k, s in enumerate(obs.sats) if np.isfinite(obs.values[0, k]).any()]
-    assert first == "G02 G04 G05 G07 G10 G12 G13 G17 G23".split()
+    assert first == ["G02", "G04", "G05", "G07", "G10", "G12", "G13", "G17", "G23"]
 
 
 def test_header_metadata(gnss_data: Path) -> None:
@@ -107,7 +153,8 @@ def test_header_metadata(gnss_data: Path) -> None:
     assert "ITT MSN SAASM" in h.receiver
     h = read_obs(gnss_data / "cssrlib_sept/SEPT078M.21O").header
     assert (h.version, h.system, h.marker) == (3.04, "M", "SEPT")
-    assert "SEPT MOSAIC-X5" in h.receiver and "4.12.1" in h.receiver
+    assert "SEPT MOSAIC-X5" in h.receiver
+    assert "4.12.1" in h.receiver
     assert "JAVRINGANT_DM" in h.antenna
     assert h.last_obs_gps_s == pytest.approx(gps_seconds("2021-03-19T12:14:59"))
 
@@ -120,19 +167,21 @@ def test_0759_splices_and_off_grid_time_tags(gnss_data: Path) -> None:
     # The event records sit at lines 855, 1058 and 1090 of the file, one COMMENT each.
     assert [e.line for e in obs.events] == [855, 1058, 1090]
     for e in obs.events:
-        assert len(e.records) == 1 and e.records[0].startswith("RINEX FILE SPLICE")
+        assert len(e.records) == 1
+        assert e.records[0].startswith("RINEX FILE SPLICE")
         assert e.records[0].endswith("COMMENT")
         assert np.isnan(e.t_gps_s)  # the splice records carry no time
     assert obs.summary()["events_by_flag"] == {"4": 3}
     off = obs.t_gps_s - np.round(obs.t_gps_s / 30.0) * 30.0
-    assert off.min() >= -1e-7 and off.max() == pytest.approx(0.005, abs=1e-6)
+    assert off.min() >= -1e-7
+    assert off.max() == pytest.approx(0.005, abs=1e-6)
     t = calendar_gps_seconds(2005, 4, 2, 0, 48, 0.004)
     k = int(np.argmin(np.abs(obs.t_gps_s - t)))
     assert obs.t_gps_s[k] == pytest.approx(t, abs=1e-6)
     # Line 857, the epoch after the first splice: 8 satellites G01 G04 G07 G11 G19 G20 G24 G28,
     # line 858: G01 L1 = 1600872.379, C1 = 25881667.680, L2 = 1244701.260 LLI 4, P2 = 25881665.610.
     listed = [s for j, s in enumerate(obs.sats) if np.isfinite(obs.values[k, j]).any()]
-    assert listed == "G01 G04 G07 G11 G19 G20 G24 G28".split()
+    assert listed == ["G01", "G04", "G07", "G11", "G19", "G20", "G24", "G28"]
     g01 = obs.sat_index("G01")
     np.testing.assert_array_equal(
         obs.values[k, g01], [1600872.379, 25881667.680, 1244701.260, 25881665.610]
@@ -176,7 +225,8 @@ def test_sept_galileo_and_qzss_codes(gnss_data: Path) -> None:
     assert np.isfinite(obs.code("C2L")[:, qzs]).any()
     # Galileo E1 pseudoranges of a terrestrial receiver: 23 000-30 000 km.
     pr = obs.code("C1C")[:, gal]
-    assert np.nanmin(pr) > 2.2e7 and np.nanmax(pr) < 3.0e7
+    assert np.nanmin(pr) > 2.2e7
+    assert np.nanmax(pr) < 3.0e7
 
 
 def test_bundled_samples(gnss_data: Path) -> None:
@@ -209,14 +259,16 @@ def test_wrong_time_of_last_obs_is_reported(tmp_path: Path) -> None:
     assert obs.t_gps_s[-1] == gps_seconds("2021-03-19T12:01:59")
     assert obs.header.last_obs_gps_s == gps_seconds("2021-03-19T12:14:59")
     warnings_ = obs.summary()["warnings"]
-    assert len(warnings_) == 1 and "TIME OF LAST OBS" in warnings_[0]
+    assert len(warnings_) == 1
+    assert "TIME OF LAST OBS" in warnings_[0]
 
 
 # --------------------------------------------------------------------- compressed input
 
 
 def _same(a, b) -> None:
-    assert a.sats == b.sats and a.codes == b.codes
+    assert a.sats == b.sats
+    assert a.codes == b.codes
     np.testing.assert_array_equal(a.t_gps_s, b.t_gps_s)
     np.testing.assert_array_equal(a.values, b.values)
     np.testing.assert_array_equal(a.lli, b.lli)
@@ -349,16 +401,19 @@ def test_rinex2_events_and_new_obs_types(tmp_path: Path) -> None:
     np.testing.assert_array_equal(obs.values[1, g02], [21000000.0, np.nan, np.nan, 40.0])
 
 
-def _v3_header(types: dict[str, list[str]], time_system: str = "GPS",
-               extra: list[str] = ()) -> list[str]:
+def _v3_header(
+    types: dict[str, list[str]], time_system: str = "GPS", extra: list[str] = ()
+) -> list[str]:
     rows = [_h(f"{'3.05':>9}{'':11}{'OBSERVATION DATA':<20}{'M':<20}", "RINEX VERSION / TYPE")]
     for sys, codes in types.items():
         for k in range(0, len(codes), 13):
             lead = f"{sys}  {len(codes):3d}" if k == 0 else " " * 6
-            rows.append(_h(lead + "".join(f" {c}" for c in codes[k : k + 13]),
-                           "SYS / # / OBS TYPES"))
-    rows.append(_h(f"{2021:6d}{1:6d}{1:6d}{0:6d}{0:6d}{0.0:13.7f}     {time_system}",
-                   "TIME OF FIRST OBS"))
+            rows.append(
+                _h(lead + "".join(f" {c}" for c in codes[k : k + 13]), "SYS / # / OBS TYPES")
+            )
+    rows.append(
+        _h(f"{2021:6d}{1:6d}{1:6d}{0:6d}{0:6d}{0.0:13.7f}     {time_system}", "TIME OF FIRST OBS")
+    )
     rows += list(extra)
     rows.append(_h("", "END OF HEADER"))
     return rows
@@ -375,7 +430,22 @@ def _v3_epoch(t: tuple, flag: int, n: int, clock: float | None = None) -> str:
 def test_rinex3_multiline_types_systems_scale_and_clock(tmp_path: Path) -> None:
     """14 GPS types (a continuation header line), BeiDou, GLONASS, SBAS and NavIC satellites,
     a SYS / SCALE FACTOR, a receiver clock offset."""
-    g = "C1C L1C D1C S1C C2W L2W D2W S2W C5Q L5Q D5Q S5Q C1W S1W".split()
+    g = [
+        "C1C",
+        "L1C",
+        "D1C",
+        "S1C",
+        "C2W",
+        "L2W",
+        "D2W",
+        "S2W",
+        "C5Q",
+        "L5Q",
+        "D5Q",
+        "S5Q",
+        "C1W",
+        "S1W",
+    ]
     types = {"G": g, "R": ["C1C", "L1C"], "C": ["C2I", "L2I"], "S": ["C1C"], "I": ["C5A"]}
     extra = [_h("G   10   2 L1C L2W", "SYS / SCALE FACTOR")]
     rows = _v3_header(types, extra=extra)
@@ -421,20 +491,25 @@ def test_rinex3_time_systems(tmp_path: Path, time_system: str, shift_s: float) -
 
 def test_rinex3_event_with_new_obs_types_and_flag6(tmp_path: Path) -> None:
     rows = _v3_header({"G": ["C1C", "L1C"], "E": ["C1X"]})
-    rows += [_v3_epoch((2021, 1, 1, 0, 0, 0.0), 0, 2), "G01" + _field(2.0e7) + _field(1.0),
-             "E11" + _field(2.5e7)]
-    rows += [_v3_epoch((2021, 1, 1, 0, 0, 0.0), 4, 2).replace("2021 01 01 00 00  0.0000000",
-                                                               " " * 27),
-             _h("G    1 C2W", "SYS / # / OBS TYPES"), _h("> not an epoch", "COMMENT")]
+    rows += [
+        _v3_epoch((2021, 1, 1, 0, 0, 0.0), 0, 2),
+        "G01" + _field(2.0e7) + _field(1.0),
+        "E11" + _field(2.5e7),
+    ]
+    rows += [
+        _v3_epoch((2021, 1, 1, 0, 0, 0.0), 4, 2).replace("2021 01 01 00 00  0.0000000", " " * 27),
+        _h("G    1 C2W", "SYS / # / OBS TYPES"),
+        _h("> not an epoch", "COMMENT"),
+    ]
     rows += [_v3_epoch((2021, 1, 1, 0, 0, 1.0), 6, 1), "G01" + _field(3.0)]
-    rows += [_v3_epoch((2021, 1, 1, 0, 0, 2.0), 0, 2), "G01" + _field(2.1e7),
-             "E11" + _field(2.6e7)]
+    rows += [_v3_epoch((2021, 1, 1, 0, 0, 2.0), 0, 2), "G01" + _field(2.1e7), "E11" + _field(2.6e7)]
     path = tmp_path / "ev.rnx"
     path.write_text("\n".join(rows) + "\n")
     obs = read_obs(path)
     assert obs.codes == ("C1C", "L1C", "C1X", "C2W")
     np.testing.assert_array_equal(obs.epoch_flag, [0, 6, 0])
-    assert len(obs.events) == 1 and obs.events[0].records[1].startswith("> not an epoch")
+    assert len(obs.events) == 1
+    assert obs.events[0].records[1].startswith("> not an epoch")
     g01 = obs.sat_index("G01")
     np.testing.assert_array_equal(obs.values[:, g01, 3], [np.nan, 3.0, 2.1e7])
     np.testing.assert_array_equal(obs.values[:, g01, 0], [2.0e7, np.nan, np.nan])
@@ -469,14 +544,15 @@ def test_nonstandard_field_layouts(tmp_path: Path) -> None:
             st.just(" " * 14),
             st.floats(-1e6, 1e7, allow_nan=False).map(lambda x: f"{x:14.5f}"[:14]),
         ),
-        min_size=1, max_size=30,
+        min_size=1,
+        max_size=30,
     ),
     st.sampled_from([" ", "0", "1", "7"]),
 )
 def test_decode_equals_python_float(texts: list[str], ind: str) -> None:
     """The vectorised decoder agrees with ``float(text)`` on every field (property)."""
     fields = np.frombuffer("".join(t + ind + ind for t in texts).encode(), dtype=np.uint8)
-    value, lli, ssi, blank, bad = _decode(fields.reshape(-1, 16))
+    value, lli, _ssi, _blank, bad = _decode(fields.reshape(-1, 16))
     want = [float(t) if t.strip() else np.nan for t in texts]
     np.testing.assert_array_equal(value, want)
     assert not bad.any()
@@ -501,7 +577,8 @@ def _raises_at(path: Path, line: int, match: str, lenient: bool = False) -> None
         read_obs(path, lenient=lenient)
     assert info.value.line == line
     assert info.value.path == str(path)
-    assert str(path) in str(info.value) and f"line {line}" in str(info.value)
+    assert str(path) in str(info.value)
+    assert f"line {line}" in str(info.value)
 
 
 def test_empty_file(tmp_path: Path) -> None:
@@ -570,7 +647,8 @@ def test_missing_data_line_mid_file(tmp_path: Path) -> None:
     path = _write(tmp_path, "gap3.o", rows)
     _raises_at(path, 34, "announces 23 satellites but only 22")
     obs = read_obs(path, lenient=True)
-    assert len(obs.t_gps_s) == 120 and [s.line for s in obs.skipped] == [34]
+    assert len(obs.t_gps_s) == 120
+    assert [s.line for s in obs.skipped] == [34]
     rows = _lines("07590920.05o")
     del rows[20]  # RINEX 2: the next epoch record is read as a data line and rejected
     _raises_at(_write(tmp_path, "gap2.o", rows), 18, "line 26, read as its data, is an epoch")
@@ -583,7 +661,9 @@ def test_garbage_in_data_line(tmp_path: Path) -> None:
     path = _write(tmp_path, "g.o", rows)
     _raises_at(path, 19, "malformed observation field")
     obs = read_obs(path, lenient=True)
-    assert [(s.line, "malformed observation field" in s.reason) for s in obs.skipped] == [(19, True)]
+    assert [(s.line, "malformed observation field" in s.reason) for s in obs.skipped] == [
+        (19, True)
+    ]
     plain = read_obs(sample_path("07590920.05o"))
     g03 = obs.sat_index("G03")
     assert np.isnan(obs.values[0, g03]).all()  # the whole damaged line is dropped
@@ -634,7 +714,9 @@ def test_malformed_epoch_record(tmp_path: Path) -> None:
     path = _write(tmp_path, "e3.o", rows)
     _raises_at(path, 34, "malformed epoch record")
     obs = read_obs(path, lenient=True)
-    assert len(obs.t_gps_s) == 119 and obs.skipped[0].line == 34 and len(obs.skipped) == 24
+    assert len(obs.t_gps_s) == 119
+    assert obs.skipped[0].line == 34
+    assert len(obs.skipped) == 24
     rows = _lines("07590920.05o")
     rows[17] = rows[17][:28] + "9" + rows[17][29:]
     _raises_at(_write(tmp_path, "e2.o", rows), 18, "malformed epoch record")
@@ -672,7 +754,8 @@ def test_against_georinex(gnss_data: Path, rel: str) -> None:
     t_ref = gps_seconds(ref.time.values.astype("datetime64[ns]"))
     assert len(t_ref) == len(obs.t_gps_s)
     lag = obs.t_gps_s - t_ref
-    assert lag.min() > -1e-6 and lag.max() < 1e-3
+    assert lag.min() > -1e-6
+    assert lag.max() < 1e-3 + 1e-6
     compared = 0
     for k, code in enumerate(obs.codes):
         np.testing.assert_array_equal(obs.values[:, :, k], ref[code].values, err_msg=code)
