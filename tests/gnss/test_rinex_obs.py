@@ -559,6 +559,43 @@ def test_decode_equals_python_float(texts: list[str], ind: str) -> None:
     assert (lli == (-1 if ind == " " else int(ind))).all()
 
 
+@settings(max_examples=300, deadline=None)
+@given(
+    st.lists(
+        st.one_of(
+            st.text(alphabet=" 0123456789-.", min_size=14, max_size=14),
+            st.text(alphabet=" 0123456789-.+eEx", min_size=14, max_size=14),
+            st.builds(
+                lambda k, tail: (" " * k + tail)[-14:].rjust(14),
+                st.integers(0, 14),
+                st.text(alphabet="0123456789-. ", min_size=0, max_size=14),
+            ),
+        ),
+        min_size=1,
+        max_size=30,
+    )
+)
+def test_decode_accepts_exactly_the_numbers(texts: list[str]) -> None:
+    """Arbitrary 14-character texts: a number is read as ``float(text)``, blanks as NaN, and
+    anything else is flagged bad; the fast path never accepts a text Python rejects."""
+    fields = np.frombuffer("".join(t + "  " for t in texts).encode(), dtype=np.uint8)
+    value, _, _, blank, bad = _decode(fields.reshape(-1, 16))
+    for k, text in enumerate(texts):
+        if not text.strip():
+            assert blank[k]
+            assert not bad[k]
+            assert np.isnan(value[k])
+            continue
+        assert not blank[k]
+        try:
+            want = float(text)
+        except ValueError:
+            assert bad[k], text
+            continue
+        assert not bad[k], text
+        assert value[k] == want or (np.isnan(want) and np.isnan(value[k])), text
+
+
 # ----------------------------------------------------------------------------- bad input
 
 

@@ -643,9 +643,20 @@ def _missing_v2_data_line(
 
 # ------------------------------------------------------------------------------- decoding
 
-# Value of each character of an F14.3 field in the standard layout (decimal point at index 10).
-_W5 = np.array([10**4, 10**3, 10**2, 10, 1], dtype=np.int64)
-_SPACE, _MINUS, _DOT = 32, 45, 46
+# Decoding works on each 16-byte field viewed as two little-endian uint64 words: ``lo`` holds
+# characters 0-7 of the F14.3 value, ``hi`` characters 8-13 and the LLI and SSI characters. Byte
+# predicates (is blank, is digit, is minus) are computed as 0/1 bytes and tested as whole words.
+_U8 = np.dtype("<u8")
+_ONES = 0x0101010101010101
+_BLANKS = 0x2020202020202020
+_LOW2, _LOW6 = 0xFFFF, 0xFFFFFFFFFFFF
+# Blank prefix of length s (0..10) of characters 0-9 as 0/1 bytes, split over lo and hi; and a
+# single minus sign right after it.
+_PREFIX_LO = np.array([_ONES >> (8 * (8 - min(s, 8))) if s else 0 for s in range(11)], _U8)
+_PREFIX_HI = np.array([0, 0, 0, 0, 0, 0, 0, 0, 0, 0x01, 0x0101], _U8)
+_MINUS_LO = np.array([1 << (8 * s) if s < 8 else 0 for s in range(11)], _U8)
+_MINUS_HI = np.array([0] * 8 + [0x01, 0x0100, 0], _U8)
+_SPACE = 32
 _NUMBER = re.compile(rb"[+-]?(\d+\.?\d*|\.\d+)([eEdD][+-]?\d+)?")
 
 
@@ -667,42 +678,64 @@ def _decode(fields: np.ndarray) -> tuple[FloatArray, Int8Array, Int8Array, np.nd
         All 16 characters blank.
     bad : ndarray of bool, shape (n,)
         Not a number (or LLI/SSI not a digit).
+
+    Notes
+    -----
+    A value in the standard layout (blanks, an optional minus sign, digits, the decimal point
+    in character 10, three digits) is read as an integer number of thousandths with the
+    8-digits-at-once multiplication of Lemire (2022) plus the remaining digits, then divided by
+    1000 (exact operands, correctly rounded division: equal to ``float(text)``). Other layouts go
+    through ``float()``.
+
+    References
+    ----------
+    D. Lemire, "Number parsing at a gigabyte per second", Software: Practice and Experience 51
+    (2021); the 8-digit SWAR step as in his blog post "Quickly parsing eight digits" (2018).
     """
-    n = len(fields)
-    value = np.full(n, np.nan)
-    v = fields[:, :14]
-    nonblank_value = (v != _SPACE).any(axis=1)
-    idx = np.flatnonzero(nonblank_value)
-    f = v[idx]
-    d = f - np.uint8(48)  # digit values; non-digits wrap to >= 10
-    isd = d < 10
-    sp = f == _SPACE
-    mi = f == _MINUS
-    ip_sp, ip_d, ip_mi = sp[:, :10], isd[:, :10], mi[:, :10]
-    std = (f[:, 10] == _DOT) & isd[:, 11:14].all(axis=1)
-    std &= (ip_sp | ip_d | ip_mi).all(axis=1)
-    std &= ~(ip_sp[:, 1:] & ~ip_sp[:, :-1]).any(axis=1)  # no blank after a non-blank
-    std &= ~(ip_mi[:, 1:] & ~ip_sp[:, :-1]).any(axis=1)  # '-' only as the first non-blank
-    dz = np.where(isd, d, np.uint8(0)).astype(np.int64)
-    integer = (dz[:, 0:5] @ _W5) * 100000 + dz[:, 5:10] @ _W5
-    thousandths = integer * 1000 + dz[:, 11] * 100 + dz[:, 12] * 10 + dz[:, 13]
-    num = thousandths / 1000.0
-    num = np.where(ip_mi.any(axis=1), -num, num)
+    f = np.ascontiguousarray(fields)
+    n = len(f)
+    words = f.view(_U8)
+    lo, hi = words[:, 0], words[:, 1]
+    value_blank = (lo == _BLANKS) & ((hi & _LOW6) == (_BLANKS & _LOW6))
+    digit = (f - np.uint8(48)) < 10
+    sp = (f == _SPACE).view(_U8)
+    mi = (f == 45).view(_U8)
+    dg = digit.view(_U8)
+    sp_lo, sp_hi = sp[:, 0], sp[:, 1] & _LOW2
+    mi_lo, mi_hi = mi[:, 0], mi[:, 1] & _LOW2
+    allowed = sp | mi | dg
+    std = (allowed[:, 0] == _ONES) & ((allowed[:, 1] & _LOW2) == 0x0101)
+    std &= f[:, 10] == 46
+    std &= ((dg[:, 1] >> 24) & 0xFFFFFF) == 0x010101
+    blanks = ((sp_lo * _ONES) >> 56) + (sp_hi & 0xFF) + (sp_hi >> 8)
+    std &= (sp_lo == _PREFIX_LO[blanks]) & (sp_hi == _PREFIX_HI[blanks])
+    negative = (mi_lo | mi_hi) != 0
+    std &= ~negative | ((mi_lo == _MINUS_LO[blanks]) & (mi_hi == _MINUS_HI[blanks]))
+    dv = ((f - np.uint8(48)) * digit).view(_U8)  # digit values, 0 for anything else
+    v = dv[:, 0]
+    v = (v * 2561) >> 8
+    v = ((v & 0x00FF00FF00FF00FF) * 6553601) >> 16
+    v = ((v & 0x0000FFFF0000FFFF) * 42949672960001) >> 32  # characters 0-7
+    h = dv[:, 1]
+    integer = v * 100 + (h & 0xFF) * 10 + ((h >> 8) & 0xFF)
+    frac = ((h >> 24) & 0xFF) * 100 + ((h >> 32) & 0xFF) * 10 + ((h >> 40) & 0xFF)
+    value = (integer * 1000 + frac).astype(np.float64) / 1000.0
+    np.negative(value, out=value, where=negative)
+    value[value_blank] = np.nan
     bad = np.zeros(n, dtype=bool)
-    for k in np.flatnonzero(~std).tolist():  # other layouts: Python's float(), if a number
-        text = f[k].tobytes().strip()
+    for k in np.flatnonzero(~std & ~value_blank).tolist():  # other layouts: float(), if a number
+        text = f[k, :14].tobytes().strip()
         if _NUMBER.fullmatch(text):
-            num[k] = float(text.replace(b"D", b"E").replace(b"d", b"e"))
+            value[k] = float(text.replace(b"D", b"E").replace(b"d", b"e"))
         else:
-            bad[idx[k]] = True
-            num[k] = np.nan
-    value[idx] = num
-    lli = _indicator(fields[:, 14])
-    ssi = _indicator(fields[:, 15])
+            bad[k] = True
+            value[k] = np.nan
+    lli = _indicator(f[:, 14])
+    ssi = _indicator(f[:, 15])
     bad |= (lli == -2) | (ssi == -2)
     lli[lli == -2] = -1
     ssi[ssi == -2] = -1
-    blank = ~nonblank_value & (fields[:, 14] == _SPACE) & (fields[:, 15] == _SPACE)
+    blank = value_blank & (f[:, 14] == _SPACE) & (f[:, 15] == _SPACE)
     return value, lli, ssi, blank, bad
 
 
