@@ -712,7 +712,7 @@ def _decode(fields: np.ndarray) -> tuple[FloatArray, Int8Array, Int8Array, np.nd
     negative = (mi_lo | mi_hi) != 0
     std &= ~negative | ((mi_lo == _MINUS_LO[blanks]) & (mi_hi == _MINUS_HI[blanks]))
     dv = ((f - np.uint8(48)) * digit).view(_U8)  # digit values, 0 for anything else
-    v = dv[:, 0]
+    v: np.ndarray = dv[:, 0]
     v = (v * 2561) >> 8
     v = ((v & 0x00FF00FF00FF00FF) * 6553601) >> 16
     v = ((v & 0x0000FFFF0000FFFF) * 42949672960001) >> 32  # characters 0-7
