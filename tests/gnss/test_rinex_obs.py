@@ -9,6 +9,7 @@ values of individual fields are checked against the text of the file itself (lin
 from __future__ import annotations
 
 import gzip
+import json
 import warnings
 from pathlib import Path
 
@@ -126,8 +127,9 @@ def test_shared_file_counts(gnss_data: Path, name: str) -> None:
     assert np.all(np.diff(obs.t_gps_s) > 0)
     if interval:
         assert np.allclose(np.round(np.diff(obs.t_gps_s)), interval)
-    summary = obs.summary()
+    summary = json.loads(json.dumps(obs.summary()))  # JSON-serialisable as it is
     assert summary["n_epochs"] == n_epochs
+    assert summary["sats_per_system"] == {s: sum(sat[0] == s for sat in obs.sats) for s in codes}
     assert summary["warnings"] == []
 
 
@@ -471,6 +473,16 @@ def test_rinex3_multiline_types_systems_scale_and_clock(tmp_path: Path) -> None:
     assert np.isnan(obs.code("C2I")[0, obs.sat_index("C20")])
     assert obs.code("C5A")[0, obs.sat_index("I05")] == 36000000.75
     assert obs.clock_offset_s[0] == -0.000012345678
+
+
+@pytest.mark.parametrize("version", ["3.00", "3.02", "3.03", "3.05", "4.00", "4.01"])
+def test_rinex3_and_4_versions(tmp_path: Path, version: str) -> None:
+    rows = _v3_header({"G": ["C1C"], "E": ["C1X"]})
+    rows[0] = f"{version:>9}" + rows[0][9:]
+    rows += [_v3_epoch((2021, 1, 1, 0, 0, 0.0), 0, 2), "G01" + _field(2.0e7), "E11" + _field(2.5e7)]
+    obs = read_obs(_write(tmp_path, "v.rnx", rows))
+    assert obs.header.version == float(version)
+    assert obs.code("C1X")[0, obs.sat_index("E11")] == 2.5e7
 
 
 @pytest.mark.parametrize(
