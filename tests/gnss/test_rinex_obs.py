@@ -211,6 +211,17 @@ def test_lli_ssi_and_values_as_printed(gnss_data: Path) -> None:
     assert (obs.lli[0, e01, 0], obs.ssi[0, e01, 0]) == (-1, 5)
 
 
+def test_zero_means_missing(gnss_data: Path) -> None:
+    """RINEX 2.11 table A2: missing observations are written as 0.0 or blanks. ARL1 writes C2
+    as 0.000 for satellites without L2C (line 17: G02 "0.000" in the C2 column)."""
+    obs = read_obs(gnss_data / "gpstk_arl1/arlm200a.15o")
+    g02 = obs.sat_index("G02")
+    assert np.isnan(obs.code("C2")[0, g02])
+    assert obs.code("C1")[0, g02] == 21276226.827
+    assert obs.code("P1")[0, g02] == 21276226.702
+    assert not (obs.values == 0.0).any()
+
+
 def test_sept_galileo_and_qzss_codes(gnss_data: Path) -> None:
     """README section 3: Galileo C1C/C5Q/C7Q/C8Q, QZSS C2L, no Doppler; codes of one system are
     NaN for the others."""
@@ -544,7 +555,8 @@ def test_nonstandard_field_layouts(tmp_path: Path) -> None:
     path.write_text("\n".join(rows) + "\n")
     obs = read_obs(path)
     got = obs.values[0, 0]
-    np.testing.assert_array_equal(got, [20000000.123, 1234567.89, -0.5, 0.0, 1500.0])
+    # "-0.000" is 0.0, which RINEX uses for "missing": NaN.
+    np.testing.assert_array_equal(got, [20000000.123, 1234567.89, -0.5, np.nan, 1500.0])
     assert obs.lli[0, 0, 0] == 4
 
 
@@ -742,6 +754,12 @@ def test_unknown_system_letter(tmp_path: Path) -> None:
     _raises_at(_write(tmp_path, "xh.o", rows), 13, "unknown satellite system")
 
 
+def test_blank_line_inside_rinex3_data(tmp_path: Path) -> None:
+    rows = _lines("SEPT078M_120.21O")
+    rows[43] = ""
+    _raises_at(_write(tmp_path, "b.o", rows), 44, "in satellite id")
+
+
 def test_system_without_obs_types(tmp_path: Path) -> None:
     rows = _lines("SEPT078M_120.21O")
     rows[43] = "R01" + rows[43][3:]
@@ -807,8 +825,10 @@ def test_against_georinex(gnss_data: Path, rel: str) -> None:
     assert lag.max() < 1e-3 + 1e-6
     compared = 0
     for k, code in enumerate(obs.codes):
-        np.testing.assert_array_equal(obs.values[:, :, k], ref[code].values, err_msg=code)
-        compared += int(np.isfinite(ref[code].values).sum())
+        # RINEX writes a missing observation as blank or 0.0; georinex keeps 0.0, navtrack NaN.
+        want = np.where(ref[code].values == 0.0, np.nan, ref[code].values)
+        np.testing.assert_array_equal(obs.values[:, :, k], want, err_msg=code)
+        compared += int(np.isfinite(want).sum())
         for name, ours in (("lli", obs.lli), ("ssi", obs.ssi)):
             if code + name in ref:
                 mine = ours[:, :, k].astype(float)

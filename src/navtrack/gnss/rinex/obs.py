@@ -114,6 +114,8 @@ def read_obs(path: StrPath, *, lenient: bool = False) -> Observations:
 
     Notes
     -----
+    A value written as 0.0 means "missing" (RINEX 2.11 table A2: missing observations are
+    written as 0.0 or blanks) and becomes NaN; its LLI and SSI are kept as written.
     Epoch flag 6 records hold cycle-slip counts, not observations (RINEX 2.11 table A3); they are
     kept as epochs with ``epoch_flag == 6`` and must be masked by users of the values. Epoch flag
     3 and 4 records that redefine the observation types take effect for the following epochs.
@@ -227,7 +229,9 @@ def _parse_header(
                 for k in range(8):
                     sat = text[4 + 7 * k : 7 + 7 * k].strip()
                     if sat:
-                        glonass_fcn[_sat_id(sat.encode(), 3)] = int(text[8 + 7 * k : 10 + 7 * k])
+                        glonass_fcn[_sat_id(sat.encode(), blank_is_gps=False)] = int(
+                            text[8 + 7 * k : 10 + 7 * k]
+                        )
         except FileFormatError:
             raise
         except (ValueError, IndexError, KeyError) as exc:
@@ -303,14 +307,17 @@ def _to_gps_rinex(t_cal_s: FloatArray, time_system: str) -> FloatArray:
     return to_gps(t_cal_s, time_system)
 
 
-def _sat_id(raw: bytes, width: int) -> str:
-    """``G05`` from ``G05``, ``G 5``, `` 5`` (RINEX 2 blank system = GPS); ValueError if bad."""
-    text = raw.decode("ascii", "replace")
-    letter = text[:1].strip() or "G"
-    prn = text[1:width].replace(" ", "0")
+def _sat_id(raw: bytes, blank_is_gps: bool) -> str:
+    """``G05`` from ``G05`` or ``G 5`` (and `` 5`` in RINEX 2, where a blank system is GPS).
+
+    Raises ValueError for an unknown system letter or a malformed number.
+    """
+    text = raw.decode("ascii", "replace").ljust(3)[:3]
+    letter = text[0] if text[0] != " " or not blank_is_gps else "G"
+    prn = "0" + text[2] if text[1] == " " else text[1:]
     if letter not in SYSTEMS:
         raise ValueError(f"unknown satellite system {letter!r} in satellite id {text!r}")
-    if len(prn) != 2 or not prn.isdigit():
+    if not prn.isdigit() or prn == "00":
         raise ValueError(f"malformed satellite id {text!r}")
     return letter + prn
 
@@ -800,7 +807,7 @@ def _assemble(
     names: list[str | None] = []
     for k, raw in enumerate(uniq.tolist()):
         try:
-            names.append(_sat_id(raw.ljust(3), 3))
+            names.append(_sat_id(raw, blank_is_gps=not v3))
         except ValueError as exc:
             names.append(None)
             members = np.flatnonzero(inverse == k)
@@ -845,6 +852,7 @@ def _assemble(
 
     value, lli, ssi, blank, bad = _decode(mat[:, lead:].reshape(n_lines * n_f, _FIELD))
     value = value.reshape(n_lines, n_f)
+    value[value == 0.0] = np.nan  # "missing observations are written as 0.0 or blanks"
     lli, ssi = lli.reshape(n_lines, n_f), ssi.reshape(n_lines, n_f)
     blank, bad = blank.reshape(n_lines, n_f), bad.reshape(n_lines, n_f)
 
