@@ -715,6 +715,18 @@ def test_missing_data_line_mid_file(tmp_path: Path) -> None:
     _raises_at(_write(tmp_path, "gap2.o", rows), 18, "line 26, read as its data, is an epoch")
 
 
+def test_surplus_data_line(tmp_path: Path) -> None:
+    rows = _lines("SEPT078M_120.21O")
+    rows.insert(35, "E02" + rows[34][3:])  # a 24th satellite line after an epoch announcing 23
+    path = _write(tmp_path, "s3.o", rows)
+    _raises_at(path, 34, "announces 23 satellites but 24 data lines follow")
+    obs = read_obs(path, lenient=True)
+    assert [s.line for s in obs.skipped] == [58]
+    # The first 23 lines are read (E02 included); the last one, line 58, is dropped.
+    assert obs.code("C1C")[0, obs.sat_index("E02")] == obs.code("C1C")[0, obs.sat_index("E01")]
+    assert np.isnan(obs.values[0, obs.sat_index(rows[57][:3])]).all()
+
+
 def test_garbage_in_data_line(tmp_path: Path) -> None:
     rows = _lines("07590920.05o")
     assert rows[18].startswith("  55923622.160")

@@ -413,23 +413,21 @@ def _scan_v3(
     starts.append(end)
     seg = len(segments) - 1
     days: dict[bytes, int] = {}
+    last: tuple[int, int, int] | None = None  # last data epoch: record line, count, end
     i = body
     pos = 0
     while pos < len(starts) - 1:
         j = starts[pos]
         if j > i:  # lines no epoch record accounts for
             if not lenient:
-                n_sat = _announced(lines, i)
-                raise FileFormatError(
-                    path,
-                    i + 1,
-                    "line outside any epoch record"
-                    + (
-                        " (the epoch record above announces fewer satellites than follow)"
-                        if n_sat
-                        else ""
-                    ),
-                )
+                if last is not None and last[2] == i:
+                    raise FileFormatError(
+                        path,
+                        last[0] + 1,
+                        f"epoch record announces {last[1]} satellites but {j - last[0] - 1} "
+                        f"data lines follow (lines {i + 1}-{j} are surplus)",
+                    )
+                raise FileFormatError(path, i + 1, "line outside any epoch record")
             _skip(scan, i, j, "line outside any epoch record")
         rec = lines[j]
         nxt = starts[pos + 1]
@@ -491,6 +489,7 @@ def _scan_v3(
             scan.line_no.append(j + 2)
             scan.data.extend(lines[j + 1 : j + 1 + take])
             i = j + 1 + take
+            last = (j, count, i)
             pos += 1
         else:
             _event(path, lines, j, flag, count, end, t_cal, scan)
@@ -507,17 +506,6 @@ def _scan_v3(
         if not lenient:
             raise FileFormatError(path, i + 1, "line outside any epoch record")
         _skip(scan, i, end, "line outside any epoch record")
-
-
-def _announced(lines: list[bytes], i: int) -> int:
-    """Satellite count of the nearest epoch record above line ``i`` (for error messages)."""
-    for j in range(i - 1, max(i - 200, -1), -1):
-        if lines[j][:1] == b">":
-            try:
-                return int(lines[j][32:35])
-            except ValueError:
-                return 0
-    return 0
 
 
 def _scan_v2(
