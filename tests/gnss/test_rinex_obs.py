@@ -808,6 +808,99 @@ def test_crlf_line_ends(tmp_path: Path) -> None:
     _same(read_obs(path), read_obs(sample_path("07590920.05o")))
 
 
+def _reference_read(path: Path) -> tuple[list[float], dict[tuple[int, str, str], tuple]]:
+    """A deliberately plain line-by-line reader written from the RINEX 2.11/3.05 tables, used
+    as an independent oracle for LLI/SSI of every code (georinex exposes only some of them).
+
+    Returns epoch calendar seconds and {(epoch, sat, code): (value, lli, ssi)} for every field
+    that is not blank.
+    """
+    lines = path.read_text().splitlines()
+    v3 = float(lines[0][:9]) >= 3
+    types: dict[str, list[str]] = {}
+    k = 0
+    system = ""
+    while lines[k][60:].strip() != "END OF HEADER":
+        label = lines[k][60:].strip()
+        if label == "SYS / # / OBS TYPES":
+            system = lines[k][0] if lines[k][0] != " " else system
+            types.setdefault(system, []).extend(lines[k][7:60].split())
+        elif label == "# / TYPES OF OBSERV":
+            types.setdefault("G", []).extend(lines[k][6:60].split())
+        k += 1
+    k += 1
+    times: list[float] = []
+    out: dict[tuple[int, str, str], tuple] = {}
+
+    def field(text: str, j: int) -> tuple | None:
+        f = text[16 * j : 16 * j + 16].ljust(16)
+        if not f.strip():
+            return None
+        lli = int(f[14]) if f[14].strip() else -1
+        ssi = int(f[15]) if f[15].strip() else -1
+        return (float(f[:14]) if f[:14].strip() else np.nan, lli, ssi)
+
+    while k < len(lines):
+        rec = lines[k]
+        if v3:
+            flag, n = int(rec[31]), int(rec[32:35])
+            if flag > 1:
+                k += 1 + n
+                continue
+            y, mo, d, h, mi = (int(x) for x in rec[1:18].split())
+            times.append(calendar_gps_seconds(y, mo, d, h, mi, float(rec[18:29])))
+            for row in lines[k + 1 : k + 1 + n]:
+                sat = row[:3]
+                for j, code in enumerate(types[sat[0]]):
+                    got = field(row[3:], j)
+                    if got:
+                        out[(len(times) - 1, sat, code)] = got
+            k += 1 + n
+        else:
+            flag, n = int(rec[28]), int(rec[29:32])
+            if flag > 1:
+                k += 1 + n
+                continue
+            y, mo, d, h, mi = (int(x) for x in rec[1:15].split())
+            times.append(
+                calendar_gps_seconds(
+                    2000 + y if y < 80 else 1900 + y, mo, d, h, mi, float(rec[15:26])
+                )
+            )
+            sats = []
+            for c in range(0, n, 12):
+                sats += [lines[k + c // 12][32 + 3 * m : 35 + 3 * m] for m in range(min(12, n - c))]
+            k += (n + 11) // 12
+            per = (len(types["G"]) + 4) // 5
+            for sat in sats:
+                sat = ("G" if sat[0] == " " else sat[0]) + sat[1:].replace(" ", "0")
+                for j, code in enumerate(types["G"]):
+                    got = field(lines[k + j // 5], j % 5)
+                    if got:
+                        out[(len(times) - 1, sat, code)] = got
+                k += per
+    return times, out
+
+
+@pytest.mark.parametrize("rel", [v[0] for v in SHARED.values()])
+def test_against_plain_reference_reader(gnss_data: Path, rel: str) -> None:
+    obs = read_obs(gnss_data / rel)
+    times, ref = _reference_read(gnss_data / rel)
+    np.testing.assert_allclose(obs.t_gps_s, times, rtol=0, atol=1e-6)
+    n_fields = 0
+    for (e, sat, code), (value, lli, ssi) in ref.items():
+        s, c = obs.sat_index(sat), obs.codes.index(code)
+        want = np.nan if value == 0.0 else value
+        assert obs.values[e, s, c] == want or (np.isnan(want) and np.isnan(obs.values[e, s, c]))
+        assert (obs.lli[e, s, c], obs.ssi[e, s, c]) == (lli, ssi), (e, sat, code)
+        n_fields += 1
+    # Nothing more is set than the reference saw.
+    written = (~np.isnan(obs.values)) | (obs.lli >= 0) | (obs.ssi >= 0)
+    assert int(written.sum()) <= n_fields
+    assert int((obs.lli >= 0).sum()) == sum(v[1] >= 0 for v in ref.values())
+    assert int((obs.ssi >= 0).sum()) == sum(v[2] >= 0 for v in ref.values())
+
+
 # ---------------------------------------------------------------- georinex cross-check
 
 GEORINEX_FILES = [v[0] for v in SHARED.values()]
