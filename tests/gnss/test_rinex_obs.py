@@ -414,6 +414,29 @@ def test_rinex2_events_and_new_obs_types(tmp_path: Path) -> None:
     np.testing.assert_array_equal(obs.values[1, g02], [21000000.0, np.nan, np.nan, 40.0])
 
 
+@pytest.mark.parametrize(
+    ("system", "time_field", "shift_s"),
+    [
+        ("G", "GPS", 0.0),
+        ("R", "GLO", 18.0),
+        ("R", "   ", 18.0),
+        ("M", "GLO", 18.0),
+        ("M", "   ", 0.0),
+    ],
+)
+def test_rinex2_time_systems(tmp_path: Path, system: str, time_field: str, shift_s: float) -> None:
+    """RINEX 2.11 section 8.1.1 / table A1: GLO time tags are UTC; a GLONASS-only file with a
+    blank time system is in GLO time, a mixed one in GPS time. GPST - UTC = 18 s in 2020."""
+    first = _h(
+        f"{2020:6d}{1:6d}{1:6d}{0:6d}{0:6d}{0.0:13.7f}     {time_field}", "TIME OF FIRST OBS"
+    )
+    rows = _v2_header(["C1"], system=system, extra=[first])
+    rows += _v2_epoch((2020, 1, 1, 0, 0, 0.0), 0, ["R01"]) + _v2_records(np.array([2.0e7]))
+    obs = read_obs(_write(tmp_path, "t.20o", rows))
+    assert obs.t_gps_s[0] == calendar_gps_seconds(2020, 1, 1, 0, 0, 0.0) + shift_s
+    assert obs.header.first_obs_gps_s == obs.t_gps_s[0]
+
+
 def _v3_header(
     types: dict[str, list[str]], time_system: str = "GPS", extra: list[str] = ()
 ) -> list[str]:
