@@ -734,8 +734,17 @@ def test_missing_data_line_mid_file(tmp_path: Path) -> None:
     assert len(obs.t_gps_s) == 120
     assert [s.line for s in obs.skipped] == [34]
     rows = _lines("07590920.05o")
-    del rows[20]  # RINEX 2: the next epoch record is read as a data line and rejected
-    _raises_at(_write(tmp_path, "gap2.o", rows), 18, "line 26, read as its data, is an epoch")
+    del rows[20]  # RINEX 2: the next epoch record would be read as a data line
+    path = _write(tmp_path, "gap2.o", rows)
+    _raises_at(path, 18, "line 26, read as its data, is an epoch")
+    # Lenient: the whole epoch goes (its satellites cannot be matched to its lines), the rest
+    # is read as usual.
+    obs = read_obs(path, lenient=True)
+    assert [s.line for s in obs.skipped] == list(range(18, 26))
+    assert "epoch dropped" in obs.skipped[0].reason
+    plain = read_obs(sample_path("07590920.05o"))
+    np.testing.assert_array_equal(obs.t_gps_s, plain.t_gps_s[1:])
+    np.testing.assert_array_equal(obs.values, plain.values[1:])
 
 
 def test_surplus_data_line(tmp_path: Path) -> None:

@@ -608,6 +608,19 @@ def _scan_v2(
             )
             _skip(scan, first + take * per_sat, end, "incomplete record at the end of the file")
             stop = end
+        if lenient:  # an epoch record among the data: lines are missing, satellites misaligned
+            intruder = next((j for j in range(first, stop) if _V2_EPOCH.match(lines[j])), None)
+            if intruder is not None:
+                scan.skipped.append(
+                    SkippedLine(
+                        line=i + 1,
+                        reason=f"epoch dropped: fewer than {count} satellite records before the "
+                        f"next epoch record (line {intruder + 1})",
+                    )
+                )
+                _skip(scan, i + 1, intruder, "data line of a dropped epoch")
+                i = intruder
+                continue
         scan.t_cal_s.append(t_cal)
         scan.flag.append(flag)
         scan.clock_s.append(clock_s)
