@@ -792,7 +792,12 @@ def test_unknown_system_letter(tmp_path: Path) -> None:
     rows = _lines("07590920.05o")
     rows[17] = rows[17].replace("G 3G 7", "G 3X 7")
     path = _write(tmp_path, "x2.o", rows)
-    _raises_at(path, 20, "unknown satellite system 'X'")  # line 20: X07's data line
+    _raises_at(path, 18, "unknown satellite system 'X'")  # in the epoch record, line 18
+    obs = read_obs(path, lenient=True)
+    assert [s.line for s in obs.skipped] == [20]  # X07's data line is what is skipped
+    rows = _lines("07590920.05o")
+    rows[17] = rows[17][:-3]  # 8 satellites announced, 7 listed
+    _raises_at(_write(tmp_path, "x2b.o", rows), 18, "malformed satellite id")
     rows = _lines("SEPT078M_120.21O")
     rows[12] = "X" + rows[12][1:]
     _raises_at(_write(tmp_path, "xh.o", rows), 13, "unknown satellite system")

@@ -75,6 +75,7 @@ class _Scan:
     n_lines: list[int] = field(default_factory=list)  # data lines per epoch
     data: list[bytes] = field(default_factory=list)  # all data lines, in file order
     line_no: list[int] = field(default_factory=list)  # 1-based line of each epoch's first data line
+    epoch_line: list[int] = field(default_factory=list)  # 1-based line of each epoch record
     rec_sat: list[bytes] = field(default_factory=list)  # RINEX 2: satellite id of every record
     rec_lines: list[int] = field(default_factory=list)  # RINEX 2: lines per record
     events: list[Event] = field(default_factory=list)
@@ -487,6 +488,7 @@ def _scan_v3(
             scan.segment.append(seg)
             scan.n_lines.append(take)
             scan.line_no.append(j + 2)
+            scan.epoch_line.append(j + 1)
             scan.data.extend(lines[j + 1 : j + 1 + take])
             i = j + 1 + take
             last = (j, count, i)
@@ -627,6 +629,7 @@ def _scan_v2(
         scan.segment.append(seg)
         scan.n_lines.append(take * per_sat)
         scan.line_no.append(first + 1)
+        scan.epoch_line.append(i + 1)
         scan.data.extend(lines[first : first + take * per_sat])
         scan.rec_sat.extend(sats[:take])
         scan.rec_lines.extend([per_sat] * take)
@@ -792,6 +795,7 @@ def _assemble(
         np.asarray(scan.line_no, dtype=np.int64) - first_of_epoch, lines_per_epoch
     ) + np.arange(n_lines)
     problem: dict[int, str] = {}  # data-line index -> why it is unusable
+    report_at: dict[int, int] = {}  # data-line index -> line to name when raising, if not its own
 
     # Satellite of each data line.
     if v3:
@@ -827,7 +831,11 @@ def _assemble(
                 )
             )
             for m in where.tolist():
-                problem.setdefault(m, str(exc))
+                if v3:
+                    problem.setdefault(m, str(exc))
+                else:  # the id is written in the epoch record: name that line when raising
+                    problem.setdefault(m, f"{exc} in the satellite list of the epoch record")
+                    report_at.setdefault(m, scan.epoch_line[epoch_of_line[m]])
     sats = sorted({n for n in names if n is not None})
     sat_col = {s: k for k, s in enumerate(sats)}
     uniq_col = np.array([sat_col.get(n, -1) if n else -1 for n in names] or [0], dtype=np.int64)
@@ -897,8 +905,8 @@ def _assemble(
     usable = np.ones(n_lines, dtype=bool)
     if problem:
         if not lenient:
-            m = min(problem, key=lambda j: line_no[j])
-            raise FileFormatError(path, int(line_no[m]), problem[m])
+            m = min(problem, key=lambda j: report_at.get(j, line_no[j]))
+            raise FileFormatError(path, int(report_at.get(m, line_no[m])), problem[m])
         for m, reason in problem.items():
             usable[m] = False
             skipped.append(SkippedLine(line=int(line_no[m]), reason=reason))
