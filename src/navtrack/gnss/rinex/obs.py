@@ -520,6 +520,9 @@ def _scan_v2(
     lenient: bool,
 ) -> None:
     """Walk RINEX 2 epoch records: (1X,I2.2,4(1X,I2),F11.7,2X,I1,I3,12(A1,I2),F12.9)."""
+    # The last record may legitimately end in blank lines (all its observations on them
+    # missing); ``end`` excludes trailing blank lines, ``limit`` is the true last line.
+    limit = len(lines) - (lines[-1] == b"")
     seg = len(segments) - 1
     per_sat = (len(segments[seg].obs_types["G"]) + 4) // 5
     days: dict[bytes, int] = {}
@@ -596,20 +599,20 @@ def _scan_v2(
             clock_s = _NAN
         stop = first + count * per_sat
         take = count
-        if stop > end:
+        if stop > limit:
             if not lenient:
                 raise FileFormatError(
                     path,
                     i + 1,
                     f"epoch record announces {count} satellites "
-                    f"({count * per_sat} data lines) but the file ends after {end - first}",
+                    f"({count * per_sat} data lines) but the file ends after {limit - first}",
                 )
-            take = (end - first) // per_sat
+            take = (limit - first) // per_sat
             scan.skipped.append(
                 SkippedLine(line=i + 1, reason=f"epoch cut short: {take} of {count} satellites")
             )
             _skip(scan, first + take * per_sat, end, "incomplete record at the end of the file")
-            stop = end
+            stop = limit
         if lenient:  # an epoch record among the data: lines are missing, satellites misaligned
             intruder = next((j for j in range(first, stop) if _V2_EPOCH.match(lines[j])), None)
             if intruder is not None:
