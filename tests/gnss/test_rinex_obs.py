@@ -762,6 +762,13 @@ def _raises_at(path: Path, line: int, match: str, lenient: bool = False) -> None
     assert f"line {line}" in str(info.value)
 
 
+def test_header_only_file(tmp_path: Path) -> None:
+    """A header without epochs is a valid, empty file: zero epochs, and the summary says so."""
+    obs = read_obs(_write(tmp_path, "h.o", _lines("SEPT078M_120.21O")[:33]))
+    assert obs.values.shape == (0, 0, 20)
+    assert obs.summary()["warnings"] == ["no observation epochs"]
+
+
 def test_empty_file(tmp_path: Path) -> None:
     path = tmp_path / "empty.o"
     path.write_bytes(b"")

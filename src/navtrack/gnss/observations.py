@@ -241,6 +241,8 @@ class Observations:
                 warnings.append(
                     f"header {label} {_iso(written)} differs from the data ({_iso(actual)})"
                 )
+        if n == 0:
+            warnings.append("no observation epochs")
         if n > 1 and np.any(np.diff(self.t_gps_s) <= 0):
             warnings.append("epoch times are not strictly increasing")
         return {
