@@ -59,6 +59,7 @@ def test_time_systems() -> None:
     assert float(to_gps(t, "GAL")) == t
     assert float(to_gps(t, "BDT")) == t + 14.0
     assert float(to_gps(t, "UTC")) == t + 18.0
-    assert float(to_gps(t + 3 * 3600.0, "GLO")) == t + 18.0
+    # RINEX GLO time tags are UTC(SU), not GLONASST = UTC + 3 h (RINEX 3.05 section 6.1).
+    assert float(to_gps(t, "GLO")) == t + 18.0
     with pytest.raises(ValueError, match="time_system"):
         to_gps(t, "XYZ")

@@ -8,7 +8,8 @@ Other time scales relate to GPST as (IS-GPS-200, Galileo OS SIS ICD, BDS-SIS-ICD
 * GST (Galileo) = GPST (the week number starts at 1999-08-22 = GPS week 1024);
 * BDT (BeiDou) = GPST - 14 s (BDT week 0 starts at 2006-01-01 00:00:00 BDT = GPS week 1356);
 * UTC = GPST - leap seconds (table below);
-* GLONASST = UTC + 3 h.
+* GLONASST = UTC(SU) + 3 h; RINEX writes GLONASS times (``GLO``) as UTC(SU), i.e. without the
+  3 h, so ``GLO`` time tags convert like UTC.
 
 References
 ----------
@@ -134,7 +135,8 @@ def to_gps(t_s: ArrayLike, time_system: str) -> FloatArray:
         Times as calendar seconds of ``time_system`` (as :func:`gps_seconds` gives for its
         calendar fields).
     time_system : {"GPS", "GAL", "QZS", "IRN", "BDT", "GLO", "UTC"}
-        RINEX 3 time-system identifier.
+        RINEX 3 time-system identifier. ``GLO`` is UTC(SU) as RINEX 2.11 section 3 and RINEX
+        3.05 section 6.1 define GLONASS time tags, so it converts like ``UTC``.
     """
     t = np.asarray(t_s, dtype=float)
     match time_system.upper():
@@ -142,8 +144,6 @@ def to_gps(t_s: ArrayLike, time_system: str) -> FloatArray:
             return t
         case "BDT":
             return t - BDT_MINUS_GPST_S
-        case "UTC":
+        case "UTC" | "GLO":
             return utc_to_gps(t)
-        case "GLO":
-            return utc_to_gps(t - GLONASST_MINUS_UTC_S)
     raise ValueError(f"time_system: unknown time system {time_system!r}")
