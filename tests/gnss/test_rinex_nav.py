@@ -397,7 +397,7 @@ def test_garbage_file(tmp_path: Path) -> None:
 def test_empty_file(tmp_path: Path) -> None:
     path = tmp_path / "empty.05n"
     path.write_text("")
-    with pytest.raises(FileFormatError, match=r"empty\.05n: empty file"):
+    with pytest.raises(FileFormatError, match=r"empty\.05n, line 1: empty file"):
         read_nav(path)
 
 
