@@ -63,7 +63,7 @@ def test_shared_nav_file_reads(gnss_data: Path, name: str) -> None:
         # toe within half a week of toc after week resolution
         assert (np.abs(df["toe_gps_s"] - df["toc_gps_s"]) <= 302400).all()
     summary = nav.summary()
-    assert summary["records"] == {s: len(df) for s, df in nav.ephemerides.items()}
+    assert summary["records_per_system"] == {s: len(df) for s, df in nav.ephemerides.items()}
 
 
 @pytest.mark.parametrize("name", BUNDLED_NAV)
@@ -455,9 +455,9 @@ def test_cli_rinex_info_on_nav(capsys: pytest.CaptureFixture[str], tmp_path: Pat
         if ln[:1].strip():
             expected[ln[0]] = expected.get(ln[0], 0) + 1
     printed = capsys.readouterr().out
-    assert "records" in printed
+    assert "records_per_system" in printed
     assert f"G: {expected['G']}" in printed
-    assert json.loads(out.read_text())["records"] == expected
+    assert json.loads(out.read_text())["records_per_system"] == expected
 
 
 def test_week_written_modulo_1024(tmp_path: Path) -> None:

@@ -45,7 +45,7 @@ def test_shared_sp3_reads(gnss_data: Path, name: str) -> None:
     r = np.linalg.norm(sp3.pos_m, axis=-1)
     assert np.nanmin(r) > 23.0e6
     assert np.nanmax(r) < 45.5e6
-    assert sp3.summary()["epochs"] == n_e
+    assert sp3.summary()["n_epochs"] == n_e
 
 
 def test_cod_printed_values(gnss_data: Path) -> None:

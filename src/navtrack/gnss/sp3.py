@@ -182,19 +182,19 @@ class Sp3:
             per_system[s[0]] = per_system.get(s[0], 0) + 1
         span = [str(t)[:19] for t in self.time[[0, -1]]] if len(self.t_gps_s) else []
         return {
-            "file": self.path,
+            "path": self.path,
             "version": f"SP3-{self.header.version}",
-            "type": f"precise orbit{' + velocity' if self.vel_mps is not None else ''}",
+            "content": f"precise orbit{' + velocity' if self.vel_mps is not None else ''}",
             "agency": self.header.agency,
-            "coordinate system": self.header.coordinate_system,
-            "orbit type": self.header.orbit_type,
-            "time system": f"{self.header.time_system} (converted to GPS)",
-            "epochs": len(self.t_gps_s),
-            "interval (s)": self.header.interval_s,
-            "time span (GPST)": span,
-            "satellites": per_system,
-            "positions missing": int(np.isnan(self.pos_m[..., 0]).sum()),
-            "clocks missing": int(np.isnan(self.clock_s).sum()),
+            "coordinate_system": self.header.coordinate_system,
+            "orbit_type": self.header.orbit_type,
+            "time_system": self.header.time_system,
+            "n_epochs": len(self.t_gps_s),
+            "interval_s": self.header.interval_s,
+            "span_gps": span,
+            "sats_per_system": per_system,
+            "positions_missing": int(np.isnan(self.pos_m[..., 0]).sum()),
+            "clocks_missing": int(np.isnan(self.clock_s).sum()),
         }
 
 

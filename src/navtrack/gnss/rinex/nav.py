@@ -235,17 +235,18 @@ class NavData:
             t = np.concatenate(tocs)
             span = [str(to_datetime64(t.min()))[:19], str(to_datetime64(t.max()))[:19]]
         return {
-            "file": self.path,
+            "path": self.path,
             "version": self.version,
-            "type": f"navigation ({self.file_type}, system {self.system})",
-            "records": {s: len(self.ephemerides[s]) for s in self.systems},
-            "satellites": {s: len(self.ephemerides[s]["sat"].unique()) for s in self.systems},
-            "satellite ids": {s: sorted(self.ephemerides[s]["sat"].unique()) for s in self.systems},
-            "ionosphere": {k: [float(v) for v in a] for k, a in self.iono.items()},
-            "time corrections": {k: list(v) for k, v in self.time_corrections.items()},
-            "leap seconds": self.leap_seconds,
-            "toc span (GPST)": span,
-            "skipped records": len(self.skipped),
+            "file_type": self.file_type,
+            "system": self.system,
+            "records_per_system": {s: len(self.ephemerides[s]) for s in self.systems},
+            "sats_per_system": {s: len(self.ephemerides[s]["sat"].unique()) for s in self.systems},
+            "sat_ids": {s: sorted(self.ephemerides[s]["sat"].unique()) for s in self.systems},
+            "iono": {k: [float(v) for v in a] for k, a in self.iono.items()},
+            "time_corrections": {k: list(v) for k, v in self.time_corrections.items()},
+            "leap_seconds": self.leap_seconds,
+            "toc_span_gps": span,
+            "skipped_records": len(self.skipped),
         }
 
 
