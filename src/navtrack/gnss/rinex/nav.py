@@ -1,0 +1,551 @@
+"""RINEX 2.x/3.x navigation (broadcast ephemeris) reader.
+
+:func:`read_nav` turns a RINEX navigation file into a :class:`NavData`: header ionosphere
+parameters, time-system corrections and leap seconds, and one :class:`pandas.DataFrame` of
+broadcast records per satellite system, in SI units with times converted to GPS seconds.
+
+Formats read: RINEX 2.xx GPS (``N``), GLONASS (``G``) and SBAS (``H``) navigation files and
+RINEX 3.xx navigation files, single-system or mixed, with GPS, QZSS, Galileo (I/NAV and F/NAV),
+BeiDou, GLONASS, SBAS and NavIC/IRNSS records. Fields are cut at their fixed columns (so fields
+that touch, ``.745058D-08-.603921D-08``, are read correctly), Fortran ``D`` exponents are
+accepted, RINEX 2 two-digit years map to 1980-2079, and blank or missing trailing fields are
+NaN (integer fields: -1).
+
+Every record of the file is returned, including ephemerides whose time of clock lies after
+the observations they will serve ("future" ephemerides) and duplicate records from different
+data sources (Galileo I/NAV and F/NAV): selecting among them is the ephemeris module's job.
+
+References
+----------
+RINEX 2.11 (IGS/RTCM-SC104, 2012), tables A4, A11, A12, A16; RINEX 3.05 (IGS/RTCM-SC104, 2020),
+section 6 and tables A5-A23. IS-GPS-200N 20.3.3.4; Galileo OS SIS ICD 2.0 5.1; BDS-SIS-ICD-B1I
+3.0 5.2.4; GLONASS ICD 5.1 4.4.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from os import fspath
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from navtrack._typing import FloatArray, StrPath
+from navtrack.errors import FileFormatError
+from navtrack.gnss.observations import SkippedLine
+from navtrack.gnss.rinex._io import read_bytes, sniff
+from navtrack.timescale import (
+    BDS_WEEK_OFFSET,
+    BDT_MINUS_GPST_S,
+    SECONDS_PER_WEEK,
+    calendar_gps_seconds,
+    to_datetime64,
+    utc_to_gps,
+)
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+__all__ = ["NavData", "read_nav"]
+
+_NAN = math.nan
+
+# Field names of each record type, in file order: the three clock fields of the first line,
+# then four fields per "BROADCAST ORBIT" line. ``None`` marks spare fields.
+_GPS_FIELDS: tuple[str | None, ...] = (
+    "af0", "af1", "af2",
+    "iode", "crs", "deltan", "m0",
+    "cuc", "e", "cus", "sqrta",
+    "toe_sow", "cic", "omega0", "cis",
+    "i0", "crc", "omega", "omegadot",
+    "idot", "codes_l2", "week", "l2p_flag",
+    "sva_m", "svh", "tgd", "iodc",
+    "tot_sow", "fit_h", None, None,
+)  # fmt: skip
+_GAL_FIELDS: tuple[str | None, ...] = (
+    *_GPS_FIELDS[:19],
+    "idot", "data_source", "week", None,
+    "sva_m", "svh", "bgd_e5a", "bgd_e5b",
+    "tot_sow", None, None, None,
+)  # fmt: skip
+_BDS_FIELDS: tuple[str | None, ...] = (
+    *_GPS_FIELDS[:19],
+    "idot", None, "week", None,
+    "sva_m", "svh", "tgd1", "tgd2",
+    "tot_sow", "aodc", None, None,
+)  # fmt: skip
+_IRN_FIELDS: tuple[str | None, ...] = (
+    *_GPS_FIELDS[:19],
+    "idot", None, "week", None,
+    "sva_m", "svh", "tgd", None,
+    "tot_sow", None, None, None,
+)  # fmt: skip
+_GLO_FIELDS: tuple[str | None, ...] = (
+    "taun", "gamman", "tk_s",
+    "x_m", "vx_mps", "ax_mps2", "svh",
+    "y_m", "vy_mps", "ay_mps2", "freq_num",
+    "z_m", "vz_mps", "az_mps2", "age_d",
+    # RINEX 3.05 optional fifth line
+    "status_flags", "delta_taun_s", "urai", "health_flags",
+)  # fmt: skip
+_SBAS_FIELDS: tuple[str | None, ...] = (
+    "af0", "af1", "tot_sow",
+    "x_m", "vx_mps", "ax_mps2", "svh",
+    "y_m", "vy_mps", "ay_mps2", "ura_m",
+    "z_m", "vz_mps", "az_mps2", "iodn",
+)  # fmt: skip
+
+_FIELDS = {
+    "G": _GPS_FIELDS,
+    "J": _GPS_FIELDS,
+    "E": _GAL_FIELDS,
+    "C": _BDS_FIELDS,
+    "I": _IRN_FIELDS,
+    "R": _GLO_FIELDS,
+    "S": _SBAS_FIELDS,
+}
+# Number of lines of a complete record, and the most a record may have (GLONASS in 3.05).
+_N_LINES = {"G": 8, "J": 8, "E": 8, "C": 8, "I": 8, "R": 4, "S": 4}
+_MAX_LINES = {**_N_LINES, "R": 5}
+_KEPLER = "GJECI"
+_KM = {"x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "ax_mps2", "ay_mps2", "az_mps2"}
+_INT_FIELDS = {
+    "iode", "iodc", "week", "svh", "codes_l2", "l2p_flag", "data_source", "aodc", "freq_num",
+    "age_d", "status_flags", "urai", "health_flags", "iodn",
+}  # fmt: skip
+_STATE_ORDER = {
+    c: k + 1
+    for k, c in enumerate(
+        ("x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "ax_mps2", "ay_mps2", "az_mps2")
+    )
+}
+_STATE_ORDER.update({c: 20 for c in ("svh", "freq_num", "age_d", "ura_m", "iodn")})
+_STATE_ORDER.update({c: 30 for c in ("status_flags", "delta_taun_s", "urai", "health_flags")})
+_TIME_SYSTEM = {"G": "GPS", "J": "GPS", "E": "GPS", "I": "GPS", "S": "GPS", "C": "BDT", "R": "UTC"}
+# RINEX 2 file types; ``E`` is the Galileo type of the unofficial RINEX 2.12 (teqc).
+_RINEX2_SYSTEM = {"N": "G", "G": "R", "H": "S", "E": "E"}
+_D_TO_E = str.maketrans("Dd", "Ee")
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class NavData:
+    """Broadcast navigation data of one RINEX navigation file.
+
+    Attributes
+    ----------
+    path : str
+        Source file.
+    version : float
+        RINEX version (2.10, 3.04, ...).
+    file_type : str
+        RINEX file type letter (``N``; RINEX 2 ``G`` GLONASS, ``H`` SBAS).
+    system : str
+        System letter of the file header (``M`` mixed).
+    iono : mapping of str to ndarray
+        Ionosphere parameters from the header, read-only arrays: ``GPSA``/``GPSB`` (Klobuchar
+        alpha0-3 in s, s/semicircle, ...; beta0-3 in s, ...; from RINEX 2 ``ION ALPHA``/``ION
+        BETA`` or RINEX 3 ``IONOSPHERIC CORR``), ``GAL`` (NeQuick ai0-ai2), ``QZSA``/``QZSB``,
+        ``BDSA``/``BDSB``, ``IRNA``/``IRNB`` as present. Units as broadcast (ICD scaling
+        applied, i.e. the values as written).
+    time_corrections : mapping of str to tuple
+        Time-system corrections ``(a0_s, a1_s_per_s, t_ref_sow, week, source, utc_id)`` keyed by
+        the RINEX 3 type (``GPUT``, ``GAUT``, ``GPGA``, ``BDUT``, ``GLUT``, ``QZGP`` ...). RINEX 2
+        ``DELTA-UTC: A0,A1,T,W`` becomes ``GPUT``, ``D-UTC A0,A1,T,W,S,U`` (SBAS) ``SBUT`` and
+        GLONASS ``CORR TO SYSTEM TIME`` ``GLUT`` with ``a0_s`` = -TauC and the reference date's
+        (year, month, day) in place of (t_ref_sow, week, source). Missing fields are ``None``.
+    leap_seconds : int or None
+        GPS - UTC from ``LEAP SECONDS`` (current value), when present.
+    ephemerides : mapping of str to pandas.DataFrame
+        One table per system letter present (``G``, ``R``, ``E``, ``C``, ``J``, ``S``, ``I``),
+        one row per broadcast record, rows sorted by (``sat``, ``toc_gps_s``, file order), index
+        0..n-1. Every record is kept (duplicates, I/NAV and F/NAV, future ephemerides).
+        Float columns are NaN and integer columns (int64) -1 where the file leaves a field
+        blank. Columns:
+
+        *All systems*: ``sat`` (str, ``G05``; SBAS as written in RINEX, PRN - 100),
+        ``toc_gps_s`` (time of clock / reference epoch in GPS seconds, converted from the
+        system's time scale: BDT + 14 s; GLONASS UTC(SU) + leap seconds), ``line`` (1-based
+        line of the record's first line).
+
+        *Kepler systems* ``G``, ``J``, ``E``, ``C``, ``I`` (IS-GPS-200 names and units):
+        ``af0`` (s), ``af1`` (s/s), ``af2`` (s/s²), ``iode`` (GPS/QZSS IODE, Galileo IODnav,
+        BeiDou AODE, NavIC IODEC), ``crs``, ``crc`` (m), ``deltan`` (rad/s), ``m0``, ``omega0``,
+        ``i0``, ``omega`` (rad), ``cuc``, ``cus``, ``cic``, ``cis`` (rad), ``e``, ``sqrta``
+        (m^0.5), ``toe_sow`` (s of week, as written), ``week`` (as written: GPS week for G, J,
+        E — RINEX aligns the Galileo week to GPS — and I; BDT week for C), ``toe_gps_s`` (full
+        GPS seconds of toe: week rollovers and toe/toc week mismatches resolved against toc;
+        BDT converted to GPST), ``omegadot``, ``idot`` (rad/s), ``svh`` (health as written),
+        ``sva_m`` (URA/SISA/accuracy in m as written), ``tot_sow`` (transmission time, s of
+        week as written), and by system:
+        G/J ``tgd`` (s), ``iodc``, ``codes_l2``, ``l2p_flag``, ``fit_h`` (fit interval in h as
+        written; QZSS in RINEX 3 writes the fit-interval flag 0/1 here);
+        E ``bgd_e5a``, ``bgd_e5b`` (s, E5a/E1 and E5b/E1), ``data_source`` (bits 0/2 I/NAV,
+        bit 1 F/NAV, bits 8/9 clock for E5a/E5b);
+        C ``tgd1``, ``tgd2`` (s, B1/B3 and B2/B3), ``aodc``; I ``tgd`` (s).
+
+        *GLONASS* ``R``: ``taun`` (s; the clock bias as the file gives it, i.e. **-TauN**),
+        ``gamman`` (+GammaN), ``tk_s`` (message frame time as written: RINEX 2 seconds of the
+        UTC day, RINEX 3 seconds of the UTC week), ``x_m``, ``y_m``, ``z_m`` (PZ-90, m),
+        ``vx_mps``..., ``ax_mps2``... (lunisolar accelerations; converted from km), ``svh``,
+        ``freq_num`` (-7..+13), ``age_d`` (days), and from RINEX 3.05 optional line 5:
+        ``status_flags``, ``delta_taun_s``, ``urai``, ``health_flags``.
+
+        *SBAS* ``S``: ``af0`` (s), ``af1`` (s/s), ``tot_sow``, ``x_m`` ... ``az_mps2`` (m),
+        ``svh``, ``ura_m``, ``iodn``.
+    skipped : tuple of SkippedLine
+        Records skipped in lenient reading (first line of each and why); empty otherwise.
+
+    References
+    ----------
+    RINEX 2.11 tables A4, A11, A16; RINEX 3.05 tables A5-A23.
+    """
+
+    path: str
+    version: float
+    file_type: str
+    system: str
+    iono: Mapping[str, FloatArray]
+    time_corrections: Mapping[str, tuple[Any, ...]]
+    leap_seconds: int | None
+    ephemerides: Mapping[str, pd.DataFrame]
+    skipped: tuple[SkippedLine, ...] = ()
+    comments: tuple[str, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        for arr in self.iono.values():
+            arr.flags.writeable = False
+        object.__setattr__(self, "iono", MappingProxyType(dict(self.iono)))
+        object.__setattr__(self, "time_corrections", MappingProxyType(dict(self.time_corrections)))
+        object.__setattr__(self, "ephemerides", MappingProxyType(dict(self.ephemerides)))
+
+    @property
+    def systems(self) -> str:
+        """System letters with at least one record, in ``GRECJSI`` order."""
+        return "".join(s for s in "GRECJSI" if s in self.ephemerides)
+
+    def summary(self) -> dict[str, Any]:
+        """What the file holds, as plain Python values (for ``navtrack rinex info``)."""
+        tocs = [df["toc_gps_s"].to_numpy() for df in self.ephemerides.values() if len(df)]
+        span: list[str] = []
+        if tocs:
+            t = np.concatenate(tocs)
+            span = [str(to_datetime64(t.min()))[:19], str(to_datetime64(t.max()))[:19]]
+        return {
+            "file": self.path,
+            "version": self.version,
+            "type": f"navigation ({self.file_type}, system {self.system})",
+            "records": {s: len(self.ephemerides[s]) for s in self.systems},
+            "satellites": {s: len(self.ephemerides[s]["sat"].unique()) for s in self.systems},
+            "satellite ids": {s: sorted(self.ephemerides[s]["sat"].unique()) for s in self.systems},
+            "ionosphere": {k: [float(v) for v in a] for k, a in self.iono.items()},
+            "time corrections": {k: list(v) for k, v in self.time_corrections.items()},
+            "leap seconds": self.leap_seconds,
+            "toc span (GPST)": span,
+            "skipped records": len(self.skipped),
+        }
+
+
+def read_nav(path: StrPath, *, lenient: bool = False) -> NavData:
+    """Read a RINEX 2.x/3.x navigation file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Navigation file, plain or compressed (gzip, bzip2, ``.Z``).
+    lenient : bool
+        When true, a damaged record (unreadable number, unknown system letter, missing lines)
+        is skipped and listed in :attr:`NavData.skipped`; when false (default) it raises.
+
+    Returns
+    -------
+    NavData
+        See :class:`NavData` for the table schema.
+
+    Raises
+    ------
+    FileFormatError
+        Empty file, not a RINEX navigation file, unsupported version, missing ``END OF
+        HEADER``, an unreadable header field, or (strict reading) a damaged record; the message
+        names the file and line.
+    """
+    data = read_bytes(path)
+    kind = sniff(path, data)
+    if kind.format != "rinex" or kind.file_type not in "NGHE" or not kind.file_type.strip():
+        raise FileFormatError(path, 1, f"not a RINEX navigation file (type {kind.file_type!r})")
+    if kind.version >= 4:
+        raise FileFormatError(path, 1, f"RINEX {kind.version} navigation files are not supported")
+    text = data.decode("ascii", "replace")
+    lines = text.splitlines()
+    header = _parse_header(path, lines)
+    v2 = kind.version < 3
+    if v2:
+        system = _RINEX2_SYSTEM[kind.file_type]
+    elif kind.file_type == "N":
+        system = kind.system
+    else:  # some RINEX 3.0x writers keep the RINEX 2 type letters
+        system = _RINEX2_SYSTEM[kind.file_type]
+    if v2 and system == "E" and "GPSA" in header.iono:  # RINEX 2.12 Galileo: ION ALPHA = ai0-2
+        header.iono["GAL"] = header.iono.pop("GPSA")[:3]
+    rows, skipped = _parse_records(path, lines, header.end, v2, system, lenient)
+    tables = _tables(rows)
+    return NavData(
+        path=fspath(path),
+        version=kind.version,
+        file_type=kind.file_type,
+        system=system,
+        iono=header.iono,
+        time_corrections=header.time_corrections,
+        leap_seconds=header.leap_seconds,
+        ephemerides=tables,
+        skipped=tuple(skipped),
+        comments=tuple(header.comments),
+    )
+
+
+@dataclass(slots=True)
+class _Header:
+    end: int = 0  # index of the first line after END OF HEADER
+    iono: dict[str, FloatArray] = field(default_factory=dict)
+    time_corrections: dict[str, tuple[Any, ...]] = field(default_factory=dict)
+    leap_seconds: int | None = None
+    comments: list[str] = field(default_factory=list)
+
+
+def _parse_header(path: StrPath, lines: list[str]) -> _Header:
+    # Numbers in header records are read as tokens rather than at their nominal columns:
+    # writers disagree on the columns (GPSTk puts DELTA-UTC one column right) and fields may
+    # touch (``.745058D-08-.603921D-08``); the token pattern splits both correctly.
+    h = _Header()
+    for i, line in enumerate(lines):
+        n = i + 1
+        label = line[60:80].strip()
+        if label == "END OF HEADER":
+            h.end = n
+            return h
+        if label == "COMMENT":
+            h.comments.append(line[:60].rstrip())
+        elif label in ("ION ALPHA", "ION BETA"):  # RINEX 2: 2X,4D12.4
+            key = "GPSA" if label == "ION ALPHA" else "GPSB"
+            h.iono[key] = np.array(_tokens(path, n, line[:60], 4, label))
+        elif label == "IONOSPHERIC CORR":  # RINEX 3: A4,1X,4D12.4,1X,A1,1X,I2
+            key = line[:4].strip()
+            vals = _tokens(path, n, line[4:54], 4, f"IONOSPHERIC CORR {key}")
+            if key == "GAL":
+                vals = vals[:3]
+            h.iono.setdefault(key, np.array(vals))  # BDS may repeat per time mark: keep first
+        elif label in ("DELTA-UTC: A0,A1,T,W", "D-UTC A0,A1,T,W,S,U"):
+            # RINEX 2 GPS 3X,2D19.12,2I9; SBAS adds 1X,A5,1X,I2 (beyond column 60: ignored)
+            key = "GPUT" if label.startswith("DELTA") else "SBUT"
+            a0, a1, t, w = _tokens(path, n, line[:59], 4, label)
+            h.time_corrections[key] = (a0, a1, _int(t), _int(w), None, None)
+        elif label == "CORR TO SYSTEM TIME":  # RINEX 2 GLONASS: 3I6,3X,D19.12
+            y, m, d, tauc = _tokens(path, n, line[:60], 4, label)
+            h.time_corrections["GLUT"] = (tauc, None, _int(y), _int(m), _int(d), None)
+        elif label == "TIME SYSTEM CORR":  # RINEX 3: A4,1X,D17.10,D16.9,1X,I6,1X,I4,1X,A5,1X,I2
+            key = line[:4].strip()
+            a0, a1, t, w = _tokens(path, n, line[4:50], 4, f"TIME SYSTEM CORR {key}")
+            u = _tokens(path, n, line[57:60], 1, f"TIME SYSTEM CORR {key} UTC id")[0]
+            h.time_corrections[key] = (
+                a0,
+                a1,
+                _int(t),
+                _int(w),
+                line[51:56].strip() or None,
+                _int(u),
+            )
+        elif label == "LEAP SECONDS":
+            h.leap_seconds = _int(_tokens(path, n, line[:6], 1, label)[0])
+    raise FileFormatError(path, len(lines), "no END OF HEADER record (header not terminated)")
+
+
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[DdEe][+-]?\d+)?")
+
+
+def _tokens(path: StrPath, lineno: int, text: str, count: int, what: str) -> list[float]:
+    """The first ``count`` numbers of a header field (NaN for missing trailing ones)."""
+    found = _NUMBER.findall(text)
+    if _NUMBER.sub("", text).strip():
+        raise FileFormatError(path, lineno, f"unreadable {what} {text.strip()!r}")
+    vals = [float(t.translate(_D_TO_E)) for t in found[:count]]
+    return vals + [_NAN] * (count - len(vals))
+
+
+def _int(v: float) -> int | None:
+    return None if math.isnan(v) else round(v)
+
+
+def _parse_records(
+    path: StrPath,
+    lines: list[str],
+    start: int,
+    v2: bool,
+    file_system: str,
+    lenient: bool,
+) -> tuple[dict[str, list[dict[str, Any]]], list[SkippedLine]]:
+    # Record boundaries: a record's first line has the satellite in columns 1-3 (RINEX 3: a
+    # system letter in column 1; RINEX 2: the PRN in columns 1-2); continuation lines start
+    # with 3 (RINEX 2) or 4 (RINEX 3) blanks.
+    n = len(lines)
+    while n > start and not lines[n - 1].strip():
+        n -= 1
+    starts = [i for i in range(start, n) if (lines[i][:3].strip() if v2 else lines[i][:1].strip())]
+    if start < n and (not starts or starts[0] != start):
+        first_bad = start + 1
+        msg = "navigation data does not start with a satellite/epoch line"
+        if not lenient:
+            raise FileFormatError(path, first_bad, msg)
+        skipped = [SkippedLine(first_bad, msg)]
+    else:
+        skipped = []
+    rows: dict[str, list[dict[str, Any]]] = {}
+    ends = [*starts[1:], n]
+    for i0, i1 in zip(starts, ends, strict=True):
+        try:
+            sys_letter, row = _parse_record(path, lines, i0, i1, v2, file_system)
+        except FileFormatError as exc:
+            if not lenient:
+                raise
+            skipped.append(SkippedLine(i0 + 1, exc.message))
+            continue
+        rows.setdefault(sys_letter, []).append(row)
+    return rows, skipped
+
+
+def _parse_record(
+    path: StrPath, lines: list[str], i0: int, i1: int, v2: bool, file_system: str
+) -> tuple[str, dict[str, Any]]:
+    first = lines[i0]
+    lineno = i0 + 1
+    if v2:
+        sys_letter = file_system
+        prn_text, epoch_text, c0 = first[0:2], first[3:22], 22
+        c_orbit = 3
+    else:
+        sys_letter = first[0]
+        prn_text, epoch_text, c0 = first[1:3], first[4:23], 23
+        c_orbit = 4
+    if sys_letter not in _FIELDS:
+        raise FileFormatError(path, lineno, f"unknown satellite system letter {sys_letter!r}")
+    names = _FIELDS[sys_letter]
+    n_lines = i1 - i0
+    # Blank lines after the last expected one (some writers pad) are ignored.
+    while n_lines > _N_LINES[sys_letter] and not lines[i0 + n_lines - 1].strip():
+        n_lines -= 1
+    if n_lines < _N_LINES[sys_letter]:
+        raise FileFormatError(
+            path,
+            lineno,
+            f"truncated {sys_letter} record: {n_lines} of {_N_LINES[sys_letter]} lines",
+        )
+    if n_lines > _MAX_LINES[sys_letter]:
+        raise FileFormatError(
+            path,
+            i0 + _MAX_LINES[sys_letter] + 1,
+            f"{sys_letter} record has {n_lines} lines, expected {_N_LINES[sys_letter]} "
+            "(unexpected continuation line)",
+        )
+    try:
+        prn = int(prn_text)
+        parts = epoch_text.split()
+        if len(parts) != 6:
+            raise ValueError
+        year, month, day, hour, minute = (int(p) for p in parts[:5])
+        sec = float(parts[5])
+        if v2 or year < 100:
+            year += 2000 if year < 80 else (1900 if year < 100 else 0)
+        t_cal = calendar_gps_seconds(year, month, day, hour, minute, sec)
+    except ValueError:
+        raise FileFormatError(
+            path, lineno, f"unreadable satellite/epoch {first[:c0].strip()!r}"
+        ) from None
+    row: dict[str, Any] = {"sat": f"{sys_letter}{prn:02d}", "line": lineno, "n_lines": n_lines}
+    k = 0
+    for j in range(n_lines):
+        line = lines[i0 + j]
+        cols = (c0, c0 + 19, c0 + 38) if j == 0 else tuple(c_orbit + 19 * m for m in range(4))
+        for c in cols:
+            name = names[k] if k < len(names) else None
+            k += 1
+            if name is None:
+                continue
+            s = line[c : c + 19].strip()
+            if not s:
+                row[name] = _NAN
+                continue
+            try:
+                row[name] = float(s.translate(_D_TO_E))
+            except ValueError:
+                raise FileFormatError(
+                    path, i0 + j + 1, f"unreadable {name} {s!r} in {row['sat']} record"
+                ) from None
+    for name in names[k:]:
+        if name is not None:
+            row[name] = _NAN
+    ts = _TIME_SYSTEM[sys_letter]
+    if ts == "BDT":
+        row["toc_gps_s"] = t_cal - BDT_MINUS_GPST_S
+    elif ts == "UTC":
+        row["toc_gps_s"] = float(utc_to_gps(t_cal))
+    else:
+        row["toc_gps_s"] = t_cal
+    if sys_letter in "RS":
+        for name in _KM:
+            row[name] *= 1000.0
+    if sys_letter in _KEPLER:
+        row["toe_gps_s"] = _toe_gps_s(sys_letter, row["week"], row["toe_sow"], row["toc_gps_s"])
+    return sys_letter, row
+
+
+def _toe_gps_s(sys_letter: str, week: float, toe_sow: float, toc_gps_s: float) -> float:
+    """Full GPS seconds of toe from the written week, resolved against toc.
+
+    The written week may be rolled over (some writers give GPS weeks modulo 1024) or be the
+    week of toc rather than of toe near a week boundary; toe lies within half a week of toc.
+    """
+    if math.isnan(week) or math.isnan(toe_sow):
+        return _NAN
+    if sys_letter == "C":
+        t = (week + BDS_WEEK_OFFSET) * SECONDS_PER_WEEK + toe_sow - BDT_MINUS_GPST_S
+    else:
+        t = week * SECONDS_PER_WEEK + toe_sow
+        rollover = 1024 * SECONDS_PER_WEEK
+        t += round((toc_gps_s - t) / rollover) * rollover
+    return t + round((toc_gps_s - t) / SECONDS_PER_WEEK) * SECONDS_PER_WEEK
+
+
+def _tables(rows: dict[str, list[dict[str, Any]]]) -> dict[str, pd.DataFrame]:
+    import pandas as pd
+
+    tables: dict[str, pd.DataFrame] = {}
+    for sys_letter in "GRECJSI":
+        recs = rows.get(sys_letter)
+        if not recs:
+            continue
+        names = [c for c in _FIELDS[sys_letter] if c is not None]
+        if sys_letter == "R" and all(r["n_lines"] < 5 for r in recs):
+            names = names[:15]  # no record has the optional RINEX 3.05 fifth line
+        if sys_letter in "RS":  # state vector components together, as in the docstring
+            names = sorted(names, key=lambda c: _STATE_ORDER.get(c, 0))
+        if sys_letter in _KEPLER:
+            k = names.index("week") + 1
+            names = [*names[:k], "toe_gps_s", *names[k:]]
+        columns = ["sat", "toc_gps_s", *names, "line"]
+        data: dict[str, Any] = {}
+        for c in columns:
+            if c == "sat":
+                data[c] = np.array([r["sat"] for r in recs], dtype=object)
+            elif c == "line":
+                data[c] = np.array([r["line"] for r in recs], dtype=np.int64)
+            else:
+                vals = np.array([r.get(c, _NAN) for r in recs], dtype=float)
+                if c in _INT_FIELDS:
+                    vals = np.where(np.isnan(vals), -1, np.round(vals)).astype(np.int64)
+                data[c] = vals
+        df = pd.DataFrame(data, columns=columns)
+        df = df.sort_values(["sat", "toc_gps_s", "line"], kind="stable", ignore_index=True)
+        tables[sys_letter] = df
+    return tables
