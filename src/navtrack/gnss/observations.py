@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 
@@ -91,6 +92,12 @@ class ObsHeader:
         ``LEAP SECONDS`` when present.
     comments : tuple of str
         ``COMMENT`` lines.
+    first_obs_gps_s, last_obs_gps_s : float or None
+        ``TIME OF FIRST OBS`` / ``TIME OF LAST OBS`` as written in the header, in GPS seconds
+        (informative only: the epochs of the data are authoritative, and writers do get
+        ``TIME OF LAST OBS`` wrong).
+    glonass_fcn : mapping of str to int
+        ``GLONASS SLOT / FRQ #``: frequency channel number of each GLONASS satellite id.
     """
 
     version: float
@@ -107,9 +114,13 @@ class ObsHeader:
     obs_types: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     leap_seconds: int | None = None
     comments: tuple[str, ...] = ()
+    first_obs_gps_s: float | None = None
+    last_obs_gps_s: float | None = None
+    glonass_fcn: Mapping[str, int] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "obs_types", MappingProxyType(dict(self.obs_types)))
+        object.__setattr__(self, "glonass_fcn", MappingProxyType(dict(self.glonass_fcn)))
         for arr in (self.approx_xyz_m, self.antenna_delta_hen_m):
             if arr is not None:
                 _freeze(arr)
@@ -129,11 +140,12 @@ class Observations:
         Epoch time tags in GPS seconds (receiver time, as written; not snapped to a grid).
     epoch_flag : ndarray of int8, shape (n_epochs,)
         RINEX epoch flag of each observation epoch (0 OK, 1 power failure since the previous
-        epoch, 6 cycle-slip records).
+        epoch, 6 cycle-slip records: the values of a flag-6 epoch are slip counts, not
+        observations, and must be masked out by users of the values).
     clock_offset_s : ndarray, shape (n_epochs,)
         Receiver clock offset field (s), NaN when not written.
     sats : tuple of str, length n_sats
-        Satellite ids (``G05``, ``E11``, ...), sorted.
+        Satellite ids (``G05``, ``E11``, ...), sorted as strings.
     codes : tuple of str, length n_codes
         Observation codes as written in the file (union over systems, in first-seen order).
     values : ndarray, shape (n_epochs, n_sats, n_codes)
@@ -200,3 +212,62 @@ class Observations:
             return self.sats.index(sat)
         except ValueError:
             raise KeyError(f"satellite {sat!r} not observed") from None
+
+    def summary(self) -> dict[str, Any]:
+        """What the observations hold, as a JSON-serialisable dict (``navtrack rinex info``).
+
+        Keys: ``path``, ``version``, ``file_type``, ``marker``, ``receiver``, ``antenna``,
+        ``approx_xyz_m``, ``interval_s``, ``time_system``, ``first_epoch``/``last_epoch`` (ISO
+        8601 GPST, ms), ``n_epochs``, ``epoch_flags`` (epochs per flag), ``n_sats``,
+        ``sats_per_system``, ``codes_per_system``, ``events_by_flag``, ``skipped_lines`` and
+        ``warnings`` (header/data disagreements, e.g. a wrong ``TIME OF LAST OBS``).
+        """
+        h = self.header
+        present = self.systems
+        per_system = {s: sum(1 for sat in self.sats if sat[0] == s) for s in present}
+        codes = {s: list(h.obs_types.get(s, self.codes)) for s in present}
+        flags, counts = np.unique(self.epoch_flag, return_counts=True)
+        events: dict[str, int] = {}
+        for e in self.events:
+            events[str(e.flag)] = events.get(str(e.flag), 0) + 1
+        warnings = []
+        n = len(self.t_gps_s)
+        for label, written, actual in (
+            ("TIME OF FIRST OBS", h.first_obs_gps_s, self.t_gps_s[0] if n else None),
+            ("TIME OF LAST OBS", h.last_obs_gps_s, self.t_gps_s[-1] if n else None),
+        ):
+            if written is not None and actual is not None and abs(written - actual) > 5e-4:
+                warnings.append(
+                    f"header {label} {_iso(written)} differs from the data ({_iso(actual)})"
+                )
+        if n > 1 and np.any(np.diff(self.t_gps_s) <= 0):
+            warnings.append("epoch times are not strictly increasing")
+        return {
+            "path": self.path,
+            "version": h.version,
+            "file_type": h.file_type,
+            "marker": h.marker,
+            "receiver": h.receiver,
+            "antenna": h.antenna,
+            "approx_xyz_m": None if h.approx_xyz_m is None else h.approx_xyz_m.tolist(),
+            "interval_s": h.interval_s,
+            "time_system": h.time_system,
+            "first_epoch": _iso(self.t_gps_s[0]) if n else None,
+            "last_epoch": _iso(self.t_gps_s[-1]) if n else None,
+            "n_epochs": n,
+            "epoch_flags": {str(int(f)): int(c) for f, c in zip(flags, counts, strict=True)},
+            "n_sats": len(self.sats),
+            "sats_per_system": per_system,
+            "codes_per_system": codes,
+            "events_by_flag": events,
+            "skipped_lines": len(self.skipped),
+            "warnings": warnings,
+        }
+
+
+def _iso(t_gps_s: float) -> str:
+    """ISO 8601 GPST calendar string of GPS seconds, rounded to the millisecond."""
+    from navtrack.timescale import GPS_EPOCH
+
+    ms = np.timedelta64(round(float(t_gps_s) * 1000.0), "ms")
+    return str(np.datetime_as_string(GPS_EPOCH.astype("datetime64[ms]") + ms, unit="ms"))
