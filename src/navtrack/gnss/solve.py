@@ -118,11 +118,13 @@ def _regularise(N: FloatArray, observed: BoolArray) -> FloatArray:
 def _singular(N: FloatArray, rcond: float) -> BoolArray:
     """Normal matrices whose scaled condition is worse than ``1/rcond``."""
     d = np.sqrt(np.einsum("bpp->bp", N))
-    Ns = N / (d[:, :, None] * d[:, None, :])
-    eig = np.linalg.eigvalsh(Ns)
-    ok = np.isfinite(eig).all(axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        Ns = N / (d[:, :, None] * d[:, None, :])
+    ok = np.isfinite(Ns).all(axis=(1, 2))
     bad = ~ok
-    bad[ok] = eig[ok, 0] <= rcond * eig[ok, -1]
+    if ok.any():
+        eig = np.linalg.eigvalsh(Ns[ok])
+        bad[ok] = eig[:, 0] <= rcond * eig[:, -1]
     return bad
 
 
