@@ -7,6 +7,9 @@ independent XOR checksum and pynmea2 (NMEA), xml.etree and gpxpy (GPX/KML), IERS
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import xml.etree.ElementTree as ET
 from functools import reduce
 from pathlib import Path
@@ -287,3 +290,28 @@ def test_kml_structure(solution: pd.DataFrame, tmp_path: Path) -> None:
     table = solution_table(solution)
     assert lon == pytest.approx(table["lon_deg"][0], abs=1e-9)
     assert lat == pytest.approx(table["lat_deg"][0], abs=1e-9)
+
+
+def test_mapping_input_gives_the_same_files(solution: pd.DataFrame, tmp_path: Path) -> None:
+    mapping = {name: solution[name].to_numpy() for name in solution.columns}
+    mapping["excluded"] = [s.split() for s in solution["excluded"]]  # lists of ids
+    for suffix in (".csv", ".nmea", ".gpx", ".kml"):
+        a = write_solution(solution, tmp_path / f"frame{suffix}").read_bytes()
+        b = write_solution(mapping, tmp_path / f"dict{suffix}").read_bytes()
+        assert a == b, suffix
+
+
+def test_writers_do_not_import_pandas(tmp_path: Path) -> None:
+    # The positioning command is timed as a whole process; pandas alone costs ~0.25 s to import.
+    code = (
+        "import sys, numpy as np\n"
+        "from navtrack.io.solution import write_solution\n"
+        "d = {'t_gps_s': np.array([1.3e9, 1.3e9 + 1]), 'x_m': np.array([-3962107.0, np.nan]),\n"
+        "     'y_m': np.array([3381308.0, np.nan]), 'z_m': np.array([3668677.0, np.nan]),\n"
+        "     'status': np.array(['ok', 'too_few_sats']), 'n_sats': np.array([9, 3])}\n"
+        f"for s in ('csv', 'nmea', 'kml', 'gpx'): write_solution(d, r'{tmp_path}/x.' + s)\n"
+        "assert 'pandas' not in sys.modules, 'pandas imported'\n"
+    )
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2] / "src")}
+    subprocess.run([sys.executable, "-c", code], check=True, env=env)
+    assert (tmp_path / "x.csv").read_text().splitlines()[2].endswith(",,,,,,,,3,,too_few_sats,")

@@ -18,10 +18,10 @@ OGC 07-147r2 KML 2.2.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from os import fspath
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
 
@@ -32,10 +32,16 @@ from navtrack.errors import FileFormatError, MissingDependencyError
 if TYPE_CHECKING:
     import pandas as pd
 
+#: A solution frame: a pandas DataFrame or any mapping of column name to a 1-D array.
+SolutionLike: TypeAlias = "pd.DataFrame | Mapping[str, Any]"
+
 __all__ = [
     "FORMATS",
     "SOLUTION_COLUMNS",
+    "nmea_checksums",
+    "nmea_gga",
     "read_solution",
+    "solution_columns",
     "solution_table",
     "write_solution",
 ]
@@ -90,8 +96,20 @@ _RTKLIB_Q_TO_GGA = {1: 4, 2: 5, 3: 2, 4: 2, 5: 1, 6: 5}
 # --------------------------------------------------------------------------------------------
 
 
-def _missing(df: pd.DataFrame, names: Sequence[str]) -> list[str]:
-    return [n for n in names if n not in df.columns]
+def _keys(df: SolutionLike) -> list[str]:
+    return [str(k) for k in df]
+
+
+def _missing(df: SolutionLike, names: Sequence[str]) -> list[str]:
+    keys = set(_keys(df))
+    return [n for n in names if n not in keys]
+
+
+def _float(values: Any) -> FloatArray:
+    """float64 copy-free view of a column (pandas nullable NA -> NaN)."""
+    if hasattr(values, "to_numpy"):
+        return np.asarray(values.to_numpy(dtype=float, na_value=np.nan), dtype=float)
+    return np.asarray(values, dtype=float)
 
 
 def _excluded_strings(values: Any) -> np.ndarray:
@@ -107,13 +125,16 @@ def _excluded_strings(values: Any) -> np.ndarray:
     return np.array(out, dtype=object)
 
 
-def solution_table(df: pd.DataFrame) -> pd.DataFrame:
-    """The full solution table of a solution frame: every column of :data:`SOLUTION_COLUMNS`
-    in order, derived where absent, then the frame's other columns.
+def solution_columns(df: SolutionLike) -> dict[str, np.ndarray]:
+    """The full solution table of a solution frame as a dict of NumPy columns: every column of
+    :data:`SOLUTION_COLUMNS` in order, derived where absent, then the frame's other columns.
+
+    Needs no pandas: ``df`` may be a DataFrame or any mapping of column name to array (the
+    positioning command writes its output without importing pandas).
 
     Parameters
     ----------
-    df : pandas.DataFrame
+    df : pandas.DataFrame or mapping of str to array-like
         One row per epoch. Required: ``t_gps_s`` (GPS seconds), the position as ``x_m``,
         ``y_m``, ``z_m`` (ECEF, m) or as ``lat_deg``, ``lon_deg``, ``h_m`` (WGS-84, ellipsoidal
         height), and ``status``. Optional (written empty when absent): ``clock_m``, ``sd_e_m``,
@@ -123,16 +144,16 @@ def solution_table(df: pd.DataFrame) -> pd.DataFrame:
 
     Returns
     -------
-    pandas.DataFrame
-        A new frame (the input is not modified); ``t_gps_s`` is not among its columns.
+    dict of str to ndarray
+        New arrays, all of length n (the input is not modified); ``n_sats`` is float64 with NaN
+        where unknown; ``t_gps_s`` is not among the keys.
 
     Raises
     ------
     ValueError
-        Missing required columns (named in the message) or non-finite ``t_gps_s``.
+        Missing required columns (named in the message), columns of different lengths or
+        non-finite ``t_gps_s``.
     """
-    import pandas as pd
-
     has_xyz = not _missing(df, ("x_m", "y_m", "z_m"))
     has_llh = not _missing(df, ("lat_deg", "lon_deg", "h_m"))
     missing = _missing(df, ("t_gps_s", "status"))
@@ -141,16 +162,24 @@ def solution_table(df: pd.DataFrame) -> pd.DataFrame:
         missing = [*missing, "(or lat_deg, lon_deg, h_m)"]
     if missing:
         raise ValueError(f"df: solution frame lacks the columns {', '.join(missing)}")
-    t = df["t_gps_s"].to_numpy(dtype=float)
+    t = _float(df["t_gps_s"])
+    n = t.shape[0]
+    if t.ndim != 1:
+        raise ValueError(f"df: t_gps_s must be one-dimensional, got shape {t.shape}")
+    lengths = {k: len(df[k]) for k in _keys(df)}
+    wrong = sorted(k for k, m in lengths.items() if m != n)
+    if wrong:
+        raise ValueError(f"df: columns {', '.join(wrong)} do not have the {n} rows of t_gps_s")
     if not np.all(np.isfinite(t)):
         bad = int(np.flatnonzero(~np.isfinite(t))[0])
         raise ValueError(f"df: t_gps_s is not finite in row {bad}")
 
-    n = len(df)
     if has_xyz:
-        xyz = df[["x_m", "y_m", "z_m"]].to_numpy(dtype=float)
+        xyz = np.stack([_float(df["x_m"]), _float(df["y_m"]), _float(df["z_m"])], axis=-1)
     if has_llh:
-        llh_deg = df[["lat_deg", "lon_deg", "h_m"]].to_numpy(dtype=float)
+        llh_deg = np.stack(
+            [_float(df["lat_deg"]), _float(df["lon_deg"]), _float(df["h_m"])], axis=-1
+        )
     if not has_llh:
         llh = geodesy.ecef_to_geodetic(xyz)
         llh_deg = np.stack([np.degrees(llh[:, 0]), np.degrees(llh[:, 1]), llh[:, 2]], axis=-1)
@@ -160,44 +189,49 @@ def solution_table(df: pd.DataFrame) -> pd.DataFrame:
         )
     week, tow = timescale.week_tow(t)
     time_gps = np.datetime_as_string(timescale.to_datetime64(t).astype("datetime64[ms]"))
+    keys = set(_keys(df))
 
     def optional_float(name: str) -> FloatArray:
-        if name in df.columns:
-            return df[name].to_numpy(dtype=float)
-        return np.full(n, np.nan)
+        return _float(df[name]).copy() if name in keys else np.full(n, np.nan)
 
-    if "n_sats" in df.columns:
-        n_sats = pd.array(df["n_sats"].to_numpy(), dtype="Int64")
-    else:
-        n_sats = pd.array([None] * n, dtype="Int64")
-    excluded = (
-        _excluded_strings(df["excluded"]) if "excluded" in df.columns else np.full(n, "", object)
+    excluded = _excluded_strings(df["excluded"]) if "excluded" in keys else np.full(n, "", object)
+    cols: dict[str, np.ndarray] = {
+        "time_gps": time_gps,
+        "week": week,
+        "tow_s": tow,
+        "x_m": xyz[:, 0].copy(),
+        "y_m": xyz[:, 1].copy(),
+        "z_m": xyz[:, 2].copy(),
+        "lat_deg": llh_deg[:, 0].copy(),
+        "lon_deg": llh_deg[:, 1].copy(),
+        "h_m": llh_deg[:, 2].copy(),
+        "clock_m": optional_float("clock_m"),
+        "sd_e_m": optional_float("sd_e_m"),
+        "sd_n_m": optional_float("sd_n_m"),
+        "sd_u_m": optional_float("sd_u_m"),
+        "n_sats": optional_float("n_sats"),
+        "pdop": optional_float("pdop"),
+        "status": np.array(df["status"], copy=True),
+        "excluded": excluded,
+    }
+    for k in _keys(df):
+        if k not in cols and k != "t_gps_s":
+            cols[k] = np.array(df[k], copy=True)
+    return cols
+
+
+def solution_table(df: SolutionLike) -> pd.DataFrame:
+    """:func:`solution_columns` as a pandas DataFrame (``n_sats`` as nullable ``Int64``)."""
+    return _frame(solution_columns(df))
+
+
+def _frame(cols: dict[str, np.ndarray]) -> pd.DataFrame:
+    import pandas as pd
+
+    table = pd.DataFrame(cols)
+    table["n_sats"] = pd.array(
+        [None if np.isnan(v) else int(v) for v in cols["n_sats"].tolist()], dtype="Int64"
     )
-    table = pd.DataFrame(
-        {
-            "time_gps": time_gps,
-            "week": week,
-            "tow_s": tow,
-            "x_m": xyz[:, 0],
-            "y_m": xyz[:, 1],
-            "z_m": xyz[:, 2],
-            "lat_deg": llh_deg[:, 0],
-            "lon_deg": llh_deg[:, 1],
-            "h_m": llh_deg[:, 2],
-            "clock_m": optional_float("clock_m"),
-            "sd_e_m": optional_float("sd_e_m"),
-            "sd_n_m": optional_float("sd_n_m"),
-            "sd_u_m": optional_float("sd_u_m"),
-            "n_sats": n_sats,
-            "pdop": optional_float("pdop"),
-            "status": df["status"].to_numpy(),
-            "excluded": excluded,
-        },
-        index=pd.RangeIndex(n),
-    )
-    extras = [c for c in df.columns if c not in table.columns and c != "t_gps_s"]
-    for c in extras:
-        table[c] = df[c].to_numpy()
     return table
 
 
@@ -239,7 +273,7 @@ def _open_for_writing(path: Path) -> Any:
 
 
 def write_solution(
-    df: pd.DataFrame,
+    df: SolutionLike,
     path: StrPath,
     *,
     ok_status: object = "ok",
@@ -249,18 +283,19 @@ def write_solution(
 
     Parameters
     ----------
-    df : pandas.DataFrame
-        One row per epoch; columns as :func:`solution_table` describes (``t_gps_s``, position,
-        ``status`` required). Rows are written in the given order, failed epochs included.
+    df : pandas.DataFrame or mapping of str to array-like
+        One row per epoch; columns as :func:`solution_columns` describes (``t_gps_s``,
+        position, ``status`` required). Rows are written in the given order, failed epochs
+        included. CSV, NMEA, KML and GPX are written without pandas.
     path : str or path-like
         Output file; the suffix chooses the format:
 
         ``.csv``
             :data:`SOLUTION_COLUMNS` in that order, then the frame's extra columns. Times are
             GPST: ``time_gps`` ISO 8601 to the millisecond, ``tow_s`` to the microsecond;
-            metres to 0.1 mm, degrees to 1e-9. Missing values are empty fields.
+            metres to 0.1 mm, degrees to 1e-9, DOP to 0.001; missing values are empty fields.
         ``.parquet``
-            The same table at full precision (needs pyarrow, extra ``parquet``).
+            The same table at full precision (needs pandas and pyarrow, extra ``parquet``).
         ``.nmea``
             One ``$..GGA`` sentence per epoch: UTC time (GPST minus leap seconds) to 0.01 s,
             latitude/longitude as ``ddmm.mmmmmm``/``dddmm.mmmmmm``, fix quality 1 for valid
@@ -294,7 +329,7 @@ def write_solution(
     OSError
         The file cannot be written; the message names the path.
     MissingDependencyError
-        ``.parquet`` without pyarrow.
+        ``.parquet`` without pandas or pyarrow.
     """
     p = Path(path)
     suffix = p.suffix.lower()
@@ -305,46 +340,76 @@ def write_solution(
         )
     if len(talker) != 2 or not talker.isalpha() or not talker.isupper():
         raise ValueError(f"talker: expected two upper-case letters, got {talker!r}")
-    table = solution_table(df)
+    cols = solution_columns(df)
     _check_writable(p)
+    if suffix == ".parquet":
+        _write_parquet(cols, p)
+        return p
     if suffix == ".csv":
-        _write_csv(table, p)
-    elif suffix == ".parquet":
-        _write_parquet(table, p)
+        text = _csv(cols)
     else:
-        ok = _ok_mask(table["status"], ok_status) & np.isfinite(
-            table[["lat_deg", "lon_deg", "h_m"]].to_numpy(float)
-        ).all(axis=1)
-        t = df["t_gps_s"].to_numpy(float)
+        llh = np.stack([cols["lat_deg"], cols["lon_deg"], cols["h_m"]], axis=-1)
+        ok = _ok_mask(cols["status"], ok_status) & np.isfinite(llh).all(axis=1)
+        t = _float(df["t_gps_s"])
         if suffix == ".nmea":
-            text = "".join(s + "\r\n" for s in nmea_gga(table, t, ok, talker=talker))
+            text = "".join(s + "\r\n" for s in nmea_gga(cols, t, ok, talker=talker))
         elif suffix == ".kml":
-            text = _kml(table, ok)
+            text = _kml(cols, ok)
         else:
-            text = _gpx(table, t, ok)
-        with _open_for_writing(p) as fh:
-            fh.write(text)
+            text = _gpx(cols, t, ok)
+    with _open_for_writing(p) as fh:
+        fh.write(text)
     return p
 
 
-def _write_csv(table: pd.DataFrame, path: Path) -> None:
-    out = table.copy()
-    for name, dec in _CSV_DECIMALS.items():
-        out[name] = np.round(out[name].to_numpy(float), dec)
-    with _open_for_writing(path) as fh:
-        out.to_csv(fh, index=False, lineterminator="\n")
+def _csv_quote(values: Any) -> list[str]:
+    """Strings as RFC 4180 fields (quoted only when they hold a comma, quote or line end)."""
+    out = []
+    for v in values:
+        s = "" if v is None or (isinstance(v, float) and np.isnan(v)) else str(v)
+        if any(c in s for c in ',"\r\n'):
+            s = '"' + s.replace('"', '""') + '"'
+        out.append(s)
+    return out
 
 
-def _write_parquet(table: pd.DataFrame, path: Path) -> None:
+def _csv_floats(values: FloatArray, decimals: int | None) -> list[str]:
+    """Shortest round-trip text of the values rounded to ``decimals``; NaN as empty field."""
+    a = values if decimals is None else np.round(values, decimals)
+    out = [repr(v) for v in a.tolist()]
+    for i in np.flatnonzero(np.isnan(a)).tolist():
+        out[i] = ""
+    return out
+
+
+def _csv_column(name: str, values: np.ndarray) -> list[str]:
+    if name == "n_sats":
+        return [str(int(v)) if v == v else "" for v in values.tolist()]
+    kind = values.dtype.kind
+    if kind == "f":
+        return _csv_floats(values, _CSV_DECIMALS.get(name))
+    if kind in "iub":
+        return [str(v) for v in values.tolist()]
+    return _csv_quote(values.tolist())
+
+
+def _csv(cols: dict[str, np.ndarray]) -> str:
+    fields = [_csv_column(name, values) for name, values in cols.items()]
+    header = ",".join(_csv_quote(list(cols)))
+    return header + "\n" + "".join(",".join(row) + "\n" for row in zip(*fields, strict=True))
+
+
+def _write_parquet(cols: dict[str, np.ndarray], path: Path) -> None:
     try:
         import pyarrow  # noqa: F401
     except ImportError:
         raise MissingDependencyError("pyarrow", "parquet", "Parquet solution files") from None
-    out = table.copy()
-    out["status"] = out["status"].astype(str) if out["status"].dtype == object else out["status"]
-    out["excluded"] = out["excluded"].astype(str)
+    table = _frame(cols)
+    if table["status"].dtype == object:
+        table["status"] = table["status"].astype(str)
+    table["excluded"] = table["excluded"].astype(str)
     try:
-        out.to_parquet(path, index=False)
+        table.to_parquet(path, index=False)
     except OSError as exc:
         raise OSError(exc.errno, f"cannot write solution file: {exc}", fspath(path)) from exc
 
@@ -388,14 +453,14 @@ def _ddmm(value_deg: FloatArray, deg_width: int, decimals: int) -> list[str]:
 
 
 def nmea_gga(
-    table: pd.DataFrame, t_gps_s: FloatArray, ok: BoolArray, *, talker: str = "GP"
+    cols: Mapping[str, np.ndarray], t_gps_s: FloatArray, ok: BoolArray, *, talker: str = "GP"
 ) -> list[str]:
     """GGA sentences (with ``$`` and checksum, without line ends) of a solution table.
 
     Parameters
     ----------
-    table : pandas.DataFrame
-        As :func:`solution_table` returns, n rows.
+    cols : mapping of str to ndarray
+        As :func:`solution_columns` returns, n rows.
     t_gps_s : ndarray, shape (n,)
         GPS seconds of the rows.
     ok : ndarray of bool, shape (n,)
@@ -407,7 +472,7 @@ def nmea_gga(
     -------
     list of str, length n
     """
-    n = len(table)
+    n = len(t_gps_s)
     utc_cs = np.round(timescale.gps_to_utc(t_gps_s) * 100.0).astype(np.int64)
     # 1980-01-06 00:00 UTC is a midnight, so the time of day is the remainder modulo one day.
     tod = utc_cs % 8_640_000
@@ -416,23 +481,23 @@ def nmea_gga(
         f"{h:02d}{m:02d}{c // 100:02d}.{c % 100:02d}"
         for h, m, c in zip(hh.tolist(), mm.tolist(), cs.tolist(), strict=True)
     ]
-    lat = table["lat_deg"].to_numpy(float)
-    lon = table["lon_deg"].to_numpy(float)
-    h = table["h_m"].to_numpy(float)
+    lat = _float(cols["lat_deg"])
+    lon = _float(cols["lon_deg"])
+    h = _float(cols["h_m"])
     lat_s = _ddmm(np.where(ok, lat, 0.0), 2, 6)
     lon_s = _ddmm(np.where(ok, lon, 0.0), 3, 6)
     ns = np.where(lat >= 0.0, "N", "S")
     ew = np.where(lon >= 0.0, "E", "W")
-    if "q" in table.columns:
-        q = table["q"].to_numpy()
+    if "q" in cols:
+        q = np.asarray(cols["q"])
         quality = np.array([_RTKLIB_Q_TO_GGA.get(int(v), 0) for v in q], dtype=np.int64)
     else:
         quality = np.ones(n, dtype=np.int64)
     quality = np.where(ok, quality, 0)
-    n_sats = table["n_sats"].to_numpy(dtype=float, na_value=np.nan)
+    n_sats = _float(cols["n_sats"])
     sats = [f"{int(v):02d}" if np.isfinite(v) else "" for v in n_sats.tolist()]
-    dop_col = "hdop" if "hdop" in table.columns else "pdop"
-    dop = table[dop_col].to_numpy(float)
+    dop_col = "hdop" if "hdop" in cols else "pdop"
+    dop = _float(cols[dop_col])
     dops = [f"{v:.2f}" if np.isfinite(v) else "" for v in dop.tolist()]
     bodies = []
     for i in range(n):
@@ -459,13 +524,13 @@ def _utc_iso(t_gps_s: FloatArray) -> np.ndarray:
     return np.char.add(np.datetime_as_string(utc), "Z")
 
 
-def _kml(table: pd.DataFrame, ok: BoolArray) -> str:
-    lat = table["lat_deg"].to_numpy(float)[ok]
-    lon = table["lon_deg"].to_numpy(float)[ok]
+def _kml(cols: Mapping[str, np.ndarray], ok: BoolArray) -> str:
+    lat = _float(cols["lat_deg"])[ok]
+    lon = _float(cols["lon_deg"])[ok]
     coords = " ".join(f"{a:.9f},{b:.9f}" for a, b in zip(lon.tolist(), lat.tolist(), strict=True))
-    n, n_ok = len(table), int(ok.sum())
-    first = table["time_gps"].iloc[0] if n else ""
-    last = table["time_gps"].iloc[-1] if n else ""
+    n, n_ok = len(ok), int(ok.sum())
+    first = cols["time_gps"][0] if n else ""
+    last = cols["time_gps"][-1] if n else ""
     desc = (
         f"navtrack solution, {n} epochs ({first} to {last} GPST), {n_ok} with a valid "
         f"position drawn, {n - n_ok} without a valid position left out"
@@ -485,23 +550,23 @@ def _kml(table: pd.DataFrame, ok: BoolArray) -> str:
     )
 
 
-def _gpx(table: pd.DataFrame, t_gps_s: FloatArray, ok: BoolArray) -> str:
-    n, n_ok = len(table), int(ok.sum())
+def _gpx(cols: Mapping[str, np.ndarray], t_gps_s: FloatArray, ok: BoolArray) -> str:
+    n, n_ok = len(ok), int(ok.sum())
     idx = np.flatnonzero(ok)
     times = _utc_iso(t_gps_s[idx])
-    lat = table["lat_deg"].to_numpy(float)[idx]
-    lon = table["lon_deg"].to_numpy(float)[idx]
-    h = table["h_m"].to_numpy(float)[idx]
-    n_sats = table["n_sats"].to_numpy(dtype=float, na_value=np.nan)[idx]
+    lat = _float(cols["lat_deg"])[idx]
+    lon = _float(cols["lon_deg"])[idx]
+    h = _float(cols["h_m"])[idx]
+    n_sats = _float(cols["n_sats"])[idx]
 
     def element(name: str, values: FloatArray, fmt: str) -> list[str]:
         return [f"<{name}>{v:{fmt}}</{name}>" if np.isfinite(v) else "" for v in values.tolist()]
 
     sats = element("sat", n_sats, ".0f")
     dops = [
-        element(name, table[name].to_numpy(float)[idx], ".2f")
+        element(name, _float(cols[name])[idx], ".2f")
         for name in ("hdop", "vdop", "pdop")
-        if name in table.columns
+        if name in cols
     ]
     dop_str = ["".join(parts) for parts in zip(*dops, strict=True)] if dops else [""] * len(idx)
     # A new segment starts wherever the previous row was not a valid fix.
