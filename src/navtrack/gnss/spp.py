@@ -677,7 +677,6 @@ def solve_spp(
     llh = g["llh"]
     rot = enu_rotation(llh[:, 0], llh[:, 1])
     los_enu = np.einsum("eij,esj->esi", rot, g["los"])
-    used = lsq.valid & (status == SppStatus.OK)[:, None]
     dop = dops(los_enu, lsq.valid)
     conv = status == SppStatus.OK
     if cfg.chi2_alpha > 0:
@@ -687,6 +686,7 @@ def solve_spp(
     gdop = dop[:, 0]
     status[conv & (status == SppStatus.OK) & ~(gdop <= cfg.max_gdop)] = SppStatus.HIGH_DOP
     solved = np.isin(status, (SppStatus.OK, SppStatus.REJECTED_VALIDITY, SppStatus.HIGH_DOP))
+    used = lsq.valid & solved[:, None]
     pos = np.where(solved[:, None], x[:, :3], np.nan)
     clock_m = np.where(solved, x[:, 3], np.nan)
     group_seen = np.stack([(lsq.valid & (group == k)).any(axis=1) for k in range(n_groups)], 1)
@@ -719,23 +719,86 @@ def solve_spp(
     )
 
 
-def solution_table(result: SppResult) -> pd.DataFrame:
-    """The solution as a table with the columns of ``navtrack.io.solution.write_solution``.
+def subset_epochs(obs: Observations, epochs: slice | IntArray) -> Observations:
+    """The observations of some epochs only (same satellites and codes)."""
+    from navtrack.gnss.observations import Observations as Obs
 
-    Columns: ``time_gps`` (ISO 8601 GPST), ``week``, ``tow_s``, ``x_m``, ``y_m``, ``z_m``,
-    ``lat_deg``, ``lon_deg``, ``h_m``, ``clock_m``, ``sd_e_m``, ``sd_n_m``, ``sd_u_m``,
-    ``n_sats``, ``pdop``, ``status`` (name), ``excluded`` (space-separated ids; empty until RAIM
-    lands). One row per epoch, all statuses (positions NaN where none was estimated).
+    return Obs(
+        path=obs.path,
+        header=obs.header,
+        t_gps_s=np.array(obs.t_gps_s[epochs]),
+        epoch_flag=np.array(obs.epoch_flag[epochs]),
+        clock_offset_s=np.array(obs.clock_offset_s[epochs]),
+        sats=obs.sats,
+        codes=obs.codes,
+        values=np.array(obs.values[epochs]),
+        lli=np.array(obs.lli[epochs]),
+        ssi=np.array(obs.ssi[epochs]),
+    )
+
+
+def concatenate_results(parts: list[SppResult]) -> SppResult:
+    """Join results of consecutive epoch blocks (same satellites); clock groups are aligned by
+    name, ISBs and covariance entries of groups absent from a block are NaN."""
+    if not parts:
+        raise ValueError("parts: need at least one result")
+    groups = [g for g in "GRECJI" if any(g in p.clock_groups for p in parts)]
+    if parts[0].clock_groups and parts[0].clock_groups[0] in groups:
+        first = parts[0].clock_groups[0]
+        groups.remove(first)
+        groups.insert(0, first)
+    n_p = 3 + len(groups)
+
+    def align(p: SppResult) -> tuple[FloatArray, FloatArray]:
+        e = p.t_gps_s.size
+        isb = np.full((e, len(groups) - 1), np.nan)
+        cov = np.full((e, n_p, n_p), np.nan)
+        src = [0, 1, 2] + [3 + p.clock_groups.index(g) if g in p.clock_groups else -1
+                           for g in groups]
+        for i, si in enumerate(src):
+            for j, sj in enumerate(src):
+                if si >= 0 and sj >= 0:
+                    cov[:, i, j] = p.cov[:, si, sj]
+        for k, g in enumerate(groups[1:]):
+            if g in p.clock_groups[1:]:
+                isb[:, k] = p.isb_m[:, p.clock_groups.index(g) - 1]
+        return isb, cov
+
+    aligned = [align(p) for p in parts]
+
+    def cat(name: str) -> np.ndarray:
+        return np.concatenate([getattr(p, name) for p in parts])
+
+    return SppResult(
+        t_gps_s=cat("t_gps_s"), sats=parts[0].sats, clock_groups=tuple(groups),
+        pos_m=cat("pos_m"), clock_m=cat("clock_m"),
+        isb_m=np.concatenate([a[0] for a in aligned]),
+        cov=np.concatenate([a[1] for a in aligned]), cov_enu_m2=cat("cov_enu_m2"),
+        status=cat("status"), used=cat("used"), observed=cat("observed"),
+        no_ephemeris=cat("no_ephemeris"), residuals_m=cat("residuals_m"), sigma_m=cat("sigma_m"),
+        azel_rad=cat("azel_rad"), dop=cat("dop"), chi2=cat("chi2"), dof=cat("dof"),
+        iterations=cat("iterations"),
+    )
+
+
+def solution_columns(result: SppResult) -> dict[str, np.ndarray]:
+    """The solution as columns (plain arrays, no pandas), one row per epoch, all statuses.
+
+    Columns: ``time_gps`` (ISO 8601 GPST, ms), ``week``, ``tow_s``, ``x_m``, ``y_m``, ``z_m``,
+    ``lat_deg``, ``lon_deg``, ``h_m`` (ellipsoidal), ``clock_m``, ``sd_e_m``, ``sd_n_m``,
+    ``sd_u_m`` (formal standard deviations), ``n_sats`` (used), ``pdop``, ``status`` (name),
+    ``excluded`` (space-separated ids; empty until RAIM lands), then ``t_gps_s``, ``gdop``,
+    ``hdop``, ``vdop`` and one ``isb_<sys>_m`` per further clock group. Positions are NaN
+    where no estimate exists.
     """
-    import pandas as pd
-
     from navtrack.timescale import to_datetime64, week_tow
 
     week, tow = week_tow(result.t_gps_s)
     llh = ecef_to_geodetic(result.pos_m)
     sd = np.sqrt(np.einsum("eii->ei", result.cov_enu_m2))
     times = np.datetime_as_string(to_datetime64(result.t_gps_s), unit="ms")
-    return pd.DataFrame({
+    n = result.t_gps_s.size
+    cols: dict[str, np.ndarray] = {
         "time_gps": times,
         "week": week,
         "tow_s": tow,
@@ -749,8 +812,23 @@ def solution_table(result: SppResult) -> pd.DataFrame:
         "sd_e_m": sd[:, 0],
         "sd_n_m": sd[:, 1],
         "sd_u_m": sd[:, 2],
-        "n_sats": result.used.sum(axis=1) if result.used.size else np.zeros(len(week), int),
+        "n_sats": result.used.sum(axis=1) if result.used.size else np.zeros(n, np.int64),
         "pdop": result.dop[:, 1],
         "status": np.array(STATUS_NAMES, dtype=object)[result.status.astype(np.int64)],
-        "excluded": [""] * len(week),
-    })
+        "excluded": np.full(n, "", dtype=object),
+        "t_gps_s": result.t_gps_s,
+        "gdop": result.dop[:, 0],
+        "hdop": result.dop[:, 2],
+        "vdop": result.dop[:, 3],
+    }
+    for k, g in enumerate(result.clock_groups[1:]):
+        cols[f"isb_{g}_m"] = result.isb_m[:, k]
+    return cols
+
+
+def solution_table(result: SppResult) -> pd.DataFrame:
+    """The solution as a pandas DataFrame with the columns of :func:`solution_columns` (the
+    input of ``navtrack.io.solution.write_solution`` and ``navtrack.plots.gnss``)."""
+    import pandas as pd
+
+    return pd.DataFrame(solution_columns(result))
