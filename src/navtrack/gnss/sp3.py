@@ -1,0 +1,496 @@
+"""SP3 precise orbit and clock files (SP3-a, SP3-c, SP3-d).
+
+:func:`read_sp3` turns an SP3 file into an :class:`Sp3`: epoch times in GPS seconds, satellite
+ids, ECEF positions (m), clock offsets (s), and -- when the file has them -- velocities, clock
+rates, standard deviations and the orbit/clock flags, as fixed ``(epochs, satellites, ...)``
+arrays with NaN for missing values.
+
+Units in the file are km, µs, dm/s and 10⁻⁴ µs/s; navtrack converts them to m, s, m/s and s/s.
+Positions written as ``0.000000`` (all three components) and clocks written as
+``999999.999999`` mean "bad or absent" and become NaN. Epochs are converted from the file's time
+system (``%c`` line; SP3-a is always GPS) to GPS time.
+
+References
+----------
+Hilla, S., "The Extended Standard Product 3 Orbit Format (SP3-d)", IGS, 2016 (and SP3-c, 2010;
+Remondi, SP3-a, 1989).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from os import fspath
+from typing import Any
+
+import numpy as np
+
+from navtrack._typing import FloatArray, Int8Array, StrPath
+from navtrack.errors import FileFormatError
+from navtrack.timescale import calendar_gps_seconds, to_datetime64, to_gps
+
+__all__ = ["Sp3", "Sp3Header", "read_sp3"]
+
+_FILE_TYPES = {"G", "M", "R", "E", "C", "J", "I", "L", "S"}
+_BAD_CLOCK = 999999.0  # 999999.999999 marks a bad/absent clock (any value >= this)
+_FLAG_BITS = ((74, 1), (75, 2), (78, 4), (79, 8))  # column -> flag bit (E, P, M, P)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Sp3Header:
+    """Header of an SP3 file.
+
+    Attributes
+    ----------
+    version : str
+        Format version letter (``a``, ``c``, ``d``).
+    pos_vel : str
+        ``P`` (positions only) or ``V`` (positions and velocities).
+    n_epochs : int
+        Number of epochs the header announces.
+    data_used : str
+        Data used descriptor (``d+D``, ``DD+AD`` ...).
+    coordinate_system : str
+        Reference frame (``IGb14``, ``WGS84`` ...).
+    orbit_type : str
+        ``FIT``, ``EXT``, ``BCT``, ``HLM``.
+    agency : str
+        Agency code.
+    file_type : str
+        ``G``, ``M``, ``R``, ``E``, ``C``, ``J``, ``I`` from ``%c`` (``G`` for SP3-a).
+    time_system : str
+        Time system of the epochs as written (``GPS``, ``UTC``, ``GAL``, ``BDT`` ...); the
+        result's times are GPS time.
+    interval_s : float
+        Nominal epoch interval (s).
+    accuracy_m : ndarray, shape (n_sats,)
+        Satellite accuracy ``2**exponent`` mm converted to m, NaN where the exponent is 0
+        (unknown).
+    base_pos_vel : float
+        ``%f`` floating-point base for position/velocity standard deviations (NaN if absent).
+    base_clk_rate : float
+        ``%f`` base for clock/clock-rate standard deviations (NaN if absent).
+    comments : tuple of str
+        ``/*`` comment lines.
+    """
+
+    version: str
+    pos_vel: str
+    n_epochs: int
+    data_used: str
+    coordinate_system: str
+    orbit_type: str
+    agency: str
+    file_type: str
+    time_system: str
+    interval_s: float
+    accuracy_m: FloatArray
+    base_pos_vel: float = math.nan
+    base_clk_rate: float = math.nan
+    comments: tuple[str, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        self.accuracy_m.flags.writeable = False
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Sp3:
+    """Precise orbits and clocks of one SP3 file.
+
+    Attributes
+    ----------
+    path : str
+        Source file.
+    header : Sp3Header
+        Header fields.
+    t_gps_s : ndarray, shape (n_epochs,)
+        Epoch times in GPS seconds.
+    sats : tuple of str, length n_sats
+        Satellite ids (``G01``, ``R07``, ``E11``, ...), in header order. SP3-a ids without a
+        system letter are GPS.
+    pos_m : ndarray, shape (n_epochs, n_sats, 3)
+        Satellite ECEF position (m) in :attr:`Sp3Header.coordinate_system`; NaN where missing
+        or written as 0.000000.
+    clock_s : ndarray, shape (n_epochs, n_sats)
+        Satellite clock offset (s); NaN where missing or written as 999999.999999.
+    vel_mps : ndarray, shape (n_epochs, n_sats, 3), or None
+        Velocity (m/s) from ``V`` records; None when the file has none.
+    clock_rate : ndarray, shape (n_epochs, n_sats), or None
+        Clock rate (s/s) from ``V`` records; None when the file has none.
+    pos_sd_m : ndarray, shape (n_epochs, n_sats, 3), or None
+        Position standard deviations ``base_pos_vel**exponent`` mm converted to m; None when no
+        record has them, NaN where blank.
+    clock_sd_s : ndarray, shape (n_epochs, n_sats), or None
+        Clock standard deviation ``base_clk_rate**exponent`` ps converted to s.
+    flags : ndarray of int8, shape (n_epochs, n_sats)
+        Bit mask of the ``P`` record flags: 1 clock event, 2 clock predicted, 4 maneuver,
+        8 orbit predicted.
+
+    References
+    ----------
+    SP3-d (IGS, 2016) section 2 (header) and 3 (records).
+    """
+
+    path: str
+    header: Sp3Header
+    t_gps_s: FloatArray
+    sats: tuple[str, ...]
+    pos_m: FloatArray
+    clock_s: FloatArray
+    vel_mps: FloatArray | None = None
+    clock_rate: FloatArray | None = None
+    pos_sd_m: FloatArray | None = None
+    clock_sd_s: FloatArray | None = None
+    flags: Int8Array | None = None
+
+    def __post_init__(self) -> None:
+        n_e, n_s = len(self.t_gps_s), len(self.sats)
+        shapes = {
+            "pos_m": (n_e, n_s, 3),
+            "clock_s": (n_e, n_s),
+            "vel_mps": (n_e, n_s, 3),
+            "clock_rate": (n_e, n_s),
+            "pos_sd_m": (n_e, n_s, 3),
+            "clock_sd_s": (n_e, n_s),
+            "flags": (n_e, n_s),
+        }
+        for name, shape in shapes.items():
+            arr = getattr(self, name)
+            if arr is None:
+                continue
+            if arr.shape != shape:
+                raise ValueError(f"{name}: expected shape {shape}, got {arr.shape}")
+            arr.flags.writeable = False
+        self.t_gps_s.flags.writeable = False
+
+    @property
+    def time(self) -> np.ndarray:
+        """Epoch times as GPST calendar ``datetime64[ns]``."""
+        return to_datetime64(self.t_gps_s)
+
+    def sat_index(self, sat: str) -> int:
+        """Column of a satellite id in the satellite axis."""
+        try:
+            return self.sats.index(sat)
+        except ValueError:
+            raise KeyError(f"satellite {sat!r} not in the SP3 file") from None
+
+    def summary(self) -> dict[str, Any]:
+        """What the file holds, as plain Python values (for ``navtrack rinex info``)."""
+        per_system: dict[str, int] = {}
+        for s in self.sats:
+            per_system[s[0]] = per_system.get(s[0], 0) + 1
+        span = [str(t)[:19] for t in self.time[[0, -1]]] if len(self.t_gps_s) else []
+        return {
+            "file": self.path,
+            "version": f"SP3-{self.header.version}",
+            "type": f"precise orbit{' + velocity' if self.vel_mps is not None else ''}",
+            "agency": self.header.agency,
+            "coordinate system": self.header.coordinate_system,
+            "orbit type": self.header.orbit_type,
+            "time system": f"{self.header.time_system} (converted to GPS)",
+            "epochs": len(self.t_gps_s),
+            "interval (s)": self.header.interval_s,
+            "time span (GPST)": span,
+            "satellites": per_system,
+            "positions missing": int(np.isnan(self.pos_m[..., 0]).sum()),
+            "clocks missing": int(np.isnan(self.clock_s).sum()),
+        }
+
+
+def read_sp3(path: StrPath) -> Sp3:
+    """Read an SP3-a/c/d precise orbit (and clock) file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        SP3 file, plain or compressed (gzip, bzip2, ``.Z``).
+
+    Returns
+    -------
+    Sp3
+
+    Raises
+    ------
+    FileFormatError
+        Not an SP3 file, an unreadable header or data field, a satellite not listed in the
+        header, a data record before the first epoch, or a file whose number of epochs
+        differs from the header's (truncated file); the message names the file and line.
+    """
+    from navtrack.gnss.rinex._io import read_bytes
+
+    text = read_bytes(path).decode("ascii", "replace")
+    lines = text.splitlines()
+    first = lines[0]
+    if not (first.startswith("#") and len(first) > 2 and first[1] in "abcd"):
+        raise FileFormatError(path, 1, "not an SP3 file (line 1 does not start with #a/#c/#d)")
+    version = first[1]
+    pos_vel = first[2]
+    if pos_vel not in "PV":
+        raise FileFormatError(path, 1, f"position/velocity flag {pos_vel!r} is not P or V")
+    try:
+        n_epochs = int(first[32:39])
+    except ValueError:
+        raise FileFormatError(path, 1, f"unreadable number of epochs {first[32:39]!r}") from None
+    interval_s = math.nan
+    if len(lines) > 1 and lines[1].startswith("##"):
+        interval_s = _float(path, 2, lines[1][24:38], "epoch interval")
+
+    sat_ids: list[str] = []
+    acc_exp: list[int] = []
+    n_sats = -1
+    file_type, time_system = "G", "GPS"
+    base_pos, base_clk = math.nan, math.nan
+    comments: list[str] = []
+    n_c = n_f = 0
+    i = 2
+    n_lines = len(lines)
+    while i < n_lines and not lines[i].startswith("*"):
+        line = lines[i]
+        lineno = i + 1
+        if line.startswith("++"):
+            acc_exp.extend(_int(path, lineno, line[k : k + 3]) for k in range(9, 60, 3))
+        elif line.startswith("+"):
+            if n_sats < 0:
+                n_sats = _int(path, lineno, line[3:6])
+            sat_ids.extend(line[k : k + 3] for k in range(9, 60, 3))
+        elif line.startswith("%c"):
+            if n_c == 0:  # SP3-a writers fill the unused %c fields with "c"
+                file_type = line[3:5].strip()
+                file_type = file_type if file_type.upper() in _FILE_TYPES else "G"
+                time_system = line[9:12].strip()
+            n_c += 1
+        elif line.startswith("%f"):
+            if n_f == 0:
+                base_pos = _float(path, lineno, line[3:13], "position base")
+                base_clk = _float(path, lineno, line[14:26], "clock base")
+                # 0 means "not used" (SP3-a writers and files without standard deviations)
+                base_pos = base_pos if base_pos > 0 else math.nan
+                base_clk = base_clk if base_clk > 0 else math.nan
+            n_f += 1
+        elif line.startswith("/*"):
+            comments.append(line[3:].rstrip())
+        elif line.startswith("%i"):
+            pass
+        elif line.strip() and not line.startswith("EOF"):
+            raise FileFormatError(path, lineno, f"unexpected header line {line[:20]!r}")
+        i += 1
+    if n_sats < 0:
+        raise FileFormatError(path, 3, "no satellite list ('+' lines) in the header")
+    sats = tuple(_sat_id(path, s) for s in sat_ids[:n_sats])
+    if len(sats) < n_sats:
+        raise FileFormatError(path, i, f"header lists {len(sats)} of {n_sats} satellites")
+    if time_system.upper() in ("CCC", "CC", ""):
+        time_system = "GPS"
+    exps = np.array((acc_exp + [0] * n_sats)[:n_sats], dtype=float)
+    accuracy_m = np.where(exps > 0, 2.0**exps * 1e-3, np.nan)
+    sat_col = {s: k for k, s in enumerate(sats)}
+    # SP3-a ids are written "  1" (blank system letter = GPS) in records as in the header
+    for raw, s in zip(sat_ids[:n_sats], sats, strict=True):
+        sat_col.setdefault(raw, sat_col[s])
+
+    epochs: list[float] = []
+    p_rows: list[tuple[int, int, str, int]] = []  # epoch, column, line, line number
+    v_rows: list[tuple[int, int, str, int]] = []
+    e = -1
+    saw_eof = False
+    for j in range(i, n_lines):
+        line = lines[j]
+        c = line[:1]
+        if c == "P":
+            if e < 0:
+                raise FileFormatError(path, j + 1, "position record before the first epoch")
+            p_rows.append((e, _col(path, j + 1, sat_col, line[1:4]), line, j + 1))
+        elif c == "*":
+            epochs.append(_epoch(path, j + 1, line))
+            e += 1
+        elif c == "V":
+            if e < 0:
+                raise FileFormatError(path, j + 1, "velocity record before the first epoch")
+            v_rows.append((e, _col(path, j + 1, sat_col, line[1:4]), line, j + 1))
+        elif line.startswith("EOF"):
+            saw_eof = True
+            break
+        elif c == "E" or not line.strip():
+            continue  # EP/EV correlation records are not read
+        else:
+            raise FileFormatError(path, j + 1, f"unexpected record {line[:20]!r}")
+    if len(epochs) != n_epochs:
+        raise FileFormatError(
+            path,
+            len(lines),
+            f"header announces {n_epochs} epochs, file has {len(epochs)}"
+            + ("" if saw_eof else " and no EOF line (truncated file?)"),
+        )
+
+    n_e, n_s = len(epochs), len(sats)
+    t_cal = np.array(epochs, dtype=float)
+    if time_system.upper() == "TAI":
+        t_gps_s = t_cal - 19.0  # GPST = TAI - 19 s
+    else:
+        try:
+            t_gps_s = np.asarray(to_gps(t_cal, time_system), dtype=float)
+        except ValueError:
+            raise FileFormatError(path, 13, f"unknown time system {time_system!r}") from None
+    pos_m, clock_s, pos_sd, clk_sd, flags = _records(path, p_rows, n_e, n_s, base_pos, base_clk)
+    pos_m *= 1e3
+    clock_s *= 1e-6
+    vel_mps = clock_rate = None
+    if v_rows:
+        vel, rate, _, _, _ = _records(path, v_rows, n_e, n_s, base_pos, base_clk)
+        vel_mps = vel * 0.1  # dm/s
+        clock_rate = rate * 1e-10  # 1e-4 us/s
+    header = Sp3Header(
+        version=version,
+        pos_vel=pos_vel,
+        n_epochs=n_epochs,
+        data_used=first[40:45].strip(),
+        coordinate_system=first[46:51].strip(),
+        orbit_type=first[52:55].strip(),
+        agency=first[56:60].strip(),
+        file_type=file_type,
+        time_system=time_system,
+        interval_s=interval_s,
+        accuracy_m=accuracy_m,
+        base_pos_vel=base_pos,
+        base_clk_rate=base_clk,
+        comments=tuple(comments),
+    )
+    return Sp3(
+        path=fspath(path),
+        header=header,
+        t_gps_s=t_gps_s,
+        sats=sats,
+        pos_m=pos_m,
+        clock_s=clock_s,
+        vel_mps=vel_mps,
+        clock_rate=clock_rate,
+        pos_sd_m=pos_sd,
+        clock_sd_s=clk_sd,
+        flags=flags,
+    )
+
+
+def _records(
+    path: StrPath,
+    rows: list[tuple[int, int, str, int]],
+    n_e: int,
+    n_s: int,
+    base_pos: float,
+    base_clk: float,
+) -> tuple[FloatArray, FloatArray, FloatArray | None, FloatArray | None, Int8Array]:
+    """Values of P (or V) records: xyz (file units), clock, standard deviations, flags."""
+    xyz = np.full((n_e, n_s, 3), np.nan)
+    clk = np.full((n_e, n_s), np.nan)
+    flags = np.zeros((n_e, n_s), dtype=np.int8)
+    n = len(rows)
+    vals = np.full((n, 4), np.nan)
+    extra: list[int] = []
+    for k, (_, _, line, lineno) in enumerate(rows):
+        fields = line[4:60].split()
+        if len(fields) == 4:
+            try:
+                vals[k] = [float(f) for f in fields]
+            except ValueError:
+                vals[k] = _fixed(path, lineno, line)
+        else:  # a blank (or touching) field: read at the fixed columns
+            vals[k] = _fixed(path, lineno, line)
+        if len(line) > 60 and line[60:].strip():
+            extra.append(k)
+    ei = np.fromiter((r[0] for r in rows), dtype=np.int64, count=n)
+    si = np.fromiter((r[1] for r in rows), dtype=np.int64, count=n)
+    bad_pos = np.all(vals[:, :3] == 0.0, axis=1)
+    vals[bad_pos, :3] = np.nan
+    vals[vals[:, 3] >= _BAD_CLOCK, 3] = np.nan
+    xyz[ei, si] = vals[:, :3]
+    clk[ei, si] = vals[:, 3]
+    pos_sd = clk_sd = None
+    if extra:
+        pos_sd = np.full((n_e, n_s, 3), np.nan)
+        clk_sd = np.full((n_e, n_s), np.nan)
+        for k in extra:
+            line = rows[k][2].ljust(80)
+            lineno = rows[k][3]
+            e, s = ei[k], si[k]
+            for m, c in enumerate((61, 64, 67)):
+                x = _opt_int(path, lineno, line[c : c + 2])
+                if x is not None and not math.isnan(base_pos):
+                    pos_sd[e, s, m] = base_pos**x * 1e-3  # mm -> m (velocity: 1e-4 mm/s)
+            x = _opt_int(path, lineno, line[70:73])
+            if x is not None and not math.isnan(base_clk):
+                clk_sd[e, s] = base_clk**x * 1e-12  # ps -> s (rate: 1e-4 ps/s)
+            f = 0
+            for c, bit in _FLAG_BITS:
+                if line[c] != " ":
+                    f |= bit
+            flags[e, s] = f
+    return xyz, clk, pos_sd, clk_sd, flags
+
+
+def _fixed(path: StrPath, lineno: int, line: str) -> list[float]:
+    out = []
+    for c in (4, 18, 32, 46):
+        s = line[c : c + 14].strip()
+        if not s:
+            out.append(math.nan)
+            continue
+        out.append(_float(path, lineno, s, "coordinate/clock"))
+    return out
+
+
+def _float(path: StrPath, lineno: int, text: str, what: str) -> float:
+    s = text.strip()
+    if not s:
+        return math.nan
+    try:
+        return float(s)
+    except ValueError:
+        raise FileFormatError(path, lineno, f"unreadable {what} {s!r}") from None
+
+
+def _int(path: StrPath, lineno: int, text: str) -> int:
+    s = text.strip()
+    try:
+        return int(s) if s else 0
+    except ValueError:
+        raise FileFormatError(path, lineno, f"unreadable integer {s!r}") from None
+
+
+def _opt_int(path: StrPath, lineno: int, text: str) -> int | None:
+    s = text.strip()
+    return _int(path, lineno, s) if s else None
+
+
+def _sat_id(path: StrPath, raw: str) -> str:
+    s = raw.strip()
+    if not s:
+        raise FileFormatError(path, 3, "blank satellite id in the header list")
+    try:
+        if s[0].isdigit():  # SP3-a: no system letter means GPS
+            return f"G{int(s):02d}"
+        return f"{s[0]}{int(s[1:]):02d}"
+    except ValueError:
+        raise FileFormatError(path, 3, f"unreadable satellite id {raw!r}") from None
+
+
+def _col(path: StrPath, lineno: int, sat_col: dict[str, int], raw: str) -> int:
+    k = sat_col.get(raw)
+    if k is None:
+        try:
+            k = sat_col.get(_sat_id(path, raw))
+        except (ValueError, FileFormatError):
+            k = None
+        if k is None:
+            raise FileFormatError(path, lineno, f"satellite {raw!r} not listed in the header")
+        sat_col[raw] = k
+    return k
+
+
+def _epoch(path: StrPath, lineno: int, line: str) -> float:
+    parts = line[2:].split()
+    try:
+        y, mo, d, h, mi = (int(p) for p in parts[:5])
+        sec = float(parts[5])
+        return calendar_gps_seconds(y, mo, d, h, mi, sec)
+    except (ValueError, IndexError):
+        raise FileFormatError(path, lineno, f"unreadable epoch {line.strip()!r}") from None
