@@ -41,7 +41,7 @@ def read_bytes(path: StrPath) -> bytes:
     if raw[60:71] == b"CRINEX VERS":
         raw = _hatanaka_decompress(path, raw)
     if not raw.strip():
-        raise FileFormatError(path, None, "empty file")
+        raise FileFormatError(path, 1, "empty file")
     return raw
 
 

@@ -18,6 +18,7 @@ RINEX 4.00 (IGS/RTCM-SC104, 2021), observation tables (same data section as 3.05
 
 from __future__ import annotations
 
+import itertools
 import re
 from dataclasses import dataclass, field, replace
 from datetime import date
@@ -25,13 +26,13 @@ from os import fspath
 
 import numpy as np
 
-from navtrack._typing import FloatArray, Int8Array, IntArray, StrPath
+from navtrack._typing import FloatArray, Int8Array, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import (
     SYSTEMS,
     Event,
-    ObsHeader,
     Observations,
+    ObsHeader,
     SkippedLine,
 )
 from navtrack.gnss.rinex._io import read_bytes, sniff
@@ -241,8 +242,9 @@ def _parse_header(
     for sys, (count, line) in declared.items():
         if len(obs_types[sys]) != count:
             raise FileFormatError(
-                path, line + 1, f"{count} observation types announced for {sys!r}, "
-                f"{len(obs_types[sys])} listed",
+                path,
+                line + 1,
+                f"{count} observation types announced for {sys!r}, {len(obs_types[sys])} listed",
             )
     time_system = time_system or _DEFAULT_TIME_SYSTEM.get(file_system, "GPS")
     if time_system not in _KNOWN_TIME_SYSTEMS:
@@ -269,7 +271,7 @@ def _parse_header(
 
 
 def _join_fields(text: str, cuts: tuple[int, ...]) -> str:
-    parts = (text[a:b].strip() for a, b in zip(cuts, cuts[1:], strict=False))
+    parts = (text[a:b].strip() for a, b in itertools.pairwise(cuts))
     return " ".join(p for p in parts if p)
 
 
@@ -347,11 +349,14 @@ def _new_segment(
                     raise ValueError("continuation line without a preceding count")
                 new[current] += text[6:60].split()
         except ValueError as exc:
-            raise FileFormatError(path, first_line + k + 1, f"malformed {label!r} ({exc})") from None
+            raise FileFormatError(
+                path, first_line + k + 1, f"malformed {label!r} ({exc})"
+            ) from None
     for sys, (count, k) in declared.items():
         if len(new[sys]) != count:
             raise FileFormatError(
-                path, first_line + k + 1,
+                path,
+                first_line + k + 1,
                 f"{count} observation types announced, {len(new[sys])} listed",
             )
     types = dict(seg.obs_types) if v3 else {}
@@ -363,13 +368,20 @@ def _new_segment(
 
 
 def _event(
-    path: StrPath, lines: list[bytes], i: int, flag: int, count: int, end: int, t_cal: float,
+    path: StrPath,
+    lines: list[bytes],
+    i: int,
+    flag: int,
+    count: int,
+    end: int,
+    t_cal: float,
     scan: _Scan,
 ) -> None:
     if i + 1 + count > end:
         raise FileFormatError(
-            path, i + 1, f"event record announces {count} special records but the file ends "
-            f"after {end - i - 1}",
+            path,
+            i + 1,
+            f"event record announces {count} special records but the file ends after {end - i - 1}",
         )
     records = tuple(r.decode("ascii", "replace").rstrip() for r in lines[i + 1 : i + 1 + count])
     scan.events.append(Event(line=i + 1, t_gps_s=_NAN, flag=flag, records=records))
@@ -381,10 +393,15 @@ def _skip(scan: _Scan, first: int, stop: int, reason: str) -> None:
 
 
 def _scan_v3(
-    path: StrPath, lines: list[bytes], body: int, end: int, segments: list[_Segment],
-    scan: _Scan, lenient: bool,
+    path: StrPath,
+    lines: list[bytes],
+    body: int,
+    end: int,
+    segments: list[_Segment],
+    scan: _Scan,
+    lenient: bool,
 ) -> None:
-    """Walk the RINEX 3 epoch records (``>`` lines): (A1,1X,I4,4(1X,I2),F11.7,2X,I1,I3,6X,F15.12)."""
+    """Walk the RINEX 3 epoch records: ``>`` lines, (A1,1X,I4,4(1X,I2),F11.7,2X,I1,I3,6X,F15.12)."""
     starts = [j for j in range(body, end) if lines[j][:1] == b">"]
     starts.append(end)
     seg = len(segments) - 1
@@ -397,9 +414,13 @@ def _scan_v3(
             if not lenient:
                 n_sat = _announced(lines, i)
                 raise FileFormatError(
-                    path, i + 1, "line outside any epoch record" + (
-                        f" (the epoch record above announces fewer satellites than follow)"
-                        if n_sat else ""
+                    path,
+                    i + 1,
+                    "line outside any epoch record"
+                    + (
+                        " (the epoch record above announces fewer satellites than follow)"
+                        if n_sat
+                        else ""
                     ),
                 )
             _skip(scan, i, j, "line outside any epoch record")
@@ -430,7 +451,8 @@ def _scan_v3(
         except (ValueError, IndexError) as exc:
             if not lenient:
                 raise FileFormatError(path, j + 1, f"malformed epoch record ({exc})") from None
-            _skip(scan, j, nxt, "malformed epoch record" if j == starts[pos] else "")
+            scan.skipped.append(SkippedLine(line=j + 1, reason=f"malformed epoch record ({exc})"))
+            _skip(scan, j + 1, nxt, "data line of a malformed epoch record")
             i = nxt
             pos += 1
             continue
@@ -440,15 +462,19 @@ def _scan_v3(
             if have < count:
                 if not lenient:
                     raise FileFormatError(
-                        path, j + 1, f"epoch record announces {count} satellites but only "
-                        f"{have} data lines follow" + (
-                            " before the end of the file" if nxt == end else
-                            f" before the next epoch record (line {nxt + 1})"
+                        path,
+                        j + 1,
+                        f"epoch record announces {count} satellites but only "
+                        f"{have} data lines follow"
+                        + (
+                            " before the end of the file"
+                            if nxt == end
+                            else f" before the next epoch record (line {nxt + 1})"
                         ),
                     )
-                scan.skipped.append(SkippedLine(
-                    line=j + 1, reason=f"epoch cut short: {have} of {count} satellites"
-                ))
+                scan.skipped.append(
+                    SkippedLine(line=j + 1, reason=f"epoch cut short: {have} of {count} satellites")
+                )
                 take = have
             scan.t_cal_s.append(t_cal)
             scan.flag.append(flag)
@@ -488,13 +514,19 @@ def _announced(lines: list[bytes], i: int) -> int:
 
 
 def _scan_v2(
-    path: StrPath, lines: list[bytes], body: int, end: int, segments: list[_Segment],
-    scan: _Scan, lenient: bool,
+    path: StrPath,
+    lines: list[bytes],
+    body: int,
+    end: int,
+    segments: list[_Segment],
+    scan: _Scan,
+    lenient: bool,
 ) -> None:
     """Walk RINEX 2 epoch records: (1X,I2.2,4(1X,I2),F11.7,2X,I1,I3,12(A1,I2),F12.9)."""
     seg = len(segments) - 1
     per_sat = (len(segments[seg].obs_types["G"]) + 4) // 5
     days: dict[bytes, int] = {}
+    previous = (-1, 0, 0, 0)  # last data epoch: record line, satellites, first/stop data line
     i = body
     while i < end:
         rec = lines[i]
@@ -509,8 +541,10 @@ def _scan_v2(
                 if day is None:
                     yy = int(rec[1:3])
                     day = days[key] = (
-                        date(yy + (1900 if yy >= 80 else 2000), int(rec[4:6]), int(rec[7:9]))
-                        .toordinal() - _GPS_EPOCH_ORDINAL
+                        date(
+                            yy + (1900 if yy >= 80 else 2000), int(rec[4:6]), int(rec[7:9])
+                        ).toordinal()
+                        - _GPS_EPOCH_ORDINAL
                     )
                 t_cal = day * 86400.0 + (
                     int(rec[10:12]) * 3600.0 + int(rec[13:15]) * 60.0 + float(rec[15:26])
@@ -521,6 +555,7 @@ def _scan_v2(
                 t_cal = _NAN
         except ValueError as exc:
             if not lenient:
+                _missing_v2_data_line(path, lines, previous)
                 raise FileFormatError(path, i + 1, f"malformed epoch record ({exc})") from None
             scan.skipped.append(SkippedLine(line=i + 1, reason=f"malformed epoch record ({exc})"))
             i += 1
@@ -545,7 +580,9 @@ def _scan_v2(
             row = lines[i + k]
             if k and row[:32].strip():
                 raise FileFormatError(
-                    path, i + k + 1, f"expected a satellite-list continuation line "
+                    path,
+                    i + k + 1,
+                    f"expected a satellite-list continuation line "
                     f"({count} satellites announced at line {i + 1})",
                 )
             m = min(12, count - 12 * k)
@@ -565,11 +602,16 @@ def _scan_v2(
         if stop > end:
             if not lenient:
                 raise FileFormatError(
-                    path, i + 1, f"epoch record announces {count} satellites "
+                    path,
+                    i + 1,
+                    f"epoch record announces {count} satellites "
                     f"({count * per_sat} data lines) but the file ends after {end - first}",
                 )
             take = (end - first) // per_sat
-            _skip(scan, first + take * per_sat, end, "epoch cut short by the end of the file")
+            scan.skipped.append(
+                SkippedLine(line=i + 1, reason=f"epoch cut short: {take} of {count} satellites")
+            )
+            _skip(scan, first + take * per_sat, end, "incomplete record at the end of the file")
             stop = end
         scan.t_cal_s.append(t_cal)
         scan.flag.append(flag)
@@ -580,7 +622,23 @@ def _scan_v2(
         scan.data.extend(lines[first : first + take * per_sat])
         scan.rec_sat.extend(sats[:take])
         scan.rec_lines.extend([per_sat] * take)
+        previous = (i, count, first, stop)
         i = stop
+
+
+def _missing_v2_data_line(
+    path: StrPath, lines: list[bytes], previous: tuple[int, int, int, int]
+) -> None:
+    """Explain a malformed epoch record by a data line missing from the epoch before it."""
+    rec, count, first, stop = previous
+    for j in range(first, stop):
+        if _V2_EPOCH.match(lines[j]):
+            raise FileFormatError(
+                path,
+                rec + 1,
+                f"epoch record announces {count} satellites but fewer data lines "
+                f"follow: line {j + 1}, read as its data, is an epoch record",
+            )
 
 
 # ------------------------------------------------------------------------------- decoding
@@ -664,10 +722,12 @@ def _matrix(data: list[bytes], lead: int) -> np.ndarray:
     return np.frombuffer(buf, dtype=np.uint8).reshape(len(data), width)
 
 
-
-
 def _assemble(
-    path: StrPath, header: ObsHeader, segments: list[_Segment], scan: _Scan, v3: bool,
+    path: StrPath,
+    header: ObsHeader,
+    segments: list[_Segment],
+    scan: _Scan,
+    v3: bool,
     lenient: bool,
 ) -> Observations:
     n_e = len(scan.t_cal_s)
@@ -687,8 +747,9 @@ def _assemble(
     epoch_of_line = np.repeat(np.arange(n_e), lines_per_epoch)
     seg_of_line = np.repeat(np.asarray(scan.segment, dtype=np.int64), lines_per_epoch)
     first_of_epoch = np.cumsum(lines_per_epoch) - lines_per_epoch
-    line_no = np.repeat(np.asarray(scan.line_no, dtype=np.int64) - first_of_epoch,
-                        lines_per_epoch) + np.arange(n_lines)
+    line_no = np.repeat(
+        np.asarray(scan.line_no, dtype=np.int64) - first_of_epoch, lines_per_epoch
+    ) + np.arange(n_lines)
     problem: dict[int, str] = {}  # data-line index -> why it is unusable
 
     # Satellite of each data line.
@@ -710,8 +771,13 @@ def _assemble(
         except ValueError as exc:
             names.append(None)
             members = np.flatnonzero(inverse == k)
-            where = members if v3 else np.flatnonzero(np.isin(
-                np.repeat(np.arange(len(rec_lines)), rec_lines), members))
+            where = (
+                members
+                if v3
+                else np.flatnonzero(
+                    np.isin(np.repeat(np.arange(len(rec_lines)), rec_lines), members)
+                )
+            )
             for m in where.tolist():
                 problem.setdefault(m, str(exc))
     sats = sorted({n for n in names if n is not None})
@@ -745,17 +811,23 @@ def _assemble(
         code[:, 5:] = -1  # RINEX 2 lines hold 5 fields (80 columns)
 
     value, lli, ssi, blank, bad = _decode(mat[:, lead:].reshape(n_lines * n_f, _FIELD))
-    value, lli, ssi = (a.reshape(n_lines, n_f) for a in (value, lli, ssi))
+    value = value.reshape(n_lines, n_f)
+    lli, ssi = lli.reshape(n_lines, n_f), ssi.reshape(n_lines, n_f)
     blank, bad = blank.reshape(n_lines, n_f), bad.reshape(n_lines, n_f)
 
     for m in np.flatnonzero(bad.any(axis=1)).tolist():
         k = int(np.argmax(bad[m]))
-        text = mat[m, lead + _FIELD * k : lead + _FIELD * (k + 1)].tobytes().decode("ascii", "replace")
-        problem.setdefault(m, f"not a number in observation field {k + 1}: {text!r}")
+        text = (
+            mat[m, lead + _FIELD * k : lead + _FIELD * (k + 1)].tobytes().decode("ascii", "replace")
+        )
+        problem.setdefault(m, f"malformed observation field {k + 1}: {text!r}")
     surplus = ~blank & (code < 0)
     for m in np.flatnonzero(surplus.any(axis=1) & declared[row]).tolist():
-        problem.setdefault(m, "more observations than observation types"
-                           + ("" if v3 else " (or data beyond column 80)"))
+        problem.setdefault(
+            m,
+            "more observations than observation types"
+            + ("" if v3 else " (or data beyond column 80)"),
+        )
     for m in np.flatnonzero(~declared[row]).tolist():
         name = names[int(inverse[m])] if v3 else "?"
         problem.setdefault(m, f"no observation types for the system of satellite {name}")
