@@ -266,3 +266,30 @@ def test_geoid_heights_refused(tmp_path: Path) -> None:
     )
     with pytest.raises(FileFormatError, match="geoid"):
         read_pos(f)
+
+
+def test_extra_field_and_header_only(gnss_data: Path, tmp_path: Path) -> None:
+    lines = (gnss_data / "rtklib_spp" / "arl1_gps.pos").read_text().splitlines(keepends=True)
+    lines[40] = lines[40].rstrip("\n") + "   9.9\n"
+    f = tmp_path / "extra.pos"
+    f.write_text("".join(lines))
+    with pytest.raises(FileFormatError, match="found 16") as info:
+        read_pos(f)
+    assert info.value.line == 41
+    head_only = tmp_path / "head.pos"
+    head_only.write_text("".join(lines[:14]))
+    df = read_pos(head_only)
+    assert len(df) == 0
+    assert "sdzx_m" in df.columns
+
+
+def test_dms_sign_near_zero_degrees(tmp_path: Path) -> None:
+    f = tmp_path / "dms0.pos"
+    f.write_text(
+        "% (lat/lon/height=WGS84/ellipsoidal)\n"
+        "%  GPST                  latitude(d'\")   longitude(d'\")  height(m)   Q  ns\n"
+        "2015/07/19 00:00:00.000  -0 30 00.000   0 15 36.000   10.0   5   6\n"
+    )
+    df = read_pos(f)
+    assert df["lat_deg"][0] == -0.5
+    assert df["lon_deg"][0] == pytest.approx(0.26, abs=1e-12)  # 15' 36" = 0.26 deg

@@ -315,3 +315,38 @@ def test_writers_do_not_import_pandas(tmp_path: Path) -> None:
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2] / "src")}
     subprocess.run([sys.executable, "-c", code], check=True, env=env)
     assert (tmp_path / "x.csv").read_text().splitlines()[2].endswith(",,,,,,,,3,,too_few_sats,")
+
+
+def test_empty_and_single_epoch_frames(tmp_path: Path) -> None:
+    import datetime as dt
+
+    empty = {
+        "t_gps_s": np.zeros(0),
+        "x_m": np.zeros(0),
+        "y_m": np.zeros(0),
+        "z_m": np.zeros(0),
+        "status": np.zeros(0, dtype=str),
+    }
+    for suffix in (".csv", ".nmea", ".kml", ".gpx"):
+        out = write_solution(empty, tmp_path / f"empty{suffix}")
+        if suffix in (".kml", ".gpx"):
+            ET.parse(out)
+    assert (tmp_path / "empty.nmea").read_text() == ""
+    assert len(read_solution(tmp_path / "empty.csv")) == 0
+    # One epoch 0.4 ms before a full second: time_gps rounds to the nearest millisecond.
+    t = 1300000000.9996
+    one = {
+        "t_gps_s": [t],
+        "x_m": [-3962107.0],
+        "y_m": [3381308.0],
+        "z_m": [3668677.0],
+        "status": ["ok"],
+    }
+    back = read_solution(write_solution(one, tmp_path / "one.csv"))
+    expected = dt.datetime(1980, 1, 6) + dt.timedelta(seconds=1300000001)
+    assert back["time_gps"][0] == expected.isoformat() + ".000"
+    assert back["t_gps_s"][0] == pytest.approx(t, abs=1e-6)
+    root = ET.parse(write_solution(one, tmp_path / "one.kml")).getroot()
+    assert root.find("k:Document/k:Placemark/k:Point/k:coordinates", KML_NS) is not None
+    root = ET.parse(write_solution(one, tmp_path / "one.gpx")).getroot()
+    assert len(root.findall("g:trk/g:trkseg/g:trkpt", GPX_NS)) == 1

@@ -26,6 +26,7 @@ T. Takasu, *RTKLIB ver. 2.4.2 Manual*, 2013, appendix B.4.
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from os import fspath
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -92,20 +93,83 @@ def _parse_column_header(path: StrPath, lineno: int, line: str) -> tuple[str, li
     return scale, cols
 
 
-def _bad_line(
-    path: StrPath, rows: list[list[str]], linenos: list[int], col: int, what: str, parse: type
-) -> FileFormatError:
-    """The error for the first row whose field ``col`` does not parse (searched only on failure)."""
-    for tokens, lineno in zip(rows, linenos, strict=True):
+class _Fields:
+    """The whitespace-separated fields of the solution lines, split by pandas' C parser.
+
+    Columns come out as float64 or str arrays; when a field does not parse, the offending line
+    is found (only then) and reported with its number.
+    """
+
+    def __init__(
+        self,
+        path: StrPath,
+        lines: list[str],
+        linenos: list[int],
+        n_tokens: int,
+        header_no: int,
+        str_cols: Sequence[int],
+    ) -> None:
+        import csv
+        import io
+
+        import pandas as pd
+
+        self.path, self.lines, self.linenos = path, lines, linenos
+        self.n_tokens, self.header_no = n_tokens, header_no
+        self.n = len(lines)
+        if not lines:
+            self.frame = pd.DataFrame({k: np.zeros(0, dtype=object) for k in range(n_tokens)})
+            return
         try:
-            parse(tokens[col])
-        except ValueError:
-            return FileFormatError(path, lineno, f"{what}: cannot read {tokens[col]!r}")
-    return FileFormatError(path, None, f"{what}: unreadable value")
+            self.frame = pd.read_csv(
+                io.StringIO("\n".join(lines)),
+                sep=r"\s+",
+                header=None,
+                names=list(range(n_tokens)),
+                dtype=dict.fromkeys(str_cols, str),
+                quoting=csv.QUOTE_NONE,
+                skip_blank_lines=False,
+                na_filter=False,
+                engine="c",
+            )
+        except pd.errors.ParserError as exc:
+            m = re.search(r"line (\d+), saw (\d+)", str(exc))
+            if m is None:
+                raise FileFormatError(path, None, f"unreadable solution lines: {exc}") from None
+            raise self._count_error(int(m.group(1)) - 1) from None
+        # Short lines are padded with empty fields; find the first.
+        last = self.frame[n_tokens - 1]
+        if last.dtype.kind not in "fi":
+            short = np.flatnonzero(last.to_numpy(dtype=str) == "")
+            if short.size:
+                raise self._count_error(int(short[0]))
 
+    def _count_error(self, row: int) -> FileFormatError:
+        found = len(self.lines[row].split())
+        return FileFormatError(
+            self.path,
+            self.linenos[row],
+            f"expected {self.n_tokens} fields as the column header on line {self.header_no} "
+            f"says, found {found}",
+        )
 
-def _parse_iso(value: str) -> np.datetime64:
-    return np.datetime64(value, "ns")
+    def strings(self, col: int) -> np.ndarray:
+        """Field ``col`` of every line as a str array."""
+        return np.asarray(self.frame[col].to_numpy(dtype=str), dtype=str)
+
+    def floats(self, col: int, what: str) -> FloatArray:
+        """Field ``col`` of every line as float64; FileFormatError naming the first bad line."""
+        column = self.frame[col]
+        if column.dtype.kind in "fi":
+            return np.asarray(column.to_numpy(dtype=float), dtype=float)
+        for row, token in enumerate(column.to_numpy(dtype=str).tolist()):
+            try:
+                float(token)
+            except ValueError:
+                raise FileFormatError(
+                    self.path, self.linenos[row], f"{what}: cannot read {token!r}"
+                ) from None
+        return np.asarray(column.to_numpy(dtype=str).astype(float), dtype=float)
 
 
 def read_pos(path: StrPath) -> pd.DataFrame:
@@ -162,7 +226,7 @@ def read_pos(path: StrPath) -> pd.DataFrame:
     columns: list[str] | None = None
     scale = "GPST"
     header_lineno = 0
-    rows: list[list[str]] = []
+    lines: list[str] = []
     linenos: list[int] = []
     n_tokens = 0
     for lineno, line in enumerate(text.splitlines(), start=1):
@@ -173,7 +237,7 @@ def read_pos(path: StrPath) -> pd.DataFrame:
             body = stripped[1:].strip()
             header.append(body)
             first = body.split(maxsplit=1)[0] if body else ""
-            if first in _TIME_LABELS and not rows:
+            if first in _TIME_LABELS and not lines:
                 scale, columns = _parse_column_header(p, lineno, stripped)
                 header_lineno = lineno
                 # Two time fields; latitude/longitude in d m s take three fields each.
@@ -183,34 +247,31 @@ def read_pos(path: StrPath) -> pd.DataFrame:
             raise FileFormatError(
                 p, lineno, "solution line before the column header ('%  GPST  ...')"
             )
-        tokens = stripped.split()
-        if len(tokens) != n_tokens:
-            raise FileFormatError(
-                p,
-                lineno,
-                f"expected {n_tokens} fields as the column header on line {header_lineno} "
-                f"says, found {len(tokens)}",
-            )
-        rows.append(tokens)
+        lines.append(stripped)
         linenos.append(lineno)
     if columns is None:
         raise FileFormatError(p, None, "no column header ('%  GPST  ...') found")
 
-    arr = np.array(rows, dtype=str).reshape(len(rows), n_tokens)
-    t_gps_s = _parse_times(p, arr, rows, linenos, scale)
-
+    # Time fields and the degrees of d m s angles stay text ("-0" keeps its sign).
+    str_cols = [0, 1]
+    k = 2
+    for label in columns:
+        if label.endswith("(d'\")"):
+            str_cols.append(k)
+            k += 3
+        else:
+            k += 1
+    fields = _Fields(p, lines, linenos, n_tokens, header_lineno, str_cols)
+    t_gps_s = _parse_times(fields, scale)
     data: dict[str, np.ndarray] = {}
     k = 2
     for label in columns:
         name = _column_name(label)
         if label.endswith("(d'\")"):
-            data[name] = _parse_dms(p, arr[:, k : k + 3], rows, linenos, k)
+            data[name] = _parse_dms(fields, k)
             k += 3
             continue
-        try:
-            values = arr[:, k].astype(float)
-        except ValueError:
-            raise _bad_line(p, rows, linenos, k, f"column {label}", float) from None
+        values = fields.floats(k, f"column {label}")
         if name in _INT_COLUMNS:
             if not np.all(values == np.round(values)):
                 bad = int(np.flatnonzero(values != np.round(values))[0])
@@ -239,41 +300,38 @@ def read_pos(path: StrPath) -> pd.DataFrame:
     return df
 
 
-def _parse_times(
-    path: StrPath, arr: np.ndarray, rows: list[list[str]], linenos: list[int], scale: str
-) -> FloatArray:
-    """GPS seconds of the two time fields (calendar or week/tow) of every row."""
-    if arr.shape[0] == 0:
+def _parse_times(fields: _Fields, scale: str) -> FloatArray:
+    """GPS seconds of the two time fields (calendar or week/tow) of every line."""
+    if fields.n == 0:
         return np.zeros(0)
-    if "/" in arr[0, 0]:
-        iso = np.char.add(np.char.add(np.char.replace(arr[:, 0], "/", "-"), "T"), arr[:, 1])
+    date, clock = fields.strings(0), fields.strings(1)
+    if "/" in date[0]:
+        iso = np.strings.add(np.strings.add(np.strings.replace(date, "/", "-"), "T"), clock)
         try:
             t = timescale.gps_seconds(iso.astype("datetime64[ns]"))
         except ValueError:
-            for tokens, lineno in zip(rows, linenos, strict=True):
+            for row, value in enumerate(iso.tolist()):
                 try:
-                    _parse_iso(tokens[0].replace("/", "-") + "T" + tokens[1])
+                    np.datetime64(value, "ns")
                 except ValueError:
                     raise FileFormatError(
-                        path, lineno, f"time: cannot read {tokens[0]} {tokens[1]!r}"
+                        fields.path, fields.linenos[row], f"time: cannot read {value!r}"
                     ) from None
-            raise FileFormatError(path, None, "time: unreadable value") from None
-        bad = np.flatnonzero(np.char.find(arr[:, 0], "/") < 0)
+            raise FileFormatError(fields.path, None, "time: unreadable value") from None
+        bad = np.flatnonzero(np.strings.find(date, "/") < 0)
         if bad.size:
-            raise FileFormatError(path, linenos[bad[0]], "time: mixed calendar and week/tow")
+            raise FileFormatError(
+                fields.path, fields.linenos[bad[0]], "time: mixed calendar and week/tow"
+            )
     else:
-        try:
-            week = arr[:, 0].astype(float)
-        except ValueError:
-            raise _bad_line(path, rows, linenos, 0, "GPS week", float) from None
-        try:
-            tow = arr[:, 1].astype(float)
-        except ValueError:
-            raise _bad_line(path, rows, linenos, 1, "time of week", float) from None
+        week = fields.floats(0, "GPS week")
+        tow = fields.floats(1, "time of week")
         bad = np.flatnonzero((week != np.round(week)) | (tow < 0) | (tow >= 604800.0))
         if bad.size:
             raise FileFormatError(
-                path, linenos[bad[0]], "week/tow: week not integer or tow outside [0, 604800) s"
+                fields.path,
+                fields.linenos[bad[0]],
+                "week/tow: week not integer or tow outside [0, 604800) s",
             )
         t = timescale.from_week_tow(week, tow)
     if scale == "UTC":
@@ -283,18 +341,14 @@ def _parse_times(
     return np.asarray(t, dtype=float)
 
 
-def _parse_dms(
-    path: StrPath, fields: np.ndarray, rows: list[list[str]], linenos: list[int], k: int
-) -> FloatArray:
-    """Signed degrees of ``deg min sec`` fields (the sign sits on the degrees field)."""
-    out = []
-    for j, what in enumerate(("degrees", "minutes", "seconds")):
-        try:
-            out.append(fields[:, j].astype(float))
-        except ValueError:
-            raise _bad_line(path, rows, linenos, k + j, f"angle {what}", float) from None
-    deg, minutes, sec = out
-    sign = np.where(np.char.startswith(fields[:, 0], "-"), -1.0, 1.0)
+def _parse_dms(fields: _Fields, k: int) -> FloatArray:
+    """Signed degrees of ``deg min sec`` fields ``k, k+1, k+2`` (the sign sits on the degrees
+    field, so that -0 30 00 is -0.5 deg)."""
+    deg = fields.floats(k, "angle degrees")
+    minutes = fields.floats(k + 1, "angle minutes")
+    sec = fields.floats(k + 2, "angle seconds")
+    negative = np.strings.startswith(fields.strings(k), "-")
+    sign = np.where(negative, -1.0, 1.0)
     return np.asarray(sign * (np.abs(deg) + minutes / 60.0 + sec / 3600.0), dtype=float)
 
 

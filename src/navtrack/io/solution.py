@@ -188,7 +188,10 @@ def solution_columns(df: SolutionLike) -> dict[str, np.ndarray]:
             np.stack([np.radians(llh_deg[:, 0]), np.radians(llh_deg[:, 1]), llh_deg[:, 2]], -1)
         )
     week, tow = timescale.week_tow(t)
-    time_gps = np.datetime_as_string(timescale.to_datetime64(t).astype("datetime64[ms]"))
+    # Rounded (not truncated) to the millisecond.
+    t_ms = np.round((t - timescale.from_week_tow(week, 0.0)) * 1e3).astype("timedelta64[ms]")
+    week_start = timescale.GPS_EPOCH.astype("datetime64[ms]") + (week * 7).astype("timedelta64[D]")
+    time_gps = np.datetime_as_string(week_start + t_ms)
     keys = set(_keys(df))
 
     def optional_float(name: str) -> FloatArray:
@@ -543,10 +546,21 @@ def _kml(cols: Mapping[str, np.ndarray], ok: BoolArray) -> str:
         f"<description>{desc}</description>\n"
         '<Style id="track"><LineStyle><color>ff0000ff</color><width>2</width></LineStyle>'
         "</Style>\n"
-        "<Placemark>\n<name>track</name>\n<styleUrl>#track</styleUrl>\n"
-        "<LineString>\n<tessellate>1</tessellate>\n<altitudeMode>clampToGround</altitudeMode>\n"
-        f"<coordinates>{coords}</coordinates>\n"
-        "</LineString>\n</Placemark>\n</Document>\n</kml>\n"
+        + (
+            ""
+            if n_ok == 0
+            else "<Placemark>\n<name>track</name>\n<styleUrl>#track</styleUrl>\n"
+            + (
+                # A KML LineString needs two or more coordinate tuples.
+                f"<Point>\n<coordinates>{coords}</coordinates>\n</Point>\n"
+                if n_ok == 1
+                else "<LineString>\n<tessellate>1</tessellate>\n"
+                "<altitudeMode>clampToGround</altitudeMode>\n"
+                f"<coordinates>{coords}</coordinates>\n</LineString>\n"
+            )
+            + "</Placemark>\n"
+        )
+        + "</Document>\n</kml>\n"
     )
 
 
