@@ -634,7 +634,8 @@ def sp3_states(
     order : int
         Polynomial degree (10 as RTKLIB and the IGS practice for 15-min and 5-min orbits).
     max_gap_s : float
-        ``t`` must lie within the node span and at most this far from the nearest node.
+        ``t`` may lie at most this far outside the node span (extrapolation, as RTKLIB's 900 s)
+        and the clock at most this far from its nearest epoch.
 
     Returns
     -------
@@ -666,7 +667,7 @@ def sp3_states(
         w = _lagrange_weights(tt - t[:, None], np.zeros_like(t))
         out = np.stack([(w * x).sum(-1), (w * y).sum(-1), (w * pp[..., 2]).sum(-1)], axis=-1)
         bad = ~np.isfinite(pp).all(axis=(1, 2))
-        bad |= (t < tn[0]) | (t > tn[-1])
+        bad |= (t < tn[0] - max_gap_s) | (t > tn[-1] + max_gap_s)
         out[bad] = np.nan
         return out
 
@@ -684,7 +685,7 @@ def sp3_states(
         c0, c1 = sp3.clock_s[i1 - 1, j], sp3.clock_s[i1, j]
         dts = c0 + (c1 - c0) * (ts - t0) / (t1 - t0)
         near = np.minimum(np.abs(ts - t0), np.abs(ts - t1)) <= max_gap_s
-        dts = np.where(near & (ts >= tn[0]) & (ts <= tn[-1]), dts, np.nan)
+        dts = np.where(near, dts, np.nan)
         t = ts - np.nan_to_num(dts)
         p0 = interp(j, t)
         pp = interp(j, t + 0.5)

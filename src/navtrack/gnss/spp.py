@@ -131,6 +131,10 @@ class SppConfig:
         SEPT file behave as if the QZSS TGD were zero (median distance to RTKLIB 0.16 m without,
         0.70 m with it; 3D RMS against the reference 1.43 m without, 2.03 m with), although
         IS-QZSS-PNT specifies it for L1C/A like GPS's. Add ``"J"`` to follow the ICD.
+    sp3_needs_broadcast : bool
+        With SP3 orbits, use only satellites that also have a valid broadcast ephemeris (RTKLIB
+        2.4.3 removes the satellite clock with the broadcast clock before interpolating SP3 and
+        drops satellites without one; navtrack uses the SP3 clock and keeps them by default).
     """
 
     systems: str = "GREJC"
@@ -149,6 +153,7 @@ class SppConfig:
     sigma0_m: float = 0.3
     max_ura_m: float = 300.0
     tgd_systems: str = "GECIR"
+    sp3_needs_broadcast: bool = False
 
     def __post_init__(self) -> None:
         if self.weighting not in ("rtklib", "elevation", "cn0", "equal"):
@@ -629,8 +634,17 @@ def solve_spp(
                 gd[:, cols] = eph.group_delay_s(table, idx, band)
             y[:, cols] = p1[:, cols]
     y = y + C_MPS * (states.clock_s - gd)
+    if sp3 is not None and cfg.sp3_needs_broadcast:
+        bc = eph.broadcast_states(
+            tables, sats, t_rx, t_sv, max_age_s=cfg.max_age_s, healthy_only=False,
+            galileo_nav=cfg.galileo_nav,
+        )
+        has_eph_bc = bc.valid
+    else:
+        has_eph_bc = np.ones((n_e, n_s), dtype=bool)
     var_sat = states.var_m2 + 0.3**2
     has_eph = states.valid & np.array([s[0] in orbit_systems for s in sats], dtype=bool)
+    has_eph &= has_eph_bc
     base_valid = observed & has_eph & np.isfinite(y)
     if cfg.healthy_only:
         base_valid &= states.svh == 0
