@@ -99,9 +99,10 @@ class SppConfig:
         Measurement variance model: ``rtklib`` is RTKLIB's
         ``f^2 a^2 (b^2 + b^2 / sin el) + URA^2 + var_iono + var_tropo + 0.3^2`` (``a = 100``,
         ``b = 0.003`` m, ``f`` 1.5 for GLONASS) — see ``shared/data/gnss/rtklib_spp/README.md``;
-        ``elevation`` ``sigma0^2 (1 + 1 / sin^2 el)``; ``cn0`` the SIGMA-epsilon model
-        ``C 10^(-C/N0 / 10)`` with ``C = 1.61e4 m^2 Hz`` (Hartinger & Brunner 1999), falling back
-        to ``elevation`` where C/N0 is missing; ``equal`` unit weights.
+        ``elevation`` ``sigma0^2 (1 + 1 / sin^2 el)``; ``cn0`` ``sigma0^2 + C 10^(-C/N0 / 10)``
+        with the SIGMA-epsilon constant ``C = 1.61e4 m^2 Hz`` of the C/A code (Hartinger &
+        Brunner 1999) for tracking noise and ``sigma0`` for orbit, clock and atmosphere errors,
+        falling back to ``elevation`` where C/N0 is missing; ``equal`` ``sigma0`` for all.
     iono : {"klobuchar", "ionofree", "off"}
         Broadcast Klobuchar (scaled by ``(f_L1/f)^2`` for other carriers), dual-frequency
         ionosphere-free combination (:data:`IONOFREE_BANDS`), or none.
@@ -122,7 +123,8 @@ class SppConfig:
     clock_groups : mapping of str to str
         System -> system whose clock it shares.
     sigma0_m : float
-        Scale of the ``elevation`` model.
+        Scale (m) of the ``elevation``, ``cn0`` and ``equal`` models: the zenith-level
+        signal-in-space plus atmosphere error of broadcast-ephemeris SPP (1.5 m).
     max_ura_m : float
         Satellites with a larger broadcast URA are not used (RTKLIB: 300 m).
     tgd_systems : str
@@ -150,7 +152,7 @@ class SppConfig:
     healthy_only: bool = True
     galileo_nav: str = "inav"
     clock_groups: Mapping[str, str] = field(default_factory=lambda: dict(DEFAULT_CLOCK_GROUP))
-    sigma0_m: float = 0.3
+    sigma0_m: float = 1.5
     max_ura_m: float = 300.0
     tgd_systems: str = "GECIR"
     sp3_needs_broadcast: bool = False
@@ -450,11 +452,11 @@ class _Model:
             c_n0 = self.cn0[idx]
             var = np.where(
                 np.isfinite(c_n0),
-                1.61e4 * 10.0 ** (-np.nan_to_num(c_n0) / 10.0),
+                cfg.sigma0_m**2 + 1.61e4 * 10.0 ** (-np.nan_to_num(c_n0) / 10.0),
                 cfg.sigma0_m**2 * (1.0 + 1.0 / sin_el**2),
             )
         else:
-            var = np.ones_like(el)
+            var = np.full_like(el, cfg.sigma0_m**2)
         valid &= np.isfinite(v) & np.isfinite(var) & (var > 0)
         w = np.where(valid, 1.0 / np.where(valid, var, 1.0), 0.0)
         J = np.where(valid[..., None], J, 0.0)
