@@ -250,6 +250,7 @@ def marquardt(
     beta: float = 10.0,
     eps: float = 0.1,
     max_iter: int = 100,
+    xtol: float = 1e-10,
     rcond: float = 1e-12,
 ) -> LsqResult:
     """Batched Marquardt (Levenberg–Marquardt) with the adaptive growth factor of Li (2010).
@@ -280,6 +281,10 @@ def marquardt(
         defaults are the paper's ``mu_1 = 0.1, beta = 10, epsilon = 0.1``.
     max_iter : int
         Maximum number of trial steps per epoch (the paper has no limit).
+    xtol : float
+        Safeguard not in the paper: an epoch also stops (converged) when its trial step is
+        shorter than ``xtol`` — in floating point ``F`` cannot decrease any more, and ``mu``
+        would grow without end while ``||A^T W f||`` stays above a too small ``eps``.
     rcond : float
         Singularity threshold of the undamped normal matrix used for the covariance.
 
@@ -329,7 +334,7 @@ def marquardt(
         vt, Jt, wt = model(xt, active)
         Ft = np.einsum("bm,bm->b", wt, vt**2)
         better = Ft < F
-        small = gnorm <= eps
+        small = (gnorm <= eps) | (np.linalg.norm(d, axis=1) < xtol)
         # step 6: accept; stop if the gradient at x_k was already small
         acc = active[better]
         x[acc] = xt[better]
