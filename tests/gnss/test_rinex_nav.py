@@ -458,3 +458,40 @@ def test_cli_rinex_info_on_nav(capsys: pytest.CaptureFixture[str], tmp_path: Pat
     assert "records" in printed
     assert f"G: {expected['G']}" in printed
     assert json.loads(out.read_text())["records"] == expected
+
+
+def test_week_written_modulo_1024(tmp_path: Path) -> None:
+    # 07590920.05n line 18 writes GPS week 1316 (2005-03-27); some writers give it modulo
+    # 1024 (292): toe must come out the same, 1316 weeks + 525600 s (line 16)
+    lines = _sample_lines()
+    assert "1.316000000000D+03" in lines[17]
+    lines[17] = lines[17].replace("1.316000000000D+03", "2.920000000000D+02")
+    path = tmp_path / "rolled.05n"
+    path.write_text("".join(lines))
+    g = read_nav(path).ephemerides["G"]
+    first = g[g["line"] == 13].iloc[0]
+    assert first["week"] == 292
+    assert first["toe_gps_s"] == 1316 * 604800 + 525600.0
+    assert first["toe_gps_s"] == first["toc_gps_s"]
+
+
+def test_rinex305_glonass_fifth_line(tmp_path: Path) -> None:
+    # RINEX 3.05 table A10: optional BROADCAST ORBIT - 4 with status flags, L1/L2 group
+    # delay difference, URAI and health flags
+    lines = (TEST_DATA / "spare_filled_nav3.rnx").read_text().splitlines(keepends=True)
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("R21"))
+    extra = "     1.790000000000E+02-1.862645149231E-09 2.000000000000E+00 0.000000000000E+00\n"
+    lines.insert(k + 4, extra)
+    path = tmp_path / "glo305.rnx"
+    path.write_text("".join(lines))
+    r = read_nav(path).ephemerides["R"].iloc[0]
+    assert r["status_flags"] == 179
+    assert r["delta_taun_s"] == -1.862645149231e-09
+    assert r["urai"] == 2
+    assert r["health_flags"] == 0
+    assert r["z_m"] == pytest.approx(2.137510400391e04 * 1000, rel=1e-15)
+    # a sixth line is one too many
+    lines.insert(k + 5, extra)
+    path.write_text("".join(lines))
+    with pytest.raises(FileFormatError, match=f"line {k + 6}: R record has 6 lines"):
+        read_nav(path)

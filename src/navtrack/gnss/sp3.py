@@ -289,32 +289,24 @@ def read_sp3(path: StrPath) -> Sp3:
     for raw, s in zip(sat_ids[:n_sats], sats, strict=True):
         sat_col.setdefault(raw, sat_col[s])
 
-    epochs: list[float] = []
-    p_rows: list[tuple[int, int, str, int]] = []  # epoch, column, line, line number
-    v_rows: list[tuple[int, int, str, int]] = []
-    e = -1
-    saw_eof = False
-    for j in range(i, n_lines):
-        line = lines[j]
-        c = line[:1]
-        if c == "P":
-            if e < 0:
-                raise FileFormatError(path, j + 1, "position record before the first epoch")
-            p_rows.append((e, _col(path, j + 1, sat_col, line[1:4]), line, j + 1))
-        elif c == "*":
-            epochs.append(_epoch(path, j + 1, line))
-            e += 1
-        elif c == "V":
-            if e < 0:
-                raise FileFormatError(path, j + 1, "velocity record before the first epoch")
-            v_rows.append((e, _col(path, j + 1, sat_col, line[1:4]), line, j + 1))
-        elif line.startswith("EOF"):
-            saw_eof = True
-            break
-        elif c == "E" or not line.strip():
-            continue  # EP/EV correlation records are not read
-        else:
-            raise FileFormatError(path, j + 1, f"unexpected record {line[:20]!r}")
+    # Data section as an (n_lines, 80) character matrix: records are fixed-width, so every
+    # field is a column slice of it.
+    data = lines[i:]
+    chars = np.frombuffer(
+        bytearray("".join(ln[:80].ljust(80) for ln in data).encode("ascii", "replace")),
+        dtype=np.uint8,
+    ).reshape(len(data), 80)
+    kinds = chars[:, 0]
+    eof = np.flatnonzero((chars[:, :3] == np.frombuffer(b"EOF", dtype=np.uint8)).all(axis=1))
+    saw_eof = len(eof) > 0
+    if saw_eof:
+        chars, kinds = chars[: eof[0]], kinds[: eof[0]]
+    star = np.flatnonzero(kinds == ord("*"))
+    known = np.isin(kinds, np.frombuffer(b"*PVE", dtype=np.uint8))
+    for k in np.flatnonzero(~known).tolist():
+        if data[k].strip():
+            raise FileFormatError(path, i + k + 1, f"unexpected record {data[k][:20]!r}")
+    epochs = [_epoch(path, i + k + 1, data[k]) for k in star.tolist()]
     if len(epochs) != n_epochs:
         raise FileFormatError(
             path,
@@ -322,7 +314,8 @@ def read_sp3(path: StrPath) -> Sp3:
             f"header announces {n_epochs} epochs, file has {len(epochs)}"
             + ("" if saw_eof else " and no EOF line (truncated file?)"),
         )
-
+    p_rows = _rows(path, chars, kinds, "P", star, sat_col, i)
+    v_rows = _rows(path, chars, kinds, "V", star, sat_col, i)
     n_e, n_s = len(epochs), len(sats)
     t_cal = np.array(epochs, dtype=float)
     if time_system.upper() == "TAI":
@@ -336,7 +329,7 @@ def read_sp3(path: StrPath) -> Sp3:
     pos_m *= 1e3
     clock_s *= 1e-6
     vel_mps = clock_rate = None
-    if v_rows:
+    if len(v_rows[2]):
         vel, rate, _, _, _ = _records(path, v_rows, n_e, n_s, base_pos, base_clk)
         vel_mps = vel * 0.1  # dm/s
         clock_rate = rate * 1e-10  # 1e-4 us/s
@@ -371,59 +364,96 @@ def read_sp3(path: StrPath) -> Sp3:
     )
 
 
+_Rows = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]  # epoch, column, chars, line no.
+
+
+def _rows(
+    path: StrPath,
+    chars: np.ndarray,
+    kinds: np.ndarray,
+    kind: str,
+    star: np.ndarray,
+    sat_col: dict[str, int],
+    offset: int,
+) -> _Rows:
+    """Epoch index, satellite column, characters and line number of every P (or V) record."""
+    idx = np.flatnonzero(kinds == ord(kind))
+    epoch = np.searchsorted(star, idx) - 1
+    lineno = offset + idx + 1
+    if len(idx) and epoch[0] < 0:
+        raise FileFormatError(path, int(lineno[0]), f"{kind} record before the first epoch")
+    rec = chars[idx]
+    ids, inverse = np.unique(rec[:, 1:4].copy().view("S3").ravel(), return_inverse=True)
+    cols = np.empty(len(ids), dtype=np.int64)
+    for u, raw in enumerate(ids):
+        text = raw.decode("ascii", "replace").ljust(3)
+        k = sat_col.get(text)
+        if k is None:  # ids written differently from the header ("G 1")
+            first = int(lineno[np.flatnonzero(inverse == u)[0]])
+            k = _col(path, first, sat_col, text)
+        cols[u] = k
+    return epoch, cols[inverse.ravel()], rec, lineno
+
+
+def _fixed_width(chars: np.ndarray, width: int) -> FloatArray:
+    """Parse a (rows, n * width) character block of numeric fields: (rows, n) floats, NaN
+    for blank fields; ValueError if any field is not a number."""
+    n_rows = chars.shape[0]
+    block = np.ascontiguousarray(chars).reshape(-1, width)
+    blank = (block == 32).all(axis=1)
+    block[blank, -1] = ord("0")
+    out = block.view(f"S{width}").reshape(-1).astype(float)
+    out[blank] = np.nan
+    return out.reshape(n_rows, -1)
+
+
 def _records(
     path: StrPath,
-    rows: list[tuple[int, int, str, int]],
+    rows: _Rows,
     n_e: int,
     n_s: int,
     base_pos: float,
     base_clk: float,
 ) -> tuple[FloatArray, FloatArray, FloatArray | None, FloatArray | None, Int8Array]:
     """Values of P (or V) records: xyz (file units), clock, standard deviations, flags."""
+    ei, si, rec, lineno = rows
     xyz = np.full((n_e, n_s, 3), np.nan)
     clk = np.full((n_e, n_s), np.nan)
     flags = np.zeros((n_e, n_s), dtype=np.int8)
-    n = len(rows)
-    vals = np.full((n, 4), np.nan)
-    extra: list[int] = []
-    for k, (_, _, line, lineno) in enumerate(rows):
-        fields = line[4:60].split()
-        if len(fields) == 4:
-            try:
-                vals[k] = [float(f) for f in fields]
-            except ValueError:
-                vals[k] = _fixed(path, lineno, line)
-        else:  # a blank (or touching) field: read at the fixed columns
-            vals[k] = _fixed(path, lineno, line)
-        if len(line) > 60 and line[60:].strip():
-            extra.append(k)
-    ei = np.fromiter((r[0] for r in rows), dtype=np.int64, count=n)
-    si = np.fromiter((r[1] for r in rows), dtype=np.int64, count=n)
+    try:
+        vals = _fixed_width(rec[:, 4:60], 14)
+    except ValueError:  # locate the damaged line
+        for r, ln in zip(rec, lineno, strict=True):
+            _fixed(path, int(ln), r.tobytes().decode("ascii", "replace"))
+        raise
     bad_pos = np.all(vals[:, :3] == 0.0, axis=1)
     vals[bad_pos, :3] = np.nan
     vals[vals[:, 3] >= _BAD_CLOCK, 3] = np.nan
     xyz[ei, si] = vals[:, :3]
     clk[ei, si] = vals[:, 3]
     pos_sd = clk_sd = None
-    if extra:
+    extra = np.flatnonzero((rec[:, 60:80] != 32).any(axis=1))
+    if len(extra):
+        tail = rec[extra]
+        # exponents: columns 62-63, 65-66, 68-69 (x, y, z) and 71-73 (clock), 1-based
+        try:
+            pos_exp = _fixed_width(tail[:, [61, 62, 64, 65, 67, 68]], 2)
+            clk_exp = _fixed_width(tail[:, 70:73], 3)[:, 0]
+        except ValueError:
+            for k in extra.tolist():
+                t = rec[k].tobytes().decode("ascii", "replace")
+                for c0, c1 in ((61, 63), (64, 66), (67, 69), (70, 73)):
+                    _opt_int(path, int(lineno[k]), t[c0:c1])
+            raise
+        e, s = ei[extra], si[extra]
         pos_sd = np.full((n_e, n_s, 3), np.nan)
         clk_sd = np.full((n_e, n_s), np.nan)
-        for k in extra:
-            line = rows[k][2].ljust(80)
-            lineno = rows[k][3]
-            e, s = ei[k], si[k]
-            for m, c in enumerate((61, 64, 67)):
-                x = _opt_int(path, lineno, line[c : c + 2])
-                if x is not None and not math.isnan(base_pos):
-                    pos_sd[e, s, m] = base_pos**x * 1e-3  # mm -> m (velocity: 1e-4 mm/s)
-            x = _opt_int(path, lineno, line[70:73])
-            if x is not None and not math.isnan(base_clk):
-                clk_sd[e, s] = base_clk**x * 1e-12  # ps -> s (rate: 1e-4 ps/s)
-            f = 0
-            for c, bit in _FLAG_BITS:
-                if line[c] != " ":
-                    f |= bit
-            flags[e, s] = f
+        pos_sd[e, s] = base_pos**pos_exp * 1e-3  # mm -> m (velocity: 1e-4 mm/s)
+        clk_sd[e, s] = base_clk**clk_exp * 1e-12  # ps -> s (rate: 1e-4 ps/s)
+        f = np.zeros(len(extra), dtype=np.int8)
+        for c, bit in _FLAG_BITS:
+            f |= np.where(tail[:, c] != 32, bit, 0).astype(np.int8)
+        flags[e, s] = f
     return xyz, clk, pos_sd, clk_sd, flags
 
 

@@ -290,8 +290,8 @@ def read_nav(path: StrPath, *, lenient: bool = False) -> NavData:
         system = _RINEX2_SYSTEM[kind.file_type]
     if v2 and system == "E" and "GPSA" in header.iono:  # RINEX 2.12 Galileo: ION ALPHA = ai0-2
         header.iono["GAL"] = header.iono.pop("GPSA")[:3]
-    rows, skipped = _parse_records(path, lines, header.end, v2, system, lenient)
-    tables = _tables(rows)
+    groups, skipped = _parse_records(path, lines, header.end, v2, system, lenient)
+    tables = _tables(groups)
     return NavData(
         path=fspath(path),
         version=kind.version,
@@ -378,6 +378,17 @@ def _int(v: float) -> int | None:
     return None if math.isnan(v) else round(v)
 
 
+@dataclass(slots=True)
+class _Group:
+    """Records of one system: header data of each record and the text of its fields."""
+
+    sats: list[str] = field(default_factory=list)
+    lines: list[int] = field(default_factory=list)  # 1-based line of the first line
+    n_lines: list[int] = field(default_factory=list)
+    t_cal: list[float] = field(default_factory=list)  # epoch as calendar seconds, as written
+    starts: list[int] = field(default_factory=list)  # 0-based index of the first line
+
+
 def _parse_records(
     path: StrPath,
     lines: list[str],
@@ -385,7 +396,7 @@ def _parse_records(
     v2: bool,
     file_system: str,
     lenient: bool,
-) -> tuple[dict[str, list[dict[str, Any]]], list[SkippedLine]]:
+) -> tuple[dict[str, tuple[_Group, FloatArray]], list[SkippedLine]]:
     # Record boundaries: a record's first line has the satellite in columns 1-3 (RINEX 3: a
     # system letter in column 1; RINEX 2: the PRN in columns 1-2); continuation lines start
     # with 3 (RINEX 2) or 4 (RINEX 3) blanks.
@@ -393,44 +404,54 @@ def _parse_records(
     while n > start and not lines[n - 1].strip():
         n -= 1
     starts = [i for i in range(start, n) if (lines[i][:3].strip() if v2 else lines[i][:1].strip())]
+    skipped: list[SkippedLine] = []
     if start < n and (not starts or starts[0] != start):
-        first_bad = start + 1
         msg = "navigation data does not start with a satellite/epoch line"
         if not lenient:
-            raise FileFormatError(path, first_bad, msg)
-        skipped = [SkippedLine(first_bad, msg)]
-    else:
-        skipped = []
-    rows: dict[str, list[dict[str, Any]]] = {}
+            raise FileFormatError(path, start + 1, msg)
+        skipped.append(SkippedLine(start + 1, msg))
+    groups: dict[str, _Group] = {}
     ends = [*starts[1:], n]
     for i0, i1 in zip(starts, ends, strict=True):
         try:
-            sys_letter, row = _parse_record(path, lines, i0, i1, v2, file_system)
+            sys_letter, sat, n_lines, t_cal = _record_head(path, lines, i0, i1, v2, file_system)
         except FileFormatError as exc:
             if not lenient:
                 raise
             skipped.append(SkippedLine(i0 + 1, exc.message))
             continue
-        rows.setdefault(sys_letter, []).append(row)
-    return rows, skipped
+        g = groups.setdefault(sys_letter, _Group())
+        g.sats.append(sat)
+        g.lines.append(i0 + 1)
+        g.n_lines.append(n_lines)
+        g.t_cal.append(t_cal)
+        g.starts.append(i0)
+    out: dict[str, tuple[_Group, FloatArray]] = {}
+    for sys_letter, g in groups.items():
+        try:
+            values = _fields_fast(lines, g, sys_letter, v2)
+        except ValueError:  # find the damaged field, record by record
+            g, values = _fields_slow(path, lines, g, sys_letter, v2, lenient, skipped)
+        if g.sats:
+            out[sys_letter] = (g, values)
+    skipped.sort(key=lambda sk: sk.line)
+    return out, skipped
 
 
-def _parse_record(
+def _record_head(
     path: StrPath, lines: list[str], i0: int, i1: int, v2: bool, file_system: str
-) -> tuple[str, dict[str, Any]]:
+) -> tuple[str, str, int, float]:
+    """System, satellite id, number of lines and epoch (calendar seconds) of one record."""
     first = lines[i0]
     lineno = i0 + 1
     if v2:
         sys_letter = file_system
         prn_text, epoch_text, c0 = first[0:2], first[3:22], 22
-        c_orbit = 3
     else:
         sys_letter = first[0]
         prn_text, epoch_text, c0 = first[1:3], first[4:23], 23
-        c_orbit = 4
     if sys_letter not in _FIELDS:
         raise FileFormatError(path, lineno, f"unknown satellite system letter {sys_letter!r}")
-    names = _FIELDS[sys_letter]
     n_lines = i1 - i0
     # Blank lines after the last expected one (some writers pad) are ignored.
     while n_lines > _N_LINES[sys_letter] and not lines[i0 + n_lines - 1].strip():
@@ -455,97 +476,139 @@ def _parse_record(
             raise ValueError
         year, month, day, hour, minute = (int(p) for p in parts[:5])
         sec = float(parts[5])
-        if v2 or year < 100:
-            year += 2000 if year < 80 else (1900 if year < 100 else 0)
+        if year < 100:  # RINEX 2: 80-99 -> 19xx, 00-79 -> 20xx
+            year += 2000 if year < 80 else 1900
         t_cal = calendar_gps_seconds(year, month, day, hour, minute, sec)
     except ValueError:
         raise FileFormatError(
             path, lineno, f"unreadable satellite/epoch {first[:c0].strip()!r}"
         ) from None
-    row: dict[str, Any] = {"sat": f"{sys_letter}{prn:02d}", "line": lineno, "n_lines": n_lines}
-    k = 0
-    for j in range(n_lines):
-        line = lines[i0 + j]
-        cols = (c0, c0 + 19, c0 + 38) if j == 0 else tuple(c_orbit + 19 * m for m in range(4))
-        for c in cols:
-            name = names[k] if k < len(names) else None
-            k += 1
-            if name is None:
-                continue
-            s = line[c : c + 19].strip()
-            if not s:
-                row[name] = _NAN
-                continue
-            try:
-                row[name] = float(s.translate(_D_TO_E))
-            except ValueError:
-                raise FileFormatError(
-                    path, i0 + j + 1, f"unreadable {name} {s!r} in {row['sat']} record"
-                ) from None
-    for name in names[k:]:
-        if name is not None:
-            row[name] = _NAN
-    ts = _TIME_SYSTEM[sys_letter]
-    if ts == "BDT":
-        row["toc_gps_s"] = t_cal - BDT_MINUS_GPST_S
-    elif ts == "UTC":
-        row["toc_gps_s"] = float(utc_to_gps(t_cal))
-    else:
-        row["toc_gps_s"] = t_cal
-    if sys_letter in "RS":
-        for name in _KM:
-            row[name] *= 1000.0
-    if sys_letter in _KEPLER:
-        row["toe_gps_s"] = _toe_gps_s(sys_letter, row["week"], row["toe_sow"], row["toc_gps_s"])
-    return sys_letter, row
+    return sys_letter, f"{sys_letter}{prn:02d}", n_lines, t_cal
 
 
-def _toe_gps_s(sys_letter: str, week: float, toe_sow: float, toc_gps_s: float) -> float:
+def _record_text(lines: list[str], i0: int, n_lines: int, max_lines: int, v2: bool) -> str:
+    """The fields of one record as one fixed-width string, 19 characters per field."""
+    c0, co = (22, 3) if v2 else (23, 4)
+    parts = [lines[i0][c0 : c0 + 57].ljust(57)]
+    parts.extend(lines[i0 + j][co : co + 76].ljust(76) for j in range(1, n_lines))
+    parts.append(" " * (76 * (max_lines - n_lines)))
+    return "".join(parts)
+
+
+def _fields_fast(lines: list[str], g: _Group, sys_letter: str, v2: bool) -> FloatArray:
+    """All fields of a system's records at once: (n_records, n_fields), NaN for blanks.
+
+    Raises ValueError when any field is not a number (the caller then locates it).
+    """
+    max_lines = _MAX_LINES[sys_letter]
+    n_fields = 3 + 4 * (max_lines - 1)
+    text = "".join(
+        _record_text(lines, i0, nl, max_lines, v2)
+        for i0, nl in zip(g.starts, g.n_lines, strict=True)
+    )
+    buf = bytearray(text.translate(_D_TO_E).encode("ascii", "replace"))
+    chars = np.frombuffer(buf, dtype=np.uint8).reshape(-1, 19)
+    blank = (chars == 32).all(axis=1)
+    chars[blank, :3] = np.frombuffer(b"nan", dtype=np.uint8)
+    return chars.view("S19").reshape(len(g.sats), n_fields).astype(float)
+
+
+def _fields_slow(
+    path: StrPath,
+    lines: list[str],
+    g: _Group,
+    sys_letter: str,
+    v2: bool,
+    lenient: bool,
+    skipped: list[SkippedLine],
+) -> tuple[_Group, FloatArray]:
+    """Field by field, to name the damaged one (strict) or skip its record (lenient)."""
+    max_lines = _MAX_LINES[sys_letter]
+    names = _FIELDS[sys_letter]
+    keep = _Group()
+    rows: list[list[float]] = []
+    for k, (i0, nl) in enumerate(zip(g.starts, g.n_lines, strict=True)):
+        text = _record_text(lines, i0, nl, max_lines, v2).translate(_D_TO_E)
+        row: list[float] = []
+        try:
+            for m in range(len(text) // 19):
+                s = text[19 * m : 19 * (m + 1)].strip()
+                try:
+                    row.append(float(s) if s else _NAN)
+                except ValueError:
+                    line = i0 + (0 if m < 3 else (m - 3) // 4 + 1) + 1
+                    raise FileFormatError(
+                        path,
+                        line,
+                        f"unreadable {names[m] or 'spare field'} {s!r} in {g.sats[k]} record",
+                    ) from None
+        except FileFormatError as exc:
+            if not lenient:
+                raise
+            skipped.append(SkippedLine(g.lines[k], exc.message))
+            continue
+        rows.append(row)
+        for attr in ("sats", "lines", "n_lines", "t_cal", "starts"):
+            getattr(keep, attr).append(getattr(g, attr)[k])
+    return keep, np.array(rows, dtype=float).reshape(len(rows), 3 + 4 * (max_lines - 1))
+
+
+def _toe_gps_s(
+    sys_letter: str, week: FloatArray, toe_sow: FloatArray, toc_gps_s: FloatArray
+) -> FloatArray:
     """Full GPS seconds of toe from the written week, resolved against toc.
 
     The written week may be rolled over (some writers give GPS weeks modulo 1024) or be the
     week of toc rather than of toe near a week boundary; toe lies within half a week of toc.
     """
-    if math.isnan(week) or math.isnan(toe_sow):
-        return _NAN
     if sys_letter == "C":
         t = (week + BDS_WEEK_OFFSET) * SECONDS_PER_WEEK + toe_sow - BDT_MINUS_GPST_S
     else:
         t = week * SECONDS_PER_WEEK + toe_sow
         rollover = 1024 * SECONDS_PER_WEEK
-        t += round((toc_gps_s - t) / rollover) * rollover
-    return t + round((toc_gps_s - t) / SECONDS_PER_WEEK) * SECONDS_PER_WEEK
+        t = t + np.round((toc_gps_s - t) / rollover) * rollover
+    return t + np.round((toc_gps_s - t) / SECONDS_PER_WEEK) * SECONDS_PER_WEEK
 
 
-def _tables(rows: dict[str, list[dict[str, Any]]]) -> dict[str, pd.DataFrame]:
+def _tables(groups: dict[str, tuple[_Group, FloatArray]]) -> dict[str, pd.DataFrame]:
     import pandas as pd
 
     tables: dict[str, pd.DataFrame] = {}
     for sys_letter in "GRECJSI":
-        recs = rows.get(sys_letter)
-        if not recs:
+        if sys_letter not in groups:
             continue
-        names = [c for c in _FIELDS[sys_letter] if c is not None]
-        if sys_letter == "R" and all(r["n_lines"] < 5 for r in recs):
+        g, values = groups[sys_letter]
+        all_names = _FIELDS[sys_letter]
+        cols: dict[str, Any] = {
+            name: values[:, k] for k, name in enumerate(all_names) if name is not None
+        }
+        names = [c for c in all_names if c is not None]
+        if sys_letter == "R" and max(g.n_lines) < 5:
             names = names[:15]  # no record has the optional RINEX 3.05 fifth line
         if sys_letter in "RS":  # state vector components together, as in the docstring
             names = sorted(names, key=lambda c: _STATE_ORDER.get(c, 0))
+            for name in _KM:
+                cols[name] = cols[name] * 1000.0
+        t_cal = np.array(g.t_cal, dtype=float)
+        ts = _TIME_SYSTEM[sys_letter]
+        if ts == "BDT":
+            toc = t_cal - BDT_MINUS_GPST_S
+        elif ts == "UTC":
+            toc = utc_to_gps(t_cal)
+        else:
+            toc = t_cal
         if sys_letter in _KEPLER:
             k = names.index("week") + 1
             names = [*names[:k], "toe_gps_s", *names[k:]]
-        columns = ["sat", "toc_gps_s", *names, "line"]
-        data: dict[str, Any] = {}
-        for c in columns:
-            if c == "sat":
-                data[c] = np.array([r["sat"] for r in recs], dtype=object)
-            elif c == "line":
-                data[c] = np.array([r["line"] for r in recs], dtype=np.int64)
-            else:
-                vals = np.array([r.get(c, _NAN) for r in recs], dtype=float)
-                if c in _INT_FIELDS:
-                    vals = np.where(np.isnan(vals), -1, np.round(vals)).astype(np.int64)
-                data[c] = vals
-        df = pd.DataFrame(data, columns=columns)
-        df = df.sort_values(["sat", "toc_gps_s", "line"], kind="stable", ignore_index=True)
-        tables[sys_letter] = df
+            cols["toe_gps_s"] = _toe_gps_s(sys_letter, cols["week"], cols["toe_sow"], toc)
+        for name in _INT_FIELDS.intersection(names):
+            v = cols[name]
+            cols[name] = np.where(np.isnan(v), -1, np.round(v)).astype(np.int64)
+        line = np.array(g.lines, dtype=np.int64)
+        sats = np.array(g.sats)
+        order = np.lexsort((line, toc, sats))  # by satellite, then toc, then file order
+        data = {"sat": sats[order].astype(object), "toc_gps_s": toc[order]}
+        data.update((name, cols[name][order]) for name in names)
+        data["line"] = line[order]
+        tables[sys_letter] = pd.DataFrame(data)
     return tables

@@ -1,0 +1,389 @@
+"""Android GnssLogger raw measurement logs -> :class:`~navtrack.gnss.observations.Observations`.
+
+:func:`read_gnsslogger` reads the ``Raw,`` rows of a GnssLogger text log (old and new column
+sets: the ``# Raw,...`` header comment defines the columns) and builds, per epoch and signal,
+the RINEX-like observables
+
+* ``C..`` pseudorange (m) from ``TimeNanos``, ``FullBiasNanos``, ``BiasNanos``,
+  ``TimeOffsetNanos`` and ``ReceivedSvTimeNanos`` with each constellation's time of week /
+  day / 100 ms ambiguity resolved;
+* ``L..`` carrier phase (cycles) from ``AccumulatedDeltaRangeMeters`` when the ADR state is
+  valid (LLI bit 0 set on reset or cycle slip);
+* ``D..`` Doppler (Hz, RINEX sign: positive when the satellite approaches) = -PRR / λ;
+* ``S..`` carrier-to-noise density ``Cn0DbHz`` (dB-Hz).
+
+Signal codes are RINEX 3 codes chosen by constellation and carrier frequency
+(``CarrierFrequencyHz``; logs without it are taken to be on the primary band: GPS/QZSS/Galileo
+L1/E1 ``1C``, GLONASS G1 ``1C``, BeiDou B1I ``2I``) with the attribute from ``CodeType`` when
+logged (else the usual smartphone attribute: C for L1/E1/G1, Q for L5/E5a, I for B1I).
+
+Rows that cannot give a valid pseudorange are not dropped silently: each is listed in
+:attr:`Observations.skipped` with its line number and one of the reasons in
+:data:`SKIP_REASONS`; :func:`skipped_counts` tallies them.
+
+References
+----------
+European GNSS Agency, "Using GNSS raw measurements on Android devices", white paper, 2017,
+sections 2.4 and 5 (pseudorange generation, time ambiguities per constellation);
+Android ``android.location.GnssMeasurement`` reference (state bits, ADR state bits, Svid
+ranges); RINEX 3.05 section 5.2.10 (Doppler sign) and table 4-10 (codes).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from os import fspath
+
+import numpy as np
+
+from navtrack._typing import StrPath
+from navtrack.errors import FileFormatError
+from navtrack.gnss.observations import Observations, ObsHeader, SkippedLine
+from navtrack.gnss.rinex._io import read_bytes
+from navtrack.timescale import BDT_MINUS_GPST_S, GLONASST_MINUS_UTC_S, leap_seconds
+
+__all__ = ["SKIP_REASONS", "read_gnsslogger", "skipped_counts"]
+
+C_MPS = 299792458.0
+_WEEK_NS = 604800 * 10**9
+_DAY_NS = 86400 * 10**9
+_100MS_NS = 100 * 10**6
+
+# android.location.GnssMeasurement state bits
+_CODE_LOCK = 1
+_TOW_DECODED = 8
+_MSEC_AMBIGUOUS = 16
+_GLO_TOD_DECODED = 128
+_GAL_E1C_2ND_CODE_LOCK = 2048
+_TOW_KNOWN = 16384
+_GLO_TOD_KNOWN = 32768
+# AccumulatedDeltaRangeState bits
+_ADR_VALID = 1
+_ADR_RESET = 2
+_ADR_CYCLE_SLIP = 4
+
+# Android ConstellationType -> RINEX system letter (2 SBAS and 0 unknown are not used)
+_CONSTELLATION = {1: "G", 3: "R", 4: "J", 5: "C", 6: "E", 7: "I"}
+
+SKIP_REASONS = (
+    "constellation not supported",
+    "no GNSS time (FullBiasNanos missing)",
+    "GLONASS slot unknown (frequency channel only)",
+    "millisecond ambiguity",
+    "TOW/TOD not decoded",
+    "satellite time uncertainty too large",
+    "pseudorange out of range",
+    "unknown carrier frequency",
+    "duplicate signal in epoch",
+    "unreadable row",
+)
+"""Reasons a ``Raw`` row gives no observation (the ``reason`` of its ``SkippedLine``)."""
+
+_REQUIRED = (
+    "TimeNanos",
+    "FullBiasNanos",
+    "Svid",
+    "State",
+    "ReceivedSvTimeNanos",
+    "ReceivedSvTimeUncertaintyNanos",
+    "Cn0DbHz",
+    "ConstellationType",
+)
+# Carrier frequencies (Hz) of the bands phones track, by system: (centre, band digit,
+# default attribute when CodeType is not logged).
+_BANDS: dict[str, tuple[tuple[float, str, str], ...]] = {
+    "G": ((1575.42e6, "1", "C"), (1176.45e6, "5", "Q"), (1227.60e6, "2", "L")),
+    "J": ((1575.42e6, "1", "C"), (1176.45e6, "5", "Q"), (1227.60e6, "2", "L")),
+    "E": ((1575.42e6, "1", "C"), (1176.45e6, "5", "Q"), (1207.14e6, "7", "Q")),
+    "C": ((1561.098e6, "2", "I"), (1575.42e6, "1", "P"), (1176.45e6, "5", "P")),
+    "I": ((1176.45e6, "5", "A"),),
+}
+_DEFAULT_FREQ = {"G": 1575.42e6, "J": 1575.42e6, "E": 1575.42e6, "C": 1561.098e6, "I": 1176.45e6}
+_PR_MIN_M, _PR_MAX_M = 1.0e7, 6.0e7
+
+
+def read_gnsslogger(
+    path: StrPath,
+    *,
+    max_sv_time_uncertainty_ns: float = 500.0,
+    lenient: bool = False,
+) -> Observations:
+    """Read an Android GnssLogger raw log into observations.
+
+    Parameters
+    ----------
+    path : str or path-like
+        GnssLogger ``.txt`` log (plain or gzip).
+    max_sv_time_uncertainty_ns : float
+        Rows with ``ReceivedSvTimeUncertaintyNanos`` at or above this are skipped (500 ns,
+        ~150 m, as in Google's gps-measurement-tools and the shared data README).
+    lenient : bool
+        When true, an unreadable ``Raw`` row is skipped with reason ``"unreadable row"``;
+        when false (default) it raises.
+
+    Returns
+    -------
+    Observations
+        Epochs are the distinct ``TimeNanos`` of the rows, in time order; ``t_gps_s`` is the
+        phone's GPS time of reception ``TimeNanos - (FullBiasNanos + BiasNanos)`` (s).
+        ``clock_offset_s`` is NaN (the phone's clock bias is already removed by
+        ``FullBiasNanos``/``BiasNanos``; what remains is estimated by the positioning).
+        ``header.version`` is 0.0 and ``header.receiver`` holds the logger's version line.
+        Every ``Raw`` row either gives values or is listed in ``skipped``.
+
+    Notes
+    -----
+    Validity, per constellation (GSA white paper table 5): GPS, QZSS, BeiDou, NavIC and
+    Galileo need ``TOW_DECODED`` or ``TOW_KNOWN`` (pseudorange from the time of week; BeiDou
+    in BDT = GPST - 14 s); Galileo with only ``GAL_E1C_2ND_CODE_LOCK`` gives the time within
+    100 ms and the pseudorange is resolved modulo 100 ms (valid since Galileo ranges are
+    < 100 light-ms); GLONASS needs ``GLO_TOD_DECODED`` or ``GLO_TOD_KNOWN`` (time of day in
+    UTC(SU) + 3 h; GPS - UTC from the ``LeapSecond`` column when logged, else from the IERS
+    table). Rows with ``MSEC_AMBIGUOUS`` are skipped. GLONASS rows whose ``Svid`` is a
+    frequency channel (93-106) rather than an orbital slot cannot be matched to an ephemeris
+    and are skipped. Doppler for GLONASS needs ``CarrierFrequencyHz`` (NaN otherwise).
+
+    Raises
+    ------
+    FileFormatError
+        No ``# Raw,`` header line, a required column missing, or (strict reading) an
+        unreadable ``Raw`` row; the message names the file and line.
+    """
+    text = read_bytes(path).decode("utf-8", "replace")
+    lines = text.splitlines()
+    columns: dict[str, int] | None = None
+    version_line = ""
+    comments: list[str] = []
+    rows: list[tuple[int, list[str]]] = []
+    for i, line in enumerate(lines):
+        if line.startswith("#"):
+            body = line[1:].strip()
+            if body.startswith("Raw,"):
+                names = [c.strip() for c in body.split(",")]
+                columns = {n: k - 1 for k, n in enumerate(names) if k > 0}
+                missing = [c for c in _REQUIRED if c not in columns]
+                if missing:
+                    raise FileFormatError(
+                        path, i + 1, f"Raw header lacks column(s) {', '.join(missing)}"
+                    )
+            elif body.startswith("Version"):
+                version_line = body
+            elif body:
+                comments.append(body)
+        elif line.startswith("Raw,"):
+            if columns is None:
+                raise FileFormatError(path, i + 1, "Raw row before the '# Raw,...' header line")
+            rows.append((i + 1, line.split(",")[1:]))
+    if columns is None:
+        raise FileFormatError(path, None, "not a GnssLogger log: no '# Raw,...' header line")
+    return _build(path, rows, columns, version_line, comments, max_sv_time_uncertainty_ns, lenient)
+
+
+def skipped_counts(obs: Observations) -> dict[str, int]:
+    """Number of skipped rows per reason (in :data:`SKIP_REASONS` order)."""
+    counts = Counter(s.reason for s in obs.skipped)
+    return {r: counts[r] for r in SKIP_REASONS if counts[r]}
+
+
+def _int_field(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        return int(float(text))  # some loggers write integers as 1.0E10
+
+
+def _float_field(text: str) -> float:
+    return float(text) if text.strip() else math.nan
+
+
+def _build(
+    path: StrPath,
+    rows: list[tuple[int, list[str]]],
+    col: dict[str, int],
+    version_line: str,
+    comments: list[str],
+    max_unc_ns: float,
+    lenient: bool,
+) -> Observations:
+    skipped: list[SkippedLine] = []
+
+    def opt(fields: list[str], name: str) -> str:
+        k = col.get(name)
+        return fields[k] if k is not None and k < len(fields) else ""
+
+    # (epoch key, sat, code, values...) of every usable row
+    good: list[tuple[int, str, str, float, float, float, float, int]] = []
+    epoch_time: dict[int, float] = {}
+    seen: set[tuple[int, str, str]] = set()
+    n_cols = max(col.values()) + 1
+    for lineno, f in rows:
+        try:
+            if len(f) < min(n_cols, max(col[c] for c in _REQUIRED) + 1):
+                raise ValueError("too few fields")
+            time_nanos = _int_field(f[col["TimeNanos"]])
+            const = _int_field(f[col["ConstellationType"]])
+            svid = _int_field(f[col["Svid"]])
+            state = _int_field(f[col["State"]])
+            rx_sv_ns = _int_field(f[col["ReceivedSvTimeNanos"]])
+            unc_ns = _float_field(f[col["ReceivedSvTimeUncertaintyNanos"]])
+            cn0 = _float_field(f[col["Cn0DbHz"]])
+            full_bias_txt = f[col["FullBiasNanos"]].strip()
+            full_bias = _int_field(full_bias_txt) if full_bias_txt else None
+            bias_ns = _float_field(opt(f, "BiasNanos"))
+            offset_ns = _float_field(opt(f, "TimeOffsetNanos"))
+            prr = _float_field(opt(f, "PseudorangeRateMetersPerSecond"))
+            freq = _float_field(opt(f, "CarrierFrequencyHz"))
+            adr = _float_field(opt(f, "AccumulatedDeltaRangeMeters"))
+            adr_state_txt = opt(f, "AccumulatedDeltaRangeState").strip()
+            adr_state = _int_field(adr_state_txt) if adr_state_txt else 0
+            leap_txt = opt(f, "LeapSecond").strip()
+            leap = _int_field(leap_txt) if leap_txt else None
+            code_type = opt(f, "CodeType").strip()
+        except (ValueError, IndexError) as exc:
+            if not lenient:
+                raise FileFormatError(path, lineno, f"unreadable Raw row ({exc})") from None
+            skipped.append(SkippedLine(lineno, "unreadable row"))
+            continue
+        bias_ns = 0.0 if math.isnan(bias_ns) else bias_ns
+        offset_ns = 0.0 if math.isnan(offset_ns) else offset_ns
+
+        def skip(reason: str, lineno: int = lineno) -> None:
+            skipped.append(SkippedLine(lineno, reason))
+
+        sys_letter = _CONSTELLATION.get(const)
+        if sys_letter is None:
+            skip("constellation not supported")
+            continue
+        if full_bias is None or full_bias == 0:
+            skip("no GNSS time (FullBiasNanos missing)")
+            continue
+        # receiver GNSS time: integer ns since the GPS epoch plus a sub-ns float part
+        t_rx_int = time_nanos - full_bias
+        t_rx_frac = offset_ns - bias_ns
+        if time_nanos not in epoch_time:
+            epoch_time[time_nanos] = (t_rx_int // 10**9) + ((t_rx_int % 10**9) - bias_ns) * 1e-9
+        if sys_letter == "R" and not 1 <= svid <= 24:
+            skip("GLONASS slot unknown (frequency channel only)")
+            continue
+        if state & _MSEC_AMBIGUOUS:
+            skip("millisecond ambiguity")
+            continue
+        period, t_rx_scale = _time_reference(sys_letter, state, t_rx_int, leap)
+        if period == 0:
+            skip("TOW/TOD not decoded")
+            continue
+        if not unc_ns < max_unc_ns:  # NaN uncertainty fails too
+            skip("satellite time uncertainty too large")
+            continue
+        # travel time; the modulo also resolves a week/day rollover between transmission and
+        # reception (Python's % of ints is never negative)
+        tau_ns = ((t_rx_scale - rx_sv_ns) % period) + t_rx_frac
+        pr_m = tau_ns * 1e-9 * C_MPS
+        if not _PR_MIN_M < pr_m < _PR_MAX_M:
+            skip("pseudorange out of range")
+            continue
+        sig = _signal(sys_letter, freq, code_type)
+        if sig is None:
+            skip("unknown carrier frequency")
+            continue
+        sat = f"{sys_letter}{svid - 192 if sys_letter == 'J' else svid:02d}"
+        key = (time_nanos, sat, sig)
+        if key in seen:
+            skip("duplicate signal in epoch")
+            continue
+        seen.add(key)
+        f_hz = freq if not math.isnan(freq) else _DEFAULT_FREQ.get(sys_letter, math.nan)
+        wavelength = C_MPS / f_hz
+        doppler = -prr / wavelength
+        phase = adr / wavelength if adr_state & _ADR_VALID else math.nan
+        lli = 1 if adr_state & (_ADR_RESET | _ADR_CYCLE_SLIP) else 0
+        if math.isnan(phase):
+            lli = -1
+        good.append((time_nanos, sat, sig, pr_m, phase, doppler, cn0, lli))
+
+    keys = sorted(epoch_time)
+    e_index = {k: n for n, k in enumerate(keys)}
+    sats = tuple(sorted({g[1] for g in good}, key=lambda s: ("GRECJSI".index(s[0]), s)))
+    s_index = {s: n for n, s in enumerate(sats)}
+    signals = sorted({g[2] for g in good}, key=lambda c: (c[0], c[1]))
+    codes = tuple(f"{t}{c}" for c in signals for t in "CLDS")
+    c_index = {c: n for n, c in enumerate(codes)}
+    values = np.full((len(keys), len(sats), len(codes)), np.nan)
+    lli_arr = np.full(values.shape, -1, dtype=np.int8)
+    for time_nanos, sat, sig, pr_m, phase, doppler, cn0, lli in good:
+        e, s = e_index[time_nanos], s_index[sat]
+        values[e, s, c_index["C" + sig]] = pr_m
+        values[e, s, c_index["L" + sig]] = phase
+        values[e, s, c_index["D" + sig]] = doppler
+        values[e, s, c_index["S" + sig]] = cn0
+        lli_arr[e, s, c_index["L" + sig]] = lli
+    obs_types: dict[str, tuple[str, ...]] = {}
+    for sys_letter in "GRECJSI":
+        present = sorted({g[2] for g in good if g[1][0] == sys_letter})
+        if present:
+            obs_types[sys_letter] = tuple(f"{t}{c}" for c in present for t in "CLDS")
+    header = ObsHeader(
+        version=0.0,
+        file_type="O",
+        system="M",
+        receiver=f"Android GnssLogger ({version_line})" if version_line else "Android GnssLogger",
+        time_system="GPS",
+        obs_types=obs_types,
+        comments=tuple(comments),
+    )
+    skipped.sort(key=lambda s: s.line)
+    return Observations(
+        path=fspath(path),
+        header=header,
+        t_gps_s=np.array([epoch_time[k] for k in keys], dtype=float),
+        epoch_flag=np.zeros(len(keys), dtype=np.int8),
+        clock_offset_s=np.full(len(keys), np.nan),
+        sats=sats,
+        codes=codes,
+        values=values,
+        lli=lli_arr,
+        ssi=np.full(values.shape, -1, dtype=np.int8),
+        skipped=tuple(skipped),
+    )
+
+
+def _time_reference(
+    sys_letter: str, state: int, t_rx_int: int, leap: int | None
+) -> tuple[int, int]:
+    """Ambiguity period (ns; 0 when the satellite time is not usable) and the receiver time
+    expressed in the satellite's time scale, reduced modulo that period (ns)."""
+    if sys_letter == "R":
+        if not state & (_GLO_TOD_DECODED | _GLO_TOD_KNOWN):
+            return 0, 0
+        if leap is None:
+            leap = int(leap_seconds(t_rx_int * 1e-9))
+        t_glo = t_rx_int - leap * 10**9 + int(GLONASST_MINUS_UTC_S) * 10**9
+        return _DAY_NS, t_glo % _DAY_NS
+    t = t_rx_int
+    if sys_letter == "C":
+        t += int(BDT_MINUS_GPST_S) * 10**9
+    if state & (_TOW_DECODED | _TOW_KNOWN):
+        return _WEEK_NS, t % _WEEK_NS
+    if sys_letter == "E" and state & _GAL_E1C_2ND_CODE_LOCK:
+        return _100MS_NS, t % _100MS_NS
+    return 0, 0
+
+
+def _signal(sys_letter: str, freq_hz: float, code_type: str) -> str | None:
+    """RINEX band digit + attribute of a signal (``"1C"``), None for an unknown frequency."""
+    if sys_letter == "R":
+        # G1 FDMA: 1602 MHz + k * 562.5 kHz, k = -7..+6; G2: 1246 MHz + k * 437.5 kHz
+        if math.isnan(freq_hz) or 1597.0e6 < freq_hz < 1606.5e6:
+            return "1" + (code_type or "C")
+        if 1242.0e6 < freq_hz < 1249.5e6:
+            return "2" + (code_type or "C")
+        return None
+    bands = _BANDS[sys_letter]
+    if math.isnan(freq_hz):
+        band, attr = bands[0][1], bands[0][2]
+        return band + (code_type or attr)
+    for centre, band, attr in bands:
+        if abs(freq_hz - centre) < 2.0e6:
+            return band + (code_type or attr)
+    return None
