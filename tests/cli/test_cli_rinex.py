@@ -20,6 +20,7 @@ def test_info_example(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> Non
     assert "n_epochs" in text
     assert "120" in text
     assert "2021-03-19T12:01:59.000" in text
+    assert "events_by_flag    none" in text
     summary = json.loads(out.read_text())
     assert summary["n_epochs"] == 120
     assert summary["marker"] == "SEPT"

@@ -9,6 +9,7 @@ values of individual fields are checked against the text of the file itself (lin
 from __future__ import annotations
 
 import gzip
+import json
 import warnings
 from pathlib import Path
 
@@ -126,8 +127,9 @@ def test_shared_file_counts(gnss_data: Path, name: str) -> None:
     assert np.all(np.diff(obs.t_gps_s) > 0)
     if interval:
         assert np.allclose(np.round(np.diff(obs.t_gps_s)), interval)
-    summary = obs.summary()
+    summary = json.loads(json.dumps(obs.summary()))  # JSON-serialisable as it is
     assert summary["n_epochs"] == n_epochs
+    assert summary["sats_per_system"] == {s: sum(sat[0] == s for sat in obs.sats) for s in codes}
     assert summary["warnings"] == []
 
 
@@ -207,6 +209,17 @@ def test_lli_ssi_and_values_as_printed(gnss_data: Path) -> None:
     k = obs.codes.index("L1C")
     assert (obs.lli[0, e01, k], obs.ssi[0, e01, k]) == (0, 5)
     assert (obs.lli[0, e01, 0], obs.ssi[0, e01, 0]) == (-1, 5)
+
+
+def test_zero_means_missing(gnss_data: Path) -> None:
+    """RINEX 2.11 table A2: missing observations are written as 0.0 or blanks. ARL1 writes C2
+    as 0.000 for satellites without L2C (line 17: G02 "0.000" in the C2 column)."""
+    obs = read_obs(gnss_data / "gpstk_arl1/arlm200a.15o")
+    g02 = obs.sat_index("G02")
+    assert np.isnan(obs.code("C2")[0, g02])
+    assert obs.code("C1")[0, g02] == 21276226.827
+    assert obs.code("P1")[0, g02] == 21276226.702
+    assert not (obs.values == 0.0).any()
 
 
 def test_sept_galileo_and_qzss_codes(gnss_data: Path) -> None:
@@ -401,6 +414,29 @@ def test_rinex2_events_and_new_obs_types(tmp_path: Path) -> None:
     np.testing.assert_array_equal(obs.values[1, g02], [21000000.0, np.nan, np.nan, 40.0])
 
 
+@pytest.mark.parametrize(
+    ("system", "time_field", "shift_s"),
+    [
+        ("G", "GPS", 0.0),
+        ("R", "GLO", 18.0),
+        ("R", "   ", 18.0),
+        ("M", "GLO", 18.0),
+        ("M", "   ", 0.0),
+    ],
+)
+def test_rinex2_time_systems(tmp_path: Path, system: str, time_field: str, shift_s: float) -> None:
+    """RINEX 2.11 section 8.1.1 / table A1: GLO time tags are UTC; a GLONASS-only file with a
+    blank time system is in GLO time, a mixed one in GPS time. GPST - UTC = 18 s in 2020."""
+    first = _h(
+        f"{2020:6d}{1:6d}{1:6d}{0:6d}{0:6d}{0.0:13.7f}     {time_field}", "TIME OF FIRST OBS"
+    )
+    rows = _v2_header(["C1"], system=system, extra=[first])
+    rows += _v2_epoch((2020, 1, 1, 0, 0, 0.0), 0, ["R01"]) + _v2_records(np.array([2.0e7]))
+    obs = read_obs(_write(tmp_path, "t.20o", rows))
+    assert obs.t_gps_s[0] == calendar_gps_seconds(2020, 1, 1, 0, 0, 0.0) + shift_s
+    assert obs.header.first_obs_gps_s == obs.t_gps_s[0]
+
+
 def _v3_header(
     types: dict[str, list[str]], time_system: str = "GPS", extra: list[str] = ()
 ) -> list[str]:
@@ -473,6 +509,16 @@ def test_rinex3_multiline_types_systems_scale_and_clock(tmp_path: Path) -> None:
     assert obs.clock_offset_s[0] == -0.000012345678
 
 
+@pytest.mark.parametrize("version", ["3.00", "3.02", "3.03", "3.05", "4.00", "4.01"])
+def test_rinex3_and_4_versions(tmp_path: Path, version: str) -> None:
+    rows = _v3_header({"G": ["C1C"], "E": ["C1X"]})
+    rows[0] = f"{version:>9}" + rows[0][9:]
+    rows += [_v3_epoch((2021, 1, 1, 0, 0, 0.0), 0, 2), "G01" + _field(2.0e7), "E11" + _field(2.5e7)]
+    obs = read_obs(_write(tmp_path, "v.rnx", rows))
+    assert obs.header.version == float(version)
+    assert obs.code("C1X")[0, obs.sat_index("E11")] == 2.5e7
+
+
 @pytest.mark.parametrize(
     ("time_system", "shift_s"),
     [("GPS", 0.0), ("GAL", 0.0), ("BDT", 14.0), ("GLO", 18.0), ("UTC", 18.0)],
@@ -532,7 +578,8 @@ def test_nonstandard_field_layouts(tmp_path: Path) -> None:
     path.write_text("\n".join(rows) + "\n")
     obs = read_obs(path)
     got = obs.values[0, 0]
-    np.testing.assert_array_equal(got, [20000000.123, 1234567.89, -0.5, 0.0, 1500.0])
+    # "-0.000" is 0.0, which RINEX uses for "missing": NaN.
+    np.testing.assert_array_equal(got, [20000000.123, 1234567.89, -0.5, np.nan, 1500.0])
     assert obs.lli[0, 0, 0] == 4
 
 
@@ -557,6 +604,43 @@ def test_decode_equals_python_float(texts: list[str], ind: str) -> None:
     np.testing.assert_array_equal(value, want)
     assert not bad.any()
     assert (lli == (-1 if ind == " " else int(ind))).all()
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.lists(
+        st.one_of(
+            st.text(alphabet=" 0123456789-.", min_size=14, max_size=14),
+            st.text(alphabet=" 0123456789-.+eEx", min_size=14, max_size=14),
+            st.builds(
+                lambda k, tail: (" " * k + tail)[-14:].rjust(14),
+                st.integers(0, 14),
+                st.text(alphabet="0123456789-. ", min_size=0, max_size=14),
+            ),
+        ),
+        min_size=1,
+        max_size=30,
+    )
+)
+def test_decode_accepts_exactly_the_numbers(texts: list[str]) -> None:
+    """Arbitrary 14-character texts: a number is read as ``float(text)``, blanks as NaN, and
+    anything else is flagged bad; the fast path never accepts a text Python rejects."""
+    fields = np.frombuffer("".join(t + "  " for t in texts).encode(), dtype=np.uint8)
+    value, _, _, blank, bad = _decode(fields.reshape(-1, 16))
+    for k, text in enumerate(texts):
+        if not text.strip():
+            assert blank[k]
+            assert not bad[k]
+            assert np.isnan(value[k])
+            continue
+        assert not blank[k]
+        try:
+            want = float(text)
+        except ValueError:
+            assert bad[k], text
+            continue
+        assert not bad[k], text
+        assert value[k] == want or (np.isnan(want) and np.isnan(value[k])), text
 
 
 # ----------------------------------------------------------------------------- bad input
@@ -654,6 +738,18 @@ def test_missing_data_line_mid_file(tmp_path: Path) -> None:
     _raises_at(_write(tmp_path, "gap2.o", rows), 18, "line 26, read as its data, is an epoch")
 
 
+def test_surplus_data_line(tmp_path: Path) -> None:
+    rows = _lines("SEPT078M_120.21O")
+    rows.insert(35, "E02" + rows[34][3:])  # a 24th satellite line after an epoch announcing 23
+    path = _write(tmp_path, "s3.o", rows)
+    _raises_at(path, 34, "announces 23 satellites but 24 data lines follow")
+    obs = read_obs(path, lenient=True)
+    assert [s.line for s in obs.skipped] == [58]
+    # The first 23 lines are read (E02 included); the last one, line 58, is dropped.
+    assert obs.code("C1C")[0, obs.sat_index("E02")] == obs.code("C1C")[0, obs.sat_index("E01")]
+    assert np.isnan(obs.values[0, obs.sat_index(rows[57][:3])]).all()
+
+
 def test_garbage_in_data_line(tmp_path: Path) -> None:
     rows = _lines("07590920.05o")
     assert rows[18].startswith("  55923622.160")
@@ -693,6 +789,12 @@ def test_unknown_system_letter(tmp_path: Path) -> None:
     _raises_at(_write(tmp_path, "xh.o", rows), 13, "unknown satellite system")
 
 
+def test_blank_line_inside_rinex3_data(tmp_path: Path) -> None:
+    rows = _lines("SEPT078M_120.21O")
+    rows[43] = ""
+    _raises_at(_write(tmp_path, "b.o", rows), 44, "in satellite id")
+
+
 def test_system_without_obs_types(tmp_path: Path) -> None:
     rows = _lines("SEPT078M_120.21O")
     rows[43] = "R01" + rows[43][3:]
@@ -729,6 +831,99 @@ def test_crlf_line_ends(tmp_path: Path) -> None:
     _same(read_obs(path), read_obs(sample_path("07590920.05o")))
 
 
+def _reference_read(path: Path) -> tuple[list[float], dict[tuple[int, str, str], tuple]]:
+    """A deliberately plain line-by-line reader written from the RINEX 2.11/3.05 tables, used
+    as an independent oracle for LLI/SSI of every code (georinex exposes only some of them).
+
+    Returns epoch calendar seconds and {(epoch, sat, code): (value, lli, ssi)} for every field
+    that is not blank.
+    """
+    lines = path.read_text().splitlines()
+    v3 = float(lines[0][:9]) >= 3
+    types: dict[str, list[str]] = {}
+    k = 0
+    system = ""
+    while lines[k][60:].strip() != "END OF HEADER":
+        label = lines[k][60:].strip()
+        if label == "SYS / # / OBS TYPES":
+            system = lines[k][0] if lines[k][0] != " " else system
+            types.setdefault(system, []).extend(lines[k][7:60].split())
+        elif label == "# / TYPES OF OBSERV":
+            types.setdefault("G", []).extend(lines[k][6:60].split())
+        k += 1
+    k += 1
+    times: list[float] = []
+    out: dict[tuple[int, str, str], tuple] = {}
+
+    def field(text: str, j: int) -> tuple | None:
+        f = text[16 * j : 16 * j + 16].ljust(16)
+        if not f.strip():
+            return None
+        lli = int(f[14]) if f[14].strip() else -1
+        ssi = int(f[15]) if f[15].strip() else -1
+        return (float(f[:14]) if f[:14].strip() else np.nan, lli, ssi)
+
+    while k < len(lines):
+        rec = lines[k]
+        if v3:
+            flag, n = int(rec[31]), int(rec[32:35])
+            if flag > 1:
+                k += 1 + n
+                continue
+            y, mo, d, h, mi = (int(x) for x in rec[1:18].split())
+            times.append(calendar_gps_seconds(y, mo, d, h, mi, float(rec[18:29])))
+            for row in lines[k + 1 : k + 1 + n]:
+                sat = row[:3]
+                for j, code in enumerate(types[sat[0]]):
+                    got = field(row[3:], j)
+                    if got:
+                        out[(len(times) - 1, sat, code)] = got
+            k += 1 + n
+        else:
+            flag, n = int(rec[28]), int(rec[29:32])
+            if flag > 1:
+                k += 1 + n
+                continue
+            y, mo, d, h, mi = (int(x) for x in rec[1:15].split())
+            times.append(
+                calendar_gps_seconds(
+                    2000 + y if y < 80 else 1900 + y, mo, d, h, mi, float(rec[15:26])
+                )
+            )
+            sats = []
+            for c in range(0, n, 12):
+                sats += [lines[k + c // 12][32 + 3 * m : 35 + 3 * m] for m in range(min(12, n - c))]
+            k += (n + 11) // 12
+            per = (len(types["G"]) + 4) // 5
+            for sat in sats:
+                sat = ("G" if sat[0] == " " else sat[0]) + sat[1:].replace(" ", "0")
+                for j, code in enumerate(types["G"]):
+                    got = field(lines[k + j // 5], j % 5)
+                    if got:
+                        out[(len(times) - 1, sat, code)] = got
+                k += per
+    return times, out
+
+
+@pytest.mark.parametrize("rel", [v[0] for v in SHARED.values()])
+def test_against_plain_reference_reader(gnss_data: Path, rel: str) -> None:
+    obs = read_obs(gnss_data / rel)
+    times, ref = _reference_read(gnss_data / rel)
+    np.testing.assert_allclose(obs.t_gps_s, times, rtol=0, atol=1e-6)
+    n_fields = 0
+    for (e, sat, code), (value, lli, ssi) in ref.items():
+        s, c = obs.sat_index(sat), obs.codes.index(code)
+        want = np.nan if value == 0.0 else value
+        assert obs.values[e, s, c] == want or (np.isnan(want) and np.isnan(obs.values[e, s, c]))
+        assert (obs.lli[e, s, c], obs.ssi[e, s, c]) == (lli, ssi), (e, sat, code)
+        n_fields += 1
+    # Nothing more is set than the reference saw.
+    written = (~np.isnan(obs.values)) | (obs.lli >= 0) | (obs.ssi >= 0)
+    assert int(written.sum()) <= n_fields
+    assert int((obs.lli >= 0).sum()) == sum(v[1] >= 0 for v in ref.values())
+    assert int((obs.ssi >= 0).sum()) == sum(v[2] >= 0 for v in ref.values())
+
+
 # ---------------------------------------------------------------- georinex cross-check
 
 GEORINEX_FILES = [v[0] for v in SHARED.values()]
@@ -758,8 +953,10 @@ def test_against_georinex(gnss_data: Path, rel: str) -> None:
     assert lag.max() < 1e-3 + 1e-6
     compared = 0
     for k, code in enumerate(obs.codes):
-        np.testing.assert_array_equal(obs.values[:, :, k], ref[code].values, err_msg=code)
-        compared += int(np.isfinite(ref[code].values).sum())
+        # RINEX writes a missing observation as blank or 0.0; georinex keeps 0.0, navtrack NaN.
+        want = np.where(ref[code].values == 0.0, np.nan, ref[code].values)
+        np.testing.assert_array_equal(obs.values[:, :, k], want, err_msg=code)
+        compared += int(np.isfinite(want).sum())
         for name, ours in (("lli", obs.lli), ("ssi", obs.ssi)):
             if code + name in ref:
                 mine = ours[:, :, k].astype(float)

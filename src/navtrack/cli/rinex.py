@@ -59,6 +59,8 @@ def run_info(args: argparse.Namespace) -> int:
 
 
 def _format(value: Any) -> str:
+    if isinstance(value, dict | list | tuple) and not value:
+        return "none"
     if isinstance(value, dict):
         return "; ".join(f"{k}: {_format(v)}" for k, v in value.items())
     if isinstance(value, list | tuple):

@@ -150,7 +150,7 @@ class Observations:
         Observation codes as written in the file (union over systems, in first-seen order).
     values : ndarray, shape (n_epochs, n_sats, n_codes)
         Observation values in the file's units (pseudorange m, phase cycles, Doppler Hz,
-        signal strength dB-Hz); NaN where missing.
+        signal strength dB-Hz); NaN where missing (RINEX: blank or written as 0.0).
     lli : ndarray of int8, shape (n_epochs, n_sats, n_codes)
         Loss-of-lock indicator, -1 where blank.
     ssi : ndarray of int8, shape (n_epochs, n_sats, n_codes)

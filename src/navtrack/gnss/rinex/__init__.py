@@ -7,5 +7,6 @@ plain, gzip, bzip2, ``.Z`` and Hatanaka-compressed files, and raise
 """
 
 from navtrack.gnss.rinex._io import FileKind, read_bytes, sniff
+from navtrack.gnss.rinex.obs import read_obs
 
-__all__ = ["FileKind", "read_bytes", "sniff"]
+__all__ = ["FileKind", "read_bytes", "read_obs", "sniff"]
