@@ -17,6 +17,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
 
 from navtrack.io.rtklib import read_pos, to_solution_frame
 from navtrack.io.solution import (
@@ -350,3 +353,84 @@ def test_empty_and_single_epoch_frames(tmp_path: Path) -> None:
     assert root.find("k:Document/k:Placemark/k:Point/k:coordinates", KML_NS) is not None
     root = ET.parse(write_solution(one, tmp_path / "one.gpx")).getroot()
     assert len(root.findall("g:trk/g:trkseg/g:trkpt", GPX_NS)) == 1
+
+
+def test_nmea_rmc_dates_against_pynmea2(solution: pd.DataFrame, tmp_path: Path) -> None:
+    pynmea2 = pytest.importorskip("pynmea2")
+    # Move the frame to just before a UTC midnight: 2021-03-19T23:59:58 UTC = ...:00:16 GPST.
+    sol = solution.assign(t_gps_s=solution["t_gps_s"] - solution["t_gps_s"][0] + 1300233616.0)
+    lines = write_solution(sol, tmp_path / "r.nmea", nmea_rmc=True).read_text().splitlines()
+    assert len(lines) == 2 * len(sol)
+    msgs = [pynmea2.parse(s, check=True) for s in lines]
+    assert [m.sentence_type for m in msgs[:4]] == ["GGA", "RMC", "GGA", "RMC"]
+    rmc = msgs[1::2]
+    assert str(rmc[0].datestamp) == "2021-03-19"
+    assert str(rmc[0].timestamp)[:8] == "23:59:58"
+    assert str(rmc[2].datestamp) == "2021-03-20"  # two seconds later, the next UTC day
+    assert str(rmc[2].timestamp)[:8] == "00:00:00"
+    assert rmc[0].status == "A"
+    assert rmc[FAILED_ROWS[0]].status == "V"
+    assert rmc[0].latitude == pytest.approx(msgs[0].latitude, abs=1e-12)
+    assert rmc[0].mode_indicator == "A"
+    assert all(len(s) + 2 <= 82 for s in lines)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    lat=hnp.arrays(np.float64, 20, elements=st.floats(-89.999999, 89.999999)),
+    lon=hnp.arrays(np.float64, 20, elements=st.floats(-179.999999, 179.999999)),
+)
+def test_nmea_angles_round_trip(lat: np.ndarray, lon: np.ndarray) -> None:
+    # Property: ddmm.mmmmmm fields decode (independently, here) to the input within the
+    # written resolution (0.5e-6 arc minute), with minutes always below 60.
+    import tempfile
+
+    n = lat.size
+    df = {
+        "t_gps_s": 1.3e9 + np.arange(n),
+        "lat_deg": lat,
+        "lon_deg": lon,
+        "h_m": np.zeros(n),
+        "status": np.array(["ok"] * n),
+    }
+    with tempfile.TemporaryDirectory() as tmp:
+        lines = write_solution(df, Path(tmp) / "p.nmea").read_text().splitlines()
+    for line, la, lo in zip(lines, lat, lon, strict=True):
+        f = line.split(",")
+        for field, hemi, width, want, neg in ((f[2], f[3], 2, la, "S"), (f[4], f[5], 3, lo, "W")):
+            deg, minutes = int(field[:width]), float(field[width:])
+            assert 0.0 <= minutes < 60.0
+            assert len(field) == width + 9
+            value = (deg + minutes / 60.0) * (-1 if hemi == neg else 1)
+            assert abs(value - want) <= 0.5e-6 / 60.0 + 1e-12
+
+
+def test_gpx_point_children_follow_schema_order(solution: pd.DataFrame, tmp_path: Path) -> None:
+    # GPX 1.1 wptType is an xsd:sequence: ele, time, magvar, geoidheight, name, cmt, desc, src,
+    # link, sym, type, fix, sat, hdop, vdop, pdop, ageofdgpsdata, dgpsid, extensions.
+    order = [
+        "ele",
+        "time",
+        "magvar",
+        "geoidheight",
+        "name",
+        "cmt",
+        "desc",
+        "src",
+        "link",
+        "sym",
+        "type",
+        "fix",
+        "sat",
+        "hdop",
+        "vdop",
+        "pdop",
+        "ageofdgpsdata",
+        "dgpsid",
+    ]
+    sol = solution.assign(hdop=1.1, vdop=1.7)
+    root = ET.parse(write_solution(sol, tmp_path / "o.gpx")).getroot()
+    pt = root.find("g:trk/g:trkseg/g:trkpt", GPX_NS)
+    tags = [child.tag.split("}")[1] for child in pt]
+    assert tags == ["ele", "time", "geoidheight", "fix", "sat", "hdop", "vdop", "pdop"]
+    assert [order.index(t) for t in tags] == sorted(order.index(t) for t in tags)

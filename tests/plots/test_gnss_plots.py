@@ -47,7 +47,8 @@ def sp3_azel(gnss_data: Path) -> tuple[np.ndarray, list[str]]:
     """Azimuth/elevation of every SP3 satellite seen from ARL1, first 13 epochs (1 h)."""
     pymap3d = pytest.importorskip("pymap3d")
     epochs: list[dict[str, np.ndarray]] = []
-    for line in (gnss_data / "gpstk_arl1" / "test_input_sp3_nav_2015_200.sp3").open():
+    text = (gnss_data / "gpstk_arl1" / "test_input_sp3_nav_2015_200.sp3").read_text()
+    for line in text.splitlines():
         if line.startswith("*"):
             if len(epochs) == 13:
                 break
@@ -178,3 +179,14 @@ def test_bad_inputs(arl1, sp3_azel, tmp_path: Path) -> None:
     blocker.write_text("x")
     with pytest.raises(NotADirectoryError, match="file"):
         plot_solution(arl1, blocker)
+
+
+def test_all_epochs_failed_still_plots(arl1: pd.DataFrame, tmp_path: Path) -> None:
+    failed = arl1.assign(status="too_few_sats")
+    data = solution_plot_data(failed, ARL1_REF)
+    assert not data.ok.any()
+    assert np.isnan(data.enu_m).all()
+    paths = plot_solution(failed, tmp_path / "failed", ref_xyz_m=ARL1_REF)
+    assert len(paths) == 3
+    for p in paths:
+        assert p.read_bytes()[:8] == PNG_SIGNATURE

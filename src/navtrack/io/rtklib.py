@@ -15,12 +15,12 @@ output options:
   ``ratio`` (ambiguity validation ratio) and optional velocity columns.
 
 The reader follows the column header, so every combination of these options reads without
-configuration. It was written from the format as RTKLIB 2.4.3's manual (appendix B.4, "Solution
-file format") describes it and from the files in ``shared/data/gnss``; no RTKLIB code was used.
+configuration. It was written from the solution format as the RTKLIB manual's file-format
+appendix describes it and from the files in ``shared/data/gnss``; no RTKLIB code was used.
 
 References
 ----------
-T. Takasu, *RTKLIB ver. 2.4.2 Manual*, 2013, appendix B.4.
+T. Takasu, *RTKLIB ver. 2.4.2 Manual*, 2013, appendix B (solution file format).
 """
 
 from __future__ import annotations
@@ -211,7 +211,7 @@ def read_pos(path: StrPath) -> pd.DataFrame:
 
     References
     ----------
-    T. Takasu, *RTKLIB ver. 2.4.2 Manual*, 2013, appendix B.4.
+    T. Takasu, *RTKLIB ver. 2.4.2 Manual*, 2013, appendix B (solution file format).
     """
     import pandas as pd
 

@@ -1,8 +1,9 @@
 """Positioning solution files: CSV and Parquet tables, NMEA GGA, KML and GPX tracks.
 
-A *solution frame* is a pandas DataFrame with one row per epoch (see :func:`write_solution` for
-its columns). :func:`write_solution` picks the file format from the suffix; :func:`read_solution`
-reads navtrack's own CSV and Parquet tables back.
+A *solution frame* is a pandas DataFrame, or any mapping of column names to 1-D arrays, with
+one row per epoch (see :func:`solution_columns` for its columns). :func:`write_solution` picks
+the file format from the suffix; :func:`read_solution` reads navtrack's own CSV and Parquet
+tables back.
 
 Heights: navtrack writes WGS-84 **ellipsoidal** heights everywhere. Where a format expects a
 height above mean sea level (NMEA GGA altitude, GPX ``ele``), the ellipsoidal height is written
@@ -40,6 +41,7 @@ __all__ = [
     "SOLUTION_COLUMNS",
     "nmea_checksums",
     "nmea_gga",
+    "ok_mask",
     "read_solution",
     "solution_columns",
     "solution_table",
@@ -89,6 +91,9 @@ _CSV_DECIMALS = {
 # RTKLIB solution quality Q -> NMEA GGA fix quality (NMEA 0183: 1 GPS fix, 2 differential,
 # 4 RTK fixed, 5 RTK float). PPP (Q=6) has no NMEA code; its ambiguities are float, so 5.
 _RTKLIB_Q_TO_GGA = {1: 4, 2: 5, 3: 2, 4: 2, 5: 1, 6: 5}
+_HEX = tuple(f"{i:02X}" for i in range(256))
+# GGA fix quality -> RMC mode indicator (NMEA 0183 v2.3+).
+_GGA_TO_MODE = {1: "A", 2: "D", 4: "R", 5: "F"}
 
 
 # --------------------------------------------------------------------------------------------
@@ -114,6 +119,8 @@ def _float(values: Any) -> FloatArray:
 
 def _excluded_strings(values: Any) -> np.ndarray:
     """Space-separated satellite ids from strings, sequences of ids or missing values."""
+    if isinstance(values, np.ndarray) and values.dtype.kind == "U":
+        return values.astype(object)
     out = []
     for v in values:
         if isinstance(v, str):
@@ -238,11 +245,15 @@ def _frame(cols: dict[str, np.ndarray]) -> pd.DataFrame:
     return table
 
 
-def _ok_mask(status: Any, ok_status: object) -> BoolArray:
-    """Epochs whose status marks a valid fix (equal to ``ok_status`` or, for enumerations and
-    strings, named like it regardless of case)."""
-    values = np.asarray(status, dtype=object)
+def ok_mask(status: Any, ok_status: object = "ok") -> BoolArray:
+    """Epochs whose ``status`` marks a valid fix: equal to ``ok_status`` or, for strings and
+    enumerations, named like it regardless of case. Returns a bool array of the length of
+    ``status``."""
     target = str(ok_status).lower()
+    arr = np.asarray(status)
+    if arr.dtype.kind == "U":
+        return np.asarray((arr == str(ok_status)) | (np.strings.lower(arr) == target))
+    values = np.asarray(status, dtype=object)
     return np.array(
         [v == ok_status or str(getattr(v, "name", v)).lower() == target for v in values],
         dtype=bool,
@@ -281,6 +292,7 @@ def write_solution(
     *,
     ok_status: object = "ok",
     talker: str = "GP",
+    nmea_rmc: bool = False,
 ) -> Path:
     """Write a solution frame in the format its file suffix names.
 
@@ -305,7 +317,7 @@ def write_solution(
             epochs (or mapped from RTKLIB's ``q`` column: 1->4, 2->5, 3/4->2, 5->1, 6->5), 0 and
             empty position fields otherwise, satellites used, HDOP from a ``hdop`` column when
             there is one, **otherwise PDOP** in the HDOP field, altitude = ellipsoidal height
-            with geoid separation 0. GGA carries no date.
+            with geoid separation 0. GGA carries no date (``nmea_rmc=True`` adds RMC).
         ``.kml``
             KML 2.2 document with the valid epochs as one ``LineString`` clamped to the ground.
         ``.gpx``
@@ -319,6 +331,8 @@ def write_solution(
         ``status`` value marking a valid fix (compared as is and, case-insensitively, by name).
     talker : str, default "GP"
         NMEA talker id (two letters; ``"GN"`` for multi-GNSS).
+    nmea_rmc : bool, default False
+        NMEA only: follow each GGA with an RMC sentence, which carries the UTC date.
 
     Returns
     -------
@@ -352,10 +366,10 @@ def write_solution(
         text = _csv(cols)
     else:
         llh = np.stack([cols["lat_deg"], cols["lon_deg"], cols["h_m"]], axis=-1)
-        ok = _ok_mask(cols["status"], ok_status) & np.isfinite(llh).all(axis=1)
+        ok = ok_mask(cols["status"], ok_status) & np.isfinite(llh).all(axis=1)
         t = _float(df["t_gps_s"])
         if suffix == ".nmea":
-            text = "".join(s + "\r\n" for s in nmea_gga(cols, t, ok, talker=talker))
+            text = "".join(s + "\r\n" for s in nmea_gga(cols, t, ok, talker=talker, rmc=nmea_rmc))
         elif suffix == ".kml":
             text = _kml(cols, ok)
         else:
@@ -436,10 +450,13 @@ def nmea_checksums(bodies: Sequence[str]) -> IntArray:
     """
     if len(bodies) == 0:
         return np.zeros(0, dtype=np.int64)
-    raw = np.array(bodies, dtype=str).astype(np.bytes_)
-    codes = raw.view(np.uint8).reshape(len(bodies), raw.dtype.itemsize)
-    # Padding bytes are 0, the neutral element of XOR.
-    return np.bitwise_xor.reduce(codes, axis=1).astype(np.int64)
+    # Bodies joined by NUL, the neutral element of XOR, so that one reduceat covers them all.
+    raw = np.frombuffer(("\0".join(bodies) + "\0").encode("ascii"), dtype=np.uint8)
+    lengths = np.fromiter((len(b) for b in bodies), dtype=np.int64, count=len(bodies))
+    starts = np.concatenate([[0], np.cumsum(lengths[:-1] + 1)])
+    sums = np.bitwise_xor.reduceat(raw, starts).astype(np.int64)
+    # reduceat gives the byte at a start (a NUL separator here) for an empty body: 0 either way.
+    return np.where(lengths > 0, sums, 0)
 
 
 def _ddmm(value_deg: FloatArray, deg_width: int, decimals: int) -> list[str]:
@@ -456,9 +473,19 @@ def _ddmm(value_deg: FloatArray, deg_width: int, decimals: int) -> list[str]:
 
 
 def nmea_gga(
-    cols: Mapping[str, np.ndarray], t_gps_s: FloatArray, ok: BoolArray, *, talker: str = "GP"
+    cols: Mapping[str, np.ndarray],
+    t_gps_s: FloatArray,
+    ok: BoolArray,
+    *,
+    talker: str = "GP",
+    rmc: bool = False,
 ) -> list[str]:
-    """GGA sentences (with ``$`` and checksum, without line ends) of a solution table.
+    """GGA sentences (with ``$`` and checksum, without line ends) of a solution table, each
+    followed by an RMC sentence when ``rmc`` is true.
+
+    RMC carries the UTC date; its status is A (valid) or V (void), speed and course are empty,
+    and the mode indicator (NMEA 2.3) follows the GGA quality: A autonomous, D differential,
+    R RTK fixed, F RTK float, N not valid.
 
     Parameters
     ----------
@@ -470,10 +497,12 @@ def nmea_gga(
         Rows with a valid fix; the others get quality 0 and empty position fields.
     talker : str
         Two-letter talker id.
+    rmc : bool
+        Also write RMC sentences.
 
     Returns
     -------
-    list of str, length n
+    list of str, length n (2 n with RMC)
     """
     n = len(t_gps_s)
     utc_cs = np.round(timescale.gps_to_utc(t_gps_s) * 100.0).astype(np.int64)
@@ -487,10 +516,6 @@ def nmea_gga(
     lat = _float(cols["lat_deg"])
     lon = _float(cols["lon_deg"])
     h = _float(cols["h_m"])
-    lat_s = _ddmm(np.where(ok, lat, 0.0), 2, 6)
-    lon_s = _ddmm(np.where(ok, lon, 0.0), 3, 6)
-    ns = np.where(lat >= 0.0, "N", "S")
-    ew = np.where(lon >= 0.0, "E", "W")
     if "q" in cols:
         q = np.asarray(cols["q"])
         quality = np.array([_RTKLIB_Q_TO_GGA.get(int(v), 0) for v in q], dtype=np.int64)
@@ -498,22 +523,41 @@ def nmea_gga(
         quality = np.ones(n, dtype=np.int64)
     quality = np.where(ok, quality, 0)
     n_sats = _float(cols["n_sats"])
-    sats = [f"{int(v):02d}" if np.isfinite(v) else "" for v in n_sats.tolist()]
+    sats = [f"{v:02.0f}" if v == v else "" for v in n_sats.tolist()]
     dop_col = "hdop" if "hdop" in cols else "pdop"
-    dop = _float(cols[dop_col])
-    dops = [f"{v:.2f}" if np.isfinite(v) else "" for v in dop.tolist()]
-    bodies = []
-    for i in range(n):
-        if ok[i]:
-            pos = (
-                f"{lat_s[i]},{ns[i]},{lon_s[i]},{ew[i]},{quality[i]},{sats[i]},{dops[i]},"
-                f"{h[i]:.3f},M,0.0,M"
-            )
-        else:
-            pos = f",,,,0,{sats[i]},{dops[i]},,M,,M"
-        bodies.append(f"{talker}GGA,{times[i]},{pos},,")
-    sums = nmea_checksums(bodies)
-    return [f"${b}*{c:02X}" for b, c in zip(bodies, sums.tolist(), strict=True)]
+    dops = [f"{v:.2f}" if v == v else "" for v in _float(cols[dop_col]).tolist()]
+    # Position fields of the valid rows only, in one formatting pass.
+    lat_f = _ddmm(lat[ok], 2, 6)
+    lon_f = _ddmm(lon[ok], 3, 6)
+    where_ok = [
+        f"{a},{'N' if la >= 0.0 else 'S'},{b},{'E' if lo >= 0.0 else 'W'}"
+        for a, la, b, lo in zip(lat_f, lat[ok].tolist(), lon_f, lon[ok].tolist(), strict=True)
+    ]
+    alt_ok = [f"{v:.3f}" for v in h[ok].tolist()]
+    where = [",,,"] * n
+    alt = [""] * n
+    for i, j in enumerate(np.flatnonzero(ok).tolist()):
+        where[j] = where_ok[i]
+        alt[j] = alt_ok[i]
+    sep = ["0.0" if v else "" for v in ok.tolist()]
+    qual = quality.tolist()
+    bodies = [
+        f"{talker}GGA,{t},{w},{qq},{ns},{d},{a},M,{g},M,,"
+        for t, w, qq, ns, d, a, g in zip(times, where, qual, sats, dops, alt, sep, strict=True)
+    ]
+    if rmc:
+        days = timescale.GPS_EPOCH.astype("datetime64[D]") + (utc_cs // 8_640_000).astype(
+            "timedelta64[D]"
+        )
+        iso = np.datetime_as_string(days).tolist()  # YYYY-MM-DD
+        rmcs = [
+            f"{talker}RMC,{t},{'A' if qq else 'V'},{w},,,{d[8:10]}{d[5:7]}{d[2:4]},,,"
+            f"{_GGA_TO_MODE.get(qq, 'N')}"
+            for t, w, qq, d in zip(times, where, qual, iso, strict=True)
+        ]
+        bodies = [b for pair in zip(bodies, rmcs, strict=True) for b in pair]
+    sums = nmea_checksums(bodies).tolist()
+    return [f"${b}*{_HEX[c]}" for b, c in zip(bodies, sums, strict=True)]
 
 
 # --------------------------------------------------------------------------------------------

@@ -23,6 +23,7 @@ import numpy as np
 from navtrack import geodesy, timescale
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, StrPath
 from navtrack.errors import MissingDependencyError
+from navtrack.io.solution import ok_mask
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -119,14 +120,6 @@ class SolutionPlotData:
         return str(np.datetime_as_string(timescale.to_datetime64(self.t0_gps_s), unit="s"))
 
 
-def _ok_mask(status: Any, ok_status: object) -> BoolArray:
-    target = str(ok_status).lower()
-    return np.array(
-        [v == ok_status or str(getattr(v, "name", v)).lower() == target for v in status],
-        dtype=bool,
-    )
-
-
 def check_reference(ref_xyz_m: ArrayLike) -> FloatArray:
     """A reference position as a float array of shape (3,), refusing implausible values.
 
@@ -191,7 +184,7 @@ def solution_plot_data(
     if t.ndim != 1 or t.size == 0:
         raise ValueError("df: solution frame has no rows")
     xyz = np.stack([np.asarray(df[c], dtype=float) for c in ("x_m", "y_m", "z_m")], axis=-1)
-    ok = _ok_mask(df["status"], ok_status) & np.isfinite(xyz).all(axis=1)
+    ok = ok_mask(df["status"], ok_status) & np.isfinite(xyz).all(axis=1)
     if ref_xyz_m is not None:
         ref = check_reference(ref_xyz_m)
     elif ok.any():
