@@ -144,14 +144,17 @@ def test_sp3_default_uses_satellites_without_broadcast(gnss_data: Path) -> None:
 
 def test_android_log_bar(gnss_data: Path) -> None:
     """Android GnssLogger log (GPS with broadcast nav): 3D RMS <= 15 m against the surveyed
-    point (gps-measurement-tools' reference)."""
+    point (gps-measurement-tools' reference). A phone's pseudoranges are weighted by C/N0 (the
+    RTKLIB receiver model is far too optimistic for them and its chi-square test would reject
+    about half the epochs); the first 7 epochs have no decoded GPS time of week."""
     android = pytest.importorskip("navtrack.gnss.android")
     cfg = REFERENCE["android"]
     obs = android.read_gnsslogger(gnss_data / cfg["log"])
     navs = [_nav(str(gnss_data / p)) for p in cfg["nav"]]
-    res = solve_spp(obs, navs, config=SppConfig(systems="G", elmask_deg=10.0))
+    res = solve_spp(obs, navs, config=SppConfig(systems="G", elmask_deg=10.0, weighting="cn0"))
     ok = res.status == SppStatus.OK
     assert ok.sum() >= 0.9 * res.t_gps_s.size
+    assert np.all(res.status[:7] == SppStatus.TOO_FEW_SATS)
     lat, lon, h = cfg["ref_llh_deg_m"]
     ref = geodetic_to_ecef([np.radians(lat), np.radians(lon), h])
     enu = ecef_to_enu(res.pos_m[ok], ref)

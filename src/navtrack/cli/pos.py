@@ -38,8 +38,9 @@ def register(subparsers: Any) -> None:
                    help="systems to use, e.g. GEJ (default: all present)")
     p.add_argument("--elmask", type=float, default=15.0, metavar="DEG",
                    help="elevation mask in degrees (default 15)")
-    p.add_argument("--weighting", choices=WEIGHTINGS, default="rtklib",
-                   help="measurement weighting model (default rtklib)")
+    p.add_argument("--weighting", choices=WEIGHTINGS, default=None,
+                   help="measurement weighting model (default: rtklib for RINEX, cn0 for "
+                   "Android logs)")
     p.add_argument("--iono", choices=("klobuchar", "ionofree", "off"), default="klobuchar",
                    help="ionosphere: broadcast Klobuchar, dual-frequency iono-free, or none")
     ref = p.add_mutually_exclusive_group()
@@ -181,8 +182,10 @@ def run_pos(args: argparse.Namespace) -> int:
         print(f"navtrack pos: cannot write --out: {out_problem}; solving anyway", file=sys.stderr)
     args.android = _is_android(args.obs)
     systems = "".join(dict.fromkeys(args.systems.upper()))
+    # phone pseudoranges are far noisier than RTKLIB's receiver model assumes: C/N0 weights
+    weighting = args.weighting or ("cn0" if args.android else "rtklib")
     try:
-        config = SppConfig(systems=systems, elmask_deg=args.elmask, weighting=args.weighting,
+        config = SppConfig(systems=systems, elmask_deg=args.elmask, weighting=weighting,
                            iono=args.iono)
     except ValueError as exc:
         raise SystemExit(f"navtrack pos: {exc}") from None
@@ -200,7 +203,8 @@ def run_pos(args: argparse.Namespace) -> int:
     print(f"observations   {args.obs}")
     print(f"navigation     {', '.join(str(p) for p in args.nav) or '-'}"
           + (f"  sp3 {args.sp3}" if args.sp3 else ""))
-    print(f"systems        {used_systems or '-'}  (clocks: {', '.join(result.clock_groups)})")
+    print(f"systems        {used_systems or '-'}  (clocks: {', '.join(result.clock_groups)}; "
+          f"weighting {weighting}, elevation mask {args.elmask:g} deg)")
     print(f"epochs         {n_epochs}")
     print(f"solved         {solved}")
     for name in STATUS_NAMES:

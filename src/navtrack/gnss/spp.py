@@ -10,8 +10,10 @@ receiver clock of the first clock group and one inter-system bias (ISB) per furt
 
 =================== =====================================================================
 ``ok``              solved, passed the validity tests
-``no_ephemeris``    no observed satellite of the selected systems has a usable ephemeris
-``too_few_sats``    fewer satellites than unknowns (4 + one per extra clock group)
+``no_ephemeris``    satellites observed, but none has a usable ephemeris (nav file of another
+                    day or system, all unhealthy)
+``too_few_sats``    fewer usable satellites than unknowns (4 + one per extra clock group),
+                    including epochs without any pseudorange of the selected systems
 ``singular_geometry`` normal matrix singular
 ``no_convergence``  Gauss–Newton did not converge in ``max_iter`` steps
 ``rejected_validity`` chi-square test of the weighted residuals failed
@@ -686,7 +688,8 @@ def solve_spp(
     status[lsq.status == LsqStatus.SINGULAR] = SppStatus.SINGULAR_GEOMETRY
     status[lsq.status == LsqStatus.TOO_FEW_MEASUREMENTS] = SppStatus.TOO_FEW_SATS
     status[~base_valid.any(axis=1) & observed.any(axis=1)] = SppStatus.TOO_FEW_SATS
-    status[~(has_eph & observed).any(axis=1)] = SppStatus.NO_EPHEMERIS
+    status[observed.any(axis=1) & ~(has_eph & observed).any(axis=1)] = SppStatus.NO_EPHEMERIS
+    status[~observed.any(axis=1)] = SppStatus.TOO_FEW_SATS
 
     x = lsq.x
     g = model.geometry(x, np.arange(n_e))
