@@ -19,7 +19,8 @@ def test_example_prints_summary_and_writes_csv(tmp_path: Path,
     text = capsys.readouterr().out
     assert "epochs         120" in text
     assert "solved         120" in text
-    assert "error vs ref" in text and "3D" in text
+    assert "error vs ref" in text
+    assert "3D" in text
     rows = list(csv.DictReader(out.open()))
     assert len(rows) == 120
     assert rows[0]["time_gps"] == "2021-03-19T12:00:00.000"
@@ -40,7 +41,8 @@ def test_plots(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     pytest.importorskip("matplotlib")
     assert main(["pos", "--example", "--plot", str(tmp_path / "fig")]) == 0
     pngs = sorted(p.name for p in (tmp_path / "fig").glob("*.png"))
-    assert "enu_error.png" in pngs and "skyplot.png" in pngs
+    assert "enu_error.png" in pngs
+    assert "skyplot.png" in pngs
 
 
 def test_rinex2_with_ref_llh(capsys: pytest.CaptureFixture[str]) -> None:
@@ -73,7 +75,8 @@ def test_unwritable_output_still_solves(tmp_path: Path,
     assert rc == 0
     captured = capsys.readouterr()
     assert "solved         120" in captured.out
-    assert "does not exist" in captured.err and "NOT written" in captured.err
+    assert "does not exist" in captured.err
+    assert "NOT written" in captured.err
 
 
 def test_missing_inputs() -> None:

@@ -75,7 +75,8 @@ def test_klobuchar_geometry_and_defaults() -> None:
     el = np.radians([5.0, 15.0, 30.0, 60.0, 90.0])
     d = klobuchar_delay_m(45000.0, np.radians(35.0), np.radians(139.0), 0.0, el, None)
     assert np.all(np.diff(d) < 0)  # obliquity: larger delays at low elevation
-    assert 1.0 < d[-1] < 30.0 and d[0] / d[-1] == pytest.approx(1 + 16 * (0.53 - 5 / 180) ** 3,
+    assert 1.0 < d[-1] < 30.0
+    assert d[0] / d[-1] == pytest.approx(1 + 16 * (0.53 - 5 / 180) ** 3,
                                                                  rel=0.2)
     zero = klobuchar_delay_m(45000.0, 0.6, 2.4, 0.0, 1.0, np.zeros(8))
     dflt = klobuchar_delay_m(45000.0, 0.6, 2.4, 0.0, 1.0, KLOBUCHAR_DEFAULT)
@@ -100,7 +101,9 @@ def test_saastamoinen_zenith_and_mapping() -> None:
         saastamoinen_delay_m(0.7, 100.0, np.pi / 2) / np.sin(el), rel=1e-12)
     h = np.array([-200.0, 2000.0, 2.0e4])
     out = saastamoinen_delay_m(0.7, h, 0.5)
-    assert out[0] == 0.0 and out[2] == 0.0 and 1.5 < out[1] < 4.0
+    assert out[0] == 0.0
+    assert out[2] == 0.0
+    assert 1.5 < out[1] < 4.0
     assert saastamoinen_delay_m(0.7, 10.0, -0.01) == 0.0
 
 

@@ -22,7 +22,7 @@ def _range_problem(rng: np.random.Generator, n_batch: int, n_meas: int, noise_m:
         d = beacons[idx] - x[:, None, :3]
         r = np.linalg.norm(d, axis=-1)
         v = y[idx] - (r + x[:, 3:4])
-        J = np.concatenate([-d / r[..., None], np.ones(r.shape + (1,))], axis=-1)
+        J = np.concatenate([-d / r[..., None], np.ones((*r.shape, 1))], axis=-1)
         return v, J, 1.0 / sigma[idx] ** 2, np.ones(r.shape, dtype=bool)
 
     return fun, truth, beacons, y, sigma
@@ -70,7 +70,7 @@ def test_matches_scipy_least_squares(solver: str) -> None:
 
 def test_gauss_newton_statuses() -> None:
     rng = np.random.default_rng(5)
-    fun, _, beacons, y, sigma = _range_problem(rng, 3, 6, 1.0)
+    fun, _, _beacons, _y, _sigma = _range_problem(rng, 3, 6, 1.0)
 
     def few(x, idx):  # type: ignore[no-untyped-def]
         v, J, w, valid = fun(x, idx)
@@ -93,7 +93,7 @@ def test_singular_geometry() -> None:
     def fun(x, idx):  # type: ignore[no-untyped-def]
         diff = beacons[idx] - x[:, None, :3]
         r = np.linalg.norm(diff, axis=-1)
-        J = np.concatenate([-diff / r[..., None], np.ones(r.shape + (1,))], axis=-1)
+        J = np.concatenate([-diff / r[..., None], np.ones((*r.shape, 1))], axis=-1)
         return r * 0.0, J, np.ones(r.shape), np.ones(r.shape, dtype=bool)
 
     res = gauss_newton(fun, np.zeros((1, 4)))
@@ -109,7 +109,7 @@ def test_unobserved_parameter_is_held() -> None:
 
     def fun5(x, idx):  # type: ignore[no-untyped-def]
         v, J, w, valid = fun(x[:, :4], idx)
-        return v, np.concatenate([J, np.zeros(J.shape[:2] + (1,))], axis=-1), w, valid
+        return v, np.concatenate([J, np.zeros((*J.shape[:2], 1))], axis=-1), w, valid
 
     x0 = np.zeros((4, 5))
     x0[:, 4] = 42.0

@@ -226,7 +226,8 @@ def test_sample_solution_columns_and_statuses() -> None:
                  "excluded"):
         assert len(cols[name]) == 120
     assert cols["time_gps"][0] == "2021-03-19T12:00:00.000"
-    assert cols["week"][0] == 2149 and cols["tow_s"][0] == 475200.0
+    assert cols["week"][0] == 2149
+    assert cols["tow_s"][0] == 475200.0
     np.testing.assert_allclose(cols["lat_deg"], 35.3393, atol=1e-3)
     assert np.all(cols["status"] == "ok")
     # covariances symmetric positive definite, ENU sd positive

@@ -153,7 +153,7 @@ def _error_stats(pos_m: Any, ref: tuple[float, float, float]) -> dict[str, tuple
 def run_pos(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from navtrack.gnss.spp import STATUS_NAMES, SppConfig, solution_columns, solve_spp
+    from navtrack.gnss.spp import STATUS_NAMES, SppConfig, solution_columns
 
     if args.example:
         if args.obs is not None:

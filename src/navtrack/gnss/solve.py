@@ -318,7 +318,7 @@ def marquardt(
     active = idx_all.copy()
     v, J, w = model(x, active)
     F = np.einsum("bm,bm->b", w, v**2)
-    _, gJ, observed = _normal_equations(v, J, w, valid0)
+    _, _gJ, observed = _normal_equations(v, J, w, valid0)
     few = n_valid < np.maximum(observed.sum(axis=1), 1)
     status[few] = LsqStatus.TOO_FEW_MEASUREMENTS
     keep = ~few
@@ -352,7 +352,9 @@ def marquardt(
         F = np.where(better, Ft, F)[cont]
         active = active[cont]
 
-    def final(xb: FloatArray, idx: IntArray) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray]:
+    def final(
+        xb: FloatArray, idx: IntArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray]:
         v_, J_, w_, _ = fun(xb, idx)
         return v_, J_, w_, valid0[idx]
 

@@ -45,7 +45,7 @@ from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
 if TYPE_CHECKING:
     import pandas as pd
 
-    from navtrack.gnss.ephemeris import EphemerisTable, SatStates
+    from navtrack.gnss.ephemeris import EphemerisTable
     from navtrack.gnss.observations import Observations
 
 
@@ -160,6 +160,9 @@ class SppConfig:
     sp3_needs_broadcast: bool = False
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "clock_groups", MappingProxyType(dict(self.clock_groups)))
+        if self.max_age_s is not None:
+            object.__setattr__(self, "max_age_s", MappingProxyType(dict(self.max_age_s)))
         if self.weighting not in ("rtklib", "elevation", "cn0", "equal"):
             raise ValueError(f"weighting: expected rtklib, elevation, cn0 or equal, got "
                              f"{self.weighting!r}")
@@ -502,7 +505,7 @@ def dops(los_enu: FloatArray, used: BoolArray) -> FloatArray:
         NaN where fewer than 4 satellites or singular.
     """
     n_e = los_enu.shape[0]
-    H = np.concatenate([-los_enu, np.ones(los_enu.shape[:2] + (1,))], axis=-1)
+    H = np.concatenate([-los_enu, np.ones((*los_enu.shape[:2], 1))], axis=-1)
     H = np.where(used[..., None], H, 0.0)
     N = np.einsum("esi,esj->eij", H, H)
     out = np.full((n_e, 4), np.nan)
@@ -625,7 +628,8 @@ def solve_spp(
             fb = frequency_hz(sys, bb, fnum)
             ga = eph.group_delay_s(table, idx, ba) if table is not None else 0.0
             gb = eph.group_delay_s(table, idx, bb) if table is not None else 0.0
-            assert p2 is not None
+            if p2 is None:  # pragma: no cover - set above in ionofree mode
+                raise RuntimeError("ionofree: second-frequency pseudoranges missing")
             pc = ionofree(p1[:, cols], p2[:, cols], fa, fb)
             gdc = (fa**2 * ga - fb**2 * gb) / (fa**2 - fb**2)
             gd[:, cols] = gdc
@@ -658,11 +662,11 @@ def solve_spp(
     # clock groups
     group_sys: list[str] = []
     for s in systems:
-        g = cfg.clock_groups.get(s, s)
-        g = g if g in systems else s
+        grp = cfg.clock_groups.get(s, s)
+        grp = grp if grp in systems else s
         present = base_valid[:, [i for i, sat in enumerate(sats) if sat[0] == s]].any()
-        if present and g not in group_sys:
-            group_sys.append(g)
+        if present and grp not in group_sys:
+            group_sys.append(grp)
     group_sys.sort(key="GRECJI".index)
     if not group_sys:
         group_sys = [systems[0]] if systems else ["G"]
@@ -692,10 +696,10 @@ def solve_spp(
     status[~observed.any(axis=1)] = SppStatus.TOO_FEW_SATS
 
     x = lsq.x
-    g = model.geometry(x, np.arange(n_e))
-    llh = g["llh"]
+    geo = model.geometry(x, np.arange(n_e))
+    llh = geo["llh"]
     rot = enu_rotation(llh[:, 0], llh[:, 1])
-    los_enu = np.einsum("eij,esj->esi", rot, g["los"])
+    los_enu = np.einsum("eij,esj->esi", rot, geo["los"])
     dop = dops(los_enu, lsq.valid)
     conv = status == SppStatus.OK
     if cfg.chi2_alpha > 0:
@@ -713,7 +717,7 @@ def solve_spp(
     cov = lsq.cov
     cov_enu = np.einsum("eij,ejk,elk->eil", rot, cov[:, :3, :3], rot)
     cov_enu = np.where(solved[:, None, None], cov_enu, np.nan)
-    azel = np.stack([g["az"], g["el"]], axis=-1)
+    azel = np.stack([geo["az"], geo["el"]], axis=-1)
     sigma = np.where(lsq.valid, 1.0 / np.sqrt(np.where(lsq.valid, lsq.weights, 1.0)), np.nan)
     return SppResult(
         t_gps_s=t_rx.copy(),
