@@ -98,3 +98,15 @@ def test_android_log(capsys: pytest.CaptureFixture[str]) -> None:
     assert "weighting cn0" in text
     line = next(ln for ln in text.splitlines() if ln.strip().startswith("3D"))
     assert float(line.split()[2]) <= 15.0  # 3D RMS
+
+
+def test_long_files_are_solved_in_chunks(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Files longer than CHUNK_EPOCHS are solved block by block (with a progress bar); the
+    written solution equals the one-block solution."""
+    import navtrack.cli.pos as pos
+
+    whole, chunked = tmp_path / "whole.csv", tmp_path / "chunked.csv"
+    assert main(["pos", "--example", "--out", str(whole)]) == 0
+    monkeypatch.setattr(pos, "CHUNK_EPOCHS", 25)
+    assert main(["pos", "--example", "--out", str(chunked)]) == 0
+    assert whole.read_text() == chunked.read_text()
