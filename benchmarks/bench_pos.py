@@ -8,7 +8,10 @@ an in-process breakdown (imports, read obs, read nav, solve, write) from one ext
 
 Usage::
 
-    PYTHONPATH=src python benchmarks/bench_pos.py [--repeat 5] [--only sept078_gej]
+    PYTHONPATH=src python benchmarks/bench_pos.py [--repeat 5] [--only sept078_gej] [--accuracy]
+
+``--accuracy`` also prints, per run, the epochs solved and 3D RMS against the reference next to
+RTKLIB's, and the median / max per-epoch distance to RTKLIB's own solution (in-process).
 """
 
 from __future__ import annotations
@@ -55,11 +58,55 @@ def _command(run: dict, out: Path) -> list[str]:
     return cmd
 
 
+def accuracy(names: list[str]) -> None:
+    import numpy as np
+
+    from navtrack.geodesy import ecef_to_enu
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.sp3 import read_sp3
+    from navtrack.gnss.spp import SppConfig, solve_spp
+    from navtrack.io.rtklib import read_pos
+
+    print(f"{'run':<24} {'solved':>7} {'RTKLIB':>6} {'RMS3D':>6} {'RTKLIB':>6} "
+          f"{'med d':>6} {'max d':>6}  (m; d = distance to RTKLIB's solution)")
+    for name in names:
+        run = REFERENCE["runs"][name]
+        obs = read_obs(SHARED / run["obs"])
+        navs = [read_nav(SHARED / p) for p in run["nav"]]
+        sp3 = read_sp3(SHARED / run["sp3"]) if run.get("sp3") else None
+        variants = [("", SppConfig(systems=run["systems"]))]
+        if sp3 is not None:
+            variants.append((" (RTKLIB rule)", SppConfig(systems=run["systems"],
+                                                         sp3_needs_broadcast=True)))
+        rtk = read_pos(SHARED / "rtklib_spp" / f"{name}.pos")
+        t_rtk = rtk["t_gps_s"].to_numpy()
+        xyz_rtk = rtk[["x_m", "y_m", "z_m"]].to_numpy()
+        for label, cfg in variants:
+            res = solve_spp(obs, navs, sp3=sp3, config=cfg)
+            ok = res.status == 0
+            if "ref_xyz_m" in run:
+                ref = np.asarray(run["ref_xyz_m"])
+            else:
+                traj = read_pos(SHARED / run["ref_pos"])
+                k = np.searchsorted(traj["t_gps_s"].to_numpy(), res.t_gps_s[ok] - 0.1)
+                ref = traj[["x_m", "y_m", "z_m"]].to_numpy()[k]
+            rms = float(np.sqrt(np.mean(np.sum(ecef_to_enu(res.pos_m[ok], ref) ** 2, axis=1))))
+            i = np.clip(np.searchsorted(res.t_gps_s, t_rtk - 0.1), 0, res.t_gps_s.size - 1)
+            d = np.linalg.norm(res.pos_m[i] - xyz_rtk, axis=1)
+            print(f"{name + label:<24} {int(ok.sum()):>7} {run['solved']:>6} {rms:6.2f} "
+                  f"{run['rms_3d_m']:6.2f} {np.nanmedian(d):6.3f} {np.nanmax(d):6.3f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--only", nargs="*", help="run names (default: all with an RTKLIB time)")
+    ap.add_argument("--accuracy", action="store_true", help="also print the accuracy table")
     args = ap.parse_args()
+    if args.accuracy:
+        accuracy(args.only or list(REFERENCE["runs"]))
+        print()
     env = dict(os.environ, PYTHONPATH=str(REPO / "src"))
     names = args.only or [n for n, r in REFERENCE["runs"].items() if r.get("wall_s")]
     print(f"{'run':<24} {'navtrack s':>10} {'RTKLIB s':>9} {'ratio':>6}   breakdown (s)")
