@@ -364,7 +364,7 @@ def test_glonass_only_synthetic_recovery() -> None:
     back to the millimetre."""
     from navtrack.gnss import ephemeris as eph
     from navtrack.gnss.corrections import geometric_range
-    from navtrack.gnss.observations import ObsHeader, Observations
+    from navtrack.gnss.observations import Observations, ObsHeader
     from navtrack.gnss.rinex.nav import read_nav
 
     nav = read_nav(Path(__file__).resolve().parents[1] / "data"
