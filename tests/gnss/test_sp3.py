@@ -234,3 +234,60 @@ def test_cli_rinex_info_on_sp3(capsys: pytest.CaptureFixture[str]) -> None:
     out = capsys.readouterr().out
     assert "SP3-d" in out
     assert "epochs" in out
+
+
+def _kepler_position(e: object, t: float, mu: float) -> np.ndarray:
+    """ECEF position from broadcast Keplerian elements (IS-GPS-200N table 20-IV)."""
+    g = e.__getitem__  # a pandas row
+    omega_e = 7.2921151467e-5
+    a = g("sqrta") ** 2
+    tk = t - g("toe_gps_s")
+    m = g("m0") + (np.sqrt(mu / a**3) + g("deltan")) * tk
+    ecc = g("e")
+    ea = m
+    for _ in range(30):
+        ea = m + ecc * np.sin(ea)
+    nu = np.arctan2(np.sqrt(1 - ecc**2) * np.sin(ea), np.cos(ea) - ecc)
+    phi = nu + g("omega")
+    s2, c2 = np.sin(2 * phi), np.cos(2 * phi)
+    u = phi + g("cus") * s2 + g("cuc") * c2
+    r = a * (1 - ecc * np.cos(ea)) + g("crs") * s2 + g("crc") * c2
+    inc = g("i0") + g("cis") * s2 + g("cic") * c2 + g("idot") * tk
+    om = g("omega0") + (g("omegadot") - omega_e) * tk - omega_e * g("toe_sow")
+    x, y = r * np.cos(u), r * np.sin(u)
+    return np.array(
+        [
+            x * np.cos(om) - y * np.cos(inc) * np.sin(om),
+            x * np.sin(om) + y * np.cos(inc) * np.cos(om),
+            y * np.sin(inc),
+        ]
+    )
+
+
+def test_sp3_agrees_with_broadcast_ephemeris(gnss_data: Path) -> None:
+    # Two independent products read by two readers: CODE's precise orbits (SP3, centre of mass,
+    # GPS time) and the SEPT receiver's broadcast ephemerides (RINEX nav, antenna phase
+    # centre). Broadcast orbit errors are ~1 m (IS-GPS-200 URA 2 m) and the phase-centre
+    # offsets ~1-2 m, so 12:00 GPST positions agree to a few metres and clocks to a few ns;
+    # a unit, time-scale or field-order mistake in either reader would be kilometres off.
+    from navtrack.gnss.rinex.nav import read_nav
+
+    nav = read_nav(gnss_data / "cssrlib_sept/SEPT078M.21P")
+    sp3 = read_sp3(sample_path(BUNDLED))
+    t = calendar_gps_seconds(2021, 3, 19, 12, 0, 0)
+    k = int(np.flatnonzero(sp3.t_gps_s == t)[0])
+    mus = {"G": 3.986005e14, "J": 3.986005e14, "E": 3.986004418e14}  # IS-GPS-200, Galileo ICD
+    n = 0
+    for sys_letter, mu in mus.items():
+        df = nav.ephemerides[sys_letter]
+        for sat in sorted(set(df["sat"])):
+            if sat not in sp3.sats or not np.isfinite(sp3.clock_s[k, sp3.sat_index(sat)]):
+                continue
+            rows = df[df["sat"] == sat]
+            e = rows.iloc[int(np.argmin(np.abs(rows["toe_gps_s"] - t)))]
+            d = _kepler_position(e, t, mu) - sp3.pos_m[k, sp3.sat_index(sat)]
+            assert np.linalg.norm(d) < 5.0, sat
+            dt = e["af0"] + e["af1"] * (t - e["toc_gps_s"]) - sp3.clock_s[k, sp3.sat_index(sat)]
+            assert abs(dt) < 10e-9, sat
+            n += 1
+    assert n >= 25
