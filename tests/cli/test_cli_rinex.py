@@ -37,6 +37,7 @@ def test_info_file_with_events(capsys: pytest.CaptureFixture[str]) -> None:
     assert "events_by_flag" in text
     assert "4: 3" in text
     assert "2005-04-02T00:59:30.005" in text
+    assert "version           2.10" in text
 
 
 def test_info_bad_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from navtrack.data import sample_path
@@ -643,6 +643,103 @@ def test_decode_accepts_exactly_the_numbers(texts: list[str]) -> None:
         assert value[k] == want or (np.isnan(want) and np.isnan(value[k])), text
 
 
+_POOL = [f"{s}{n:02d}" for s in "GREJCSI" for n in (1, 2, 7, 11, 24, 32)]
+
+
+@st.composite
+def _observation_sets(draw: st.DrawFn, v3: bool) -> dict:
+    """Random epochs x satellites x codes with missing values and indicators."""
+    n_epochs = draw(st.integers(1, 3))
+    sats = draw(st.lists(st.sampled_from(_POOL), min_size=1, max_size=16, unique=True))
+    if v3:
+        types = {
+            sys: draw(
+                st.lists(
+                    st.sampled_from(["C1C", "L1C", "S1C", "C2W", "L5Q", "C7I", "D1C"]),
+                    min_size=1,
+                    max_size=7,
+                    unique=True,
+                )
+            )
+            for sys in sorted({s[0] for s in sats})
+        }
+    else:
+        codes = draw(
+            st.lists(
+                st.sampled_from(
+                    ["C1", "P1", "L1", "L2", "P2", "S1", "S2", "D1", "C5", "L5", "D2", "C2"]
+                ),
+                min_size=1,
+                max_size=12,
+                unique=True,
+            )
+        )
+        types = {"G": codes}
+    number = st.one_of(
+        st.none(), st.integers(-(10**12) + 1, 10**13 - 1).filter(bool).map(lambda n: n / 1000)
+    )
+    ind = st.sampled_from(" 0123456789")
+    epochs = []
+    for _ in range(n_epochs):
+        present = [s for s in sats if draw(st.booleans())] or sats[:1]
+        rows = {}
+        for sat in present:
+            codes = types[sat[0]] if v3 else types["G"]
+            rows[sat] = [(draw(number), draw(ind), draw(ind)) for _ in codes]
+        epochs.append(rows)
+    return {"types": types, "epochs": epochs}
+
+
+def _write_obs(path: Path, obs_set: dict, v3: bool) -> None:
+    types, rows = obs_set["types"], []
+    rows = _v3_header(types) if v3 else _v2_header(types["G"], system="M")
+    for e, epoch in enumerate(obs_set["epochs"]):
+        t = (2021, 1, 1, 0, 0, float(e))
+        if v3:
+            rows.append(_v3_epoch(t, 0, len(epoch)))
+        else:
+            rows += _v2_epoch(t, 0, list(epoch))
+        for sat, fields in epoch.items():
+            text = [_field(v, lli, ssi) for v, lli, ssi in fields]
+            if v3:
+                rows.append((sat + "".join(text)).rstrip())
+            else:
+                rows += ["".join(text[k : k + 5]).rstrip() for k in range(0, len(text), 5)]
+    path.write_text("\n".join(rows) + "\n")
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)  # the one file in tmp_path is rewritten by every example
+@given(st.data())
+@pytest.mark.parametrize("v3", [False, True])
+def test_round_trip_random_files(tmp_path: Path, v3: bool, data: st.DataObject) -> None:
+    """Any file written by the RINEX 2/3 layout rules reads back field by field (multi-line
+    records, > 12 satellites, blank lines of missing observations, indicators)."""
+    obs_set = data.draw(_observation_sets(v3))
+    path = tmp_path / ("r.rnx" if v3 else "r.21o")
+    _write_obs(path, obs_set, v3)
+    obs = read_obs(path)
+    assert len(obs.t_gps_s) == len(obs_set["epochs"])
+    seen = set()
+    for e, epoch in enumerate(obs_set["epochs"]):
+        for sat, fields in epoch.items():
+            codes = obs_set["types"][sat[0]] if v3 else obs_set["types"]["G"]
+            s = obs.sat_index(sat)
+            seen.add(sat)
+            for code, (v, lli, ssi) in zip(codes, fields, strict=True):
+                c = obs.codes.index(code)
+                got = obs.values[e, s, c]
+                assert (np.isnan(got) and v is None) or got == v
+                assert obs.lli[e, s, c] == (-1 if lli == " " else int(lli))
+                assert obs.ssi[e, s, c] == (-1 if ssi == " " else int(ssi))
+    assert set(obs.sats) == seen
+    n_written = sum(
+        v is not None for epoch in obs_set["epochs"] for f in epoch.values() for v, _, _ in f
+    )
+    assert int(np.isfinite(obs.values).sum()) == n_written
+
+
 # ----------------------------------------------------------------------------- bad input
 
 
@@ -663,6 +760,13 @@ def _raises_at(path: Path, line: int, match: str, lenient: bool = False) -> None
     assert info.value.path == str(path)
     assert str(path) in str(info.value)
     assert f"line {line}" in str(info.value)
+
+
+def test_header_only_file(tmp_path: Path) -> None:
+    """A header without epochs is a valid, empty file: zero epochs, and the summary says so."""
+    obs = read_obs(_write(tmp_path, "h.o", _lines("SEPT078M_120.21O")[:33]))
+    assert obs.values.shape == (0, 0, 20)
+    assert obs.summary()["warnings"] == ["no observation epochs"]
 
 
 def test_empty_file(tmp_path: Path) -> None:
@@ -734,8 +838,17 @@ def test_missing_data_line_mid_file(tmp_path: Path) -> None:
     assert len(obs.t_gps_s) == 120
     assert [s.line for s in obs.skipped] == [34]
     rows = _lines("07590920.05o")
-    del rows[20]  # RINEX 2: the next epoch record is read as a data line and rejected
-    _raises_at(_write(tmp_path, "gap2.o", rows), 18, "line 26, read as its data, is an epoch")
+    del rows[20]  # RINEX 2: the next epoch record would be read as a data line
+    path = _write(tmp_path, "gap2.o", rows)
+    _raises_at(path, 18, "line 26, read as its data, is an epoch")
+    # Lenient: the whole epoch goes (its satellites cannot be matched to its lines), the rest
+    # is read as usual.
+    obs = read_obs(path, lenient=True)
+    assert [s.line for s in obs.skipped] == list(range(18, 26))
+    assert "epoch dropped" in obs.skipped[0].reason
+    plain = read_obs(sample_path("07590920.05o"))
+    np.testing.assert_array_equal(obs.t_gps_s, plain.t_gps_s[1:])
+    np.testing.assert_array_equal(obs.values, plain.values[1:])
 
 
 def test_surplus_data_line(tmp_path: Path) -> None:
@@ -783,7 +896,12 @@ def test_unknown_system_letter(tmp_path: Path) -> None:
     rows = _lines("07590920.05o")
     rows[17] = rows[17].replace("G 3G 7", "G 3X 7")
     path = _write(tmp_path, "x2.o", rows)
-    _raises_at(path, 20, "unknown satellite system 'X'")  # line 20: X07's data line
+    _raises_at(path, 18, "unknown satellite system 'X'")  # in the epoch record, line 18
+    obs = read_obs(path, lenient=True)
+    assert [s.line for s in obs.skipped] == [20]  # X07's data line is what is skipped
+    rows = _lines("07590920.05o")
+    rows[17] = rows[17][:-3]  # 8 satellites announced, 7 listed
+    _raises_at(_write(tmp_path, "x2b.o", rows), 18, "malformed satellite id")
     rows = _lines("SEPT078M_120.21O")
     rows[12] = "X" + rows[12][1:]
     _raises_at(_write(tmp_path, "xh.o", rows), 13, "unknown satellite system")

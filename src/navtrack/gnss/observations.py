@@ -216,11 +216,12 @@ class Observations:
     def summary(self) -> dict[str, Any]:
         """What the observations hold, as a JSON-serialisable dict (``navtrack rinex info``).
 
-        Keys: ``path``, ``version``, ``file_type``, ``marker``, ``receiver``, ``antenna``,
-        ``approx_xyz_m``, ``interval_s``, ``time_system``, ``first_epoch``/``last_epoch`` (ISO
-        8601 GPST, ms), ``n_epochs``, ``epoch_flags`` (epochs per flag), ``n_sats``,
-        ``sats_per_system``, ``codes_per_system``, ``events_by_flag``, ``skipped_lines`` and
-        ``warnings`` (header/data disagreements, e.g. a wrong ``TIME OF LAST OBS``).
+        Keys: ``path``, ``version`` (text, ``"2.10"``), ``file_type``, ``marker``,
+        ``receiver``, ``antenna``, ``approx_xyz_m``, ``interval_s``, ``time_system``,
+        ``first_epoch``/``last_epoch`` (ISO 8601 GPST, ms), ``n_epochs``, ``epoch_flags``
+        (epochs per flag), ``n_sats``, ``sats_per_system``, ``codes_per_system``,
+        ``events_by_flag``, ``skipped_lines`` and ``warnings`` (header/data disagreements,
+        e.g. a wrong ``TIME OF LAST OBS``).
         """
         h = self.header
         present = self.systems
@@ -240,11 +241,13 @@ class Observations:
                 warnings.append(
                     f"header {label} {_iso(written)} differs from the data ({_iso(actual)})"
                 )
+        if n == 0:
+            warnings.append("no observation epochs")
         if n > 1 and np.any(np.diff(self.t_gps_s) <= 0):
             warnings.append("epoch times are not strictly increasing")
         return {
             "path": self.path,
-            "version": h.version,
+            "version": f"{h.version:.2f}",  # as RINEX writes it: 2.10, not 2.1
             "file_type": h.file_type,
             "marker": h.marker,
             "receiver": h.receiver,

@@ -75,6 +75,7 @@ class _Scan:
     n_lines: list[int] = field(default_factory=list)  # data lines per epoch
     data: list[bytes] = field(default_factory=list)  # all data lines, in file order
     line_no: list[int] = field(default_factory=list)  # 1-based line of each epoch's first data line
+    epoch_line: list[int] = field(default_factory=list)  # 1-based line of each epoch record
     rec_sat: list[bytes] = field(default_factory=list)  # RINEX 2: satellite id of every record
     rec_lines: list[int] = field(default_factory=list)  # RINEX 2: lines per record
     events: list[Event] = field(default_factory=list)
@@ -487,6 +488,7 @@ def _scan_v3(
             scan.segment.append(seg)
             scan.n_lines.append(take)
             scan.line_no.append(j + 2)
+            scan.epoch_line.append(j + 1)
             scan.data.extend(lines[j + 1 : j + 1 + take])
             i = j + 1 + take
             last = (j, count, i)
@@ -518,6 +520,9 @@ def _scan_v2(
     lenient: bool,
 ) -> None:
     """Walk RINEX 2 epoch records: (1X,I2.2,4(1X,I2),F11.7,2X,I1,I3,12(A1,I2),F12.9)."""
+    # The last record may legitimately end in blank lines (all its observations on them
+    # missing); ``end`` excludes trailing blank lines, ``limit`` is the true last line.
+    limit = len(lines) - (lines[-1] == b"")
     seg = len(segments) - 1
     per_sat = (len(segments[seg].obs_types["G"]) + 4) // 5
     days: dict[bytes, int] = {}
@@ -594,26 +599,40 @@ def _scan_v2(
             clock_s = _NAN
         stop = first + count * per_sat
         take = count
-        if stop > end:
+        if stop > limit:
             if not lenient:
                 raise FileFormatError(
                     path,
                     i + 1,
                     f"epoch record announces {count} satellites "
-                    f"({count * per_sat} data lines) but the file ends after {end - first}",
+                    f"({count * per_sat} data lines) but the file ends after {limit - first}",
                 )
-            take = (end - first) // per_sat
+            take = (limit - first) // per_sat
             scan.skipped.append(
                 SkippedLine(line=i + 1, reason=f"epoch cut short: {take} of {count} satellites")
             )
             _skip(scan, first + take * per_sat, end, "incomplete record at the end of the file")
-            stop = end
+            stop = limit
+        if lenient:  # an epoch record among the data: lines are missing, satellites misaligned
+            intruder = next((j for j in range(first, stop) if _V2_EPOCH.match(lines[j])), None)
+            if intruder is not None:
+                scan.skipped.append(
+                    SkippedLine(
+                        line=i + 1,
+                        reason=f"epoch dropped: fewer than {count} satellite records before the "
+                        f"next epoch record (line {intruder + 1})",
+                    )
+                )
+                _skip(scan, i + 1, intruder, "data line of a dropped epoch")
+                i = intruder
+                continue
         scan.t_cal_s.append(t_cal)
         scan.flag.append(flag)
         scan.clock_s.append(clock_s)
         scan.segment.append(seg)
         scan.n_lines.append(take * per_sat)
         scan.line_no.append(first + 1)
+        scan.epoch_line.append(i + 1)
         scan.data.extend(lines[first : first + take * per_sat])
         scan.rec_sat.extend(sats[:take])
         scan.rec_lines.extend([per_sat] * take)
@@ -779,6 +798,7 @@ def _assemble(
         np.asarray(scan.line_no, dtype=np.int64) - first_of_epoch, lines_per_epoch
     ) + np.arange(n_lines)
     problem: dict[int, str] = {}  # data-line index -> why it is unusable
+    report_at: dict[int, int] = {}  # data-line index -> line to name when raising, if not its own
 
     # Satellite of each data line.
     if v3:
@@ -791,9 +811,16 @@ def _assemble(
         rec_first = np.cumsum(rec_lines) - rec_lines
         part = np.arange(n_lines) - np.repeat(rec_first, rec_lines)
         offset = 5 * part
-    uniq, inverse = np.unique(raw_ids, return_inverse=True)
+    # Unique ids through a 3-byte integer code (much faster than sorting byte strings).
+    id_bytes = raw_ids.view(np.uint8).reshape(-1, 3).astype(np.uint32)
+    id_code = (id_bytes[:, 0] << 16) | (id_bytes[:, 1] << 8) | id_bytes[:, 2]
+    uniq_code, inverse = np.unique(id_code, return_inverse=True)
+    uniq = [
+        bytes(((c >> 16) & 255, (c >> 8) & 255, c & 255)).replace(b"\0", b" ")
+        for c in uniq_code.tolist()
+    ]
     names: list[str | None] = []
-    for k, raw in enumerate(uniq.tolist()):
+    for k, raw in enumerate(uniq):
         try:
             names.append(_sat_id(raw, blank_is_gps=not v3))
         except ValueError as exc:
@@ -807,7 +834,11 @@ def _assemble(
                 )
             )
             for m in where.tolist():
-                problem.setdefault(m, str(exc))
+                if v3:
+                    problem.setdefault(m, str(exc))
+                else:  # the id is written in the epoch record: name that line when raising
+                    problem.setdefault(m, f"{exc} in the satellite list of the epoch record")
+                    report_at.setdefault(m, scan.epoch_line[epoch_of_line[m]])
     sats = sorted({n for n in names if n is not None})
     sat_col = {s: k for k, s in enumerate(sats)}
     uniq_col = np.array([sat_col.get(n, -1) if n else -1 for n in names] or [0], dtype=np.int64)
@@ -863,8 +894,13 @@ def _assemble(
 
     # The same satellite twice in one epoch.
     key = (epoch_of_line * max(len(sats), 1) + sat_of_line) * (int(part.max(initial=0)) + 1) + part
-    order = np.argsort(key, kind="stable")
-    dup = order[1:][(key[order][1:] == key[order][:-1]) & (sat_of_line[order][1:] >= 0)]
+    valid_key = sat_of_line >= 0
+    counts = np.bincount(key[valid_key])
+    later = np.zeros(n_lines, dtype=bool)
+    if counts.max(initial=0) > 1:  # rare: find the second and later occurrences in file order
+        order = np.argsort(key, kind="stable")
+        later[order[1:]] = (key[order][1:] == key[order][:-1]) & valid_key[order][1:]
+    dup = np.flatnonzero(later)
     for m in dup.tolist():
         problem.setdefault(m, f"satellite {sats[sat_of_line[m]]} appears twice in one epoch")
 
@@ -872,8 +908,8 @@ def _assemble(
     usable = np.ones(n_lines, dtype=bool)
     if problem:
         if not lenient:
-            m = min(problem, key=lambda j: line_no[j])
-            raise FileFormatError(path, int(line_no[m]), problem[m])
+            m = min(problem, key=lambda j: report_at.get(j, line_no[j]))
+            raise FileFormatError(path, int(report_at.get(m, line_no[m])), problem[m])
         for m, reason in problem.items():
             usable[m] = False
             skipped.append(SkippedLine(line=int(line_no[m]), reason=reason))
