@@ -1,0 +1,283 @@
+"""``navtrack pos OBS NAV...``: single point positions of a RINEX file or an Android raw log.
+
+Reads the observations (RINEX 2/3 or Android GnssLogger), the navigation file(s) and optionally
+an SP3 file, solves every epoch by weighted least squares (:func:`navtrack.gnss.spp.solve_spp`),
+prints a summary (epochs, solved, count of each status, and with a reference the mean, RMS and
+95 % of the horizontal, vertical and 3D errors), writes the solution with ``--out`` (CSV,
+Parquet, NMEA GGA, KML, GPX by suffix) and figures with ``--plot``. The exit code is 1 only when
+no epoch could be solved (or the input cannot be read).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+EXAMPLE_OBS = "SEPT078M_120.21O"
+EXAMPLE_NAV = "SEPT078M.21P"
+# cssrlib's xyz_ref of station SEPT (src/navtrack/data/README.md)
+EXAMPLE_REF_XYZ_M = (-3962108.673, 3381309.574, 3668678.638)
+CHUNK_EPOCHS = 3600
+WEIGHTINGS = ("rtklib", "elevation", "cn0", "equal")
+
+
+def register(subparsers: Any) -> None:
+    p = subparsers.add_parser(
+        "pos",
+        help="single point positioning of a RINEX observation file or an Android raw log",
+        description="Single point positions (weighted least squares, multi-GNSS with inter-system "
+        "biases, Klobuchar + Saastamoinen, RTKLIB-compatible defaults) of every epoch.",
+    )
+    p.add_argument("obs", nargs="?", type=Path, help="RINEX observation file or GnssLogger log")
+    p.add_argument("nav", nargs="*", type=Path, help="RINEX navigation file(s)")
+    p.add_argument("--sp3", type=Path, help="precise orbits/clocks (SP3) instead of broadcast")
+    p.add_argument("--systems", default="GREJC",
+                   help="systems to use, e.g. GEJ (default: all present)")
+    p.add_argument("--elmask", type=float, default=15.0, metavar="DEG",
+                   help="elevation mask in degrees (default 15)")
+    p.add_argument("--weighting", choices=WEIGHTINGS, default=None,
+                   help="measurement weighting model (default: rtklib for RINEX, cn0 for "
+                   "Android logs)")
+    p.add_argument("--iono", choices=("klobuchar", "ionofree", "off"), default="klobuchar",
+                   help="ionosphere: broadcast Klobuchar, dual-frequency iono-free, or none")
+    ref = p.add_mutually_exclusive_group()
+    ref.add_argument("--ref", nargs=3, type=float, metavar=("X", "Y", "Z"),
+                     help="reference position, ECEF metres")
+    ref.add_argument("--ref-llh", nargs=3, type=float, metavar=("LAT", "LON", "H"),
+                     help="reference position, degrees and ellipsoidal metres")
+    p.add_argument("--out", type=Path,
+                   help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)")
+    p.add_argument("--plot", type=Path, metavar="DIR", help="write figures into this directory")
+    p.add_argument("--example", action="store_true",
+                   help=f"run on the bundled {EXAMPLE_OBS} + {EXAMPLE_NAV} with its reference")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run_pos)
+
+
+def _reference(args: argparse.Namespace) -> tuple[float, float, float] | None:
+    """The reference position in ECEF metres, refusing clearly implausible values."""
+    if args.ref is not None:
+        x, y, z = args.ref
+        r = math.sqrt(x * x + y * y + z * z)
+        if not 6.2e6 < r < 6.5e6:
+            raise SystemExit(
+                f"navtrack pos: --ref {x:g} {y:g} {z:g} is {r:.4g} m from the earth's centre, not "
+                "a point near the surface: give ECEF metres (use --ref-llh for degrees)"
+            )
+        return (x, y, z)
+    if args.ref_llh is not None:
+        lat, lon, h = args.ref_llh
+        if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 360.0 and -1000.0 <= h <= 1.0e5):
+            raise SystemExit(
+                f"navtrack pos: --ref-llh {lat:g} {lon:g} {h:g} is not latitude/longitude in "
+                "degrees and height in metres (use --ref for ECEF metres)"
+            )
+        from navtrack.geodesy import geodetic_to_ecef
+
+        xyz = geodetic_to_ecef([math.radians(lat), math.radians(lon), h])
+        return (float(xyz[0]), float(xyz[1]), float(xyz[2]))
+    return None
+
+
+def _is_android(path: Path) -> bool:
+    if path.suffix.lower() in (".txt", ".csv"):
+        with path.open("rb") as f:
+            head = f.read(4096)
+        return b"Raw," in head or head.startswith(b"#")
+    return False
+
+
+def _read_inputs(args: argparse.Namespace) -> tuple[Any, list[Any], Any]:
+    if args.android:
+        from navtrack.gnss.android import read_gnsslogger
+
+        obs = read_gnsslogger(args.obs)
+    else:
+        from navtrack.gnss.rinex.obs import read_obs
+
+        obs = read_obs(args.obs)
+    from navtrack.gnss.rinex.nav import read_nav
+
+    navs = [read_nav(p) for p in args.nav]
+    sp3 = None
+    if args.sp3 is not None:
+        from navtrack.gnss.sp3 import read_sp3
+
+        sp3 = read_sp3(args.sp3)
+    return obs, navs, sp3
+
+
+def _check_output(path: Path | None) -> str | None:
+    """Why the output path cannot be written (checked before the solve), or None."""
+    if path is None:
+        return None
+    parent = path.parent if str(path.parent) else Path(".")
+    if path.suffix.lower() not in (".csv", ".parquet", ".nmea", ".kml", ".gpx"):
+        return f"unknown output format {path.suffix!r} (use .csv, .parquet, .nmea, .kml, .gpx)"
+    if not parent.is_dir():
+        return f"directory {str(parent)!r} does not exist"
+    if path.is_dir():
+        return f"{str(path)!r} is a directory"
+    import os
+
+    if not os.access(parent, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        return f"no permission to write {str(path)!r}"
+    return None
+
+
+def _error_stats(pos_m: Any, ref: tuple[float, float, float]) -> dict[str, tuple[float, ...]]:
+    import numpy as np
+
+    from navtrack.geodesy import ecef_to_enu
+
+    enu = ecef_to_enu(pos_m, np.asarray(ref))
+    hor = np.hypot(enu[:, 0], enu[:, 1])
+    ver = enu[:, 2]
+    d3 = np.linalg.norm(enu, axis=1)
+
+    def stats(x: Any, signed: Any = None) -> tuple[float, ...]:
+        mean = float(np.mean(x if signed is None else signed))
+        return (mean, float(np.sqrt(np.mean(x**2))), float(np.percentile(np.abs(x), 95)))
+
+    return {
+        "horizontal": stats(hor),
+        "vertical": stats(np.abs(ver), ver),
+        "3D": stats(d3),
+        "mean ENU": tuple(float(v) for v in enu.mean(axis=0)),
+    }
+
+
+def run_pos(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from navtrack.gnss.spp import STATUS_NAMES, SppConfig, solution_columns
+
+    if args.example:
+        if args.obs is not None:
+            raise SystemExit("navtrack pos: give either OBS NAV... or --example, not both")
+        from navtrack.data import sample_path
+
+        args.obs = sample_path(EXAMPLE_OBS)
+        args.nav = [sample_path(EXAMPLE_NAV)]
+        if args.ref is None and args.ref_llh is None:
+            args.ref = list(EXAMPLE_REF_XYZ_M)
+    if args.obs is None:
+        raise SystemExit("navtrack pos: give OBS and NAV files, or --example")
+    if not args.obs.is_file():
+        raise SystemExit(f"navtrack pos: observation file {str(args.obs)!r} not found")
+    for p in [*args.nav, *([args.sp3] if args.sp3 else [])]:
+        if not p.is_file():
+            raise SystemExit(f"navtrack pos: file {str(p)!r} not found")
+    if not args.nav and args.sp3 is None:
+        raise SystemExit(
+            "navtrack pos: no navigation file given: positions need broadcast ephemerides "
+            "(RINEX NAV) or precise orbits (--sp3)"
+        )
+    ref = _reference(args)
+    out_problem = _check_output(args.out)
+    if out_problem:
+        print(f"navtrack pos: cannot write --out: {out_problem}; solving anyway", file=sys.stderr)
+    args.android = _is_android(args.obs)
+    systems = "".join(dict.fromkeys(args.systems.upper()))
+    # phone pseudoranges are far noisier than RTKLIB's receiver model assumes: C/N0 weights
+    weighting = args.weighting or ("cn0" if args.android else "rtklib")
+    try:
+        config = SppConfig(systems=systems, elmask_deg=args.elmask, weighting=weighting,
+                           iono=args.iono)
+    except ValueError as exc:
+        raise SystemExit(f"navtrack pos: {exc}") from None
+
+    obs, navs, sp3 = _read_inputs(args)
+    n_epochs = len(obs.t_gps_s)
+    if n_epochs == 0:
+        print(f"navtrack pos: {args.obs}: no observation epochs", file=sys.stderr)
+        return 1
+    result = _solve(obs, navs, sp3, config, progress=not args.no_progress)
+    counts = result.status_counts()
+    solved = counts["ok"]
+    used_systems = "".join(s for s in "GRECJI" if any(sat[0] == s for sat in result.sats))
+
+    print(f"observations   {args.obs}")
+    print(f"navigation     {', '.join(str(p) for p in args.nav) or '-'}"
+          + (f"  sp3 {args.sp3}" if args.sp3 else ""))
+    print(f"systems        {used_systems or '-'}  (clocks: {', '.join(result.clock_groups)}; "
+          f"weighting {weighting}, elevation mask {args.elmask:g} deg)")
+    print(f"epochs         {n_epochs}")
+    print(f"solved         {solved}")
+    for name in STATUS_NAMES:
+        if counts[name]:
+            print(f"  {name:<18} {counts[name]}")
+    no_eph = sorted({s for s, m in zip(result.sats, result.no_ephemeris.any(axis=0), strict=True)
+                     if m})
+    if no_eph:
+        print(f"no ephemeris   {len(no_eph)} satellites ({' '.join(no_eph)}); their measurements "
+              "were not used")
+    if solved:
+        ok = result.status == 0
+        print(f"satellites     {np.mean(result.n_sats[ok]):.1f} used per solved epoch; "
+              f"PDOP median {np.nanmedian(result.dop[ok, 1]):.2f}")
+    if ref is not None and solved:
+        st = _error_stats(result.pos_m[result.status == 0], ref)
+        print("error vs ref   mean      RMS       95 %    (m)")
+        for key in ("horizontal", "vertical", "3D"):
+            m, r, p95 = st[key]
+            print(f"  {key:<12} {m:8.3f}  {r:8.3f}  {p95:8.3f}")
+        e, n, u = st["mean ENU"]
+        print(f"  mean ENU     {e:8.3f}  {n:8.3f}  {u:8.3f}")
+    if solved == 0:
+        cause = max(((v, k) for k, v in counts.items() if k != "ok"), default=(0, "?"))[1]
+        hint = ""
+        if cause == "no_ephemeris":
+            hint = (" (the navigation data do not cover these satellites and epochs: check that "
+                    "the NAV file matches the observation day and systems)")
+        print(f"navtrack pos: no epoch could be solved; most epochs: {cause}{hint}",
+              file=sys.stderr)
+
+    table = solution_columns(result)
+    status_code = 0 if solved else 1
+    if args.out is not None:
+        if out_problem:
+            print(f"navtrack pos: solution NOT written: {out_problem}", file=sys.stderr)
+        else:
+            from navtrack.io.solution import write_solution
+
+            try:
+                path = write_solution(table, args.out, talker="GN" if len(used_systems) > 1
+                                      else "GP")
+                print(f"written        {path}")
+            except OSError as exc:
+                print(f"navtrack pos: solution NOT written: {exc}", file=sys.stderr)
+    if args.plot is not None:
+        from navtrack.plots.gnss import plot_solution
+
+        paths = plot_solution(table, args.plot, ref_xyz_m=ref,
+                              azel=(result.azel_rad, list(result.sats)))
+        print(f"figures        {', '.join(str(p) for p in paths)}")
+    return status_code
+
+
+def _solve(obs: Any, navs: list[Any], sp3: Any, config: Any, *, progress: bool) -> Any:
+    """Solve in chunks of epochs (with a progress bar on long files) and concatenate."""
+    from navtrack.gnss.ephemeris import ephemeris_tables, merge_tables
+    from navtrack.gnss.spp import concatenate_results, solve_spp, subset_epochs
+
+    n = len(obs.t_gps_s)
+    tables = merge_tables([ephemeris_tables(n_) for n_ in navs]) if navs else {}
+    if n <= CHUNK_EPOCHS:
+        return solve_spp(obs, navs, sp3=sp3, config=config, ephemeris=tables)
+    starts = range(0, n, CHUNK_EPOCHS)
+    it: Any = starts
+    if progress:
+        from tqdm import tqdm
+
+        it = tqdm(starts, total=len(starts), unit="chunk", desc="solving", file=sys.stderr,
+                  disable=None)
+    parts = [
+        solve_spp(subset_epochs(obs, slice(s, s + CHUNK_EPOCHS)), navs, sp3=sp3, config=config,
+                  ephemeris=tables)
+        for s in it
+    ]
+    return concatenate_results(parts)
