@@ -33,10 +33,20 @@ if TYPE_CHECKING:
     import pandas as pd
 
 # Gravitational constants (m^3/s^2) and earth rotation rates (rad/s) per system.
-MU_M3S2 = {"G": 3.986005e14, "J": 3.986005e14, "E": 3.986004418e14, "C": 3.986004418e14,
-           "I": 3.986005e14}
-OMEGA_E_RAD_S = {"G": 7.2921151467e-5, "J": 7.2921151467e-5, "E": 7.2921151467e-5,
-                 "C": 7.292115e-5, "I": 7.2921151467e-5}
+MU_M3S2 = {
+    "G": 3.986005e14,
+    "J": 3.986005e14,
+    "E": 3.986004418e14,
+    "C": 3.986004418e14,
+    "I": 3.986005e14,
+}
+OMEGA_E_RAD_S = {
+    "G": 7.2921151467e-5,
+    "J": 7.2921151467e-5,
+    "E": 7.2921151467e-5,
+    "C": 7.292115e-5,
+    "I": 7.2921151467e-5,
+}
 # GLONASS PZ-90 (ICD 5.1 table 3.2)
 GLO_MU_M3S2 = 398600.4418e9
 GLO_A_M = 6378136.0
@@ -55,11 +65,42 @@ _GALILEO_INAV = 0b101  # data source bits 0 (E1-B) and 2 (E5b-I)
 _GALILEO_FNAV = 0b010  # bit 1 (E5a-I)
 
 KEPLER_FIELDS = (
-    "toc_gps_s", "af0", "af1", "af2", "crs", "deltan", "m0", "cuc", "e", "cus", "sqrta",
-    "toe_sow", "toe_gps_s", "cic", "omega0", "cis", "i0", "crc", "omega", "omegadot", "idot",
+    "toc_gps_s",
+    "af0",
+    "af1",
+    "af2",
+    "crs",
+    "deltan",
+    "m0",
+    "cuc",
+    "e",
+    "cus",
+    "sqrta",
+    "toe_sow",
+    "toe_gps_s",
+    "cic",
+    "omega0",
+    "cis",
+    "i0",
+    "crc",
+    "omega",
+    "omegadot",
+    "idot",
 )
-GLONASS_FIELDS = ("toc_gps_s", "taun", "gamman", "x_m", "y_m", "z_m", "vx_mps", "vy_mps",
-                  "vz_mps", "ax_mps2", "ay_mps2", "az_mps2")
+GLONASS_FIELDS = (
+    "toc_gps_s",
+    "taun",
+    "gamman",
+    "x_m",
+    "y_m",
+    "z_m",
+    "vx_mps",
+    "vy_mps",
+    "vz_mps",
+    "ax_mps2",
+    "ay_mps2",
+    "az_mps2",
+)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -456,8 +497,25 @@ def glonass_orbit(
 
 
 # URA index table (m), IS-GPS-200 20.3.3.3.1.1
-_URA_M = np.array([2.4, 3.4, 4.85, 6.85, 9.65, 13.65, 24.0, 48.0, 96.0, 192.0, 384.0, 768.0,
-                   1536.0, 3072.0, 6144.0])
+_URA_M = np.array(
+    [
+        2.4,
+        3.4,
+        4.85,
+        6.85,
+        9.65,
+        13.65,
+        24.0,
+        48.0,
+        96.0,
+        192.0,
+        384.0,
+        768.0,
+        1536.0,
+        3072.0,
+        6144.0,
+    ]
+)
 
 
 def ura_variance(system: str, sva_m: FloatArray, *, quantise: bool = True) -> FloatArray:
@@ -475,10 +533,18 @@ def ura_variance(system: str, sva_m: FloatArray, *, quantise: bool = True) -> Fl
         return np.where(bad, 6144.0**2, v**2)
     if system == "E":
         q = np.where(
-            v <= 0.5, np.floor(v / 0.01 + 1e-9) * 0.01,
-            np.where(v <= 1.0, 0.5 + np.floor((v - 0.5) / 0.02 + 1e-9) * 0.02,
-                     np.where(v <= 2.0, 1.0 + np.floor((v - 1.0) / 0.04 + 1e-9) * 0.04,
-                              2.0 + np.floor((v - 2.0) / 0.16 + 1e-9) * 0.16)))
+            v <= 0.5,
+            np.floor(v / 0.01 + 1e-9) * 0.01,
+            np.where(
+                v <= 1.0,
+                0.5 + np.floor((v - 0.5) / 0.02 + 1e-9) * 0.02,
+                np.where(
+                    v <= 2.0,
+                    1.0 + np.floor((v - 1.0) / 0.04 + 1e-9) * 0.04,
+                    2.0 + np.floor((v - 2.0) / 0.16 + 1e-9) * 0.16,
+                ),
+            ),
+        )
         bad |= v > 6.0
         return np.where(bad, 6144.0**2, q**2)
     k = np.searchsorted(_URA_M, np.where(bad, 0.0, v) - 1e-9, side="left")
@@ -532,8 +598,12 @@ def broadcast_states(
             continue
         ages = max_age_s or {}
         idx = select_ephemeris(
-            table, [sats[c] for c in cols], t_rx, max_age_s=ages.get(sys),
-            healthy_only=healthy_only, galileo_nav=galileo_nav,
+            table,
+            [sats[c] for c in cols],
+            t_rx,
+            max_age_s=ages.get(sys),
+            healthy_only=healthy_only,
+            galileo_nav=galileo_nav,
         )
         index[:, cols] = idx
         ts = t_sv[:, cols]
@@ -573,8 +643,15 @@ def broadcast_states(
 
 def ephemeris_tables(nav: Any) -> dict[str, EphemerisTable]:
     """:class:`EphemerisTable` per system of a ``NavData`` (or a mapping of DataFrames)."""
-    frames = getattr(nav, "ephemerides", nav)
-    return {sys: EphemerisTable.from_frame(sys, df) for sys, df in frames.items()}
+    columns = getattr(nav, "tables", None)
+    if columns is not None:
+        return {
+            sys: EphemerisTable(
+                sys, cols["sat"].astype(str), {c: v for c, v in cols.items() if c != "sat"}
+            )
+            for sys, cols in columns.items()
+        }
+    return {sys: EphemerisTable.from_frame(sys, df) for sys, df in nav.items()}
 
 
 def merge_tables(tables: list[dict[str, EphemerisTable]]) -> dict[str, EphemerisTable]:

@@ -159,10 +159,12 @@ class NavData:
         (year, month, day) in place of (t_ref_sow, week, source). Missing fields are ``None``.
     leap_seconds : int or None
         GPS - UTC from ``LEAP SECONDS`` (current value), when present.
-    ephemerides : mapping of str to pandas.DataFrame
-        One table per system letter present (``G``, ``R``, ``E``, ``C``, ``J``, ``S``, ``I``),
-        one row per broadcast record, rows sorted by (``sat``, ``toc_gps_s``, file order), index
-        0..n-1. Every record is kept (duplicates, I/NAV and F/NAV, future ephemerides).
+    tables : mapping of str to mapping of str to ndarray
+        One table per system letter present (``G``, ``R``, ``E``, ``C``, ``J``, ``S``, ``I``)
+        as read-only NumPy columns of equal length (so that positioning needs no pandas;
+        :attr:`ephemerides` gives the same tables as DataFrames), one row per broadcast record,
+        rows sorted by (``sat``, ``toc_gps_s``, file order). Every record is kept (duplicates,
+        I/NAV and F/NAV, future ephemerides).
         Float columns are NaN and integer columns (int64) -1 where the file leaves a field
         blank. Columns:
 
@@ -211,7 +213,7 @@ class NavData:
     iono: Mapping[str, FloatArray]
     time_corrections: Mapping[str, tuple[Any, ...]]
     leap_seconds: int | None
-    ephemerides: Mapping[str, pd.DataFrame]
+    tables: Mapping[str, Mapping[str, np.ndarray]]
     skipped: tuple[SkippedLine, ...] = ()
     comments: tuple[str, ...] = field(default=())
 
@@ -220,16 +222,30 @@ class NavData:
             arr.flags.writeable = False
         object.__setattr__(self, "iono", MappingProxyType(dict(self.iono)))
         object.__setattr__(self, "time_corrections", MappingProxyType(dict(self.time_corrections)))
-        object.__setattr__(self, "ephemerides", MappingProxyType(dict(self.ephemerides)))
+        frozen = {}
+        for letter, columns in self.tables.items():
+            for arr in columns.values():
+                arr.flags.writeable = False
+            frozen[letter] = MappingProxyType(dict(columns))
+        object.__setattr__(self, "tables", MappingProxyType(frozen))
+
+    @property
+    def ephemerides(self) -> Mapping[str, pd.DataFrame]:
+        """:attr:`tables` as one pandas DataFrame per system letter (built on each access)."""
+        import pandas as pd
+
+        return MappingProxyType(
+            {letter: pd.DataFrame(dict(columns)) for letter, columns in self.tables.items()}
+        )
 
     @property
     def systems(self) -> str:
         """System letters with at least one record, in ``GRECJSI`` order."""
-        return "".join(s for s in "GRECJSI" if s in self.ephemerides)
+        return "".join(s for s in "GRECJSI" if s in self.tables)
 
     def summary(self) -> dict[str, Any]:
         """What the file holds, as plain Python values (for ``navtrack rinex info``)."""
-        tocs = [df["toc_gps_s"].to_numpy() for df in self.ephemerides.values() if len(df)]
+        tocs = [c["toc_gps_s"] for c in self.tables.values() if len(c["toc_gps_s"])]
         span: list[str] = []
         if tocs:
             t = np.concatenate(tocs)
@@ -239,9 +255,9 @@ class NavData:
             "version": self.version,
             "file_type": self.file_type,
             "system": self.system,
-            "records_per_system": {s: len(self.ephemerides[s]) for s in self.systems},
-            "sats_per_system": {s: len(self.ephemerides[s]["sat"].unique()) for s in self.systems},
-            "sat_ids": {s: sorted(self.ephemerides[s]["sat"].unique()) for s in self.systems},
+            "records_per_system": {s: len(self.tables[s]["sat"]) for s in self.systems},
+            "sats_per_system": {s: len(np.unique(self.tables[s]["sat"])) for s in self.systems},
+            "sat_ids": {s: np.unique(self.tables[s]["sat"]).tolist() for s in self.systems},
             "iono": {k: [float(v) for v in a] for k, a in self.iono.items()},
             "time_corrections": {k: list(v) for k, v in self.time_corrections.items()},
             "leap_seconds": self.leap_seconds,
@@ -301,7 +317,7 @@ def read_nav(path: StrPath, *, lenient: bool = False) -> NavData:
         iono=header.iono,
         time_corrections=header.time_corrections,
         leap_seconds=header.leap_seconds,
-        ephemerides=tables,
+        tables=tables,
         skipped=tuple(skipped),
         comments=tuple(header.comments),
     )
@@ -571,10 +587,8 @@ def _toe_gps_s(
     return t + np.round((toc_gps_s - t) / SECONDS_PER_WEEK) * SECONDS_PER_WEEK
 
 
-def _tables(groups: dict[str, tuple[_Group, FloatArray]]) -> dict[str, pd.DataFrame]:
-    import pandas as pd
-
-    tables: dict[str, pd.DataFrame] = {}
+def _tables(groups: dict[str, tuple[_Group, FloatArray]]) -> dict[str, dict[str, np.ndarray]]:
+    tables: dict[str, dict[str, np.ndarray]] = {}
     for sys_letter in "GRECJSI":
         if sys_letter not in groups:
             continue
@@ -608,8 +622,8 @@ def _tables(groups: dict[str, tuple[_Group, FloatArray]]) -> dict[str, pd.DataFr
         line = np.array(g.lines, dtype=np.int64)
         sats = np.array(g.sats)
         order = np.lexsort((line, toc, sats))  # by satellite, then toc, then file order
-        data = {"sat": sats[order].astype(object), "toc_gps_s": toc[order]}
+        data = {"sat": sats[order], "toc_gps_s": toc[order]}
         data.update((name, cols[name][order]) for name in names)
         data["line"] = line[order]
-        tables[sys_letter] = pd.DataFrame(data)
+        tables[sys_letter] = data
     return tables
