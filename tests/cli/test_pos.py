@@ -72,7 +72,7 @@ def test_reference_in_wrong_units_is_refused() -> None:
 def test_unwritable_output_still_solves(tmp_path: Path,
                                         capsys: pytest.CaptureFixture[str]) -> None:
     rc = main(["pos", "--example", "--out", str(tmp_path / "missing" / "x.csv")])
-    assert rc == 0
+    assert rc == 1
     captured = capsys.readouterr()
     assert "solved         120" in captured.out
     assert "does not exist" in captured.err

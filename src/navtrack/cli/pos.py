@@ -4,8 +4,9 @@ Reads the observations (RINEX 2/3 or Android GnssLogger), the navigation file(s)
 an SP3 file, solves every epoch by weighted least squares (:func:`navtrack.gnss.spp.solve_spp`),
 prints a summary (epochs, solved, count of each status, and with a reference the mean, RMS and
 95 % of the horizontal, vertical and 3D errors), writes the solution with ``--out`` (CSV,
-Parquet, NMEA GGA, KML, GPX by suffix) and figures with ``--plot``. The exit code is 1 only when
-no epoch could be solved (or the input cannot be read).
+Parquet, NMEA GGA, KML, GPX by suffix) and figures with ``--plot``. The exit code is 1 when no
+epoch could be solved, the input cannot be read, or the requested ``--out`` file could not be
+written (the summary is still printed: a script must not mistake a missing file for success).
 """
 
 from __future__ import annotations
@@ -241,6 +242,7 @@ def run_pos(args: argparse.Namespace) -> int:
     if args.out is not None:
         if out_problem:
             print(f"navtrack pos: solution NOT written: {out_problem}", file=sys.stderr)
+            status_code = 1
         else:
             from navtrack.io.solution import write_solution
 
@@ -250,6 +252,7 @@ def run_pos(args: argparse.Namespace) -> int:
                 print(f"written        {path}")
             except OSError as exc:
                 print(f"navtrack pos: solution NOT written: {exc}", file=sys.stderr)
+                status_code = 1
     if args.plot is not None:
         from navtrack.plots.gnss import plot_solution
 
