@@ -1,0 +1,1 @@
+"""Matplotlib figures used by the CLI and the reports."""

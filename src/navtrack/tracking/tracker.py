@@ -1,0 +1,425 @@
+"""Multi-target tracker for real data: GNN or JPDA association with track management.
+
+The driver :func:`run_tracker` takes time-ordered 2-D position detections (local east/north, m)
+and runs, per scan (detections sharing one time stamp):
+
+1. prediction of every track to the scan time (linear motion model, batched KF);
+2. gating (chi-square, with a k-d tree pre-gate when there are many pairs);
+3. association: GNN (optimal 2-D assignment with missed-detection costs, :func:`assign2d`) or
+   JPDA (:func:`jpda_marginals`, then the PDA update);
+4. management: tentative tracks are confirmed after ``confirm_hits`` updates within
+   ``confirm_window_s`` of their birth (the M-of-N rule written in time, so it applies to
+   irregular report times as well as to regular scans) and dropped otherwise; tracks are
+   deleted after ``max_coast_s`` without update or when their position standard deviation
+   exceeds ``max_position_std_m``;
+5. initiation: a detection inside no track's gate is paired with an earlier such detection
+   ("seed") reachable at ``init_max_speed_mps`` within ``init_max_dt_s`` (two-point
+   initiation: position and velocity from the two points); otherwise it becomes a seed.
+
+Track ids are integers given at birth and never reused. Every detection's fate is recorded
+(``det_status``) so nothing is dropped silently.
+
+References
+----------
+.. [1] S. S. Blackman, R. Popoli, *Design and Analysis of Modern Tracking Systems*, Artech
+   House 1999, chapter 6 (GNN), 3.3 (M-of-N confirmation) and 4 (two-point initiation).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from navtrack._typing import ArrayLike, FloatArray, IntArray
+from navtrack.tracking.models import LinearMotion, constant_velocity
+
+__all__ = [
+    "DET_CONFIRMED",
+    "DET_SEED",
+    "DET_STARTED",
+    "DET_TENTATIVE",
+    "DET_UNUSED",
+    "TrackerConfig",
+    "TrackerResult",
+    "run_tracker",
+]
+
+# det_status values
+DET_CONFIRMED = 0  # updated a confirmed track
+DET_TENTATIVE = 1  # updated a tentative track
+DET_STARTED = 2  # second point of a two-point initiation (started a tentative track)
+DET_SEED = 3  # kept as a seed for initiation (never paired)
+DET_UNUSED = 4  # inside a gate but not associated (GNN loser / JPDA low probability)
+DET_STATUS_NAMES = ("confirmed", "tentative", "started", "seed", "unused")
+
+
+@dataclass(frozen=True, slots=True)
+class TrackerConfig:
+    """Tracker parameters (SI units).
+
+    The defaults suit ships (AIS); :meth:`for_aircraft` gives ADS-B values.
+    """
+
+    motion: LinearMotion = field(default_factory=lambda: constant_velocity(2, 0.05, "continuous"))
+    sigma_m: float = 25.0
+    associator: Literal["gnn", "jpda"] = "gnn"
+    pd: float = 0.9
+    clutter_density: float = 1e-9
+    gate_probability: float = 0.9999
+    init_max_speed_mps: float = 30.0
+    init_max_dt_s: float = 400.0
+    confirm_hits: int = 3
+    confirm_window_s: float = 900.0
+    max_coast_s: float = 600.0
+    max_position_std_m: float = 2000.0
+    max_exact_bits: int = 20
+    k_best: int = 1000
+    pregate_pairs: int = 4000
+
+    def __post_init__(self) -> None:
+        if self.motion.ndim != 2:
+            raise ValueError("the tracker works on 2-D (east, north) positions: motion.ndim = 2")
+        if self.associator not in ("gnn", "jpda"):
+            raise ValueError(f"associator must be 'gnn' or 'jpda', got {self.associator!r}")
+        for name in ("sigma_m", "clutter_density", "init_max_speed_mps", "init_max_dt_s",
+                     "confirm_window_s", "max_coast_s", "max_position_std_m"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be finite and > 0, got {v}")
+        if not 0 < self.pd < 1:
+            raise ValueError(f"pd must be in (0, 1), got {self.pd}")
+        if self.confirm_hits < 2:
+            raise ValueError(f"confirm_hits must be >= 2, got {self.confirm_hits}")
+
+    @staticmethod
+    def for_aircraft(associator: Literal["gnn", "jpda"] = "gnn") -> TrackerConfig:
+        """Aircraft at 10 s reports: q = 1 m²/s³, σ = 50 m, 350 m/s, coast 60 s."""
+        return TrackerConfig(
+            motion=constant_velocity(2, 1.0, "continuous"),
+            sigma_m=50.0,
+            associator=associator,
+            pd=0.95,
+            clutter_density=1e-10,
+            init_max_speed_mps=350.0,
+            init_max_dt_s=60.0,
+            confirm_hits=3,
+            confirm_window_s=60.0,
+            max_coast_s=60.0,
+            max_position_std_m=5000.0,
+        )
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class TrackerResult:
+    """Tracker output (arrays read-only).
+
+    Attributes
+    ----------
+    det_track : (N,) int
+        Id of the track each detection updated or started (``-1`` none).
+    det_status : (N,) int8
+        Fate of each detection: 0 confirmed-track update, 1 tentative-track update, 2 started a
+        track, 3 seed never paired, 4 gated but not associated.
+    track_time_s, track_id, track_x, track_std_m, track_confirmed :
+        One row per track update: time (s), id, state ``[x, vx, y, vy]`` (m, m/s), position
+        standard deviation ``sqrt(trace(P_pos)/2)`` (m), confirmed flag.
+    report_frame, report_id, report_xy :
+        Confirmed tracks predicted to each requested report time (index into
+        ``report_times``), for scoring.
+    counts : dict
+        ``scans``, ``tracks_started``, ``tracks_confirmed``, ``deleted_coast``,
+        ``deleted_covariance``, ``deleted_unconfirmed``, ``jpda_exact_clusters``,
+        ``jpda_kbest_clusters``, ``seconds``.
+    """
+
+    det_track: IntArray
+    det_status: np.ndarray
+    track_time_s: FloatArray
+    track_id: IntArray
+    track_x: FloatArray
+    track_std_m: FloatArray
+    track_confirmed: np.ndarray
+    report_frame: IntArray
+    report_id: IntArray
+    report_xy: FloatArray
+    counts: dict[str, float]
+
+    def __post_init__(self) -> None:
+        for name in ("det_track", "det_status", "track_time_s", "track_id", "track_x",
+                     "track_std_m", "track_confirmed", "report_frame", "report_id", "report_xy"):
+            getattr(self, name).setflags(write=False)
+
+
+class _Tracks:
+    """Mutable per-run track store (private to the driver)."""
+
+    def __init__(self, n: int) -> None:
+        self.x = np.zeros((0, n))
+        self.P = np.zeros((0, n, n))
+        self.id = np.zeros(0, dtype=np.int64)
+        self.confirmed = np.zeros(0, dtype=bool)
+        self.hits = np.zeros(0, dtype=np.int64)
+        self.born = np.zeros(0)
+        self.last = np.zeros(0)
+
+    def keep(self, k: np.ndarray) -> None:
+        for name in ("x", "P", "id", "confirmed", "hits", "born", "last"):
+            setattr(self, name, getattr(self, name)[k])
+
+    def add(self, x: FloatArray, P: FloatArray, tid: int, t: float) -> None:
+        self.x = np.concatenate([self.x, x[None]])
+        self.P = np.concatenate([self.P, P[None]])
+        self.id = np.append(self.id, tid)
+        self.confirmed = np.append(self.confirmed, False)
+        self.hits = np.append(self.hits, 2)
+        self.born = np.append(self.born, t)
+        self.last = np.append(self.last, t)
+
+
+def run_tracker(
+    t_s: ArrayLike,
+    z: ArrayLike,
+    config: TrackerConfig | None = None,
+    report_times: ArrayLike | None = None,
+) -> TrackerResult:
+    """Track 2-D position detections.
+
+    Parameters
+    ----------
+    t_s : (N,) detection times, s, non-decreasing (equal times form one scan)
+    z : (N, 2) east/north positions, m, finite
+    config : TrackerConfig
+    report_times : (F,) or None
+        Times at which the confirmed tracks are reported (predicted) for scoring.
+
+    Raises
+    ------
+    ValueError
+        Times not non-decreasing (the first offending index is named), non-finite values.
+    """
+    from navtrack.tracking.assignment import assign2d
+    from navtrack.tracking.gating import chi2_threshold, gate, kdtree_pregate
+    from navtrack.tracking.jpda import (
+        METHOD_EXACT,
+        METHOD_KBEST,
+        JpdaConfig,
+        association_weights,
+        jpda_marginals,
+        pda_update,
+    )
+    from navtrack.tracking.kalman import kf_predict
+
+    cfg = config or TrackerConfig()
+    t = np.asarray(t_s, dtype=float)
+    Z = np.asarray(z, dtype=float)
+    if t.ndim != 1 or Z.shape != (t.size, 2):
+        raise ValueError(f"t_s must be (N,) and z (N, 2); got {t.shape} and {Z.shape}")
+    if not np.all(np.isfinite(t)) or not np.all(np.isfinite(Z)):
+        bad = int(np.flatnonzero(~(np.isfinite(t) & np.isfinite(Z).all(axis=1)))[0])
+        raise ValueError(f"detections must be finite: detection {bad} is not")
+    back = np.flatnonzero(np.diff(t) < 0)
+    if back.size:
+        raise ValueError(
+            f"t_s must be non-decreasing: detection {back[0] + 1} ({t[back[0] + 1]}) is earlier "
+            f"than detection {back[0]} ({t[back[0]]})"
+        )
+    rep = np.zeros(0) if report_times is None else np.asarray(report_times, dtype=float)
+    clock = time.perf_counter()
+    mot = cfg.motion
+    n = mot.dim_x
+    pos = list(mot.position_index)
+    H = np.zeros((2, n))
+    H[0, pos[0]] = H[1, pos[1]] = 1.0
+    R = np.eye(2) * cfg.sigma_m**2
+    gamma = chi2_threshold(cfg.gate_probability, 2)
+    jcfg = JpdaConfig(cfg.pd, cfg.clutter_density, cfg.gate_probability, cfg.max_exact_bits,
+                      cfg.k_best)
+    log_miss = np.log1p(-cfg.pd * cfg.gate_probability)
+    log_det_gain = np.log(cfg.pd) - np.log(cfg.clutter_density)
+
+    N = t.size
+    det_track = np.full(N, -1, dtype=np.int64)
+    det_status = np.full(N, DET_SEED, dtype=np.int8)
+    tr = _Tracks(n)
+    seeds_t: list[float] = []
+    seeds_z: list[FloatArray] = []
+    seeds_i: list[int] = []
+    next_id = 0
+    counts = dict.fromkeys(
+        ("scans", "tracks_started", "tracks_confirmed", "deleted_coast", "deleted_covariance",
+         "deleted_unconfirmed", "jpda_exact_clusters", "jpda_kbest_clusters"), 0.0)
+    log_t: list[FloatArray] = []
+    log_id: list[IntArray] = []
+    log_x: list[FloatArray] = []
+    log_std: list[FloatArray] = []
+    log_conf: list[np.ndarray] = []
+    rep_f: list[IntArray] = []
+    rep_id: list[IntArray] = []
+    rep_xy: list[FloatArray] = []
+    r_next = 0
+    now = t[0] if N else 0.0
+
+    def report_until(limit: float, inclusive: bool) -> None:
+        nonlocal r_next
+        while r_next < rep.size and (rep[r_next] < limit or (inclusive and rep[r_next] <= limit)):
+            g = rep[r_next]
+            if g >= now:
+                c = tr.confirmed
+                F = mot.F(g - now)
+                xg = tr.x[c] @ F.T
+                rep_f.append(np.full(int(c.sum()), r_next, dtype=np.int64))
+                rep_id.append(tr.id[c])
+                rep_xy.append(xg[:, pos])
+            r_next += 1
+
+    starts = np.flatnonzero(np.r_[True, np.diff(t) > 0]) if N else np.zeros(0, dtype=np.int64)
+    ends = np.r_[starts[1:], N]
+    for s0, s1 in zip(starts, ends, strict=True):
+        tk = t[s0]
+        report_until(tk, inclusive=False)
+        counts["scans"] += 1
+        Zk = Z[s0:s1]
+        M = Zk.shape[0]
+        # 1. predict
+        dt = tk - now
+        if dt > 0 and tr.id.size:
+            tr.x, tr.P = kf_predict(tr.x, tr.P, mot.F(dt), mot.Q(dt))
+        now = tk
+        T = tr.id.size
+        gated_any = np.zeros(M, dtype=bool)
+        used = np.zeros(M, dtype=bool)
+        if T:
+            # 2. gate
+            zp = tr.x[:, pos]
+            Pzz = tr.P[:, pos][:, :, pos]
+            S = Pzz + R
+            cand = kdtree_pregate(zp, S, Zk, gamma) if T * M > cfg.pregate_pairs else None
+            g = gate(zp, S, Zk, gamma, candidates=cand)
+            gated_any = g.valid.any(axis=0)
+            PHt = tr.P[:, :, pos]
+            K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)
+            hit = np.zeros(T, dtype=bool)
+            # 3. associate
+            if cfg.associator == "gnn":
+                cost = np.where(g.valid, -(g.log_likelihood() + log_det_gain), np.inf)
+                a = assign2d(cost, -log_miss).track_to_meas
+                hit = a >= 0
+                if hit.any():
+                    ti = np.flatnonzero(hit)
+                    y = g.innovation[ti, a[ti]]
+                    tr.x[ti] = tr.x[ti] + np.einsum("tij,tj->ti", K[ti], y)
+                    Pn = tr.P[ti] - K[ti] @ S[ti] @ np.swapaxes(K[ti], -1, -2)
+                    tr.P[ti] = 0.5 * (Pn + np.swapaxes(Pn, -1, -2))
+                    det_track[s0 + a[ti]] = tr.id[ti]
+                    used[a[ti]] = True
+            else:
+                W = association_weights(g.log_likelihood(), g.valid, cfg.pd,
+                                        cfg.gate_probability, cfg.clutter_density)
+                jm = jpda_marginals(W, jcfg)
+                beta = jm.beta
+                active = np.flatnonzero(beta[:, 0] < 1.0)
+                if active.size:
+                    xa, Pa = pda_update(tr.x[active], tr.P[active], g.innovation[active],
+                                        S[active], K[active], beta[active])
+                    tr.x[active], tr.P[active] = xa, Pa
+                hit = beta[:, 0] < 0.5
+                counts["jpda_exact_clusters"] += len(np.unique(jm.cluster[jm.method == METHOD_EXACT]))
+                counts["jpda_kbest_clusters"] += len(np.unique(jm.cluster[jm.method == METHOD_KBEST]))
+                if M:
+                    best_t = np.argmax(beta[:, 1:], axis=0)
+                    best_b = beta[best_t, 1 + np.arange(M)]
+                    ok = best_b >= 0.5
+                    det_track[s0 + np.flatnonzero(ok)] = tr.id[best_t[ok]]
+                    used[ok] = True
+            # 4. manage
+            tr.hits[hit] += 1
+            tr.last[hit] = tk
+            upd = np.flatnonzero(hit)
+            for j in np.flatnonzero(used):
+                k = np.flatnonzero(tr.id == det_track[s0 + j])[0]
+                det_status[s0 + j] = DET_CONFIRMED if tr.confirmed[k] else DET_TENTATIVE
+            new_conf = ~tr.confirmed & (tr.hits >= cfg.confirm_hits) & (tk - tr.born <= cfg.confirm_window_s)
+            counts["tracks_confirmed"] += int(new_conf.sum())
+            tr.confirmed |= new_conf
+            if upd.size:
+                _log(tr, upd, tk, pos, log_t, log_id, log_x, log_std, log_conf)
+            det_status[s0 + np.flatnonzero(gated_any & ~used)] = DET_UNUSED
+            std = np.sqrt(0.5 * np.trace(tr.P[:, pos][:, :, pos], axis1=-2, axis2=-1))
+            coast = tk - tr.last > cfg.max_coast_s
+            cov = std > cfg.max_position_std_m
+            unconf = ~tr.confirmed & (tk - tr.born > cfg.confirm_window_s)
+            counts["deleted_coast"] += int((coast & tr.confirmed).sum())
+            counts["deleted_covariance"] += int((cov & ~coast & tr.confirmed).sum())
+            counts["deleted_unconfirmed"] += int((~tr.confirmed & (coast | cov | unconf)).sum())
+            tr.keep(~(coast | cov | unconf))
+        # 5. initiate from detections inside no gate
+        if seeds_t:
+            keep = [i for i, ts in enumerate(seeds_t) if tk - ts <= cfg.init_max_dt_s]
+            seeds_t = [seeds_t[i] for i in keep]
+            seeds_z = [seeds_z[i] for i in keep]
+            seeds_i = [seeds_i[i] for i in keep]
+        for j in np.flatnonzero(~gated_any):
+            best = -1
+            best_d = np.inf
+            for s, (ts, zs) in enumerate(zip(seeds_t, seeds_z, strict=True)):
+                dts = tk - ts
+                if dts <= 0:
+                    continue
+                d = float(np.hypot(*(Zk[j] - zs)))
+                if d <= cfg.init_max_speed_mps * dts + 3 * cfg.sigma_m and d < best_d:
+                    best, best_d = s, d
+            if best < 0:
+                seeds_t.append(tk)
+                seeds_z.append(Zk[j])
+                seeds_i.append(s0 + j)
+                continue
+            dts = tk - seeds_t[best]
+            v = (Zk[j] - seeds_z[best]) / dts
+            x0 = np.zeros(n)
+            x0[pos] = Zk[j]
+            x0[mot.velocity_index[0]], x0[mot.velocity_index[1]] = v
+            P0 = np.zeros((n, n))
+            var_v = min(2 * cfg.sigma_m**2 / dts**2, cfg.init_max_speed_mps**2)
+            cov_pv = min(cfg.sigma_m**2 / dts, np.sqrt(var_v) * cfg.sigma_m)
+            for a in range(2):
+                ip, iv = pos[a], mot.velocity_index[a]
+                P0[ip, ip] = cfg.sigma_m**2
+                P0[iv, iv] = var_v
+                P0[ip, iv] = P0[iv, ip] = cov_pv
+            if mot.order == 2:
+                for ia in range(2, n, 3):
+                    P0[ia, ia] = 1.0
+            tr.add(x0, P0, next_id, tk)
+            det_track[s0 + j] = next_id
+            det_track[seeds_i[best]] = next_id
+            det_status[s0 + j] = DET_STARTED
+            det_status[seeds_i[best]] = DET_STARTED
+            next_id += 1
+            counts["tracks_started"] += 1
+            del seeds_t[best], seeds_z[best], seeds_i[best]
+    report_until(now, inclusive=True)
+    counts["seconds"] = time.perf_counter() - clock
+
+    def cat(parts: list, shape: tuple[int, ...], dtype: type) -> np.ndarray:
+        return np.concatenate(parts) if parts else np.zeros(shape, dtype=dtype)
+
+    return TrackerResult(
+        det_track, det_status,
+        cat(log_t, (0,), float), cat(log_id, (0,), np.int64), cat(log_x, (0, n), float),
+        cat(log_std, (0,), float), cat(log_conf, (0,), bool),
+        cat(rep_f, (0,), np.int64), cat(rep_id, (0,), np.int64), cat(rep_xy, (0, 2), float),
+        counts,
+    )
+
+
+def _log(tr: _Tracks, idx: IntArray, tk: float, pos: list[int], log_t: list, log_id: list,
+         log_x: list, log_std: list, log_conf: list) -> None:
+    log_t.append(np.full(idx.size, tk))
+    log_id.append(tr.id[idx])
+    log_x.append(tr.x[idx])
+    Pp = tr.P[idx][:, pos][:, :, pos]
+    log_std.append(np.sqrt(0.5 * np.trace(Pp, axis1=-2, axis2=-1)))
+    log_conf.append(tr.confirmed[idx])
