@@ -9,6 +9,7 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -18,6 +19,7 @@ from navtrack.tracking.models import wrap_angle
 __all__ = ["Gate", "chi2_threshold", "gate", "kdtree_pregate"]
 
 
+@lru_cache(maxsize=64)
 def chi2_threshold(gate_probability: float, dim_z: int) -> float:
     """Gate size ``gamma`` with ``P(chi²_m <= gamma) = gate_probability``."""
     from scipy.stats import chi2

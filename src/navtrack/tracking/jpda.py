@@ -46,6 +46,7 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -54,9 +55,11 @@ from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
 __all__ = [
     "JpdaConfig",
     "JpdaMarginals",
+    "JpdaStep",
     "association_weights",
     "clusters",
     "jpda_marginals",
+    "jpda_step",
     "pda_update",
 ]
 
@@ -158,21 +161,32 @@ def association_weights(
 def clusters(W: ArrayLike) -> tuple[int, IntArray]:
     """Connected components of tracks linked by shared gated measurements.
 
-    Returns ``(n_clusters, label (T,))``.
+    Returns ``(n_clusters, label (T,))``, labels numbered in order of first track.
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     G = np.asarray(W)[:, 1:] > 0
     T, M = G.shape
     if T == 0:
         return 0, np.zeros(0, dtype=np.int64)
-    t, j = np.nonzero(G)
-    n = T + M
-    A = coo_matrix((np.ones(t.size), (t, T + j)), shape=(n, n))
-    _, lab = connected_components(A, directed=False)
-    lab_t = lab[:T]
-    _, inv = np.unique(lab_t, return_inverse=True)
+    if T > 256:
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+
+        t, j = np.nonzero(G)
+        n = T + M
+        A = coo_matrix((np.ones(t.size), (t, T + j)), shape=(n, n))
+        _, lab = connected_components(A, directed=False)
+        _, inv = np.unique(lab[:T], return_index=False, return_inverse=True)
+        return int(inv.max()) + 1, inv.astype(np.int64)
+    Gi = G.astype(np.int64)
+    R = (Gi @ Gi.T > 0) | np.eye(T, dtype=bool)
+    while True:  # transitive closure by repeated squaring
+        Ri = R.astype(np.int64)
+        R2 = (Ri @ Ri) > 0
+        if np.array_equal(R2, R):
+            break
+        R = R2
+    first = np.argmax(R, axis=1)
+    _, inv = np.unique(first, return_inverse=True)
     return int(inv.max()) + 1, inv.astype(np.int64)
 
 
@@ -193,8 +207,14 @@ def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMargin
     method = np.zeros(T, dtype=np.int8)
     err = np.zeros(T)
     n_events = np.full(T, -1, dtype=np.int64)
-    n_cl, lab = clusters(W)
     gated = W[:, 1:] > 0
+    if T == 0 or gated.sum(axis=0).max(initial=0) <= 1:
+        # no measurement shared: every track is its own cluster (PDA)
+        s = W.sum(axis=1, keepdims=True)
+        if np.any(s <= 0):
+            raise ValueError(f"track {int(np.flatnonzero(s <= 0)[0])}: all weights are zero")
+        return JpdaMarginals(W / s, np.arange(T, dtype=np.int64), method, err, n_events)
+    n_cl, lab = clusters(W)
     for c in range(n_cl):
         tr = np.flatnonzero(lab == c)
         if tr.size == 1:
@@ -403,3 +423,66 @@ def pda_update(
     Pc = P - K @ S @ Kt
     Pn = b[:, 0, None, None] * P + (1 - b[:, 0, None, None]) * Pc + K @ spread @ Kt
     return xn, 0.5 * (Pn + np.swapaxes(Pn, -1, -2))
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class JpdaStep:
+    """One JPDA filter step for a fixed set of tracks (arrays read-only).
+
+    Attributes
+    ----------
+    x : (T, n) posterior states; P : (T, n, n) posterior covariances
+    x_pred : (T, n), P_pred : (T, n, n) predictions
+    marginals : JpdaMarginals of the scan
+    """
+
+    x: FloatArray
+    P: FloatArray
+    x_pred: FloatArray
+    P_pred: FloatArray
+    marginals: JpdaMarginals
+
+    def __post_init__(self) -> None:
+        for name in ("x", "P", "x_pred", "P_pred"):
+            getattr(self, name).setflags(write=False)
+
+
+def jpda_step(
+    x: ArrayLike,
+    P: ArrayLike,
+    z: ArrayLike,
+    F: ArrayLike,
+    Q: ArrayLike,
+    model: Any,
+    config: JpdaConfig,
+) -> JpdaStep:
+    """Predict, gate, associate (JPDA) and update ``T`` tracks with one scan.
+
+    Linear prediction ``(F, Q)``; the measurement model may be nonlinear (EKF linearisation at
+    the prediction, angle innovations wrapped). This is the JPDAF of Bar-Shalom & Fortmann
+    (1988, ch. 9) with the weights of :func:`association_weights`.
+
+    Parameters
+    ----------
+    x : (T, n), P : (T, n, n), z : (M, m) measurements of the scan
+    F, Q : (n, n) motion model over the step
+    model : measurement model (``h``, ``jacobian``, ``R``, ``angle_mask``)
+    config : JpdaConfig
+    """
+    from navtrack.tracking.gating import chi2_threshold, gate
+    from navtrack.tracking.kalman import kf_predict
+
+    xp, Pp = kf_predict(x, P, F, Q)
+    Hj = model.jacobian(xp)
+    Ht = np.swapaxes(Hj, -1, -2)
+    PHt = Pp @ Ht
+    S = Hj @ PHt + model.R
+    S = 0.5 * (S + np.swapaxes(S, -1, -2))
+    gamma = chi2_threshold(config.gate_probability, model.dim_z)
+    g = gate(model.h(xp), S, z, gamma, angle_mask=model.angle_mask)
+    W = association_weights(g.log_likelihood(), g.valid, config.pd, config.gate_probability,
+                            config.clutter_density)
+    jm = jpda_marginals(W, config)
+    K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)
+    xn, Pn = pda_update(xp, Pp, g.innovation, S, K, jm.beta)
+    return JpdaStep(xn, Pn, xp, Pp, jm)
