@@ -209,7 +209,7 @@ class CoordinatedTurn:
     Notes
     -----
     Transition of Bar-Shalom et al. eq. 11.7.1-4 (turn rate positive counter-clockwise); the
-    ``omega -> 0`` limit is taken by series expansion below ``|omega·dt| < 1e-6``.
+    ``omega -> 0`` limit is taken by series expansion below ``|omega·dt| < 1e-3``.
     """
 
     q: float
@@ -222,14 +222,15 @@ class CoordinatedTurn:
     @staticmethod
     def _terms(w: FloatArray, dt: float) -> tuple[FloatArray, ...]:
         wt = w * dt
-        small = np.abs(wt) < 1e-6
+        small = np.abs(wt) < 1e-3  # series to 5th order: error < (wT)^6 relative
         ws = np.where(small, 1.0, w)
         s, c = np.sin(wt), np.cos(wt)
-        a = np.where(small, dt - w * w * dt**3 / 6, s / ws)  # sin(wT)/w
-        b = np.where(small, w * dt * dt / 2, (1 - c) / ws)  # (1-cos(wT))/w
+        w2 = w * w
+        a = np.where(small, dt - w2 * dt**3 / 6 + w2 * w2 * dt**5 / 120, s / ws)  # sin(wT)/w
+        b = np.where(small, w * dt**2 / 2 - w2 * w * dt**4 / 24, (1 - c) / ws)  # (1-cos)/w
         # derivatives of a, b with respect to w
-        da = np.where(small, -w * dt**3 / 3, (dt * c) / ws - s / ws**2)
-        db = np.where(small, dt * dt / 2, (dt * s) / ws - (1 - c) / ws**2)
+        da = np.where(small, -w * dt**3 / 3 + w2 * w * dt**5 / 30, (dt * c) / ws - s / ws**2)
+        db = np.where(small, dt**2 / 2 - w2 * dt**4 / 8, (dt * s) / ws - (1 - c) / ws**2)
         return s, c, a, b, da, db
 
     def f(self, x: FloatArray, dt: float) -> FloatArray:
