@@ -276,7 +276,7 @@ def run_tracker(
             r_next += 1
 
     starts = np.flatnonzero(np.r_[True, np.diff(t) > 0]) if N else np.zeros(0, dtype=np.int64)
-    ends = np.r_[starts[1:], N]
+    ends = np.r_[starts[1:], N].astype(np.int64) if N else np.zeros(0, dtype=np.int64)
     for s0, s1 in zip(starts, ends, strict=True):
         tk = t[s0]
         report_until(tk, inclusive=False)

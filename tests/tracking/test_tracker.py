@@ -1,0 +1,84 @@
+"""Simulation and tracker tests: seeded simulators, tracker on known truth, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from navtrack.tracking.metrics import clear_mot
+from navtrack.tracking.models import constant_velocity, linear_position
+from navtrack.tracking.simulate import simulate_detections, simulate_truth
+from navtrack.tracking.tracker import TrackerConfig, run_tracker
+
+
+def test_simulators_are_seeded_and_statistically_right() -> None:
+    mot = constant_velocity(2, 0.1)
+    meas = linear_position(4, (0, 2), 5.0)
+    x0 = np.array([[0.0, 10, 0, 0], [1000, 0, 1000, -5]])
+    t1 = simulate_truth(mot, x0, 400, 1.0, np.random.default_rng(1))
+    t2 = simulate_truth(mot, x0, 400, 1.0, np.random.default_rng(1))
+    np.testing.assert_array_equal(t1, t2)
+    assert t1.shape == (400, 2, 4)
+    np.testing.assert_allclose(simulate_truth(mot, x0, 3, 2.0)[2, 0], [40, 10, 0, 0])
+    det = simulate_detections(t1, meas, 0.8, 3.0, [-5000, -5000], [5000, 5000],
+                              np.random.default_rng(2))
+    n_clutter = ((det.origin == -1) & det.valid).sum(axis=1)
+    n_target = ((det.origin >= 0) & det.valid).sum()
+    # Poisson(3) mean over 400 scans: sd of the mean 0.087; Pd 0.8 over 800: sd 0.014
+    assert abs(n_clutter.mean() - 3.0) < 0.4
+    assert abs(n_target / 800 - 0.8) < 0.06
+    k, j = np.nonzero((det.origin >= 0) & det.valid)
+    err = det.z[k, j] - t1[k, det.origin[k, j]][:, [0, 2]]
+    assert abs(err.std() - 5.0) < 0.5
+
+
+def _scenario(seed: int, n_targets: int = 5, steps: int = 60):
+    rng = np.random.default_rng(seed)
+    mot = constant_velocity(2, 0.05, "continuous")
+    meas = linear_position(4, (0, 2), 10.0)
+    x0 = np.zeros((n_targets, 4))
+    x0[:, 0] = np.arange(n_targets) * 2000.0
+    x0[:, 1] = rng.uniform(-8, 8, n_targets)
+    x0[:, 3] = rng.uniform(-8, 8, n_targets)
+    truth = simulate_truth(mot, x0, steps, 10.0, rng)
+    det = simulate_detections(truth, meas, 0.9, 0.5, [-3000, -3000], [12000, 3000], rng)
+    t, z, origin = [], [], []
+    for k in range(steps):
+        v = det.valid[k]
+        t += [10.0 * k] * int(v.sum())
+        z.append(det.z[k][v])
+        origin.append(det.origin[k][v])
+    return truth, np.array(t), np.concatenate(z), np.concatenate(origin)
+
+
+@pytest.mark.parametrize("associator", ["gnn", "jpda"])
+def test_tracker_follows_separated_targets(associator: str) -> None:
+    truth, t, z, origin = _scenario(4)
+    cfg = TrackerConfig(sigma_m=10.0, associator=associator, pd=0.9, clutter_density=0.5 / 4.5e7,
+                        max_coast_s=60.0, confirm_window_s=60.0, init_max_dt_s=30.0)
+    frames = np.arange(0, 600.0, 10.0)
+    res = run_tracker(t, z, cfg, report_times=frames)
+    K, n = truth.shape[:2]
+    tf = np.repeat(np.arange(K), n)
+    tid = np.tile(np.arange(n), K)
+    tp = truth[:, :, [0, 2]].reshape(-1, 2)
+    m = clear_mot(tf, tid, tp, res.report_frame, res.report_id, res.report_xy, 100.0)
+    assert m.id_switches == 0
+    assert m.mota > 0.85  # misses only while tracks are being confirmed
+    assert m.purity == 1.0
+    assert res.counts["tracks_confirmed"] == n
+    # detections that updated confirmed tracks came from one target per track
+    sel = (res.det_status == 0) & (origin >= 0)
+    for tid_ in np.unique(res.det_track[sel]):
+        assert np.unique(origin[sel & (res.det_track == tid_)]).size == 1
+
+
+def test_tracker_rejects_bad_input() -> None:
+    with pytest.raises(ValueError, match="non-decreasing: detection 2"):
+        run_tracker([0.0, 1.0, 0.5], np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="finite: detection 1"):
+        run_tracker([0.0, 1.0], np.array([[0.0, 0.0], [np.nan, 1.0]]))
+    with pytest.raises(ValueError, match="associator"):
+        TrackerConfig(associator="mht")  # type: ignore[arg-type]
+    empty = run_tracker(np.zeros(0), np.zeros((0, 2)))
+    assert empty.det_track.size == 0 and empty.counts["scans"] == 0
