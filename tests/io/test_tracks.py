@@ -31,7 +31,8 @@ def test_ais_reader_counts_and_bad_row(tracking_data: Path) -> None:
     with path.open() as fh:
         rows = list(csv.DictReader(fh))
     bad = [i + 2 for i, r in enumerate(rows) if float(r["Longitude_degrees"]) > 0]
-    assert len(rows) == 18623 and len(bad) == 1  # README of the data set
+    assert len(rows) == 18623
+    assert len(bad) == 1
     det = read_ais_csv(path)
     assert len(det) == 18622
     assert det.bad_lines.tolist() == bad
@@ -43,13 +44,14 @@ def test_ais_reader_counts_and_bad_row(tracking_data: Path) -> None:
                                                   17.0), abs=1e-6)
     assert rows[0]["MMSI"] == det.id[0]
     assert det.speed_mps[0] == pytest.approx(5.9 * 1852 / 3600)
-    en, ref = to_local_enu(det)
+    en, _ref = to_local_enu(det)
     assert np.abs(en).max() < 60e3  # the Solent is smaller than 60 km around its median
 
 
 def test_opensky_reader(tracking_data: Path) -> None:
     det = read_opensky_csv(tracking_data / "OpenSky_Plane_States.csv")
-    assert len(det) == 6052 and len(det.bad_lines) == 0
+    assert len(det) == 6052
+    assert len(det.bad_lines) == 0
     assert np.unique(det.id).size == 84
     assert np.unique(det.t_gps_s).size == 121
     # 1626098400 = 2021-07-12 14:00:00 UTC; GPST - UTC = 18 s

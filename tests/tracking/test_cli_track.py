@@ -24,7 +24,8 @@ def test_track_command_generic_csv(tmp_path: Path, capsys: pytest.CaptureFixture
     out = tmp_path / "tracks.csv"
     assert main(["track", str(f), "--format", "csv", "--out", str(out), "--report-s", "10"]) == 0
     text = capsys.readouterr().out
-    assert "bad rows skipped" in text and "MOTA" in text
+    assert "bad rows skipped" in text
+    assert "MOTA" in text
     mota = float(next(ln for ln in text.splitlines() if ln.startswith("MOTA")).split()[-1])
     assert mota > 0.8
     assert "id switches" in text

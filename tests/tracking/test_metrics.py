@@ -31,7 +31,8 @@ def test_gospa_hand_values() -> None:
     assert (r.n_missed, r.n_false) == (1, 0)
     r = gospa([[0.0], [10.0]], [[1.0]], c=4, p=2)
     assert r.distance == pytest.approx(3.0)  # sqrt(1 + 16/2)
-    assert r.localisation == pytest.approx(1.0) and r.missed == pytest.approx(8.0)
+    assert r.localisation == pytest.approx(1.0)
+    assert r.missed == pytest.approx(8.0)
     # a pair farther than c is cheaper as one missed + one false
     r = gospa([[0.0]], [[5.0]], c=4, p=1)
     assert (r.n_missed, r.n_false, r.localisation) == (1, 1, 0.0)
@@ -44,11 +45,13 @@ def test_gospa_switching_term() -> None:
     est_sw = [np.array([[0.0], [10.0]]), np.array([[10.0], [0.0]]), np.array([[10.0], [0.0]])]
     # estimates listed in another order together with their ids: no switch
     r = gospa_sequence(truth, tid, est_sw, eid, c=4, p=1, switching_cost=3.0)
-    assert r.n_switches == 0 and r.distance == 0.0
+    assert r.n_switches == 0
+    assert r.distance == 0.0
     # same positions, ids kept: estimate 1 moves from "a" to "b" and 2 from "b" to "a"
     eid2 = [np.array([1, 2]), np.array([1, 2]), np.array([1, 2])]
     r = gospa_sequence(truth, tid, est_sw, eid2, c=4, p=1, switching_cost=3.0)
-    assert r.n_switches == 2 and r.switching == pytest.approx(6.0)
+    assert r.n_switches == 2
+    assert r.switching == pytest.approx(6.0)
     assert r.distance == pytest.approx(6.0)
 
 
@@ -78,7 +81,9 @@ def test_clear_mot_keeps_correspondence_and_purity() -> None:
     hid = [7, 7, 7, 7]
     hp = [[0, 0], [0, 0], [0, 0], [50, 0]]
     m = clear_mot(tf, tid, tp, hf, hid, hp, threshold=5.0)
-    assert m.n_matches == 4 and m.n_misses == 1 and m.id_switches == 0
+    assert m.n_matches == 4
+    assert m.n_misses == 1
+    assert m.id_switches == 0
     assert m.purity == pytest.approx(0.75)
 
 

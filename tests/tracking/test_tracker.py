@@ -81,4 +81,5 @@ def test_tracker_rejects_bad_input() -> None:
     with pytest.raises(ValueError, match="associator"):
         TrackerConfig(associator="mht")  # type: ignore[arg-type]
     empty = run_tracker(np.zeros(0), np.zeros((0, 2)))
-    assert empty.det_track.size == 0 and empty.counts["scans"] == 0
+    assert empty.det_track.size == 0
+    assert empty.counts["scans"] == 0

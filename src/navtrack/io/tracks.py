@@ -134,11 +134,11 @@ def _iso_utc_to_gps(values: Any) -> FloatArray:
     dt = pd.DatetimeIndex(
         pd.to_datetime(np.asarray(values), errors="coerce", utc=True, format="mixed")
     )
-    ok = ~dt.isna()
+    ok = np.asarray(~np.asarray(dt.isna()), dtype=bool)
     out = np.full(len(dt), np.nan)
     if ok.any():
         naive = dt[ok].tz_convert(None).to_numpy(dtype="datetime64[ns]")
-        out[np.asarray(ok)] = utc_to_gps(gps_seconds(naive))
+        out[ok] = utc_to_gps(gps_seconds(naive))
     return out
 
 

@@ -62,7 +62,7 @@ def _check(cost: ArrayLike, miss_cost: ArrayLike) -> tuple[FloatArray, FloatArra
     if C.ndim != 2:
         raise ValueError(f"cost must be a (T, M) matrix, got shape {C.shape}")
     miss = np.broadcast_to(np.asarray(miss_cost, dtype=float), (C.shape[0],))
-    if np.any(np.isnan(C)) or np.any(C == -np.inf):
+    if np.any(np.isnan(C)) or np.any(-np.inf == C):
         raise ValueError("cost must not contain NaN or -inf (use +inf for forbidden pairs)")
     if not np.all(np.isfinite(miss)):
         raise ValueError("miss_cost must be finite")

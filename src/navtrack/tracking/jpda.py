@@ -1,7 +1,8 @@
 """Joint probabilistic data association: marginals, clusters, PDA update.
 
 Association weights
-    For track ``t`` and measurement ``j`` inside its gate, ``W[t, j+1] = P_D · N(z_j; ẑ_t, S_t) / λ``;
+    For track ``t`` and measurement ``j`` inside its gate,
+    ``W[t, j+1] = P_D · N(z_j; ẑ_t, S_t) / λ``;
     the missed-detection weight is ``W[t, 0] = 1 - P_D · P_G``; pairs outside the gate have
     weight 0. A joint event (each track takes one measurement or none, each measurement used at
     most once) has probability proportional to the product of its tracks' weights
@@ -252,8 +253,8 @@ def _order_and_sets(G: BoolArray) -> tuple[IntArray, IntArray, list[list[int]]]:
     Gs = G[:, shared]
     conflict = (Gs.astype(np.int64) @ Gs.T.astype(np.int64)) > 0
     order = np.asarray(reverse_cuthill_mckee(csr_matrix(conflict), symmetric_mode=True))
-    per = [list(np.flatnonzero(Gs[t])) for t in order]
-    return order.astype(np.int64), shared, per
+    per = [[int(j) for j in np.flatnonzero(Gs[t])] for t in order]
+    return order.astype(np.int64), shared.astype(np.int64), per
 
 
 def _max_active(G: BoolArray) -> int:
@@ -288,7 +289,7 @@ def _exact(W: FloatArray) -> FloatArray:
 
     # forward pass; F_exp[i] is the message before track i, over axes U_i
     axes: list[int] = []
-    F = np.ones(())
+    F: FloatArray = np.ones(())
     F_exp: list[FloatArray] = []
     U: list[list[int]] = []
     n_new: list[int] = []
@@ -318,7 +319,7 @@ def _exact(W: FloatArray) -> FloatArray:
 
     # backward pass with marginals
     out = np.zeros((T, W.shape[1]))
-    B = np.ones(())
+    B: FloatArray = np.ones(())
     for i in range(T - 1, -1, -1):
         Ui = U[i]
         dead = [a for a, j in enumerate(Ui) if last[j] == i]

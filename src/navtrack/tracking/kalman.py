@@ -172,7 +172,7 @@ def _gain_update(
     joseph: bool,
 ) -> KalmanUpdate:
     # K = P Hᵀ S⁻¹ by a solve on S (symmetric): K = (S⁻¹ (P Hᵀ)ᵀ)ᵀ
-    K = _T(np.linalg.solve(S, _T(PHt)))
+    K = _T(np.asarray(np.linalg.solve(S, _T(PHt)), dtype=float))
     xn = x + np.einsum("...ij,...j->...i", K, y)
     if joseph:
         if H is None:

@@ -42,16 +42,21 @@ def rmse(estimate: ArrayLike, truth: ArrayLike, axis: int = 0) -> FloatArray:
     return np.asarray(np.sqrt(np.mean(np.sum(e * e, axis=-1), axis=axis)))
 
 
+def _points(A: ArrayLike) -> FloatArray:
+    a = np.asarray(A, dtype=float)
+    return a.reshape(a.shape[0], -1) if a.size else np.zeros((0, 1))
+
+
 def _dist(X: FloatArray, Y: FloatArray) -> FloatArray:
     return np.asarray(np.sqrt(((X[:, None, :] - Y[None, :, :]) ** 2).sum(-1)))
 
 
 def ospa(X: ArrayLike, Y: ArrayLike, c: float, p: float = 2.0) -> float:
-    """OSPA distance of order ``p`` with cut-off ``c`` between point sets ``X (n, d)``, ``Y (m, d)``."""
+    """OSPA distance (order ``p``, cut-off ``c``) between point sets ``X (n, d)``, ``Y (m, d)``."""
     from scipy.optimize import linear_sum_assignment
 
-    X = np.asarray(X, dtype=float).reshape(len(X), -1) if len(X) else np.zeros((0, 1))
-    Y = np.asarray(Y, dtype=float).reshape(len(Y), -1) if len(Y) else np.zeros((0, 1))
+    X = _points(X)
+    Y = _points(Y)
     n, m = len(X), len(Y)
     if n == 0 and m == 0:
         return 0.0
@@ -92,7 +97,7 @@ def _gospa_assign(
         return a, 0.0
     D = _dist(X, Y) ** p
     # assigning costs d^p, leaving both unassigned costs c^p/2 + c^p/2 = c^p
-    cost = np.where(D < c**p, D, c**p)
+    cost = np.where(c**p > D, D, c**p)
     r, col = linear_sum_assignment(cost)
     ok = D[r, col] < c**p
     a[r[ok]] = col[ok]
@@ -101,8 +106,8 @@ def _gospa_assign(
 
 def gospa(X: ArrayLike, Y: ArrayLike, c: float, p: float = 2.0) -> GospaResult:
     """GOSPA with ``alpha = 2`` between truth ``X (n, d)`` and estimates ``Y (m, d)``."""
-    X = np.asarray(X, dtype=float).reshape(len(X), -1) if len(X) else np.zeros((0, 1))
-    Y = np.asarray(Y, dtype=float).reshape(len(Y), -1) if len(Y) else np.zeros((0, 1))
+    X = _points(X)
+    Y = _points(Y)
     a, loc = _gospa_assign(X, Y, c, p)
     n_ass = int((a >= 0).sum())
     nm, nf = len(X) - n_ass, len(Y) - n_ass
@@ -136,8 +141,8 @@ def gospa_sequence(
     sw = 0.0
     prev: dict[object, object] = {}
     for X, tid, Y, yid in zip(truth, truth_ids, estimates, estimate_ids, strict=True):
-        X = np.asarray(X, dtype=float).reshape(len(X), -1) if len(X) else np.zeros((0, 1))
-        Y = np.asarray(Y, dtype=float).reshape(len(Y), -1) if len(Y) else np.zeros((0, 1))
+        X = _points(X)
+        Y = _points(Y)
         a, lk = _gospa_assign(X, Y, c, p)
         loc += lk
         n_ass = int((a >= 0).sum())

@@ -151,7 +151,7 @@ class LinearMotion:
 
     def _block_Q(self, dt: float) -> FloatArray:
         if self.noise == "discrete":
-            g = np.array([0.5 * dt * dt, dt]) if self.order == 1 else np.array([0.5 * dt * dt, dt, 1.0])
+            g = np.array([0.5 * dt * dt, dt] if self.order == 1 else [0.5 * dt * dt, dt, 1.0])
             return self.q * np.outer(g, g)
         if self.order == 1:
             return self.q * np.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]])
@@ -165,11 +165,11 @@ class LinearMotion:
 
     def F(self, dt: float) -> FloatArray:
         """State transition matrix, shape ``(dim_x, dim_x)``."""
-        return np.kron(np.eye(self.ndim), self._block_F(float(dt)))
+        return np.asarray(np.kron(np.eye(self.ndim), self._block_F(float(dt))), dtype=float)
 
     def Q(self, dt: float) -> FloatArray:
         """Process-noise covariance over ``dt`` seconds, shape ``(dim_x, dim_x)``."""
-        return np.kron(np.eye(self.ndim), self._block_Q(float(dt)))
+        return np.asarray(np.kron(np.eye(self.ndim), self._block_Q(float(dt))), dtype=float)
 
     def f(self, x: FloatArray, dt: float) -> FloatArray:
         """Propagate states ``x (..., dim_x)`` by ``dt`` seconds."""
@@ -178,7 +178,7 @@ class LinearMotion:
     def jacobian(self, x: FloatArray, dt: float) -> FloatArray:
         """``F`` broadcast to ``x.shape[:-1] + (dim_x, dim_x)``."""
         x = np.asarray(x)
-        return np.broadcast_to(self.F(dt), x.shape[:-1] + (self.dim_x, self.dim_x))
+        return np.broadcast_to(self.F(dt), (*x.shape[:-1], self.dim_x, self.dim_x))
 
 
 def constant_velocity(
@@ -246,7 +246,7 @@ class CoordinatedTurn:
         x = np.asarray(x, dtype=float)
         _, vx, _, vy, w = np.moveaxis(x, -1, 0)
         s, c, a, b, da, db = self._terms(w, dt)
-        J = np.zeros(x.shape[:-1] + (5, 5))
+        J = np.zeros((*x.shape[:-1], 5, 5))
         J[..., 0, 0] = 1.0
         J[..., 0, 1] = a
         J[..., 0, 3] = -b
@@ -291,7 +291,7 @@ class LinearMeasurement:
 
     H: FloatArray
     R: FloatArray
-    angle_mask: BoolArray = field(default=None)  # type: ignore[assignment]
+    angle_mask: BoolArray = field(default=None)  # type: ignore[arg-type]
 
     def __post_init__(self) -> None:
         H = _readonly(self.H)
@@ -406,7 +406,7 @@ class RangeBearing:
         r2 = dx * dx + dy * dy
         r = np.sqrt(r2)
         i, j = self.position_index
-        J = np.zeros(x.shape[:-1] + (2, self.dim_x))
+        J = np.zeros((*x.shape[:-1], 2, self.dim_x))
         J[..., 0, i] = dx / r
         J[..., 0, j] = dy / r
         if self.from_north:  # theta = atan2(dx, dy)
@@ -438,7 +438,7 @@ class FunctionMeasurement:
     R: FloatArray
     dim_x: int
     jac: Callable[[FloatArray], FloatArray] | None = None
-    angle_mask: BoolArray = field(default=None)  # type: ignore[assignment]
+    angle_mask: BoolArray = field(default=None)  # type: ignore[arg-type]
 
     def __post_init__(self) -> None:
         R = _readonly(np.atleast_2d(self.R))

@@ -44,7 +44,7 @@ def simulate_truth(
         raise ValueError(f"x0 must be (..., n_targets, {model.dim_x}), got {x.shape}")
     if n_steps < 1:
         raise ValueError(f"n_steps must be >= 1, got {n_steps}")
-    out = np.empty(x.shape[:-2] + (n_steps,) + x.shape[-2:])
+    out = np.empty((*x.shape[:-2], n_steps, *x.shape[-2:]))
     out[..., 0, :, :] = x
     Lq = None
     if rng is not None:
@@ -122,7 +122,7 @@ def simulate_detections(
     zt = model.h(np.where(present[..., None], X, 0.0)) + rng.standard_normal((K, n, m)) @ Lr.T
     zt = np.where(model.angle_mask, wrap_angle(zt), zt)
     det = present & (rng.random((K, n)) < pd)
-    n_cl = rng.poisson(clutter_rate, K)
+    n_cl = np.asarray(rng.poisson(clutter_rate, K), dtype=np.int64)
     N = int((det.sum(axis=1) + n_cl).max()) if K else 0
     z = np.full((K, N, m), np.nan)
     valid = np.zeros((K, N), dtype=bool)

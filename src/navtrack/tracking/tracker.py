@@ -296,9 +296,9 @@ def run_tracker(
             zp = tr.x[:, pos]
             Pzz = tr.P[:, pos][:, :, pos]
             S = Pzz + R
-            cand = kdtree_pregate(zp, S, Zk, gamma) if T * M > cfg.pregate_pairs else None
+            cand = kdtree_pregate(zp, S, Zk, gamma) if cfg.pregate_pairs < T * M else None
             g = gate(zp, S, Zk, gamma, candidates=cand)
-            gated_any = g.valid.any(axis=0)
+            gated_any = np.asarray(g.valid.any(axis=0), dtype=bool)
             PHt = tr.P[:, :, pos]
             K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)
             hit = np.zeros(T, dtype=bool)
@@ -326,8 +326,9 @@ def run_tracker(
                                         S[active], K[active], beta[active])
                     tr.x[active], tr.P[active] = xa, Pa
                 hit = beta[:, 0] < 0.5
-                counts["jpda_exact_clusters"] += len(np.unique(jm.cluster[jm.method == METHOD_EXACT]))
-                counts["jpda_kbest_clusters"] += len(np.unique(jm.cluster[jm.method == METHOD_KBEST]))
+                for key, code in (("jpda_exact_clusters", METHOD_EXACT),
+                                  ("jpda_kbest_clusters", METHOD_KBEST)):
+                    counts[key] += len(np.unique(jm.cluster[jm.method == code]))
                 if M:
                     best_t = np.argmax(beta[:, 1:], axis=0)
                     best_b = beta[best_t, 1 + np.arange(M)]
@@ -341,7 +342,8 @@ def run_tracker(
             for j in np.flatnonzero(used):
                 k = np.flatnonzero(tr.id == det_track[s0 + j])[0]
                 det_status[s0 + j] = DET_CONFIRMED if tr.confirmed[k] else DET_TENTATIVE
-            new_conf = ~tr.confirmed & (tr.hits >= cfg.confirm_hits) & (tk - tr.born <= cfg.confirm_window_s)
+            new_conf = (~tr.confirmed & (tr.hits >= cfg.confirm_hits)
+                        & (tk - tr.born <= cfg.confirm_window_s))
             counts["tracks_confirmed"] += int(new_conf.sum())
             tr.confirmed |= new_conf
             if upd.size:
@@ -374,7 +376,7 @@ def run_tracker(
             if best < 0:
                 seeds_t.append(tk)
                 seeds_z.append(Zk[j])
-                seeds_i.append(s0 + j)
+                seeds_i.append(int(s0 + j))
                 continue
             dts = tk - seeds_t[best]
             v = (Zk[j] - seeds_z[best]) / dts
@@ -384,8 +386,8 @@ def run_tracker(
             P0 = np.zeros((n, n))
             var_v = min(2 * cfg.sigma_m**2 / dts**2, cfg.init_max_speed_mps**2)
             cov_pv = min(cfg.sigma_m**2 / dts, np.sqrt(var_v) * cfg.sigma_m)
-            for a in range(2):
-                ip, iv = pos[a], mot.velocity_index[a]
+            for ax in range(2):
+                ip, iv = pos[ax], mot.velocity_index[ax]
                 P0[ip, ip] = cfg.sigma_m**2
                 P0[iv, iv] = var_v
                 P0[ip, iv] = P0[iv, ip] = cov_pv
