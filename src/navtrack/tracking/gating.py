@@ -87,7 +87,8 @@ def gate(
     T, m = zp.shape
     y = Z[None, :, :] - zp[:, None, :]
     if angle_mask is not None and np.any(angle_mask):
-        y = np.where(np.asarray(angle_mask, bool), wrap_angle(y), y)
+        am = np.flatnonzero(angle_mask)
+        y[..., am] = wrap_angle(y[..., am])
     try:
         L = np.linalg.cholesky(S)
     except np.linalg.LinAlgError:

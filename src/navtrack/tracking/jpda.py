@@ -227,9 +227,9 @@ def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMargin
             continue
         cols = np.flatnonzero(gated[tr].any(axis=0))
         Wc = W[np.ix_(tr, np.concatenate([[0], cols + 1]))]
-        bits = _max_active(Wc[:, 1:] > 0)
-        if bits <= cfg.max_exact_bits:
-            bc = _exact(Wc)
+        plan = _order_and_sets(Wc[:, 1:] > 0)
+        if _max_active(plan[2]) <= cfg.max_exact_bits:
+            bc = _exact(Wc, plan)
             method[tr] = METHOD_EXACT
         else:
             bc, bound, nev = _kbest(Wc, cfg.k_best)
@@ -251,14 +251,16 @@ def _order_and_sets(G: BoolArray) -> tuple[IntArray, IntArray, list[list[int]]]:
 
     shared = np.flatnonzero(G.sum(axis=0) >= 2)
     Gs = G[:, shared]
-    conflict = (Gs.astype(np.int64) @ Gs.T.astype(np.int64)) > 0
-    order = np.asarray(reverse_cuthill_mckee(csr_matrix(conflict), symmetric_mode=True))
+    if G.shape[0] <= 4:  # any order is as good for so few tracks
+        order = np.arange(G.shape[0])
+    else:
+        conflict = (Gs.astype(np.int64) @ Gs.T.astype(np.int64)) > 0
+        order = np.asarray(reverse_cuthill_mckee(csr_matrix(conflict), symmetric_mode=True))
     per = [[int(j) for j in np.flatnonzero(Gs[t])] for t in order]
     return order.astype(np.int64), shared.astype(np.int64), per
 
 
-def _max_active(G: BoolArray) -> int:
-    _, _, per = _order_and_sets(G)
+def _max_active(per: list[list[int]]) -> int:
     last: dict[int, int] = {}
     for i, js in enumerate(per):
         for j in js:
@@ -272,11 +274,11 @@ def _max_active(G: BoolArray) -> int:
     return best
 
 
-def _exact(W: FloatArray) -> FloatArray:
-    """Exact marginals of one cluster (see module notes)."""
+def _exact(W: FloatArray, plan: tuple[IntArray, IntArray, list[list[int]]]) -> FloatArray:
+    """Exact marginals of one cluster (see module notes); ``plan`` from ``_order_and_sets``."""
     T = W.shape[0]
     G = W[:, 1:] > 0
-    order, shared, per = _order_and_sets(G)
+    order, shared, per = plan
     is_shared = np.zeros(G.shape[1], dtype=bool)
     is_shared[shared] = True
     # weight of the options that do not touch shared measurements (miss + private measurements)
