@@ -202,3 +202,19 @@ def test_bad_inputs() -> None:
         jpda_marginals(np.array([[1.0, -1.0]]))
     with pytest.raises(ValueError, match="pd"):
         JpdaConfig(pd=0.0)
+
+
+def test_batched_enumeration_equals_per_problem_marginals() -> None:
+    from math import comb, perm
+
+    from navtrack.tracking.jpda import joint_events, jpda_marginals_batch
+
+    for T, M in [(1, 0), (2, 3), (3, 4), (2, 6)]:
+        E = joint_events(T, M)
+        assert len(E) == sum(comb(T, k) * perm(M, k) for k in range(min(T, M) + 1))
+        assert len({tuple(e) for e in E}) == len(E)
+    rng = np.random.default_rng(12)
+    Wb = np.stack([_random_weights(int(s), 3, 4, 0.7) for s in rng.integers(0, 2**31, 50)])
+    beta = jpda_marginals_batch(Wb.reshape(5, 10, 3, 5)).reshape(50, 3, 5)
+    for b in range(50):
+        np.testing.assert_allclose(beta[b], _brute_marginals(Wb[b]), atol=1e-12)

@@ -70,3 +70,32 @@ def test_jpda_tracks_both_crossing_targets() -> None:
         x, P = st.x, st.P
     err = np.hypot(x[:, 0] - truth[n, :, 0], x[:, 2] - truth[n, :, 2])
     assert np.all(err < 2000.0), err
+
+
+@pytest.mark.parametrize("max_events", [20_000, 1])
+def test_batched_runs_equal_single_runs(max_events: int) -> None:
+    from navtrack.tracking.jpda import jpda_step_batch
+
+    runs = [_scenario(40, s) for s in (11, 12, 13)]
+    sc, mot, rb, _, lam = runs[0]
+    cfg = JpdaConfig(pd=0.97, clutter_density=lam, gate_probability=0.99)
+    P0 = np.diag([500.0**2, 50.0**2, 500.0**2, 50.0**2])
+    xs = [sc["x0"]] * 3
+    Ps = [np.tile(P0, (2, 1, 1))] * 3
+    xb, Pb = np.stack(xs), np.stack(Ps)
+    for k in range(40):
+        scans = [r[3][k] for r in runs]
+        M = max(len(s) for s in scans)
+        zb = np.full((3, M, 2), np.nan)
+        vb = np.zeros((3, M), dtype=bool)
+        for r, s in enumerate(scans):
+            zb[r, : len(s)] = s
+            vb[r, : len(s)] = True
+        b = jpda_step_batch(xb, Pb, zb, vb, mot.F(1.0), mot.Q(1.0), rb, cfg, max_events)
+        xb, Pb = b.x, b.P
+        for r in range(3):
+            st = jpda_step(xs[r], Ps[r], scans[r], mot.F(1.0), mot.Q(1.0), rb, cfg)
+            xs[r], Ps[r] = st.x, st.P
+            np.testing.assert_allclose(xb[r], st.x, rtol=1e-10, atol=1e-6)
+            np.testing.assert_allclose(b.marginals.beta.reshape(3, 2, M + 1)[r, :, : len(scans[r]) + 1],
+                                       st.marginals.beta, atol=1e-10)

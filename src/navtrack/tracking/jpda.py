@@ -59,8 +59,11 @@ __all__ = [
     "JpdaStep",
     "association_weights",
     "clusters",
+    "joint_events",
     "jpda_marginals",
+    "jpda_marginals_batch",
     "jpda_step",
+    "jpda_step_batch",
     "pda_update",
 ]
 
@@ -143,18 +146,17 @@ def association_weights(
     log_likelihood: ArrayLike, valid: ArrayLike, pd: float, gate_probability: float,
     clutter_density: float,
 ) -> FloatArray:
-    """Weights ``W (T, M+1)`` as in the module notes, each row scaled to max 1.
+    """Weights ``W (..., T, M+1)`` as in the module notes, each row scaled to max 1.
 
     Row scaling multiplies every joint event by the same factor, so marginals are unchanged
     and products of many tracks stay in floating-point range.
     """
     ll = np.asarray(log_likelihood, dtype=float)
     ok = np.asarray(valid, dtype=bool)
-    T = ll.shape[0]
-    logw = np.full((T, ll.shape[1] + 1), -np.inf)
-    logw[:, 0] = np.log1p(-pd * gate_probability) if pd * gate_probability < 1 else -np.inf
-    logw[:, 1:] = np.where(ok, ll + np.log(pd) - np.log(clutter_density), -np.inf)
-    mx = logw.max(axis=1, keepdims=True)
+    logw = np.full(ll.shape[:-1] + (ll.shape[-1] + 1,), -np.inf)
+    logw[..., 0] = np.log1p(-pd * gate_probability) if pd * gate_probability < 1 else -np.inf
+    logw[..., 1:] = np.where(ok, ll + np.log(pd) - np.log(clutter_density), -np.inf)
+    mx = logw.max(axis=-1, keepdims=True)
     mx = np.where(np.isfinite(mx), mx, 0.0)
     return np.asarray(np.exp(logw - mx))
 
@@ -403,14 +405,14 @@ def pda_update(
 
     Parameters
     ----------
-    x : (T, n), P : (T, n, n)
-    innovation : (T, M, m) ``z_j - ẑ_t`` (angles wrapped)
-    S : (T, m, m), K : (T, n, m)
-    beta : (T, M+1) marginals, column 0 = missed
+    x : (..., T, n), P : (..., T, n, n)
+    innovation : (..., T, M, m) ``z_j - ẑ_t`` (angles wrapped)
+    S : (..., T, m, m), K : (..., T, n, m)
+    beta : (..., T, M+1) marginals, column 0 = missed
 
     Returns
     -------
-    x : (T, n), P : (T, n, n)
+    x : (..., T, n), P : (..., T, n, n)
     """
     x = np.asarray(x, dtype=float)
     P = np.asarray(P, dtype=float)
@@ -418,13 +420,14 @@ def pda_update(
     S = np.asarray(S, dtype=float)
     K = np.asarray(K, dtype=float)
     b = np.asarray(beta, dtype=float)
-    bj = b[:, 1:]
-    nu = np.einsum("tj,tji->ti", bj, y)
-    spread = np.einsum("tj,tji,tjk->tik", bj, y, y) - nu[:, :, None] * nu[:, None, :]
+    bj = b[..., 1:]
+    nu = np.einsum("...j,...ji->...i", bj, y)
+    spread = np.einsum("...j,...ji,...jk->...ik", bj, y, y) - nu[..., :, None] * nu[..., None, :]
     Kt = np.swapaxes(K, -1, -2)
-    xn = x + np.einsum("tij,tj->ti", K, nu)
+    xn = x + np.einsum("...ij,...j->...i", K, nu)
     Pc = P - K @ S @ Kt
-    Pn = b[:, 0, None, None] * P + (1 - b[:, 0, None, None]) * Pc + K @ spread @ Kt
+    b0 = b[..., 0, None, None]
+    Pn = b0 * P + (1 - b0) * Pc + K @ spread @ Kt
     return xn, 0.5 * (Pn + np.swapaxes(Pn, -1, -2))
 
 
@@ -489,3 +492,134 @@ def jpda_step(
     K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)
     xn, Pn = pda_update(xp, Pp, g.innovation, S, K, jm.beta)
     return JpdaStep(xn, Pn, xp, Pp, jm)
+
+
+def joint_events(n_tracks: int, n_meas: int) -> IntArray:
+    """Every joint event of ``n_tracks`` tracks and ``n_meas`` measurements.
+
+    Returns ``E (n_events, n_tracks)`` with ``E[e, t]`` in ``0..n_meas`` (0 = no measurement,
+    ``j`` = measurement ``j - 1``), no measurement used twice. The count is
+    ``sum_k C(T, k) · M! / (M - k)!``.
+    """
+    events = np.zeros((1, 0), dtype=np.int64)
+    for _ in range(n_tracks):
+        parts = [np.column_stack([events, np.zeros(len(events), dtype=np.int64)])]
+        for j in range(1, n_meas + 1):
+            free = ~(events == j).any(axis=1)
+            e = events[free]
+            parts.append(np.column_stack([e, np.full(len(e), j, dtype=np.int64)]))
+        events = np.concatenate(parts)
+    return events
+
+
+def jpda_marginals_batch(W: ArrayLike, events: IntArray | None = None) -> FloatArray:
+    """Exact marginals for a batch of small problems by dense enumeration.
+
+    For many small, equally shaped problems (particles of a joint multitarget particle filter,
+    Monte Carlo runs with few targets) one vectorised pass over the joint events beats a call
+    per problem. Pairs outside the gate simply have weight 0.
+
+    Parameters
+    ----------
+    W : (..., T, M+1) weights, column 0 = missed (see :func:`association_weights`)
+    events : from :func:`joint_events` (computed when None; pass it to reuse)
+
+    Returns
+    -------
+    beta : (..., T, M+1)
+    """
+    W = np.asarray(W, dtype=float)
+    if W.ndim < 2 or np.any(~np.isfinite(W)) or np.any(W < 0):
+        raise ValueError("W must be a finite, non-negative (..., T, M+1) array")
+    T, M1 = W.shape[-2:]
+    E = joint_events(T, M1 - 1) if events is None else np.asarray(events)
+    tix = np.arange(T)
+    p = np.prod(W[..., tix, E], axis=-1)  # (..., n_events)
+    Z = p.sum(axis=-1, keepdims=True)
+    if np.any(Z <= 0):
+        raise ValueError("a problem of the batch has zero total weight")
+    onehot = np.zeros((len(E), T, M1))
+    onehot[np.arange(len(E))[:, None], tix, E] = 1.0
+    return np.asarray(np.einsum("...e,etj->...tj", p / Z, onehot))
+
+
+def jpda_step_batch(
+    x: ArrayLike,
+    P: ArrayLike,
+    z: ArrayLike,
+    valid: ArrayLike,
+    F: ArrayLike,
+    Q: ArrayLike,
+    model: Any,
+    config: JpdaConfig,
+    max_events: int = 20_000,
+) -> JpdaStep:
+    """:func:`jpda_step` for ``R`` independent problems at once (Monte Carlo runs, particles).
+
+    Prediction, gating and the PDA update are vectorised over the batch; the marginals come from
+    one dense enumeration (:func:`jpda_marginals_batch`) when the number of joint events is at
+    most ``max_events``, else from :func:`jpda_marginals` per problem.
+
+    Parameters
+    ----------
+    x : (R, T, n), P : (R, T, n, n)
+    z : (R, M, m) measurements padded to a common ``M``; ``valid`` (R, M) marks the real ones
+    F, Q : (n, n); model : measurement model; config : JpdaConfig
+
+    Returns
+    -------
+    JpdaStep with batched arrays; ``marginals.beta`` is (R, T, M+1) and the other marginal
+    fields describe the flattened ``R·T`` tracks.
+    """
+    from navtrack.tracking.gating import chi2_threshold
+    from navtrack.tracking.kalman import kf_predict
+
+    Z = np.asarray(z, dtype=float)
+    ok = np.asarray(valid, dtype=bool)
+    xp, Pp = kf_predict(x, P, F, Q)
+    R_, T = xp.shape[:2]
+    M = Z.shape[1]
+    Hj = model.jacobian(xp)
+    PHt = Pp @ np.swapaxes(Hj, -1, -2)
+    S = Hj @ PHt + model.R
+    S = 0.5 * (S + np.swapaxes(S, -1, -2))
+    zhat = model.h(xp)
+    Zf = np.where(ok[..., None], Z, 0.0)
+    if not np.all(np.isfinite(Zf)):
+        raise ValueError("z: valid measurements must be finite")
+    y = Zf[:, None, :, :] - zhat[:, :, None, :]  # (R, T, M, m)
+    am = np.flatnonzero(model.angle_mask)
+    if am.size:
+        y[..., am] = (y[..., am] + np.pi) % (2 * np.pi) - np.pi
+    L = np.linalg.cholesky(S)
+    w = np.linalg.solve(L[:, :, None], y[..., None])[..., 0]
+    d2 = np.einsum("...i,...i->...", w, w)
+    m = S.shape[-1]
+    log_norm = -0.5 * (m * np.log(2 * np.pi)
+                       + 2 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1))
+    gamma = chi2_threshold(config.gate_probability, m)
+    inside = (d2 <= gamma) & ok[:, None, :]
+    W = association_weights(log_norm[..., None] - 0.5 * d2, inside, config.pd,
+                            config.gate_probability, config.clutter_density)
+    from math import comb, perm
+
+    n_ev = sum(comb(T, k) * perm(M, k) for k in range(min(T, M) + 1))
+    if n_ev <= max_events:
+        beta = jpda_marginals_batch(W, joint_events(T, M))
+        flat = JpdaMarginals(
+            beta.reshape(R_ * T, M + 1), np.repeat(np.arange(R_), T).astype(np.int64),
+            np.ones(R_ * T, dtype=np.int8), np.zeros(R_ * T), np.full(R_ * T, n_ev),
+        )
+    else:
+        parts = [jpda_marginals(W[r], config) for r in range(R_)]
+        beta = np.stack([p.beta for p in parts])
+        flat = JpdaMarginals(
+            beta.reshape(R_ * T, M + 1),
+            np.concatenate([p.cluster + r * T for r, p in enumerate(parts)]),
+            np.concatenate([p.method for p in parts]),
+            np.concatenate([p.error_bound for p in parts]),
+            np.concatenate([p.n_events for p in parts]),
+        )
+    K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)
+    xn, Pn = pda_update(xp, Pp, y, S, K, beta)
+    return JpdaStep(xn, Pn, xp, Pp, flat)
