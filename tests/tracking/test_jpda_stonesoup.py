@@ -97,5 +97,5 @@ def test_batched_runs_equal_single_runs(max_events: int) -> None:
             st = jpda_step(xs[r], Ps[r], scans[r], mot.F(1.0), mot.Q(1.0), rb, cfg)
             xs[r], Ps[r] = st.x, st.P
             np.testing.assert_allclose(xb[r], st.x, rtol=1e-10, atol=1e-6)
-            np.testing.assert_allclose(b.marginals.beta.reshape(3, 2, M + 1)[r, :, : len(scans[r]) + 1],
-                                       st.marginals.beta, atol=1e-10)
+            beta_r = b.marginals.beta.reshape(3, 2, M + 1)[r, :, : len(scans[r]) + 1]
+            np.testing.assert_allclose(beta_r, st.marginals.beta, atol=1e-10)

@@ -153,7 +153,7 @@ def association_weights(
     """
     ll = np.asarray(log_likelihood, dtype=float)
     ok = np.asarray(valid, dtype=bool)
-    logw = np.full(ll.shape[:-1] + (ll.shape[-1] + 1,), -np.inf)
+    logw = np.full((*ll.shape[:-1], ll.shape[-1] + 1), -np.inf)
     logw[..., 0] = np.log1p(-pd * gate_probability) if pd * gate_probability < 1 else -np.inf
     logw[..., 1:] = np.where(ok, ll + np.log(pd) - np.log(clutter_density), -np.inf)
     mx = logw.max(axis=-1, keepdims=True)
