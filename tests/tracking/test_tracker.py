@@ -83,3 +83,38 @@ def test_tracker_rejects_bad_input() -> None:
     empty = run_tracker(np.zeros(0), np.zeros((0, 2)))
     assert empty.det_track.size == 0
     assert empty.counts["scans"] == 0
+
+
+def test_imm_with_identical_models_equals_single_model() -> None:
+    # Blom & Bar-Shalom 1988: with identical models the mixing is exact and the IMM reduces to
+    # the single-model filter, whatever the switching probability
+    truth, t, z, _ = _scenario(5, n_targets=3, steps=30)
+    base = TrackerConfig(sigma_m=10.0, pd=0.9, clutter_density=0.5 / 4.5e7, max_coast_s=60.0,
+                         confirm_window_s=60.0, init_max_dt_s=30.0)
+    for assoc in ("gnn", "jpda"):
+        from dataclasses import replace
+
+        a = run_tracker(t, z, replace(base, associator=assoc))
+        b = run_tracker(t, z, replace(base, associator=assoc, imm_q=(base.motion.q,) * 3,
+                                      imm_switch_probability=0.2))
+        np.testing.assert_array_equal(a.det_track, b.det_track)
+        np.testing.assert_allclose(a.track_x, b.track_x, rtol=1e-9, atol=1e-6)
+
+
+def test_imm_kernels() -> None:
+    from navtrack.tracking.imm import imm_combine, imm_mix, markov_matrix
+
+    rng = np.random.default_rng(1)
+    x = rng.normal(size=(4, 2, 3))
+    A = rng.normal(size=(4, 2, 3, 3))
+    P = A @ np.swapaxes(A, -1, -2) + np.eye(3)
+    mu = rng.dirichlet([1, 1], size=4)
+    Pi = markov_matrix(2, 0.1)
+    np.testing.assert_allclose(Pi.sum(axis=1), 1.0)
+    x0, P0, c = imm_mix(x, P, mu, Pi)
+    np.testing.assert_allclose(c.sum(axis=1), 1.0)
+    # the mixture is preserved: combining the mixed estimates with c gives the combined estimate
+    xc, Pc = imm_combine(x, P, mu)
+    xc0, Pc0 = imm_combine(x0, P0, c)
+    np.testing.assert_allclose(xc0, xc, atol=1e-12)
+    np.testing.assert_allclose(Pc0, Pc, atol=1e-12)

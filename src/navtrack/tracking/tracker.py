@@ -60,6 +60,10 @@ DET_STATUS_NAMES = ("confirmed", "tentative", "started", "seed", "unused")
 class TrackerConfig:
     """Tracker parameters (SI units).
 
+    ``imm_q``: process-noise levels of an IMM of motion models sharing ``motion``'s form (e.g.
+    ``(1e-5, 1e-2)`` for moored and manoeuvring ships); ``None`` = a single model with
+    ``motion.q``. ``imm_switch_probability``: per-scan probability of leaving a model.
+
     The defaults suit ships (AIS); :meth:`for_aircraft` gives ADS-B values.
     """
 
@@ -78,6 +82,8 @@ class TrackerConfig:
     max_exact_bits: int = 20
     k_best: int = 1000
     pregate_pairs: int = 4000
+    imm_q: tuple[float, ...] | None = None
+    imm_switch_probability: float = 0.05
 
     def __post_init__(self) -> None:
         if self.motion.ndim != 2:
@@ -91,6 +97,8 @@ class TrackerConfig:
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
         if not 0 < self.pd < 1:
             raise ValueError(f"pd must be in (0, 1), got {self.pd}")
+        if self.imm_q is not None and (len(self.imm_q) < 2 or min(self.imm_q) < 0):
+            raise ValueError(f"imm_q must hold >= 2 values >= 0, got {self.imm_q}")
         if self.confirm_hits < 2:
             raise ValueError(f"confirm_hits must be >= 2, got {self.confirm_hits}")
 
@@ -154,11 +162,12 @@ class TrackerResult:
 
 
 class _Tracks:
-    """Mutable per-run track store (private to the driver)."""
+    """Mutable per-run track store (private to the driver); model axis ``r`` for the IMM."""
 
-    def __init__(self, n: int) -> None:
-        self.x = np.zeros((0, n))
-        self.P = np.zeros((0, n, n))
+    def __init__(self, n: int, r: int) -> None:
+        self.x = np.zeros((0, r, n))
+        self.P = np.zeros((0, r, n, n))
+        self.mu = np.zeros((0, r))
         self.id = np.zeros(0, dtype=np.int64)
         self.confirmed = np.zeros(0, dtype=bool)
         self.hits = np.zeros(0, dtype=np.int64)
@@ -166,17 +175,26 @@ class _Tracks:
         self.last = np.zeros(0)
 
     def keep(self, k: np.ndarray) -> None:
-        for name in ("x", "P", "id", "confirmed", "hits", "born", "last"):
+        for name in ("x", "P", "mu", "id", "confirmed", "hits", "born", "last"):
             setattr(self, name, getattr(self, name)[k])
 
     def add(self, x: FloatArray, P: FloatArray, tid: int, t: float) -> None:
-        self.x = np.concatenate([self.x, x[None]])
-        self.P = np.concatenate([self.P, P[None]])
+        r = self.mu.shape[1]
+        self.x = np.concatenate([self.x, np.broadcast_to(x, (1, r, x.size))])
+        self.P = np.concatenate([self.P, np.broadcast_to(P, (1, r, *P.shape))])
+        self.mu = np.concatenate([self.mu, np.full((1, r), 1.0 / r)])
         self.id = np.append(self.id, tid)
         self.confirmed = np.append(self.confirmed, False)
         self.hits = np.append(self.hits, 2)
         self.born = np.append(self.born, t)
         self.last = np.append(self.last, t)
+
+    def combined(self) -> tuple[FloatArray, FloatArray]:
+        from navtrack.tracking.imm import imm_combine
+
+        if self.mu.shape[1] == 1:
+            return self.x[:, 0], self.P[:, 0]
+        return imm_combine(self.x, self.P, self.mu)
 
 
 def run_tracker(
@@ -202,6 +220,7 @@ def run_tracker(
     """
     from navtrack.tracking.assignment import assign2d
     from navtrack.tracking.gating import chi2_threshold, gate, kdtree_pregate
+    from navtrack.tracking.imm import imm_mix, imm_model_probabilities, markov_matrix
     from navtrack.tracking.jpda import (
         METHOD_EXACT,
         METHOD_KBEST,
@@ -231,8 +250,10 @@ def run_tracker(
     mot = cfg.motion
     n = mot.dim_x
     pos = list(mot.position_index)
-    H = np.zeros((2, n))
-    H[0, pos[0]] = H[1, pos[1]] = 1.0
+    qs = (mot.q,) if cfg.imm_q is None else tuple(cfg.imm_q)
+    models = [LinearMotion(mot.ndim, mot.order, q, mot.noise) for q in qs]
+    r = len(models)
+    Pi = markov_matrix(r, cfg.imm_switch_probability)
     R = np.eye(2) * cfg.sigma_m**2
     gamma = chi2_threshold(cfg.gate_probability, 2)
     jcfg = JpdaConfig(cfg.pd, cfg.clutter_density, cfg.gate_probability, cfg.max_exact_bits,
@@ -243,7 +264,7 @@ def run_tracker(
     N = t.size
     det_track = np.full(N, -1, dtype=np.int64)
     det_status = np.full(N, DET_SEED, dtype=np.int8)
-    tr = _Tracks(n)
+    tr = _Tracks(n, r)
     seeds_t: list[float] = []
     seeds_z: list[FloatArray] = []
     seeds_i: list[int] = []
@@ -268,8 +289,8 @@ def run_tracker(
             g = rep[r_next]
             if g >= now:
                 c = tr.confirmed
-                F = mot.F(g - now)
-                xg = tr.x[c] @ F.T
+                xc, _ = tr.combined()
+                xg = xc[c] @ mot.F(g - now).T
                 rep_f.append(np.full(int(c.sum()), r_next, dtype=np.int64))
                 rep_id.append(tr.id[c])
                 rep_xy.append(xg[:, pos])
@@ -283,48 +304,79 @@ def run_tracker(
         counts["scans"] += 1
         Zk = Z[s0:s1]
         M = Zk.shape[0]
-        # 1. predict
+        # 1. predict (IMM: mix, then predict every model)
         dt = tk - now
-        if dt > 0 and tr.id.size:
-            tr.x, tr.P = kf_predict(tr.x, tr.P, mot.F(dt), mot.Q(dt))
-        now = tk
         T = tr.id.size
+        c_pred = tr.mu
+        if dt > 0 and T:
+            if r > 1:
+                x0, P0, c_pred = imm_mix(tr.x, tr.P, tr.mu, Pi)
+            else:
+                x0, P0 = tr.x, tr.P
+            Fm = mot.F(dt)
+            Qm = np.stack([m.Q(dt) for m in models])
+            tr.x, tr.P = kf_predict(x0, P0, Fm, Qm)
+            tr.mu = c_pred
+        now = tk
         gated_any = np.zeros(M, dtype=bool)
         used = np.zeros(M, dtype=bool)
         if T:
-            # 2. gate
-            zp = tr.x[:, pos]
-            Pzz = tr.P[:, pos][:, :, pos]
+            # 2. gate every model; a pair is valid if inside some model's gate
+            zp = tr.x[..., pos].reshape(T * r, 2)
+            Pzz = tr.P[..., pos, :][..., pos].reshape(T * r, 2, 2)
             S = Pzz + R
-            cand = kdtree_pregate(zp, S, Zk, gamma) if cfg.pregate_pairs < T * M else None
+            cand = kdtree_pregate(zp, S, Zk, gamma) if cfg.pregate_pairs < T * r * M else None
             g = gate(zp, S, Zk, gamma, candidates=cand)
-            gated_any = np.asarray(g.valid.any(axis=0), dtype=bool)
-            PHt = tr.P[:, :, pos]
+            valid = g.valid.reshape(T, r, M).any(axis=1)
+            ll_rm = g.log_likelihood().reshape(T, r, M)
+            ll_rm = np.where(np.isfinite(ll_rm), ll_rm, -1e300)
+            # mixture likelihood over models with the predicted model probabilities
+            logc = np.log(np.where(c_pred > 0, c_pred, 1e-300))[:, :, None]
+            a = logc + ll_rm
+            amax = a.max(axis=1, keepdims=True)
+            ll_mix = (amax + np.log(np.exp(a - amax).sum(axis=1, keepdims=True)))[:, 0]
+            gated_any = np.asarray(valid.any(axis=0), dtype=bool)
+            PHt = tr.P[..., :, pos].reshape(T * r, n, 2)
             K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)
+            S4 = S.reshape(T, r, 2, 2)
+            K4 = K.reshape(T, r, n, 2)
+            y4 = g.innovation.reshape(T, r, M, 2)
             hit = np.zeros(T, dtype=bool)
             # 3. associate
             if cfg.associator == "gnn":
-                cost = np.where(g.valid, -(g.log_likelihood() + log_det_gain), np.inf)
-                a = assign2d(cost, -log_miss).track_to_meas
-                hit = a >= 0
+                cost = np.where(valid, -(ll_mix + log_det_gain), np.inf)
+                a_t = assign2d(cost, -log_miss).track_to_meas
+                hit = a_t >= 0
                 if hit.any():
                     ti = np.flatnonzero(hit)
-                    y = g.innovation[ti, a[ti]]
-                    tr.x[ti] = tr.x[ti] + np.einsum("tij,tj->ti", K[ti], y)
-                    Pn = tr.P[ti] - K[ti] @ S[ti] @ np.swapaxes(K[ti], -1, -2)
+                    y = y4[ti, :, a_t[ti]]  # (h, r, 2)
+                    Kt = K4[ti]
+                    tr.x[ti] = tr.x[ti] + np.einsum("hrij,hrj->hri", Kt, y)
+                    Pn = tr.P[ti] - Kt @ S4[ti] @ np.swapaxes(Kt, -1, -2)
                     tr.P[ti] = 0.5 * (Pn + np.swapaxes(Pn, -1, -2))
-                    det_track[s0 + a[ti]] = tr.id[ti]
-                    used[a[ti]] = True
+                    if r > 1:
+                        tr.mu[ti] = imm_model_probabilities(c_pred[ti], ll_rm[ti, :, a_t[ti]])
+                    det_track[s0 + a_t[ti]] = tr.id[ti]
+                    used[a_t[ti]] = True
             else:
-                W = association_weights(g.log_likelihood(), g.valid, cfg.pd,
-                                        cfg.gate_probability, cfg.clutter_density)
+                W = association_weights(ll_mix, valid, cfg.pd, cfg.gate_probability,
+                                        cfg.clutter_density)
                 jm = jpda_marginals(W, jcfg)
                 beta = jm.beta
                 active = np.flatnonzero(beta[:, 0] < 1.0)
                 if active.size:
-                    xa, Pa = pda_update(tr.x[active], tr.P[active], g.innovation[active],
-                                        S[active], K[active], beta[active])
+                    b_r = np.broadcast_to(beta[active, None, :], (active.size, r, M + 1))
+                    xa, Pa = pda_update(tr.x[active], tr.P[active], y4[active], S4[active],
+                                        K4[active], b_r)
                     tr.x[active], tr.P[active] = xa, Pa
+                    if r > 1:
+                        # model likelihood: missed term plus each measurement's likelihood
+                        # ratio against the mixture (Blom & Bloem 2000, IMM-JPDA)
+                        ratio = np.exp(ll_rm[active] - ll_mix[active][:, None, :])
+                        lam_r = beta[active, None, 0] + np.einsum(
+                            "tj,trj->tr", beta[active, 1:], ratio)
+                        tr.mu[active] = imm_model_probabilities(
+                            c_pred[active], np.log(np.maximum(lam_r, 1e-300)))
                 hit = beta[:, 0] < 0.5
                 for key, code in (("jpda_exact_clusters", METHOD_EXACT),
                                   ("jpda_kbest_clusters", METHOD_KBEST)):
@@ -346,10 +398,16 @@ def run_tracker(
                         & (tk - tr.born <= cfg.confirm_window_s))
             counts["tracks_confirmed"] += int(new_conf.sum())
             tr.confirmed |= new_conf
+            xc, Pc = tr.combined()
             if upd.size:
-                _log(tr, upd, tk, pos, log_t, log_id, log_x, log_std, log_conf)
+                log_t.append(np.full(upd.size, tk))
+                log_id.append(tr.id[upd])
+                log_x.append(xc[upd])
+                Pp = Pc[upd][:, pos][:, :, pos]
+                log_std.append(np.sqrt(0.5 * np.trace(Pp, axis1=-2, axis2=-1)))
+                log_conf.append(tr.confirmed[upd])
             det_status[s0 + np.flatnonzero(gated_any & ~used)] = DET_UNUSED
-            std = np.sqrt(0.5 * np.trace(tr.P[:, pos][:, :, pos], axis1=-2, axis2=-1))
+            std = np.sqrt(0.5 * np.trace(Pc[:, pos][:, :, pos], axis1=-2, axis2=-1))
             coast = tk - tr.last > cfg.max_coast_s
             cov = std > cfg.max_position_std_m
             unconf = ~tr.confirmed & (tk - tr.born > cfg.confirm_window_s)
@@ -366,13 +424,13 @@ def run_tracker(
         for j in np.flatnonzero(~gated_any):
             best = -1
             best_d = np.inf
-            for s, (ts, zs) in enumerate(zip(seeds_t, seeds_z, strict=True)):
+            for si, (ts, zs) in enumerate(zip(seeds_t, seeds_z, strict=True)):
                 dts = tk - ts
                 if dts <= 0:
                     continue
                 d = float(np.hypot(*(Zk[j] - zs)))
                 if d <= cfg.init_max_speed_mps * dts + 3 * cfg.sigma_m and d < best_d:
-                    best, best_d = s, d
+                    best, best_d = si, d
             if best < 0:
                 seeds_t.append(tk)
                 seeds_z.append(Zk[j])
@@ -415,13 +473,3 @@ def run_tracker(
         cat(rep_f, (0,), np.int64), cat(rep_id, (0,), np.int64), cat(rep_xy, (0, 2), float),
         counts,
     )
-
-
-def _log(tr: _Tracks, idx: IntArray, tk: float, pos: list[int], log_t: list, log_id: list,
-         log_x: list, log_std: list, log_conf: list) -> None:
-    log_t.append(np.full(idx.size, tk))
-    log_id.append(tr.id[idx])
-    log_x.append(tr.x[idx])
-    Pp = tr.P[idx][:, pos][:, :, pos]
-    log_std.append(np.sqrt(0.5 * np.trace(Pp, axis1=-2, axis2=-1)))
-    log_conf.append(tr.confirmed[idx])
