@@ -96,7 +96,7 @@ def test_imm_with_identical_models_equals_single_model() -> None:
 
         a = run_tracker(t, z, replace(base, associator=assoc))
         b = run_tracker(t, z, replace(base, associator=assoc, imm_q=(base.motion.q,) * 3,
-                                      imm_switch_probability=0.2))
+                                      imm_sojourn_s=20.0))
         np.testing.assert_array_equal(a.det_track, b.det_track)
         np.testing.assert_allclose(a.track_x, b.track_x, rtol=1e-9, atol=1e-6)
 

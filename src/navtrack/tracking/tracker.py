@@ -62,7 +62,9 @@ class TrackerConfig:
 
     ``imm_q``: process-noise levels of an IMM of motion models sharing ``motion``'s form (e.g.
     ``(1e-5, 1e-2)`` for moored and manoeuvring ships); ``None`` = a single model with
-    ``motion.q``. ``imm_switch_probability``: per-scan probability of leaving a model.
+    ``motion.q``. ``imm_sojourn_s``: mean time spent in a model; over a step ``dt`` the model is
+    left with probability ``1 - exp(-dt / imm_sojourn_s)`` (a continuous-time Markov chain, so
+    irregular report times switch models at the same rate as regular scans).
 
     The defaults suit ships (AIS); :meth:`for_aircraft` gives ADS-B values.
     """
@@ -83,7 +85,7 @@ class TrackerConfig:
     k_best: int = 1000
     pregate_pairs: int = 4000
     imm_q: tuple[float, ...] | None = None
-    imm_switch_probability: float = 0.05
+    imm_sojourn_s: float = 300.0
 
     def __post_init__(self) -> None:
         if self.motion.ndim != 2:
@@ -99,6 +101,8 @@ class TrackerConfig:
             raise ValueError(f"pd must be in (0, 1), got {self.pd}")
         if self.imm_q is not None and (len(self.imm_q) < 2 or min(self.imm_q) < 0):
             raise ValueError(f"imm_q must hold >= 2 values >= 0, got {self.imm_q}")
+        if not (np.isfinite(self.imm_sojourn_s) and self.imm_sojourn_s > 0):
+            raise ValueError(f"imm_sojourn_s must be finite and > 0, got {self.imm_sojourn_s}")
         if self.confirm_hits < 2:
             raise ValueError(f"confirm_hits must be >= 2, got {self.confirm_hits}")
 
@@ -253,7 +257,6 @@ def run_tracker(
     qs = (mot.q,) if cfg.imm_q is None else tuple(cfg.imm_q)
     models = [LinearMotion(mot.ndim, mot.order, q, mot.noise) for q in qs]
     r = len(models)
-    Pi = markov_matrix(r, cfg.imm_switch_probability)
     R = np.eye(2) * cfg.sigma_m**2
     gamma = chi2_threshold(cfg.gate_probability, 2)
     jcfg = JpdaConfig(cfg.pd, cfg.clutter_density, cfg.gate_probability, cfg.max_exact_bits,
@@ -310,6 +313,7 @@ def run_tracker(
         c_pred = tr.mu
         if dt > 0 and T:
             if r > 1:
+                Pi = markov_matrix(r, -np.expm1(-dt / cfg.imm_sojourn_s))
                 x0, P0, c_pred = imm_mix(tr.x, tr.P, tr.mu, Pi)
             else:
                 x0, P0 = tr.x, tr.P
