@@ -63,8 +63,12 @@ def run_track(args: argparse.Namespace) -> int:
     report_s, max_gap_s, match_m = DEFAULTS[args.fmt]
     report_s = args.report_s or report_s
     match_m = args.match_m or match_m
-    cfg = (TrackerConfig.for_aircraft(args.associator) if args.fmt == "opensky"
-           else TrackerConfig(associator=args.associator))
+    if args.fmt == "opensky":
+        cfg = TrackerConfig.for_aircraft(args.associator)
+    elif args.fmt == "ais":
+        cfg = TrackerConfig.for_ships(args.associator)
+    else:
+        cfg = TrackerConfig(associator=args.associator)
     t0 = det.t_gps_s[0]
     grid = t0 + np.arange(0.0, det.t_gps_s[-1] - t0 + 1e-9, report_s)
     res = run_tracker(det.t_gps_s, en, cfg, report_times=grid)
