@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -88,12 +90,10 @@ def test_tracker_rejects_bad_input() -> None:
 def test_imm_with_identical_models_equals_single_model() -> None:
     # Blom & Bar-Shalom 1988: with identical models the mixing is exact and the IMM reduces to
     # the single-model filter, whatever the switching probability
-    truth, t, z, _ = _scenario(5, n_targets=3, steps=30)
+    _, t, z, _ = _scenario(5, n_targets=3, steps=30)
     base = TrackerConfig(sigma_m=10.0, pd=0.9, clutter_density=0.5 / 4.5e7, max_coast_s=60.0,
                          confirm_window_s=60.0, init_max_dt_s=30.0)
     for assoc in ("gnn", "jpda"):
-        from dataclasses import replace
-
         a = run_tracker(t, z, replace(base, associator=assoc))
         b = run_tracker(t, z, replace(base, associator=assoc, imm_q=(base.motion.q,) * 3,
                                       imm_sojourn_s=20.0))
