@@ -163,13 +163,20 @@ class LinearMotion:
             ]
         )
 
+    def _block_diag(self, blk: FloatArray) -> FloatArray:
+        k = self.order + 1
+        out = np.zeros((self.dim_x, self.dim_x))
+        for a in range(self.ndim):
+            out[a * k : (a + 1) * k, a * k : (a + 1) * k] = blk
+        return out
+
     def F(self, dt: float) -> FloatArray:
         """State transition matrix, shape ``(dim_x, dim_x)``."""
-        return np.asarray(np.kron(np.eye(self.ndim), self._block_F(float(dt))), dtype=float)
+        return self._block_diag(self._block_F(float(dt)))
 
     def Q(self, dt: float) -> FloatArray:
         """Process-noise covariance over ``dt`` seconds, shape ``(dim_x, dim_x)``."""
-        return np.asarray(np.kron(np.eye(self.ndim), self._block_Q(float(dt))), dtype=float)
+        return self._block_diag(self._block_Q(float(dt)))
 
     def f(self, x: FloatArray, dt: float) -> FloatArray:
         """Propagate states ``x (..., dim_x)`` by ``dt`` seconds."""
