@@ -218,3 +218,12 @@ def test_batched_enumeration_equals_per_problem_marginals() -> None:
     beta = jpda_marginals_batch(Wb.reshape(5, 10, 3, 5)).reshape(50, 3, 5)
     for b in range(50):
         np.testing.assert_allclose(beta[b], _brute_marginals(Wb[b]), atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_tensor_elimination_path_equals_brute_force(seed: int) -> None:
+    # clusters of 4-6 tracks (beyond the dense-enumeration shortcut for <= 3 tracks)
+    W = _random_weights(seed, 4 + seed % 3, 7, 0.6 + 0.1 * (seed % 4))
+    jm = jpda_marginals(W)
+    assert (jm.method == 1).any()
+    np.testing.assert_allclose(jm.beta, _brute_marginals(W), rtol=0, atol=1e-12)

@@ -47,6 +47,7 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -229,6 +230,13 @@ def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMargin
             continue
         cols = np.flatnonzero(gated[tr].any(axis=0))
         Wc = W[np.ix_(tr, np.concatenate([[0], cols + 1]))]
+        if tr.size <= 3 and cols.size <= 8:
+            # tiny cluster: dense enumeration of its joint events is cheapest
+            bc = jpda_marginals_batch(Wc, joint_events(tr.size, cols.size))
+            method[tr] = METHOD_EXACT
+            beta[tr, 0] = bc[:, 0]
+            beta[np.ix_(tr, cols + 1)] = bc[:, 1:]
+            continue
         plan = _order_and_sets(Wc[:, 1:] > 0)
         if _max_active(plan[2]) <= cfg.max_exact_bits:
             bc = _exact(Wc, plan)
@@ -494,6 +502,7 @@ def jpda_step(
     return JpdaStep(xn, Pn, xp, Pp, jm)
 
 
+@lru_cache(maxsize=256)
 def joint_events(n_tracks: int, n_meas: int) -> IntArray:
     """Every joint event of ``n_tracks`` tracks and ``n_meas`` measurements.
 
@@ -509,6 +518,7 @@ def joint_events(n_tracks: int, n_meas: int) -> IntArray:
             e = events[free]
             parts.append(np.column_stack([e, np.full(len(e), j, dtype=np.int64)]))
         events = np.concatenate(parts)
+    events.setflags(write=False)
     return events
 
 
