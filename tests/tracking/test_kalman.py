@@ -192,3 +192,36 @@ def test_bad_covariance_rejected() -> None:
         LinearMeasurement(np.eye(2), np.array([[1.0, 0.5], [0.0, 1.0]]))
     with pytest.raises(ValueError, match="ndim"):
         constant_velocity(4, 1.0)
+
+
+def test_function_measurement_hook_foveal_sensor() -> None:
+    # paper 4 (Xi & Morrell 2005): z = arctan(c (X - d)) + v, R = 0.05, 1-D CV, P0 = diag(1, 0.1)
+    from navtrack.tracking.models import FunctionMeasurement
+
+    c, d = 2.0, 0.3
+
+    def h(x: np.ndarray) -> np.ndarray:
+        return np.arctan(c * (x[..., :1] - d))
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        J = np.zeros((*x.shape[:-1], 1, 2))
+        J[..., 0, 0] = c / (1 + (c * (x[..., 0] - d)) ** 2)
+        return J
+
+    numeric = FunctionMeasurement(h, np.array([[0.05]]), dim_x=2)
+    analytic = FunctionMeasurement(h, np.array([[0.05]]), dim_x=2, jac=jac)
+    x = np.array([[0.1, 0.2], [1.5, -0.3]])
+    np.testing.assert_allclose(numeric.jacobian(x), analytic.jacobian(x), rtol=1e-7)
+    P = np.diag([1.0, 0.1])
+    z = np.array([[0.2], [1.0]])
+    ue = ekf_update(x, P, z, analytic)
+    uu = ukf_update(x, P, z, analytic)
+    # both shrink the position variance; the EKF moves toward the measurement's preimage
+    assert np.all(ue.P[:, 0, 0] < 1.0)
+    assert np.all(uu.P[:, 0, 0] < 1.0)
+    target = np.tan(z[:, 0]) / c + d
+    assert np.all(np.abs(ue.x[:, 0] - target) < np.abs(x[:, 0] - target))
+    # with a small prior spread the model is locally linear: UKF -> EKF
+    Ps = np.diag([1e-6, 1e-7])
+    np.testing.assert_allclose(ukf_update(x, Ps, z, analytic).x,
+                               ekf_update(x, Ps, z, analytic).x, rtol=1e-5)
