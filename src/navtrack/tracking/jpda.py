@@ -319,7 +319,7 @@ def _exact(W: FloatArray, plan: tuple[IntArray, IntArray, list[list[int]]]) -> F
         for j in per[i]:
             a = axes.index(j)
             w = Wo[i, 1 + shared[j]]
-            Gn[_ix(a, 1)] += w * F[_ix(a, 0)]
+            _h(Gn, a, 1)[...] += w * _h(F, a, 0)
         dead = [a for a, j in enumerate(axes) if last[j] == i]
         if dead:
             Gn = Gn.sum(axis=tuple(dead))
@@ -336,14 +336,14 @@ def _exact(W: FloatArray, plan: tuple[IntArray, IntArray, list[list[int]]]) -> F
         Ui = U[i]
         dead = [a for a, j in enumerate(Ui) if last[j] == i]
         Bb = np.expand_dims(B, tuple(dead)) if dead else B
-        Bb = np.broadcast_to(Bb, (2,) * len(Ui))
+        Bb = np.ascontiguousarray(np.broadcast_to(Bb, (2,) * len(Ui)))
         Fi = F_exp[i]
         m0 = w0[i] * float(np.vdot(Fi, Bb))
         row = out[order[i]]
         for j in per[i]:
             a = Ui.index(j)
             w = Wo[i, 1 + shared[j]]
-            row[1 + shared[j]] = w * float(np.vdot(Fi[_ix(a, 0)], Bb[_ix(a, 1)]))
+            row[1 + shared[j]] = w * float(np.vdot(_h(Fi, a, 0), _h(Bb, a, 1)))
         # split the no-shared option into miss and private measurements
         if w0[i] > 0:
             scale = m0 / w0[i]
@@ -355,14 +355,16 @@ def _exact(W: FloatArray, plan: tuple[IntArray, IntArray, list[list[int]]]) -> F
         for j in per[i]:
             a = Ui.index(j)
             w = Wo[i, 1 + shared[j]]
-            Bn[_ix(a, 0)] += w * Bb[_ix(a, 1)]
+            _h(Bn, a, 0)[...] += w * _h(Bb, a, 1)
         k = n_new[i]
         B = Bn[(...,) + (0,) * k] if k else Bn
     return out / Z
 
 
-def _ix(axis: int, v: int) -> tuple[slice | int, ...]:
-    return (slice(None),) * axis + (v,)
+def _h(A: FloatArray, axis: int, v: int) -> FloatArray:
+    """View of the C-contiguous ``(2, 2, ...)`` tensor ``A`` at index ``v`` of ``axis``, as a
+    3-D ``(2**axis, 2, rest)`` reshape (numpy iterates that far faster than a 20-D view)."""
+    return A.reshape(1 << axis, 2, -1)[:, v]
 
 
 # ------------------------------------------------------------------------------- k-best
