@@ -22,7 +22,11 @@ def test_track_command_generic_csv(tmp_path: Path, capsys: pytest.CaptureFixture
     f = tmp_path / "ships.csv"
     f.write_text("\n".join(lines) + "\n")
     out = tmp_path / "tracks.csv"
-    assert main(["track", str(f), "--format", "csv", "--out", str(out), "--report-s", "10"]) == 0
+    pytest.importorskip("matplotlib")
+    plots = tmp_path / "plots"
+    assert main(["track", str(f), "--format", "csv", "--out", str(out), "--report-s", "10",
+                 "--plot", str(plots)]) == 0
+    assert (plots / "tracks.png").stat().st_size > 1000
     text = capsys.readouterr().out
     assert "bad rows skipped" in text
     assert "MOTA" in text
@@ -34,3 +38,11 @@ def test_track_command_generic_csv(tmp_path: Path, capsys: pytest.CaptureFixture
     df = pd.read_csv(out)
     assert {"time", "track_id", "x_m", "y_m", "lat_deg", "lon_deg"} <= set(df.columns)
     assert df.loc[df.confirmed, "track_id"].nunique() == 3
+
+
+def test_track_command_reports_missing_columns(tmp_path: Path,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    f = tmp_path / "bad.csv"
+    f.write_text("when,lat,lon\n2020-01-01T00:00:00Z,50,-1\n")
+    assert main(["track", str(f), "--format", "csv"]) == 1
+    assert "bad.csv, line 1: missing column" in capsys.readouterr().err

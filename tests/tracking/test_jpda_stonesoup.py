@@ -99,3 +99,13 @@ def test_batched_runs_equal_single_runs(max_events: int) -> None:
             np.testing.assert_allclose(xb[r], st.x, rtol=1e-10, atol=1e-6)
             beta_r = b.marginals.beta.reshape(3, 2, M + 1)[r, :, : len(scans[r]) + 1]
             np.testing.assert_allclose(beta_r, st.marginals.beta, atol=1e-10)
+
+
+def test_empty_scan_is_pure_prediction() -> None:
+    sc, mot, rb, _, lam = _scenario(1, 0)
+    cfg = JpdaConfig(pd=0.97, clutter_density=lam, gate_probability=0.99)
+    P = np.tile(np.diag([500.0**2, 50.0**2, 500.0**2, 50.0**2]), (2, 1, 1))
+    st = jpda_step(sc["x0"], P, np.zeros((0, 2)), mot.F(1.0), mot.Q(1.0), rb, cfg)
+    np.testing.assert_array_equal(st.marginals.beta, np.ones((2, 1)))
+    np.testing.assert_allclose(st.x, st.x_pred)
+    np.testing.assert_allclose(st.P, st.P_pred)
