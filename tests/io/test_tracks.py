@@ -99,3 +99,20 @@ def test_generic_csv_xy_and_missing_columns(tmp_path: Path) -> None:
         read_track_csv(e)
     with pytest.raises(FileFormatError, match="missing column"):
         read_ais_csv(p)
+
+
+def test_velocity_from_speed_and_course(tracking_data: Path) -> None:
+    from navtrack.io.tracks import velocity_local_enu
+
+    det = read_ais_csv(tracking_data / "SolentAIS_20160112_130211.csv")
+    v = velocity_local_enu(det)
+    # first report: SOG 5.9 kn, COG 157.8 deg; 2 km from the reference the frames agree to 1e-3
+    s = 5.9 * 1852 / 3600
+    np.testing.assert_allclose(v[0], [s * np.sin(np.radians(157.8)),
+                                      s * np.cos(np.radians(157.8))], atol=2e-3)
+    # AIS "not available" course (360) gives NaN
+    assert np.all(np.isnan(v[det.course_deg >= 360]))
+    speed = np.hypot(v[:, 0], v[:, 1])
+    ok = np.isfinite(speed)
+    # rotating into the reference tangent plane drops the tiny vertical part (< 1e-4 relative)
+    np.testing.assert_allclose(speed[ok], det.speed_mps[ok], rtol=1e-4)

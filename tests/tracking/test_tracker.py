@@ -118,3 +118,31 @@ def test_imm_kernels() -> None:
     xc0, Pc0 = imm_combine(x0, P0, c)
     np.testing.assert_allclose(xc0, xc, atol=1e-12)
     np.testing.assert_allclose(Pc0, Pc, atol=1e-12)
+
+
+def test_one_point_initiation_with_reported_velocity() -> None:
+    truth, t, z, origin = _scenario(6, n_targets=4, steps=40)
+    k = np.round(t / 10.0).astype(int)
+    vel = np.where(origin[:, None] >= 0, truth[k, np.maximum(origin, 0)][:, [1, 3]], np.nan)
+    cfg = TrackerConfig(sigma_m=10.0, pd=0.9, clutter_density=0.5 / 4.5e7, max_coast_s=60.0,
+                        confirm_window_s=60.0, init_max_dt_s=30.0, init_velocity_std_mps=0.5)
+    two = run_tracker(t, z, cfg)
+    one = run_tracker(t, z, cfg, velocity=vel)
+    assert one.counts["tracks_confirmed"] == 4
+    # every target's first detection starts its own track (no seed waiting for a partner)
+    first = (t == 0) & (origin >= 0)
+    assert np.all(one.det_status[first] == 2)
+
+    def first_velocity_error(res) -> float:
+        errs = []
+        for tid in np.unique(res.track_id[res.track_confirmed]):
+            i = np.flatnonzero(res.track_id == tid)[0]
+            tgt = origin[res.det_track == tid]
+            kk = round(float(res.track_time_s[i]) / 10.0)
+            errs.append(np.hypot(*(res.track_x[i, [1, 3]] - truth[kk, tgt[tgt >= 0][0], [1, 3]])))
+        return float(np.mean(errs))
+
+    # the reported velocity (sd 0.5 m/s here) beats a two-point difference (sd 1.4 m/s)
+    assert first_velocity_error(one) < first_velocity_error(two)
+    with pytest.raises(ValueError, match="velocity"):
+        run_tracker(t, z, cfg, velocity=vel[:3])

@@ -37,6 +37,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--plot", type=Path, metavar="DIR", help="write a map of the tracks here")
     p.add_argument("--report-s", type=float, help="scoring grid interval, s")
     p.add_argument("--match-m", type=float, help="CLEAR-MOT match threshold, m")
+    p.add_argument("--no-velocity", action="store_true",
+                   help="do not use reported speed/course for one-point track initiation")
     p.add_argument("--max-range-km", type=float, default=1000.0,
                    help="skip rows farther than this from the median position (default 1000)")
     p.set_defaults(func=run_track)
@@ -47,7 +49,7 @@ def run_track(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from navtrack.io.tracks import read_tracks, to_local_enu
+    from navtrack.io.tracks import read_tracks, to_local_enu, velocity_local_enu
     from navtrack.tracking.metrics import clear_mot, interpolate_truth
     from navtrack.tracking.tracker import DET_STATUS_NAMES, TrackerConfig, run_tracker
 
@@ -71,10 +73,15 @@ def run_track(args: argparse.Namespace) -> int:
         cfg = TrackerConfig(associator=args.associator)
     t0 = det.t_gps_s[0]
     grid = t0 + np.arange(0.0, det.t_gps_s[-1] - t0 + 1e-9, report_s)
-    res = run_tracker(det.t_gps_s, en, cfg, report_times=grid)
+    vel = None if args.no_velocity else velocity_local_enu(det, *ref) if det.geodetic else None
+    if vel is not None and not np.isfinite(vel).any():
+        vel = None
+    res = run_tracker(det.t_gps_s, en, cfg, report_times=grid, velocity=vel)
     status = np.bincount(res.det_status, minlength=len(DET_STATUS_NAMES))
     summary["reference (lat, lon deg)"] = f"{ref[0]:.6f} {ref[1]:.6f}"
     summary["associator"] = args.associator
+    summary["reported velocity used for initiation"] = (
+        "no" if vel is None else f"yes ({int(np.isfinite(vel).all(axis=1).sum())} rows)")
     summary["scans"] = int(res.counts["scans"])
     summary["detections by fate"] = {
         n: int(c) for n, c in zip(DET_STATUS_NAMES, status, strict=True)

@@ -29,6 +29,7 @@ __all__ = [
     "read_track_csv",
     "read_tracks",
     "to_local_enu",
+    "velocity_local_enu",
 ]
 
 UNIX_TO_GPS_EPOCH_S = 315964800.0  # 1980-01-06T00:00:00 UTC in Unix seconds
@@ -294,3 +295,38 @@ def to_local_enu(
     )
     ref = geodetic_to_ecef([np.radians(lat0), np.radians(lon0), 0.0])
     return np.asarray(ecef_to_enu(xyz, ref)[:, :2]), (lat0, lon0)
+
+
+def velocity_local_enu(
+    det: TrackDetections, ref_lat_deg: float | None = None, ref_lon_deg: float | None = None
+) -> FloatArray:
+    """Reported velocities (``speed_mps``, ``course_deg`` clockwise from true north) as east/north
+    components (m/s) in the tangent plane of :func:`to_local_enu`.
+
+    Each velocity is rotated from the local north/east at its own position into the reference
+    frame (meridian convergence is a few degrees across the OpenSky area). AIS "not available"
+    codes (course >= 360°, speed >= 102.2 kn) and missing values give NaN rows.
+
+    Returns
+    -------
+    v_en : (N, 2)
+    """
+    from navtrack.geodesy import enu_rotation
+
+    s = np.asarray(det.speed_mps, dtype=float)
+    c = np.asarray(det.course_deg, dtype=float)
+    bad = ~np.isfinite(s) | ~np.isfinite(c) | (c >= 360) | (c < 0) | (s < 0)
+    if det.format == "ais":
+        bad |= s >= 102.2 * KNOT_MPS
+    cr = np.radians(c)
+    v_local = np.stack([s * np.sin(cr), s * np.cos(cr), np.zeros_like(s)], axis=-1)
+    if det.geodetic:
+        lat0 = float(np.median(det.lat_deg)) if ref_lat_deg is None else ref_lat_deg
+        lon0 = float(np.median(det.lon_deg)) if ref_lon_deg is None else ref_lon_deg
+        R_i = enu_rotation(np.radians(det.lat_deg), np.radians(det.lon_deg))  # (N, 3, 3)
+        R_0 = enu_rotation(np.radians(lat0), np.radians(lon0))
+        v_ecef = np.einsum("nji,nj->ni", R_i, v_local)
+        v_local = v_ecef @ R_0.T
+    out = np.asarray(v_local[:, :2], dtype=float)
+    out[bad] = np.nan
+    return out

@@ -60,6 +60,9 @@ DET_STATUS_NAMES = ("confirmed", "tentative", "started", "seed", "unused")
 class TrackerConfig:
     """Tracker parameters (SI units).
 
+    ``init_from``: which detections may start tracks: those inside no track's gate, or all
+    that were not associated (GNN: unassigned; JPDA: summed association probability < 0.5).
+
     ``imm_q``: process-noise levels of an IMM of motion models sharing ``motion``'s form (e.g.
     ``(1e-5, 1e-2)`` for moored and manoeuvring ships); ``None`` = a single model with
     ``motion.q``. ``imm_sojourn_s``: mean time spent in a model; over a step ``dt`` the model is
@@ -84,16 +87,22 @@ class TrackerConfig:
     max_exact_bits: int = 20
     k_best: int = 1000
     pregate_pairs: int = 4000
+    init_from: Literal["outside_gates", "unassociated"] = "outside_gates"
+    init_velocity_std_mps: float = 1.0
     imm_q: tuple[float, ...] | None = None
     imm_sojourn_s: float = 300.0
 
     def __post_init__(self) -> None:
         if self.motion.ndim != 2:
             raise ValueError("the tracker works on 2-D (east, north) positions: motion.ndim = 2")
+        if self.init_from not in ("outside_gates", "unassociated"):
+            raise ValueError(f"init_from must be 'outside_gates' or 'unassociated', "
+                             f"got {self.init_from!r}")
         if self.associator not in ("gnn", "jpda"):
             raise ValueError(f"associator must be 'gnn' or 'jpda', got {self.associator!r}")
         for name in ("sigma_m", "clutter_density", "init_max_speed_mps", "init_max_dt_s",
-                     "confirm_window_s", "max_coast_s", "max_position_std_m"):
+                     "init_velocity_std_mps", "confirm_window_s", "max_coast_s",
+                     "max_position_std_m"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
@@ -109,9 +118,12 @@ class TrackerConfig:
     @staticmethod
     def for_ships(associator: Literal["gnn", "jpda"] = "gnn") -> TrackerConfig:
         """AIS ships: IMM of moored (q = 1e-5 m²/s³) and manoeuvring (1e-2) CV models,
-        σ = 25 m, 4 updates within 15 min to confirm, coast 10 min (values tuned on the Solent
-        file; moored ships report every 3 min, moving ones every 2-10 s)."""
-        return TrackerConfig(associator=associator, imm_q=(1e-5, 1e-2), confirm_hits=4)
+        σ = 25 m, λ = 1e-6 /m² (harbours: other ships rather than clutter compete for a
+        report), tracks started from unassociated reports, 3 updates within 15 min to confirm,
+        coast 10 min. Values tuned on the Solent file (moored ships report every 3 min, moving
+        ones every 2-10 s)."""
+        return TrackerConfig(associator=associator, imm_q=(1e-5, 1e-2), confirm_hits=3,
+                             clutter_density=1e-6, init_from="unassociated")
 
     @staticmethod
     def for_aircraft(associator: Literal["gnn", "jpda"] = "gnn") -> TrackerConfig:
@@ -190,14 +202,14 @@ class _Tracks:
         for name in ("x", "P", "mu", "id", "confirmed", "hits", "born", "last"):
             setattr(self, name, getattr(self, name)[k])
 
-    def add(self, x: FloatArray, P: FloatArray, tid: int, t: float) -> None:
+    def add(self, x: FloatArray, P: FloatArray, tid: int, t: float, hits: int = 2) -> None:
         r = self.mu.shape[1]
         self.x = np.concatenate([self.x, np.broadcast_to(x, (1, r, x.size))])
         self.P = np.concatenate([self.P, np.broadcast_to(P, (1, r, *P.shape))])
         self.mu = np.concatenate([self.mu, np.full((1, r), 1.0 / r)])
         self.id = np.append(self.id, tid)
         self.confirmed = np.append(self.confirmed, False)
-        self.hits = np.append(self.hits, 2)
+        self.hits = np.append(self.hits, hits)
         self.born = np.append(self.born, t)
         self.last = np.append(self.last, t)
 
@@ -214,6 +226,7 @@ def run_tracker(
     z: ArrayLike,
     config: TrackerConfig | None = None,
     report_times: ArrayLike | None = None,
+    velocity: ArrayLike | None = None,
 ) -> TrackerResult:
     """Track 2-D position detections.
 
@@ -224,6 +237,12 @@ def run_tracker(
     config : TrackerConfig
     report_times : (F,) or None
         Times at which the confirmed tracks are reported (predicted) for scoring.
+    velocity : (N, 2) or None
+        Reported east/north velocity of each detection (m/s; NaN where unknown), e.g. AIS speed
+        and course over ground or ADS-B velocity and heading. A detection with a velocity
+        starts a tentative track on its own (one-point initiation, velocity standard deviation
+        ``init_velocity_std_mps``) instead of waiting for a second point; the velocity is used
+        for initiation only, not in the updates.
 
     Raises
     ------
@@ -258,6 +277,9 @@ def run_tracker(
             f"than detection {back[0]} ({t[back[0]]})"
         )
     rep = np.zeros(0) if report_times is None else np.asarray(report_times, dtype=float)
+    V = np.full((t.size, 2), np.nan) if velocity is None else np.asarray(velocity, dtype=float)
+    if V.shape != (t.size, 2):
+        raise ValueError(f"velocity must be (N, 2) like z, got {V.shape}")
     clock = time.perf_counter()
     mot = cfg.motion
     n = mot.dim_x
@@ -332,6 +354,7 @@ def run_tracker(
         now = tk
         gated_any = np.zeros(M, dtype=bool)
         used = np.zeros(M, dtype=bool)
+        claimed = np.zeros(M, dtype=bool)  # detections not available for initiation
         if T:
             # 2. gate every model; a pair is valid if inside some model's gate
             zp = tr.x[..., pos].reshape(T * r, 2)
@@ -370,6 +393,7 @@ def run_tracker(
                         tr.mu[ti] = imm_model_probabilities(c_pred[ti], ll_rm[ti, :, a_t[ti]])
                     det_track[s0 + a_t[ti]] = tr.id[ti]
                     used[a_t[ti]] = True
+                claimed = used.copy() if cfg.init_from == "unassociated" else gated_any
             else:
                 W = association_weights(ll_mix, valid, cfg.pd, cfg.gate_probability,
                                         cfg.clutter_density)
@@ -399,6 +423,8 @@ def run_tracker(
                     ok = best_b >= 0.5
                     det_track[s0 + np.flatnonzero(ok)] = tr.id[best_t[ok]]
                     used[ok] = True
+                claimed = (beta[:, 1:].sum(axis=0) >= 0.5 if cfg.init_from == "unassociated"
+                           else gated_any)
             # 4. manage
             tr.hits[hit] += 1
             tr.last[hit] = tk
@@ -433,7 +459,25 @@ def run_tracker(
             seeds_t = [seeds_t[i] for i in keep]
             seeds_z = [seeds_z[i] for i in keep]
             seeds_i = [seeds_i[i] for i in keep]
-        for j in np.flatnonzero(~gated_any):
+        for j in np.flatnonzero(~claimed):
+            vj = V[s0 + j]
+            if np.all(np.isfinite(vj)):
+                x0 = np.zeros(n)
+                x0[pos] = Zk[j]
+                x0[list(mot.velocity_index)] = vj
+                P0 = np.zeros((n, n))
+                P0[pos, pos] = cfg.sigma_m**2
+                vix = list(mot.velocity_index)
+                P0[vix, vix] = cfg.init_velocity_std_mps**2
+                if mot.order == 2:
+                    for ia in range(2, n, 3):
+                        P0[ia, ia] = 1.0
+                tr.add(x0, P0, next_id, tk, hits=1)
+                det_track[s0 + j] = next_id
+                det_status[s0 + j] = DET_STARTED
+                next_id += 1
+                counts["tracks_started"] += 1
+                continue
             best = -1
             best_d = np.inf
             for si, (ts, zs) in enumerate(zip(seeds_t, seeds_z, strict=True)):
@@ -444,6 +488,7 @@ def run_tracker(
                 if d <= cfg.init_max_speed_mps * dts + 3 * cfg.sigma_m and d < best_d:
                     best, best_d = si, d
             if best < 0:
+                det_status[s0 + j] = DET_SEED
                 seeds_t.append(tk)
                 seeds_z.append(Zk[j])
                 seeds_i.append(int(s0 + j))
