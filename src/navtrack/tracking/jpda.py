@@ -219,15 +219,17 @@ def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMargin
             raise ValueError(f"track {int(np.flatnonzero(s <= 0)[0])}: all weights are zero")
         return JpdaMarginals(W / s, np.arange(T, dtype=np.int64), method, err, n_events)
     n_cl, lab = clusters(W)
-    for c in range(n_cl):
-        tr = np.flatnonzero(lab == c)
-        if tr.size == 1:
-            row = W[tr[0]]
-            s = row.sum()
-            if s <= 0:
-                raise ValueError(f"track {tr[0]}: all association weights are zero")
-            beta[tr[0]] = row / s
-            continue
+    size = np.bincount(lab, minlength=n_cl)
+    single = size[lab] == 1
+    if single.any():  # tracks alone in their cluster: PDA in closed form, all at once
+        s = W[single].sum(axis=1, keepdims=True)
+        if np.any(s <= 0):
+            raise ValueError("a track has all association weights zero")
+        beta[single] = W[single] / s
+    order = np.argsort(lab, kind="stable")
+    bounds = np.searchsorted(lab[order], np.flatnonzero(size > 1))
+    for c, b0 in zip(np.flatnonzero(size > 1), bounds, strict=True):
+        tr = order[b0 : b0 + size[c]]
         cols = np.flatnonzero(gated[tr].any(axis=0))
         Wc = W[np.ix_(tr, np.concatenate([[0], cols + 1]))]
         if tr.size <= 3 and cols.size <= 8:
