@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from navtrack import __version__
 
 # Command modules, each with ``register(subparsers)``; kept in the order ``--help`` lists them.
-COMMAND_MODULES = ("navtrack.cli.rinex", "navtrack.cli.pos")
+COMMAND_MODULES = ("navtrack.cli.rinex", "navtrack.cli.pos", "navtrack.cli.track")
 
 
 def build_parser() -> argparse.ArgumentParser:

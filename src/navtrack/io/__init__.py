@@ -2,7 +2,9 @@
 
 * :mod:`navtrack.io.solution` — :func:`~navtrack.io.solution.write_solution` (CSV, Parquet,
   NMEA GGA, KML, GPX) and :func:`~navtrack.io.solution.read_solution` (CSV, Parquet);
-* :mod:`navtrack.io.rtklib` — :func:`~navtrack.io.rtklib.read_pos` for RTKLIB ``.pos`` files.
+* :mod:`navtrack.io.rtklib` — :func:`~navtrack.io.rtklib.read_pos` for RTKLIB ``.pos`` files;
+* :mod:`navtrack.io.tracks` — real detection/track files (Solent AIS, OpenSky states, generic
+  CSV) for the tracker.
 
-Both need pandas; import the submodules directly.
+They need pandas; import the submodules directly.
 """

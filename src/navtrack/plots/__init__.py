@@ -1,7 +1,8 @@
 """matplotlib figures used by the command line and the reports (extra ``plot``).
 
 * :mod:`navtrack.plots.gnss` — positioning solutions: ENU errors, horizontal scatter,
-  satellites/DOP, skyplot.
+  satellites/DOP, skyplot;
+* :mod:`navtrack.plots.tracks` — map-like plot of tracks against the scored truth.
 
 matplotlib is imported only when a figure is drawn.
 """

@@ -1,0 +1,332 @@
+"""Readers of real tracking data: AIS CSV (Solent), OpenSky state vectors, a generic CSV.
+
+Every reader returns :class:`TrackDetections`: time-sorted detections with GPS-second times,
+geodetic or local positions, the source line of each row and the id column (used only to score
+a tracker, never by it). Rows that cannot be used are *reported and skipped*: their line numbers
+and reasons are in ``bad_lines`` / ``bad_reasons``; a file whose required columns are missing
+raises :class:`navtrack.errors.FileFormatError`.
+
+Row checks: unparsable or non-finite time or position, latitude outside [-90, 90], longitude
+outside [-180, 180], and positions farther than ``max_range_km`` (default 1000 km) from the
+median position of the file (the Solent AIS file has one report at longitude +54.8° among
+longitudes near -1.2°: a valid number, an impossible position for a Solent vessel).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from navtrack._typing import FloatArray, IntArray, StrPath
+from navtrack.errors import FileFormatError
+
+__all__ = [
+    "TrackDetections",
+    "read_ais_csv",
+    "read_opensky_csv",
+    "read_track_csv",
+    "read_tracks",
+    "to_local_enu",
+    "velocity_local_enu",
+]
+
+UNIX_TO_GPS_EPOCH_S = 315964800.0  # 1980-01-06T00:00:00 UTC in Unix seconds
+KNOT_MPS = 1852.0 / 3600.0
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class TrackDetections:
+    """Detections read from a file, sorted by time (arrays read-only).
+
+    Attributes
+    ----------
+    path, format : source file and format (``ais``, ``opensky``, ``csv``)
+    t_gps_s : (N,) GPS seconds
+    lat_deg, lon_deg : (N,) geodetic position, degrees (NaN when the file gives ``x_m``/``y_m``)
+    x_m, y_m : (N,) local position, m (NaN when the file gives lat/lon)
+    alt_m, speed_mps, course_deg : (N,) optional columns (NaN when absent)
+    id : (N,) str, object identity for scoring (empty strings when absent)
+    line : (N,) 1-based line number in the file of each row
+    bad_lines : (B,) line numbers of skipped rows; bad_reasons : reason per skipped row
+    n_reordered : rows that were out of time order in the file (now sorted, stable)
+    ignored_columns : columns present in the file and not used
+    """
+
+    path: str
+    format: str
+    t_gps_s: FloatArray
+    lat_deg: FloatArray
+    lon_deg: FloatArray
+    x_m: FloatArray
+    y_m: FloatArray
+    alt_m: FloatArray
+    speed_mps: FloatArray
+    course_deg: FloatArray
+    id: np.ndarray
+    line: IntArray
+    bad_lines: IntArray
+    bad_reasons: tuple[str, ...]
+    n_reordered: int = 0
+    ignored_columns: tuple[str, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        for name in ("t_gps_s", "lat_deg", "lon_deg", "x_m", "y_m", "alt_m", "speed_mps",
+                     "course_deg", "id", "line", "bad_lines"):
+            getattr(self, name).setflags(write=False)
+
+    def __len__(self) -> int:
+        return int(self.t_gps_s.size)
+
+    @property
+    def geodetic(self) -> bool:
+        """True when positions are latitude/longitude."""
+        return bool(np.isfinite(self.lat_deg).any())
+
+    def summary(self) -> dict[str, Any]:
+        reasons: dict[str, int] = {}
+        for r in self.bad_reasons:
+            reasons[r] = reasons.get(r, 0) + 1
+        return {
+            "file": self.path,
+            "format": self.format,
+            "detections": len(self),
+            "ids": int(np.unique(self.id).size) if len(self) else 0,
+            "bad rows skipped": len(self.bad_lines),
+            "bad row reasons": reasons,
+            "rows out of time order (sorted)": self.n_reordered,
+            "ignored columns": list(self.ignored_columns),
+        }
+
+
+def _read_frame(path: StrPath) -> Any:
+    import pandas as pd
+
+    try:
+        return pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
+    except pd.errors.EmptyDataError:
+        raise FileFormatError(path, 1, "empty file (no header)") from None
+    except pd.errors.ParserError as exc:
+        raise FileFormatError(path, None, f"not a readable CSV: {exc}") from None
+
+
+def _require(path: StrPath, df: Any, cols: list[str]) -> None:
+    missing = [c for c in cols if c not in df.columns]
+    if missing:
+        raise FileFormatError(
+            path, 1, f"missing column(s) {missing}; header has {list(df.columns)}"
+        )
+
+
+def _num(df: Any, col: str | None) -> FloatArray:
+    import pandas as pd
+
+    if col is None or col not in df.columns:
+        return np.full(len(df), np.nan)
+    return np.asarray(pd.to_numeric(df[col], errors="coerce"), dtype=float)
+
+
+def _iso_utc_to_gps(values: Any) -> FloatArray:
+    import pandas as pd
+
+    from navtrack.timescale import gps_seconds, utc_to_gps
+
+    dt = pd.DatetimeIndex(
+        pd.to_datetime(np.asarray(values), errors="coerce", utc=True, format="mixed")
+    )
+    ok = np.asarray(~np.asarray(dt.isna()), dtype=bool)
+    out = np.full(len(dt), np.nan)
+    if ok.any():
+        naive = dt[ok].tz_convert(None).to_numpy(dtype="datetime64[ns]")
+        out[ok] = utc_to_gps(gps_seconds(naive))
+    return out
+
+
+def _finish(
+    path: StrPath,
+    fmt: str,
+    df: Any,
+    t: FloatArray,
+    lat: FloatArray,
+    lon: FloatArray,
+    x: FloatArray,
+    y: FloatArray,
+    alt: FloatArray,
+    speed: FloatArray,
+    course: FloatArray,
+    ids: np.ndarray,
+    used: list[str],
+    max_range_km: float | None,
+) -> TrackDetections:
+    n = len(t)
+    line = np.arange(2, n + 2, dtype=np.int64)  # header is line 1
+    reason = np.full(n, "", dtype=object)
+    geo = not np.all(np.isnan(lat) & np.isnan(lon)) or np.all(np.isnan(x))
+
+    def flag(mask: np.ndarray, why: str) -> None:
+        new = mask & (reason == "")
+        reason[new] = why
+
+    flag(~np.isfinite(t), "time not readable")
+    if geo:
+        flag(~np.isfinite(lat) | ~np.isfinite(lon), "latitude/longitude not a finite number")
+        flag(np.abs(lat) > 90, "latitude outside [-90, 90]")
+        flag(np.abs(lon) > 180, "longitude outside [-180, 180]")
+    else:
+        flag(~np.isfinite(x) | ~np.isfinite(y), "x_m/y_m not a finite number")
+    ok = reason == ""
+    if max_range_km is not None and ok.any():
+        if geo:
+            from navtrack.geodesy import geodetic_to_ecef
+
+            llh = np.stack([np.radians(lat), np.radians(lon), np.zeros(n)], axis=-1)
+            llh[~ok] = 0.0
+            xyz = geodetic_to_ecef(llh)
+            centre = geodetic_to_ecef(
+                [np.radians(np.median(lat[ok])), np.radians(np.median(lon[ok])), 0.0]
+            )
+            dist = np.linalg.norm(xyz - centre, axis=-1)
+        else:
+            dist = np.hypot(x - np.median(x[ok]), y - np.median(y[ok]))
+        flag(ok & (dist > max_range_km * 1e3),
+             f"position more than {max_range_km:g} km from the median position")
+    ok = reason == ""
+    idx = np.flatnonzero(ok)
+    order = idx[np.argsort(t[idx], kind="stable")]
+    n_reordered = int(np.sum(np.diff(t[idx]) < 0))
+    ignored = tuple(c for c in df.columns if c not in used)
+    return TrackDetections(
+        str(path), fmt, t[order], lat[order], lon[order], x[order], y[order], alt[order],
+        speed[order], course[order], np.asarray(ids, dtype=str)[order], line[order],
+        line[~ok], tuple(str(r) for r in reason[~ok]), n_reordered, ignored,
+    )
+
+
+def read_ais_csv(path: StrPath, max_range_km: float | None = 1000.0) -> TrackDetections:
+    """Solent AIS file: ``Time`` (UTC), ``MMSI``, ``Latitude_degrees``, ``Longitude_degrees``,
+    ``COG_degrees``, ``SOG_knots``."""
+    df = _read_frame(path)
+    cols = ["Time", "MMSI", "Latitude_degrees", "Longitude_degrees"]
+    _require(path, df, cols)
+    n = len(df)
+    return _finish(
+        path, "ais", df, _iso_utc_to_gps(df["Time"]), _num(df, "Latitude_degrees"),
+        _num(df, "Longitude_degrees"), np.full(n, np.nan), np.full(n, np.nan),
+        np.full(n, np.nan), _num(df, "SOG_knots") * KNOT_MPS, _num(df, "COG_degrees"),
+        df["MMSI"].to_numpy(), [*cols, "COG_degrees", "SOG_knots"], max_range_km,
+    )
+
+
+def read_opensky_csv(path: StrPath, max_range_km: float | None = 1000.0) -> TrackDetections:
+    """OpenSky state vectors: ``time`` (Unix s), ``icao24``, ``lat``, ``lon``, ``velocity``
+    (m/s), ``heading`` (deg), ``geoaltitude`` (m, else ``baroaltitude``)."""
+    from navtrack.timescale import utc_to_gps
+
+    df = _read_frame(path)
+    cols = ["time", "icao24", "lat", "lon"]
+    _require(path, df, cols)
+    n = len(df)
+    alt_col = "geoaltitude" if "geoaltitude" in df.columns else "baroaltitude"
+    t = utc_to_gps(_num(df, "time") - UNIX_TO_GPS_EPOCH_S)
+    return _finish(
+        path, "opensky", df, t, _num(df, "lat"), _num(df, "lon"), np.full(n, np.nan),
+        np.full(n, np.nan), _num(df, alt_col), _num(df, "velocity"), _num(df, "heading"),
+        df["icao24"].to_numpy(), [*cols, alt_col, "velocity", "heading"], max_range_km,
+    )
+
+
+def read_track_csv(path: StrPath, max_range_km: float | None = 1000.0) -> TrackDetections:
+    """Generic layout: ``time`` (ISO 8601 UTC), ``lat`` and ``lon`` (deg) or ``x_m`` and ``y_m``,
+    optional ``id``, ``alt_m``, ``speed_mps``, ``course_deg``; other columns are ignored (and
+    listed in ``ignored_columns``)."""
+    df = _read_frame(path)
+    _require(path, df, ["time"])
+    has_ll = "lat" in df.columns and "lon" in df.columns
+    has_xy = "x_m" in df.columns and "y_m" in df.columns
+    if not (has_ll or has_xy):
+        raise FileFormatError(
+            path, 1, f"need columns lat, lon or x_m, y_m; header has {list(df.columns)}"
+        )
+    n = len(df)
+    nan = np.full(n, np.nan)
+    used = ["time", "id", "alt_m", "speed_mps", "course_deg"]
+    used += ["lat", "lon"] if has_ll else ["x_m", "y_m"]
+    ids = df["id"].to_numpy() if "id" in df.columns else np.full(n, "", dtype=object)
+    return _finish(
+        path, "csv", df, _iso_utc_to_gps(df["time"]),
+        _num(df, "lat") if has_ll else nan, _num(df, "lon") if has_ll else nan,
+        nan if has_ll else _num(df, "x_m"), nan if has_ll else _num(df, "y_m"),
+        _num(df, "alt_m"), _num(df, "speed_mps"), _num(df, "course_deg"), ids, used,
+        max_range_km,
+    )
+
+
+def read_tracks(path: StrPath, fmt: str, max_range_km: float | None = 1000.0) -> TrackDetections:
+    """Dispatch on ``fmt`` in ``{"ais", "opensky", "csv"}``."""
+    readers = {"ais": read_ais_csv, "opensky": read_opensky_csv, "csv": read_track_csv}
+    if fmt not in readers:
+        raise ValueError(f"fmt must be one of {sorted(readers)}, got {fmt!r}")
+    return readers[fmt](path, max_range_km)
+
+
+def to_local_enu(
+    det: TrackDetections, ref_lat_deg: float | None = None, ref_lon_deg: float | None = None
+) -> tuple[FloatArray, tuple[float, float]]:
+    """East/north positions (m) in the tangent plane at a reference point (height 0).
+
+    The reference defaults to the median latitude/longitude. Files with ``x_m``/``y_m`` are
+    returned as they are (reference NaN).
+
+    Returns
+    -------
+    en : (N, 2) east, north, m
+    ref : (lat_deg, lon_deg)
+    """
+    from navtrack.geodesy import ecef_to_enu, geodetic_to_ecef
+
+    if not det.geodetic:
+        return np.stack([det.x_m, det.y_m], axis=-1), (float("nan"), float("nan"))
+    lat0 = float(np.median(det.lat_deg)) if ref_lat_deg is None else ref_lat_deg
+    lon0 = float(np.median(det.lon_deg)) if ref_lon_deg is None else ref_lon_deg
+    n = len(det)
+    xyz = geodetic_to_ecef(
+        np.stack([np.radians(det.lat_deg), np.radians(det.lon_deg), np.zeros(n)], axis=-1)
+    )
+    ref = geodetic_to_ecef([np.radians(lat0), np.radians(lon0), 0.0])
+    return np.asarray(ecef_to_enu(xyz, ref)[:, :2]), (lat0, lon0)
+
+
+def velocity_local_enu(
+    det: TrackDetections, ref_lat_deg: float | None = None, ref_lon_deg: float | None = None
+) -> FloatArray:
+    """Reported velocities (``speed_mps``, ``course_deg`` clockwise from true north) as east/north
+    components (m/s) in the tangent plane of :func:`to_local_enu`.
+
+    Each velocity is rotated from the local north/east at its own position into the reference
+    frame (meridian convergence is a few degrees across the OpenSky area). AIS "not available"
+    codes (course >= 360°, speed >= 102.2 kn) and missing values give NaN rows.
+
+    Returns
+    -------
+    v_en : (N, 2)
+    """
+    from navtrack.geodesy import enu_rotation
+
+    s = np.asarray(det.speed_mps, dtype=float)
+    c = np.asarray(det.course_deg, dtype=float)
+    bad = ~np.isfinite(s) | ~np.isfinite(c) | (c >= 360) | (c < 0) | (s < 0)
+    if det.format == "ais":
+        bad |= s >= 102.2 * KNOT_MPS
+    cr = np.radians(c)
+    v_local = np.stack([s * np.sin(cr), s * np.cos(cr), np.zeros_like(s)], axis=-1)
+    if det.geodetic:
+        lat0 = float(np.median(det.lat_deg)) if ref_lat_deg is None else ref_lat_deg
+        lon0 = float(np.median(det.lon_deg)) if ref_lon_deg is None else ref_lon_deg
+        R_i = enu_rotation(np.radians(det.lat_deg), np.radians(det.lon_deg))  # (N, 3, 3)
+        R_0 = enu_rotation(np.radians(lat0), np.radians(lon0))
+        v_ecef = np.einsum("nji,nj->ni", R_i, v_local)
+        v_local = v_ecef @ R_0.T
+    out = np.asarray(v_local[:, :2], dtype=float)
+    out[bad] = np.nan
+    return out

@@ -1,0 +1,136 @@
+"""Validation gates: chi-square ellipsoids and a k-d tree pre-gate for many targets.
+
+References
+----------
+.. [1] Y. Bar-Shalom, T. E. Fortmann, *Tracking and Data Association*, Academic Press 1988,
+   section 2.3 (validation region ``νᵀ S⁻¹ ν <= gamma``, gate probability ``P_G``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from navtrack._typing import ArrayLike, BoolArray, FloatArray
+from navtrack.tracking.models import wrap_angle
+
+__all__ = ["Gate", "chi2_threshold", "gate", "kdtree_pregate"]
+
+
+@lru_cache(maxsize=64)
+def chi2_threshold(gate_probability: float, dim_z: int) -> float:
+    """Gate size ``gamma`` with ``P(chi²_m <= gamma) = gate_probability``."""
+    from scipy.stats import chi2
+
+    if not 0.0 < gate_probability < 1.0:
+        if gate_probability == 1.0:
+            return float("inf")
+        raise ValueError(f"gate_probability must be in (0, 1], got {gate_probability}")
+    return float(chi2.ppf(gate_probability, dim_z))
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Gate:
+    """Track-to-measurement gating of one scan (arrays read-only).
+
+    Attributes
+    ----------
+    innovation : (T, M, m) ``z_j - ẑ_t`` (angles wrapped)
+    d2 : (T, M) squared Mahalanobis distance (``inf`` where not computed by the pre-gate)
+    valid : (T, M) bool, ``d2 <= gamma``
+    log_norm : (T,) ``-0.5 (m log 2π + log det S_t)``, the log of the Gaussian's peak
+    """
+
+    innovation: FloatArray
+    d2: FloatArray
+    valid: BoolArray
+    log_norm: FloatArray
+
+    def __post_init__(self) -> None:
+        for name in ("innovation", "d2", "valid", "log_norm"):
+            getattr(self, name).setflags(write=False)
+
+    def log_likelihood(self) -> FloatArray:
+        """``log N(z_j; ẑ_t, S_t)``, shape (T, M)."""
+        return np.asarray(self.log_norm[:, None] - 0.5 * self.d2)
+
+
+def gate(
+    z_pred: ArrayLike,
+    S: ArrayLike,
+    z: ArrayLike,
+    gamma: float,
+    *,
+    angle_mask: ArrayLike | None = None,
+    candidates: BoolArray | None = None,
+) -> Gate:
+    """Chi-square gate of every track against every measurement.
+
+    Parameters
+    ----------
+    z_pred : (T, m) predicted measurements
+    S : (T, m, m) innovation covariances (positive definite)
+    z : (M, m) measurements (finite)
+    gamma : float
+        Gate size (see :func:`chi2_threshold`); ``inf`` accepts everything.
+    angle_mask : bool (m,) or None
+    candidates : bool (T, M) or None
+        Pairs to evaluate (from :func:`kdtree_pregate`); others get ``d2 = inf``.
+    """
+    zp = np.asarray(z_pred, dtype=float)
+    S = np.asarray(S, dtype=float)
+    Z = np.asarray(z, dtype=float).reshape(-1, zp.shape[-1])
+    if not np.all(np.isfinite(Z)):
+        raise ValueError("z: measurements must be finite")
+    T, m = zp.shape
+    y = Z[None, :, :] - zp[:, None, :]
+    if angle_mask is not None and np.any(angle_mask):
+        am = np.flatnonzero(angle_mask)
+        y[..., am] = wrap_angle(y[..., am])
+    try:
+        L = np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        raise ValueError("S: innovation covariance not positive definite") from None
+    log_det = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
+    log_norm = -0.5 * (m * np.log(2 * np.pi) + log_det)
+    if T == 0 or Z.shape[0] == 0:
+        d2 = np.zeros((T, Z.shape[0]))
+    else:
+        # whitened innovations: solve L w = y for every (t, j)
+        w = np.linalg.solve(L[:, None, :, :], y[..., None])[..., 0]
+        d2 = np.einsum("tji,tji->tj", w, w)
+    if candidates is not None:
+        d2 = np.where(candidates, d2, np.inf)
+    return Gate(y, d2, d2 <= gamma, log_norm)
+
+
+def kdtree_pregate(
+    z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, gamma: float
+) -> BoolArray:
+    """Coarse spatial pre-gate: pairs within the ball enclosing each track's gate ellipsoid.
+
+    The ball radius is ``sqrt(gamma · λ_max(S_t))``, so every pair inside the chi-square gate
+    is a candidate (no false rejections). Measurements are put in a ``scipy.spatial.cKDTree``;
+    the cost is ``O((T + M) log M)`` instead of ``O(T·M)`` Mahalanobis distances. Only for
+    measurement spaces without angles (Cartesian positions).
+
+    Returns
+    -------
+    candidates : bool (T, M)
+    """
+    from scipy.spatial import cKDTree
+
+    zp = np.asarray(z_pred, dtype=float)
+    Z = np.asarray(z, dtype=float).reshape(-1, zp.shape[-1])
+    S = np.asarray(S, dtype=float)
+    T, M = zp.shape[0], Z.shape[0]
+    out = np.zeros((T, M), dtype=bool)
+    if T == 0 or M == 0:
+        return out
+    radius = np.sqrt(gamma * np.linalg.eigvalsh(S)[:, -1])
+    tree = cKDTree(Z)
+    for t, idx in enumerate(tree.query_ball_point(zp, radius)):
+        out[t, idx] = True
+    return out

@@ -1,0 +1,260 @@
+"""Kalman, extended and unscented Kalman predict/update kernels, batched over leading axes.
+
+Shapes: states ``x (..., n)``, covariances ``P (..., n, n)``, measurements ``z (..., m)``; the
+leading axes ``...`` are any batch (tracks, particles, Monte Carlo runs) and broadcast against
+each other and against the model matrices (``F (n, n)`` or ``(..., n, n)``). Inputs are never
+written to.
+
+References
+----------
+.. [1] Y. Bar-Shalom, X. R. Li, T. Kirubarajan, *Estimation with Applications to Tracking and
+   Navigation*, Wiley 2001: KF eq. 5.2.3-1..5.2.3-17, Joseph form eq. 5.2.3-18, EKF section 10.3.
+.. [2] S. J. Julier, J. K. Uhlmann, "Unscented filtering and nonlinear estimation", Proc. IEEE
+   92(3), 2004 (scaled sigma points, alpha/beta/kappa); E. A. Wan, R. van der Merwe, "The
+   unscented Kalman filter for nonlinear estimation", AS-SPCC 2000 (weights).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from navtrack._typing import ArrayLike, BoolArray, FloatArray
+from navtrack.tracking.models import MeasurementModel, MotionModel, wrap_angle
+
+__all__ = [
+    "KalmanUpdate",
+    "ekf_predict",
+    "ekf_update",
+    "kf_predict",
+    "kf_update",
+    "sigma_points",
+    "ukf_predict",
+    "ukf_update",
+]
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class KalmanUpdate:
+    """Result of a measurement update (all arrays read-only).
+
+    Attributes
+    ----------
+    x : (..., n) posterior state
+    P : (..., n, n) posterior covariance
+    innovation : (..., m) ``z - h(x_pred)``, angle components wrapped to ``[-pi, pi)``
+    S : (..., m, m) innovation covariance
+    K : (..., n, m) gain
+    """
+
+    x: FloatArray
+    P: FloatArray
+    innovation: FloatArray
+    S: FloatArray
+    K: FloatArray
+
+    def __post_init__(self) -> None:
+        for name in ("x", "P", "innovation", "S", "K"):
+            getattr(self, name).setflags(write=False)
+
+    @property
+    def nis(self) -> FloatArray:
+        """Normalised innovation squared ``yᵀ S⁻¹ y``, shape ``(...)``."""
+        return mahalanobis2(self.innovation, self.S)
+
+
+def _T(a: FloatArray) -> FloatArray:
+    return np.swapaxes(a, -1, -2)
+
+
+def _sym(P: FloatArray) -> FloatArray:
+    return 0.5 * (P + _T(P))
+
+
+def mahalanobis2(y: FloatArray, S: FloatArray) -> FloatArray:
+    """Squared Mahalanobis distance ``yᵀ S⁻¹ y`` over leading axes."""
+    y = np.asarray(y, dtype=float)
+    sol = np.linalg.solve(S, y[..., None])[..., 0]
+    return np.asarray(np.einsum("...i,...i->...", y, sol))
+
+
+# ---------------------------------------------------------------------------------- predict
+
+
+def kf_predict(
+    x: ArrayLike, P: ArrayLike, F: ArrayLike, Q: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    """Linear prediction ``x' = F x``, ``P' = F P Fᵀ + Q`` (Bar-Shalom eq. 5.2.3-5, -7).
+
+    Returns
+    -------
+    x : (..., n), P : (..., n, n)
+    """
+    x = np.asarray(x, dtype=float)
+    P = np.asarray(P, dtype=float)
+    F = np.asarray(F, dtype=float)
+    xp = np.einsum("...ij,...j->...i", F, x)
+    Pp = F @ P @ _T(F) + np.asarray(Q, dtype=float)
+    return xp, _sym(Pp)
+
+
+def ekf_predict(
+    x: ArrayLike, P: ArrayLike, model: MotionModel, dt: float
+) -> tuple[FloatArray, FloatArray]:
+    """Extended prediction ``x' = f(x)``, ``P' = J P Jᵀ + Q`` with ``J = ∂f/∂x`` at ``x``."""
+    x = np.asarray(x, dtype=float)
+    J = model.jacobian(x, dt)
+    Pp = J @ np.asarray(P, dtype=float) @ _T(J) + model.Q(dt)
+    return model.f(x, dt), _sym(Pp)
+
+
+def sigma_points(
+    x: FloatArray, P: FloatArray, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Scaled symmetric sigma points (Julier & Uhlmann 2004; Wan & van der Merwe 2000).
+
+    Returns
+    -------
+    X : (..., 2n+1, n) sigma points
+    wm, wc : (2n+1,) mean and covariance weights
+    """
+    n = x.shape[-1]
+    lam = alpha * alpha * (n + kappa) - n
+    if n + lam <= 0:
+        raise ValueError(f"alpha²(n + kappa) must be > 0, got {n + lam}")
+    L = np.linalg.cholesky((n + lam) * P)  # (..., n, n), columns are the offsets
+    off = _T(L)  # (..., n, n) rows = offsets
+    X = np.concatenate([x[..., None, :], x[..., None, :] + off, x[..., None, :] - off], axis=-2)
+    wm = np.full(2 * n + 1, 0.5 / (n + lam))
+    wc = wm.copy()
+    wm[0] = lam / (n + lam)
+    wc[0] = lam / (n + lam) + 1 - alpha * alpha + beta
+    return X, wm, wc
+
+
+def ukf_predict(
+    x: ArrayLike,
+    P: ArrayLike,
+    model: MotionModel,
+    dt: float,
+    alpha: float = 1.0,
+    beta: float = 2.0,
+    kappa: float = 0.0,
+) -> tuple[FloatArray, FloatArray]:
+    """Unscented prediction through ``model.f``; returns ``(x, P)``."""
+    x = np.asarray(x, dtype=float)
+    X, wm, wc = sigma_points(x, np.asarray(P, dtype=float), alpha, beta, kappa)
+    Y = model.f(X, dt)
+    xp = np.einsum("k,...ki->...i", wm, Y)
+    d = Y - xp[..., None, :]
+    Pp = np.einsum("k,...ki,...kj->...ij", wc, d, d) + model.Q(dt)
+    return xp, _sym(Pp)
+
+
+# ----------------------------------------------------------------------------------- update
+
+
+def _wrap(y: FloatArray, angle_mask: BoolArray | None) -> FloatArray:
+    if angle_mask is None or not np.any(angle_mask):
+        return y
+    return np.where(angle_mask, wrap_angle(y), y)
+
+
+def _gain_update(
+    x: FloatArray,
+    P: FloatArray,
+    y: FloatArray,
+    PHt: FloatArray,
+    S: FloatArray,
+    H: FloatArray | None,
+    R: FloatArray,
+    joseph: bool,
+) -> KalmanUpdate:
+    # K = P Hᵀ S⁻¹ by a solve on S (symmetric): K = (S⁻¹ (P Hᵀ)ᵀ)ᵀ
+    K = _T(np.asarray(np.linalg.solve(S, _T(PHt)), dtype=float))
+    xn = x + np.einsum("...ij,...j->...i", K, y)
+    if joseph:
+        if H is None:
+            raise ValueError("the Joseph form needs a measurement matrix (KF/EKF only)")
+        n = x.shape[-1]
+        IKH = np.eye(n) - K @ H
+        Pn = IKH @ P @ _T(IKH) + K @ R @ _T(K)
+    else:
+        Pn = P - K @ S @ _T(K)
+    return KalmanUpdate(xn, _sym(Pn), y, S, K)
+
+
+def kf_update(
+    x: ArrayLike,
+    P: ArrayLike,
+    z: ArrayLike,
+    H: ArrayLike,
+    R: ArrayLike,
+    *,
+    joseph: bool = False,
+    angle_mask: ArrayLike | None = None,
+) -> KalmanUpdate:
+    """Linear update (Bar-Shalom eq. 5.2.3-9..-17; Joseph form eq. 5.2.3-18 when ``joseph``).
+
+    Parameters
+    ----------
+    x : (..., n), P : (..., n, n), z : (..., m)
+    H : (m, n) or (..., m, n), R : (m, m) or (..., m, m)
+    joseph : bool
+        Use ``(I-KH) P (I-KH)ᵀ + K R Kᵀ``, which stays positive semi-definite under rounding.
+    angle_mask : bool (m,) or None
+        Innovation components wrapped to ``[-pi, pi)``.
+    """
+    x = np.asarray(x, dtype=float)
+    P = np.asarray(P, dtype=float)
+    H = np.asarray(H, dtype=float)
+    R = np.asarray(R, dtype=float)
+    mask = None if angle_mask is None else np.asarray(angle_mask, dtype=bool)
+    y = _wrap(np.asarray(z, dtype=float) - np.einsum("...ij,...j->...i", H, x), mask)
+    PHt = P @ _T(H)
+    S = _sym(H @ PHt + R)
+    return _gain_update(x, P, y, PHt, S, H, R, joseph)
+
+
+def ekf_update(
+    x: ArrayLike, P: ArrayLike, z: ArrayLike, model: MeasurementModel, *, joseph: bool = False
+) -> KalmanUpdate:
+    """Extended update: ``h`` and its Jacobian evaluated at the prediction (Bar-Shalom 10.3)."""
+    x = np.asarray(x, dtype=float)
+    P = np.asarray(P, dtype=float)
+    H = model.jacobian(x)
+    y = _wrap(np.asarray(z, dtype=float) - model.h(x), model.angle_mask)
+    PHt = P @ _T(H)
+    S = _sym(H @ PHt + model.R)
+    return _gain_update(x, P, y, PHt, S, H, model.R, joseph)
+
+
+def ukf_update(
+    x: ArrayLike,
+    P: ArrayLike,
+    z: ArrayLike,
+    model: MeasurementModel,
+    *,
+    alpha: float = 1.0,
+    beta: float = 2.0,
+    kappa: float = 0.0,
+) -> KalmanUpdate:
+    """Unscented update (Wan & van der Merwe 2000, algorithm 3.1).
+
+    Angle components of the predicted measurement are averaged as deviations from the central
+    sigma point's image, wrapped, so a mean near ±pi is not torn apart.
+    """
+    x = np.asarray(x, dtype=float)
+    P = np.asarray(P, dtype=float)
+    X, wm, wc = sigma_points(x, P, alpha, beta, kappa)
+    Z = model.h(X)  # (..., 2n+1, m)
+    mask = model.angle_mask
+    dZ0 = _wrap(Z - Z[..., :1, :], mask)
+    zp = Z[..., 0, :] + np.einsum("k,...ki->...i", wm, dZ0)
+    dZ = _wrap(Z - zp[..., None, :], mask)
+    dX = X - x[..., None, :]
+    S = _sym(np.einsum("k,...ki,...kj->...ij", wc, dZ, dZ) + model.R)
+    Pxz = np.einsum("k,...ki,...kj->...ij", wc, dX, dZ)
+    y = _wrap(np.asarray(z, dtype=float) - zp, mask)
+    return _gain_update(x, P, y, Pxz, S, None, model.R, False)

@@ -1,0 +1,493 @@
+"""Motion and measurement models for target tracking.
+
+State vectors are stacked per spatial axis: a 2-D constant-velocity state is ``[x, vx, y, vy]``
+(the ordering of Bar-Shalom and of the paper-3 scenario), a 3-D constant-acceleration state is
+``[x, vx, ax, y, vy, ay, z, vz, az]``. Units are SI (m, m/s, m/s², s, rad).
+
+Every model exposes the same small interface, used by the Kalman kernels in
+:mod:`navtrack.tracking.kalman` and by the particle filters built on them:
+
+* motion models: ``dim_x``, ``F(dt)``, ``Q(dt)``, ``f(x, dt)`` and ``jacobian(x, dt)``;
+* measurement models: ``dim_x``, ``dim_z``, ``R``, ``angle_mask``, ``linear``, ``h(x)`` and
+  ``jacobian(x)``, with ``x`` batched over any leading axes.
+
+References
+----------
+.. [1] Y. Bar-Shalom, X. R. Li, T. Kirubarajan, *Estimation with Applications to Tracking and
+   Navigation*, Wiley 2001, sections 6.2-6.3 (continuous and discrete white-noise acceleration
+   models) and 11.7 (coordinated turn).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Literal, Protocol
+
+import numpy as np
+
+from navtrack._typing import ArrayLike, BoolArray, FloatArray
+
+__all__ = [
+    "CoordinatedTurn",
+    "FunctionMeasurement",
+    "LinearMeasurement",
+    "LinearMotion",
+    "MeasurementModel",
+    "MotionModel",
+    "RangeBearing",
+    "constant_acceleration",
+    "constant_velocity",
+    "linear_position",
+    "wrap_angle",
+]
+
+
+def wrap_angle(a: ArrayLike) -> FloatArray:
+    """Wrap angles to ``[-pi, pi)`` (rad)."""
+    return np.asarray((np.asarray(a, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi, dtype=float)
+
+
+def _readonly(a: ArrayLike) -> FloatArray:
+    arr = np.array(a, dtype=float)
+    arr.setflags(write=False)
+    return arr
+
+
+class MotionModel(Protocol):
+    """What the filters need from a motion model."""
+
+    @property
+    def dim_x(self) -> int: ...
+
+    def f(self, x: FloatArray, dt: float) -> FloatArray: ...
+
+    def jacobian(self, x: FloatArray, dt: float) -> FloatArray: ...
+
+    def Q(self, dt: float) -> FloatArray: ...
+
+
+class MeasurementModel(Protocol):
+    """What the filters need from a measurement model."""
+
+    @property
+    def dim_x(self) -> int: ...
+
+    @property
+    def dim_z(self) -> int: ...
+
+    @property
+    def R(self) -> FloatArray: ...
+
+    @property
+    def angle_mask(self) -> BoolArray: ...
+
+    @property
+    def linear(self) -> bool: ...
+
+    def h(self, x: FloatArray) -> FloatArray: ...
+
+    def jacobian(self, x: FloatArray) -> FloatArray: ...
+
+
+# --------------------------------------------------------------------------------------------
+# Motion
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class LinearMotion:
+    """Constant-velocity (``order=1``) or constant-acceleration (``order=2``) motion.
+
+    Parameters
+    ----------
+    ndim : int
+        Number of spatial axes, 1 to 3.
+    order : int
+        1 = nearly constant velocity, 2 = nearly constant acceleration (Wiener-process
+        acceleration).
+    q : float
+        Process-noise level. ``noise="discrete"``: variance of the piecewise-constant
+        acceleration (CV, m²/s⁴) or acceleration increment (CA) per step, Bar-Shalom eq. 6.3.2-4
+        and 6.3.3-4. ``noise="continuous"``: power spectral density of the white noise
+        (CV: m²/s³, CA: m²/s⁵), eq. 6.2.2-12 and 6.2.3-8; this form is consistent when a step is
+        split in parts (``Q(a+b) = F(b) Q(a) F(b)ᵀ + Q(b)``), so it suits irregular real data.
+    noise : {"discrete", "continuous"}
+    """
+
+    ndim: int
+    order: int
+    q: float
+    noise: Literal["discrete", "continuous"] = "discrete"
+
+    def __post_init__(self) -> None:
+        if self.ndim not in (1, 2, 3):
+            raise ValueError(f"ndim must be 1, 2 or 3, got {self.ndim}")
+        if self.order not in (1, 2):
+            raise ValueError(f"order must be 1 (CV) or 2 (CA), got {self.order}")
+        if not (np.isfinite(self.q) and self.q >= 0):
+            raise ValueError(f"q must be finite and >= 0, got {self.q}")
+        if self.noise not in ("discrete", "continuous"):
+            raise ValueError(f"noise must be 'discrete' or 'continuous', got {self.noise!r}")
+
+    @property
+    def dim_x(self) -> int:
+        return self.ndim * (self.order + 1)
+
+    @property
+    def position_index(self) -> tuple[int, ...]:
+        """Indices of the position components in the state."""
+        return tuple(range(0, self.dim_x, self.order + 1))
+
+    @property
+    def velocity_index(self) -> tuple[int, ...]:
+        """Indices of the velocity components in the state."""
+        return tuple(range(1, self.dim_x, self.order + 1))
+
+    def _block_F(self, dt: float) -> FloatArray:
+        if self.order == 1:
+            return np.array([[1.0, dt], [0.0, 1.0]])
+        return np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
+
+    def _block_Q(self, dt: float) -> FloatArray:
+        if self.noise == "discrete":
+            g = np.array([0.5 * dt * dt, dt] if self.order == 1 else [0.5 * dt * dt, dt, 1.0])
+            return self.q * np.outer(g, g)
+        if self.order == 1:
+            return self.q * np.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]])
+        return self.q * np.array(
+            [
+                [dt**5 / 20, dt**4 / 8, dt**3 / 6],
+                [dt**4 / 8, dt**3 / 3, dt**2 / 2],
+                [dt**3 / 6, dt**2 / 2, dt],
+            ]
+        )
+
+    def _block_diag(self, blk: FloatArray) -> FloatArray:
+        k = self.order + 1
+        out = np.zeros((self.dim_x, self.dim_x))
+        for a in range(self.ndim):
+            out[a * k : (a + 1) * k, a * k : (a + 1) * k] = blk
+        return out
+
+    def F(self, dt: float) -> FloatArray:
+        """State transition matrix, shape ``(dim_x, dim_x)``."""
+        return self._block_diag(self._block_F(float(dt)))
+
+    def Q(self, dt: float) -> FloatArray:
+        """Process-noise covariance over ``dt`` seconds, shape ``(dim_x, dim_x)``."""
+        return self._block_diag(self._block_Q(float(dt)))
+
+    def f(self, x: FloatArray, dt: float) -> FloatArray:
+        """Propagate states ``x (..., dim_x)`` by ``dt`` seconds."""
+        return np.asarray(x, dtype=float) @ self.F(dt).T
+
+    def jacobian(self, x: FloatArray, dt: float) -> FloatArray:
+        """``F`` broadcast to ``x.shape[:-1] + (dim_x, dim_x)``."""
+        x = np.asarray(x)
+        return np.broadcast_to(self.F(dt), (*x.shape[:-1], self.dim_x, self.dim_x))
+
+
+def constant_velocity(
+    ndim: int, q: float, noise: Literal["discrete", "continuous"] = "discrete"
+) -> LinearMotion:
+    """Nearly-constant-velocity model in ``ndim`` axes (see :class:`LinearMotion`)."""
+    return LinearMotion(ndim, 1, q, noise)
+
+
+def constant_acceleration(
+    ndim: int, q: float, noise: Literal["discrete", "continuous"] = "discrete"
+) -> LinearMotion:
+    """Nearly-constant-acceleration model in ``ndim`` axes (see :class:`LinearMotion`)."""
+    return LinearMotion(ndim, 2, q, noise)
+
+
+@dataclass(frozen=True, slots=True)
+class CoordinatedTurn:
+    """2-D coordinated turn with unknown turn rate, state ``[x, vx, y, vy, omega]``.
+
+    Parameters
+    ----------
+    q : float
+        Continuous white-acceleration spectral density on each axis, m²/s³.
+    q_omega : float
+        Spectral density of the turn-rate random walk, rad²/s³.
+
+    Notes
+    -----
+    Transition of Bar-Shalom et al. eq. 11.7.1-4 (turn rate positive counter-clockwise); the
+    ``omega -> 0`` limit is taken by series expansion below ``|omega·dt| < 1e-3``.
+    """
+
+    q: float
+    q_omega: float
+
+    @property
+    def dim_x(self) -> int:
+        return 5
+
+    @staticmethod
+    def _terms(w: FloatArray, dt: float) -> tuple[FloatArray, ...]:
+        wt = w * dt
+        small = np.abs(wt) < 1e-3  # series to 5th order: error < (wT)^6 relative
+        ws = np.where(small, 1.0, w)
+        s, c = np.sin(wt), np.cos(wt)
+        w2 = w * w
+        a = np.where(small, dt - w2 * dt**3 / 6 + w2 * w2 * dt**5 / 120, s / ws)  # sin(wT)/w
+        b = np.where(small, w * dt**2 / 2 - w2 * w * dt**4 / 24, (1 - c) / ws)  # (1-cos)/w
+        # derivatives of a, b with respect to w
+        da = np.where(small, -w * dt**3 / 3 + w2 * w * dt**5 / 30, (dt * c) / ws - s / ws**2)
+        db = np.where(small, dt**2 / 2 - w2 * dt**4 / 8, (dt * s) / ws - (1 - c) / ws**2)
+        return s, c, a, b, da, db
+
+    def f(self, x: FloatArray, dt: float) -> FloatArray:
+        x = np.asarray(x, dtype=float)
+        px, vx, py, vy, w = np.moveaxis(x, -1, 0)
+        s, c, a, b, _, _ = self._terms(w, dt)
+        return np.stack(
+            [px + a * vx - b * vy, c * vx - s * vy, py + b * vx + a * vy, s * vx + c * vy, w],
+            axis=-1,
+        )
+
+    def jacobian(self, x: FloatArray, dt: float) -> FloatArray:
+        x = np.asarray(x, dtype=float)
+        _, vx, _, vy, w = np.moveaxis(x, -1, 0)
+        s, c, a, b, da, db = self._terms(w, dt)
+        J = np.zeros((*x.shape[:-1], 5, 5))
+        J[..., 0, 0] = 1.0
+        J[..., 0, 1] = a
+        J[..., 0, 3] = -b
+        J[..., 0, 4] = da * vx - db * vy
+        J[..., 1, 1] = c
+        J[..., 1, 3] = -s
+        J[..., 1, 4] = -dt * s * vx - dt * c * vy
+        J[..., 2, 1] = b
+        J[..., 2, 2] = 1.0
+        J[..., 2, 3] = a
+        J[..., 2, 4] = db * vx + da * vy
+        J[..., 3, 1] = s
+        J[..., 3, 3] = c
+        J[..., 3, 4] = dt * c * vx - dt * s * vy
+        J[..., 4, 4] = 1.0
+        return J
+
+    def Q(self, dt: float) -> FloatArray:
+        blk = self.q * np.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]])
+        Q = np.zeros((5, 5))
+        Q[0:2, 0:2] = blk
+        Q[2:4, 2:4] = blk
+        Q[4, 4] = self.q_omega * dt
+        return Q
+
+
+# --------------------------------------------------------------------------------------------
+# Measurements
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class LinearMeasurement:
+    """Linear measurement ``z = H x + v``, ``v ~ N(0, R)``.
+
+    Parameters
+    ----------
+    H : array, shape (dim_z, dim_x)
+    R : array, shape (dim_z, dim_z)
+        Noise covariance, symmetric positive definite.
+    """
+
+    H: FloatArray
+    R: FloatArray
+    angle_mask: BoolArray = field(default=None)  # type: ignore[arg-type]
+
+    def __post_init__(self) -> None:
+        H = _readonly(self.H)
+        R = _readonly(self.R)
+        if H.ndim != 2 or R.shape != (H.shape[0], H.shape[0]):
+            raise ValueError(f"H must be (m, n) and R (m, m); got H {H.shape}, R {R.shape}")
+        _check_spd("R", R)
+        mask = np.zeros(H.shape[0], bool) if self.angle_mask is None else self.angle_mask
+        mask = np.array(mask, dtype=bool)
+        mask.setflags(write=False)
+        object.__setattr__(self, "H", H)
+        object.__setattr__(self, "R", R)
+        object.__setattr__(self, "angle_mask", mask)
+
+    @property
+    def dim_x(self) -> int:
+        return int(self.H.shape[1])
+
+    @property
+    def dim_z(self) -> int:
+        return int(self.H.shape[0])
+
+    @property
+    def linear(self) -> bool:
+        return True
+
+    def h(self, x: FloatArray) -> FloatArray:
+        return np.asarray(x, dtype=float) @ self.H.T
+
+    def jacobian(self, x: FloatArray) -> FloatArray:
+        x = np.asarray(x)
+        return np.broadcast_to(self.H, x.shape[:-1] + self.H.shape)
+
+
+def linear_position(
+    dim_x: int, position_index: tuple[int, ...], sigma_m: float | ArrayLike
+) -> LinearMeasurement:
+    """Position measurement picking ``position_index`` out of the state.
+
+    ``sigma_m`` is the standard deviation per axis (scalar or one per axis), m.
+    """
+    m = len(position_index)
+    H = np.zeros((m, dim_x))
+    H[np.arange(m), list(position_index)] = 1.0
+    sig = np.broadcast_to(np.asarray(sigma_m, dtype=float), (m,))
+    return LinearMeasurement(H, np.diag(sig**2))
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class RangeBearing:
+    """2-D range and bearing ``z = [r, theta]`` from a sensor at ``sensor_xy``.
+
+    Parameters
+    ----------
+    R : array (2, 2)
+        Noise covariance of ``[range (m), bearing (rad)]``.
+    sensor_xy : array (2,)
+        Sensor position, m, in the same frame as the target positions.
+    position_index : (int, int)
+        Indices of x and y in the state (``(0, 2)`` for ``[x, vx, y, vy]``).
+    dim_x : int
+    from_north : bool
+        False: bearing = ``atan2(dy, dx)`` measured counter-clockwise from +x (the convention of
+        paper 3 and Stone Soup); True: azimuth ``atan2(dx, dy)`` clockwise from north (+y).
+    """
+
+    R: FloatArray
+    sensor_xy: FloatArray = field(default_factory=lambda: np.zeros(2))
+    position_index: tuple[int, int] = (0, 2)
+    dim_x: int = 4
+    from_north: bool = False
+
+    def __post_init__(self) -> None:
+        R = _readonly(self.R)
+        if R.shape != (2, 2):
+            raise ValueError(f"R must be (2, 2), got {R.shape}")
+        _check_spd("R", R)
+        s = _readonly(self.sensor_xy)
+        if s.shape != (2,) or not np.all(np.isfinite(s)):
+            raise ValueError(f"sensor_xy must be 2 finite numbers, got {s}")
+        object.__setattr__(self, "R", R)
+        object.__setattr__(self, "sensor_xy", s)
+
+    @property
+    def dim_z(self) -> int:
+        return 2
+
+    @property
+    def angle_mask(self) -> BoolArray:
+        return np.array([False, True])
+
+    @property
+    def linear(self) -> bool:
+        return False
+
+    def _d(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        x = np.asarray(x, dtype=float)
+        i, j = self.position_index
+        dx = x[..., i] - self.sensor_xy[0]
+        dy = x[..., j] - self.sensor_xy[1]
+        return (dy, dx) if self.from_north else (dx, dy)
+
+    def h(self, x: FloatArray) -> FloatArray:
+        a, b = self._d(x)  # angle = atan2(b, a)
+        return np.stack([np.hypot(a, b), np.arctan2(b, a)], axis=-1)
+
+    def jacobian(self, x: FloatArray) -> FloatArray:
+        x = np.asarray(x, dtype=float)
+        dx, dy = self._d(x)
+        if self.from_north:
+            dx, dy = dy, dx  # back to east/north differences
+        r2 = dx * dx + dy * dy
+        r = np.sqrt(r2)
+        i, j = self.position_index
+        J = np.zeros((*x.shape[:-1], 2, self.dim_x))
+        J[..., 0, i] = dx / r
+        J[..., 0, j] = dy / r
+        if self.from_north:  # theta = atan2(dx, dy)
+            J[..., 1, i] = dy / r2
+            J[..., 1, j] = -dx / r2
+        else:  # theta = atan2(dy, dx)
+            J[..., 1, i] = -dy / r2
+            J[..., 1, j] = dx / r2
+        return J
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class FunctionMeasurement:
+    """Hook for any nonlinear measurement ``z = h(x) + v`` (e.g. the foveal sensor of paper 4).
+
+    Parameters
+    ----------
+    func : callable ``(..., dim_x) -> (..., dim_z)``
+        Batched measurement function.
+    R : array (dim_z, dim_z)
+    dim_x : int
+    jac : callable ``(..., dim_x) -> (..., dim_z, dim_x)`` or None
+        Analytic Jacobian; None uses central differences (step ``1e-6·max(1, |x|)``).
+    angle_mask : bool array (dim_z,) or None
+        Components that are angles (innovations wrapped to ``[-pi, pi)``).
+    """
+
+    func: Callable[[FloatArray], FloatArray]
+    R: FloatArray
+    dim_x: int
+    jac: Callable[[FloatArray], FloatArray] | None = None
+    angle_mask: BoolArray = field(default=None)  # type: ignore[arg-type]
+
+    def __post_init__(self) -> None:
+        R = _readonly(np.atleast_2d(self.R))
+        _check_spd("R", R)
+        mask = np.zeros(R.shape[0], bool) if self.angle_mask is None else self.angle_mask
+        mask = np.array(mask, dtype=bool)
+        mask.setflags(write=False)
+        object.__setattr__(self, "R", R)
+        object.__setattr__(self, "angle_mask", mask)
+
+    @property
+    def dim_z(self) -> int:
+        return int(self.R.shape[0])
+
+    @property
+    def linear(self) -> bool:
+        return False
+
+    def h(self, x: FloatArray) -> FloatArray:
+        return np.asarray(self.func(np.asarray(x, dtype=float)), dtype=float)
+
+    def jacobian(self, x: FloatArray) -> FloatArray:
+        x = np.asarray(x, dtype=float)
+        if self.jac is not None:
+            return np.asarray(self.jac(x), dtype=float)
+        cols = []
+        for k in range(self.dim_x):
+            e = np.zeros(self.dim_x)
+            step = 1e-6 * np.maximum(1.0, np.abs(x[..., k]))
+            e[k] = 1.0
+            dz = self.h(x + step[..., None] * e) - self.h(x - step[..., None] * e)
+            dz = np.where(self.angle_mask, wrap_angle(dz), dz)
+            cols.append(dz / (2 * step[..., None]))
+        return np.stack(cols, axis=-1)
+
+
+def _check_spd(name: str, M: FloatArray) -> None:
+    if not np.all(np.isfinite(M)):
+        raise ValueError(f"{name} must be finite")
+    if not np.allclose(M, M.T, rtol=1e-10, atol=0):
+        raise ValueError(f"{name} must be symmetric")
+    try:
+        np.linalg.cholesky(M)
+    except np.linalg.LinAlgError:
+        raise ValueError(f"{name} must be positive definite") from None

@@ -1,0 +1,118 @@
+"""Readers of real tracking data (Stone Soup demo files) and of the generic CSV layout."""
+
+from __future__ import annotations
+
+import csv
+import datetime as dt
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from navtrack.errors import FileFormatError
+from navtrack.io.tracks import read_ais_csv, read_opensky_csv, read_track_csv, to_local_enu
+
+
+@pytest.fixture(scope="module")
+def tracking_data(shared_data: Path) -> Path:
+    d = shared_data / "tracking"
+    if not d.is_dir():
+        pytest.skip("tracking data absent")
+    return d
+
+
+def _gps_s(t: dt.datetime, leap_s: float = 0.0) -> float:
+    return (t - dt.datetime(1980, 1, 6)).total_seconds() + leap_s
+
+
+def test_ais_reader_counts_and_bad_row(tracking_data: Path) -> None:
+    path = tracking_data / "SolentAIS_20160112_130211.csv"
+    # independent scan of the file with the csv module: rows and the one positive longitude
+    with path.open() as fh:
+        rows = list(csv.DictReader(fh))
+    bad = [i + 2 for i, r in enumerate(rows) if float(r["Longitude_degrees"]) > 0]
+    assert len(rows) == 18623
+    assert len(bad) == 1
+    det = read_ais_csv(path)
+    assert len(det) == 18622
+    assert det.bad_lines.tolist() == bad
+    assert "median position" in det.bad_reasons[0]
+    assert np.unique(det.id).size == 91
+    assert np.all(np.diff(det.t_gps_s) >= 0)
+    # first report 2016-01-12 13:02:11.218 UTC, GPST - UTC = 17 s in 2016
+    assert det.t_gps_s[0] == pytest.approx(_gps_s(dt.datetime(2016, 1, 12, 13, 2, 11, 218000),
+                                                  17.0), abs=1e-6)
+    assert rows[0]["MMSI"] == det.id[0]
+    assert det.speed_mps[0] == pytest.approx(5.9 * 1852 / 3600)
+    en, _ref = to_local_enu(det)
+    assert np.abs(en).max() < 60e3  # the Solent is smaller than 60 km around its median
+
+
+def test_opensky_reader(tracking_data: Path) -> None:
+    det = read_opensky_csv(tracking_data / "OpenSky_Plane_States.csv")
+    assert len(det) == 6052
+    assert len(det.bad_lines) == 0
+    assert np.unique(det.id).size == 84
+    assert np.unique(det.t_gps_s).size == 121
+    # 1626098400 = 2021-07-12 14:00:00 UTC; GPST - UTC = 18 s
+    assert det.t_gps_s[0] == pytest.approx(_gps_s(dt.datetime(2021, 7, 12, 14), 18.0))
+    assert "callsign" in det.ignored_columns
+
+
+def test_generic_csv_bad_rows_order_and_columns(tmp_path: Path) -> None:
+    p = tmp_path / "d.csv"
+    p.write_text(
+        "time,lat,lon,id,colour\n"
+        "2020-01-01T00:00:10Z,50.0,-1.0,a,red\n"
+        "2020-01-01T00:00:00Z,50.001,-1.0,a,red\n"
+        "2020-01-01T00:00:20Z,95.0,-1.0,a,red\n"
+        "2020-01-01T00:00:30Z,north,-1.0,b,red\n"
+        "not a time,50.0,-1.0,b,red\n"
+        "2020-01-01T00:00:40Z,50.002,-1.001,b,red\n"
+    )
+    det = read_track_csv(p)
+    assert len(det) == 3
+    assert det.line.tolist() == [3, 2, 7]  # sorted by time, lines kept
+    assert det.n_reordered == 1
+    assert det.bad_lines.tolist() == [4, 5, 6]
+    assert det.bad_reasons == ("latitude outside [-90, 90]",
+                               "latitude/longitude not a finite number", "time not readable")
+    assert det.ignored_columns == ("colour",)
+    s = det.summary()
+    assert s["bad rows skipped"] == 3
+
+
+def test_generic_csv_xy_and_missing_columns(tmp_path: Path) -> None:
+    p = tmp_path / "xy.csv"
+    p.write_text("time,x_m,y_m\n2020-01-01T00:00:00Z,1.5,2.5\n")
+    det = read_track_csv(p)
+    en, ref = to_local_enu(det)
+    np.testing.assert_allclose(en, [[1.5, 2.5]])
+    assert np.isnan(ref[0])
+    q = tmp_path / "bad.csv"
+    q.write_text("time,east,north\n2020-01-01T00:00:00Z,1,2\n")
+    with pytest.raises(FileFormatError, match=r"bad.csv, line 1: need columns lat, lon or x_m"):
+        read_track_csv(q)
+    e = tmp_path / "empty.csv"
+    e.write_text("")
+    with pytest.raises(FileFormatError, match="empty"):
+        read_track_csv(e)
+    with pytest.raises(FileFormatError, match="missing column"):
+        read_ais_csv(p)
+
+
+def test_velocity_from_speed_and_course(tracking_data: Path) -> None:
+    from navtrack.io.tracks import velocity_local_enu
+
+    det = read_ais_csv(tracking_data / "SolentAIS_20160112_130211.csv")
+    v = velocity_local_enu(det)
+    # first report: SOG 5.9 kn, COG 157.8 deg; 2 km from the reference the frames agree to 1e-3
+    s = 5.9 * 1852 / 3600
+    np.testing.assert_allclose(v[0], [s * np.sin(np.radians(157.8)),
+                                      s * np.cos(np.radians(157.8))], atol=2e-3)
+    # AIS "not available" course (360) gives NaN
+    assert np.all(np.isnan(v[det.course_deg >= 360]))
+    speed = np.hypot(v[:, 0], v[:, 1])
+    ok = np.isfinite(speed)
+    # rotating into the reference tangent plane drops the tiny vertical part (< 1e-4 relative)
+    np.testing.assert_allclose(speed[ok], det.speed_mps[ok], rtol=1e-4)

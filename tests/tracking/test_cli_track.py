@@ -1,0 +1,48 @@
+"""``navtrack track`` end to end on a small generated CSV with known ids."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from navtrack.cli import main
+
+
+def test_track_command_generic_csv(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rng = np.random.default_rng(0)
+    lines = ["time,lat,lon,id,alt_m"]
+    for k in range(40):
+        for i in range(3):
+            lat = 50.0 + 0.05 * i + 1e-4 * k + rng.normal(0, 1e-5)
+            lon = -1.0 + 2e-4 * k + rng.normal(0, 1e-5)
+            lines.append(f"2020-01-01T00:{k // 6:02d}:{(k % 6) * 10:02d}Z,{lat},{lon},s{i},0")
+    lines.append("2020-01-01T00:00:05Z,50.0,54.8,s0,0")  # far outlier, reported and skipped
+    f = tmp_path / "ships.csv"
+    f.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "tracks.csv"
+    pytest.importorskip("matplotlib")
+    plots = tmp_path / "plots"
+    assert main(["track", str(f), "--format", "csv", "--out", str(out), "--report-s", "10",
+                 "--plot", str(plots)]) == 0
+    assert (plots / "tracks.png").stat().st_size > 1000
+    text = capsys.readouterr().out
+    assert "bad rows skipped" in text
+    assert "MOTA" in text
+    mota = float(next(ln for ln in text.splitlines() if ln.startswith("MOTA")).split()[-1])
+    assert mota > 0.8
+    assert "id switches" in text
+    import pandas as pd
+
+    df = pd.read_csv(out)
+    assert {"time", "track_id", "x_m", "y_m", "lat_deg", "lon_deg"} <= set(df.columns)
+    assert df.loc[df.confirmed, "track_id"].nunique() == 3
+
+
+def test_track_command_reports_missing_columns(tmp_path: Path,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    f = tmp_path / "bad.csv"
+    f.write_text("when,lat,lon\n2020-01-01T00:00:00Z,50,-1\n")
+    assert main(["track", str(f), "--format", "csv"]) == 1
+    assert "bad.csv, line 1: missing column" in capsys.readouterr().err
