@@ -142,7 +142,11 @@ class AriConfig:
     robust_c : tuple of float or None
         Tuning constants; ``None`` takes :data:`ROBUST_DEFAULTS`.
     robust_process : bool
-        Reweight the process equations (3) too (edges, discontinuities).
+        Reweight the process equations (3) too (the paper's treatment of edges and
+        discontinuities). Off by default: an isolated gross error can be explained either by a
+        down-weighted observation or by down-weighted process equations around it, and
+        reweighting both groups let the estimate drift to ``sigma_n -> 0`` on short series in
+        our tests (ARI(5,2), 130 epochs, 1 % gross errors), losing the detections.
     flag_threshold : float
         ``|T|`` above which an observation is flagged as a gross error. Default 3.29 is the
         two-sided 0.1 % normal quantile (Baarda's alpha_0 = 0.001).
@@ -156,6 +160,16 @@ class AriConfig:
         Limit of the reweighting loop.
     screen_n : int
         Starts are screened on the first ``screen_n`` epochs when the series is longer.
+    boundary_margin : float
+        An interior solution (both variances positive) is kept over a boundary one
+        (``sigma_n`` or ``sigma_e`` at its lower bound) unless the boundary one has a larger
+        log-likelihood by more than this (default 1.92 = half the 95 % point of chi-square(1)).
+        The paper's model has observation noise by construction; a boundary optimum the data do
+        not significantly prefer is the weak identifiability of short series (``sigma_n -> 0``
+        is the failure statsmodels' SARIMAX shows), not evidence of noise-free data.
+    select_n : int
+        The order is selected on the first ``select_n`` epochs when the series is longer (the
+        chosen order is then fitted to the whole series).
     """
 
     order: tuple[int, int] | None = None
@@ -165,13 +179,15 @@ class AriConfig:
     criterion: Literal["bic", "aic"] = "bic"
     robust: RobustName = "danish"
     robust_c: tuple[float, ...] | None = None
-    robust_process: bool = True
+    robust_process: bool = False
     flag_threshold: float = 3.29
     n_starts: int = 3
     tol: float = 1e-6
     max_iter: int = 300
     max_robust_iter: int = 20
     screen_n: int = 4000
+    select_n: int = 20000
+    boundary_margin: float = 1.92
 
     def __post_init__(self) -> None:
         if self.order is not None:
@@ -563,59 +579,12 @@ def _make_estimate(
     log_floor: float,
 ) -> _Estimate:
     fit, r_n, r_e, _ = out
-    boundary = min(vec[p], vec[p + 1]) <= log_floor + 1e-6
+    # A component at its floor, or with less than one observation's worth of redundancy, is
+    # not estimable from these data (the likelihood is flat towards zero variance).
+    boundary = min(vec[p], vec[p + 1]) <= log_floor + 1e-6 or min(r_n, r_e) < 1.0
     return _Estimate(
         vec[:p].copy(), float(vec[p]), float(vec[p + 1]), fit, r_n, r_e, n_eval, converged, boundary
     )
-
-
-def _estimate(
-    start: FloatArray,
-    y0: FloatArray,
-    w: FloatArray,
-    v: FloatArray,
-    p: int,
-    d: int,
-    max_iter: int,
-    log_floor: float,
-) -> _Estimate | None:
-    """Maximise the likelihood from a (possibly far) start by L-BFGS-B.
-
-    The AR coefficients and the two log-variances move together on ``-log L`` with the analytic
-    gradient: its variance part is the VCE equation ``r_k - Omega_k / sigma_k^2``, its AR part
-    the expected-moment least-squares equation of the paper's alternating scheme.
-    """
-    from scipy.optimize import minimize
-
-    cache: dict[bytes, tuple[_Fit, float, float, FloatArray] | None] = {}
-    n_eval = 0
-
-    def objective(vec: FloatArray) -> tuple[float, FloatArray]:
-        nonlocal n_eval
-        key = vec.tobytes()
-        if key not in cache:
-            n_eval += 1
-            cache.clear()
-            cache[key] = _evaluate(vec, y0, w, v, p, d)
-        out = cache[key]
-        if out is None:
-            return 1e300, np.zeros_like(vec)
-        return -out[0].loglike, out[3]
-
-    bounds = [(None, None)] * p + [(log_floor, None), (log_floor, None)]
-    res = minimize(
-        objective,
-        start,
-        jac=True,
-        method="L-BFGS-B",
-        bounds=bounds,
-        options={"maxiter": max_iter, "ftol": 1e-13, "gtol": 1e-9, "maxcor": 20},
-    )
-    vec = np.array(res.x, dtype=float)
-    out = _evaluate(vec, y0, w, v, p, d)
-    if out is None:
-        return None
-    return _make_estimate(vec, out, p, n_eval + 1, bool(res.success), log_floor)
 
 
 def _hessian(
@@ -650,11 +619,16 @@ def _refine(
     tol: float,
     max_iter: int,
     log_floor: float,
+    log_ceiling: float,
 ) -> tuple[_Estimate, FloatArray] | None:
-    """Quasi-Newton (BFGS from ``hess``) with Armijo backtracking, from a near-optimal start.
+    """Quasi-Newton (BFGS from ``hess``) with Armijo backtracking.
 
-    Stopping rule: the expected gain ``g^T H^-1 g / 2`` of the next step is below ``tol``
-    (log-likelihood units), or ``max_iter`` steps.
+    The AR coefficients and the two log-variances move together on ``-log L`` with the analytic
+    gradient: its variance part is the VCE equation ``r_k - Omega_k / sigma_k^2``, its AR part
+    the expected-moment least-squares equation of the paper's alternating scheme. Steps are
+    capped (1 in ``phi``, 2 in ``log sigma^2``) and the log-variances kept in
+    ``[log_floor, log_ceiling]``. Stopping rule: the expected gain ``g^T H^-1 g / 2`` of the
+    next step is below ``tol`` (log-likelihood units), or ``max_iter`` steps.
     """
     out = _evaluate(vec, y0, w, v, p, d)
     n_eval = 1
@@ -669,14 +643,20 @@ def _refine(
         if gain < tol:
             converged = True
             break
+        cap = max(
+            float(np.max(np.abs(step[:p]))) if p else 0.0,
+            0.5 * float(np.max(np.abs(step[p:]))),
+            1.0,
+        )
+        step = step / cap
         t = 1.0
         accepted = None
         while t > 1e-6:
             trial = vec + t * step
-            trial[p:] = np.maximum(trial[p:], log_floor)
+            trial[p:] = np.clip(trial[p:], log_floor, log_ceiling)
             new = _evaluate(trial, y0, w, v, p, d)
             n_eval += 1
-            if new is not None and -new[0].loglike <= f - 1e-4 * t * 2.0 * gain:
+            if new is not None and -new[0].loglike <= f - 1e-4 * t * 2.0 * gain / cap:
                 accepted = (trial, new)
                 break
             t *= 0.25
@@ -919,6 +899,18 @@ def fit_ari_order(
     return _fit_fixed(y_arr, p, d, cfg, robust=True)
 
 
+def _choose(found: list[_Estimate], margin: float) -> _Estimate:
+    """Largest likelihood, but an interior solution within ``margin`` beats a boundary one."""
+    best = max(found, key=lambda e: e.fit.loglike)
+    if best.boundary:
+        interior = [e for e in found if not e.boundary]
+        if interior:
+            alt = max(interior, key=lambda e: e.fit.loglike)
+            if alt.fit.loglike >= best.fit.loglike - margin:
+                return alt
+    return best
+
+
 def _fit_fixed(
     y: FloatArray,
     p: int,
@@ -953,27 +945,30 @@ def _fit_fixed(
     v = np.ones(n - m)
     if starts is None:
         starts = _starts(yc, p, d, cfg.n_starts)
+    log_ceiling = math.log((1e3 * scale) ** 2)
     # Several starts on a leading window (the whole series when short): the likelihood is
     # multimodal (sigma_n -> 0 and sigma_e -> 0 are local optima on short series).
     head = min(n, cfg.screen_n)
     hw = w[:head]
     hv = v[: head - m]
-    best: _Estimate | None = None
+    found: list[_Estimate] = []
     n_iter = 0
     for start in starts:
-        est = _estimate(start, y0[:head], hw, hv, p, d, cfg.max_iter, log_floor)
-        if est is None:
+        hess0 = _hessian(start, y0[:head], hw, hv, p, d)
+        n_iter += p + 3
+        out = _refine(start, hess0, y0[:head], hw, hv, p, d, cfg.tol, cfg.max_iter, log_floor, log_ceiling)
+        if out is None:
             continue
-        n_iter += est.n_iter
-        if best is None or est.fit.loglike > best.fit.loglike:
-            best = est
-    if best is None:
+        n_iter += out[0].n_iter
+        found.append(out[0])
+    if not found:
         return _bad(y, "singular", "normal matrix singular at every start", p, d)
+    best = _choose(found, cfg.boundary_margin)
     vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
     hess = _hessian(vec, y0[:head], hw, hv, p, d) * (n_obs / max(np.count_nonzero(hw), 1))
     n_iter += p + 3
     # Newton-type refinement on the whole series (also certifies convergence of short ones)
-    refined = _refine(vec, hess, y0, w, v, p, d, cfg.tol, cfg.max_iter, log_floor)
+    refined = _refine(vec, hess, y0, w, v, p, d, cfg.tol, cfg.max_iter, log_floor, log_ceiling)
     if refined is None:
         return _bad(y, "singular", "normal matrix singular on the full series", p, d)
     best, hess = refined
@@ -999,7 +994,9 @@ def _fit_fixed(
             break
         w, v = w_new, v_new
         vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
-        refined = _refine(vec, hess, y0, w, v, p, d, cfg.tol, cfg.max_iter, log_floor)
+        refined = _refine(
+            vec, hess, y0, w, v, p, d, cfg.tol, cfg.max_iter, log_floor, log_ceiling
+        )
         if refined is None:
             break
         best, hess = refined
@@ -1143,7 +1140,8 @@ def fit_ari(
         for p in range(cfg.max_p + 1)
         if p + d >= 1
     ]
-    n_obs = int(np.count_nonzero(np.isfinite(y_arr)))
+    y_sel = y_arr[: cfg.select_n]
+    n_obs = int(np.count_nonzero(np.isfinite(y_sel)))
     candidates = [(p, d) for p, d in candidates if n_obs >= _min_observations(p, d)]
     if not candidates:
         return _bad(y_arr, "too_short", f"{n_obs} observed epochs are too few for any ARI model")
@@ -1153,7 +1151,7 @@ def fit_ari(
     best_score = math.inf
     fits: dict[tuple[int, int], tuple[float, float]] = {}
     for p, d in candidates:
-        res = _fit_fixed(y_arr, p, d, cfg, robust=False)
+        res = _fit_fixed(y_sel, p, d, cfg, robust=False)
         if res.status not in ("ok", "not_converged", "boundary"):
             continue
         ll = _conditional_loglike(res, big_m)
