@@ -90,6 +90,7 @@ __all__ = [
     "fit_ari",
     "fit_ari_order",
     "gauss_markov_filter",
+    "observed_information",
     "regularize_time",
     "robust_weight",
     "simulate_ari",
@@ -167,6 +168,11 @@ class AriConfig:
         The paper's model has observation noise by construction; a boundary optimum the data do
         not significantly prefer is the weak identifiability of short series (``sigma_n -> 0``
         is the failure statsmodels' SARIMAX shows), not evidence of noise-free data.
+    initial : {"stationary", "conditional"}
+        Start of the AR part. ``"stationary"``: the first ``p`` differences follow the AR's
+        stationary distribution — the exact likelihood, the same as statsmodels' SARIMAX with
+        ``measurement_error=True`` (``phi`` is then kept stationary). ``"conditional"``: the
+        likelihood conditional on them (the plain Gauss–Markov model (2)–(3), any ``phi``).
     select_n : int
         The order is selected on the first ``select_n`` epochs when the series is longer (the
         chosen order is then fitted to the whole series).
@@ -188,6 +194,7 @@ class AriConfig:
     screen_n: int = 4000
     select_n: int = 20000
     boundary_margin: float = 1.92
+    initial: Literal["stationary", "conditional"] = "stationary"
 
     def __post_init__(self) -> None:
         if self.order is not None:
@@ -372,6 +379,8 @@ def _normal_band(
 
 def _process_residuals(c: FloatArray, x: FloatArray) -> FloatArray:
     """``e_s = sum_i c_i x_{s-i}`` for ``s = m..n-1``."""
+    if x.size < c.size:
+        return np.zeros(0)
     return np.convolve(x, c, mode="valid")
 
 
@@ -400,6 +409,63 @@ class _Fit:
     logdet: float
 
 
+@dataclass(frozen=True, slots=True)
+class _Prior:
+    """Stationary start of the AR part: ``u_{d..m-1} ~ N(0, sigma_e^2 Gamma_p(phi))``.
+
+    ``u = (1 - B)^d x``; ``D`` ``(p, m)`` maps ``x_0..x_{m-1}`` to ``u_d..u_{m-1}``;
+    ``G = D^T Gamma^-1 D`` is the block added to the normal matrix (times ``1/sigma_e^2``).
+    """
+
+    d_mat: FloatArray
+    gamma_inv: FloatArray
+    g_mat: FloatArray
+    logdet_gamma: float
+
+
+def _ar_autocovariance(phi: FloatArray) -> FloatArray | None:
+    """``Gamma_p``: covariance of ``(u_t, ..., u_{t-p+1})`` of the AR(p) with unit innovation.
+
+    ``None`` when ``phi`` is not stationary (a root of ``phi(B)`` on or inside the unit circle).
+    """
+    import scipy.linalg
+
+    p = phi.size
+    comp = np.zeros((p, p))
+    comp[0] = -phi
+    comp[1:, :-1] = np.eye(p - 1)
+    if np.max(np.abs(np.linalg.eigvals(comp))) >= 1.0 - 1e-7:
+        return None
+    q = np.zeros((p, p))
+    q[0, 0] = 1.0
+    gamma = scipy.linalg.solve_discrete_lyapunov(comp, q)
+    return 0.5 * (gamma + gamma.T)
+
+
+def _stationary_prior(phi: FloatArray, d: int) -> _Prior | None:
+    p = phi.size
+    m = p + d
+    gamma = _ar_autocovariance(phi)
+    if gamma is None:
+        return None
+    try:
+        chol = np.linalg.cholesky(gamma)
+    except np.linalg.LinAlgError:
+        return None
+    gamma_inv = np.linalg.inv(gamma)
+    gamma_inv = 0.5 * (gamma_inv + gamma_inv.T)
+    delta = ari_polynomial(np.zeros(0), d)
+    d_mat = np.zeros((p, m))
+    for k in range(p):
+        for j in range(d + 1):
+            d_mat[k, d + k - j] = delta[j]
+    # Gamma is ordered (u_t, u_{t-1}, ...): reverse to time order (u_d, ..., u_{m-1}).
+    gamma_inv = gamma_inv[::-1, ::-1]
+    return _Prior(
+        d_mat, gamma_inv, d_mat.T @ gamma_inv @ d_mat, 2.0 * float(np.sum(np.log(np.diag(chol))))
+    )
+
+
 def _solve(
     y0: FloatArray,
     w: FloatArray,
@@ -408,16 +474,25 @@ def _solve(
     sn2: float,
     se2: float,
     width: int | None,
+    prior: _Prior | None = None,
 ) -> _Fit | None:
-    """Solve the Gauss–Markov model; ``zb`` (band of ``N^-1``) when ``width`` is not None."""
+    """Solve the Gauss–Markov model; ``zb`` (band of ``N^-1``) when ``width`` is not None.
+
+    With ``prior`` the first ``p`` differences get their stationary distribution (exact
+    likelihood, as statsmodels' SARIMAX); without it the likelihood is conditional on them.
+    """
     ab = _normal_band(c, w, v, sn2, se2)
+    m = c.size - 1
+    if prior is not None:
+        g = prior.g_mat / se2
+        for lag in range(m):
+            ab[m - lag, lag:m] += np.diag(g, lag)
     try:
         x, logdet = solve_spd_banded(ab, w * y0 / sn2)
     except np.linalg.LinAlgError:
         return None
     if not np.all(np.isfinite(x)):
         return None
-    m = c.size - 1
     e = _process_residuals(c, x)
     resid = y0 - x
     omega_n = float(np.sum(w * resid**2))
@@ -425,10 +500,18 @@ def _solve(
     used_w = w > 0
     used_v = v > 0
     n_used = int(np.count_nonzero(used_w))
+    diffuse = m
+    extra = 0.0
+    if prior is not None:
+        p = prior.d_mat.shape[0]
+        diffuse = m - p
+        omega_e += float(x[:m] @ prior.g_mat @ x[:m])
+        extra = p * math.log(se2) + prior.logdet_gamma
     loglike = -0.5 * (
-        (n_used - m) * math.log(2 * math.pi)
+        (n_used - diffuse) * math.log(2 * math.pi)
         + float(np.sum(np.log(sn2 / w[used_w])))
         + float(np.sum(np.log(se2 / v[used_v])))
+        + extra
         + logdet
         + omega_n / sn2
         + omega_e / se2
@@ -439,28 +522,34 @@ def _solve(
 
 def gauss_markov_filter(
     y: ArrayLike,
-    a: ArrayLike,
+    phi: ArrayLike,
+    d: int,
     sigma_n: float,
     sigma_e: float,
     *,
     weight: ArrayLike | None = None,
     process_weight: ArrayLike | None = None,
     width: int = 0,
+    initial: Literal["stationary", "conditional"] = "conditional",
 ) -> tuple[FloatArray, FloatArray, float]:
-    """Filtered series of eqs. (2)–(3) for a given stochastic model.
+    """Filtered series of eqs. (2)–(3) for a given model (no estimation).
 
     Parameters
     ----------
     y : array_like, shape (n,)
         Observed series; NaN marks missing epochs.
-    a : array_like, shape (m,)
-        Process parameters ``a_1..a_m`` of eq. (3) (``m >= 1``).
+    phi : array_like, shape (p,)
+        AR coefficients of the differences (paper sign).
+    d : int
+        Differences; ``p + d >= 1``.
     sigma_n, sigma_e : float
         Standard deviations of eqs. (2) and (3).
     weight, process_weight : array_like, optional
-        Weights of the observations ``(n,)`` and process equations ``(n - m,)`` (default 1).
+        Weights of the observations ``(n,)`` and process equations ``(n - p - d,)`` (default 1).
     width : int
         Diagonal offsets of ``N^-1`` to return.
+    initial : {"conditional", "stationary"}
+        See :class:`AriConfig`.
 
     Returns
     -------
@@ -468,18 +557,29 @@ def gauss_markov_filter(
     zb : ndarray, shape (width + 1, n)
         ``zb[l, t] = cov(x_t, x_{t+l})``.
     loglike : float
-        Diffuse log-likelihood (module notes).
+        Log-likelihood (module notes).
     """
     y_arr = np.asarray(y, dtype=float)
-    c = np.concatenate([[1.0], np.asarray(a, dtype=float).ravel()])
+    phi_arr = np.asarray(phi, dtype=float).ravel()
+    c = ari_polynomial(phi_arr, d)
     m = c.size - 1
     n = y_arr.size
     if m < 1 or n <= m:
-        raise ValueError(f"need len(a) >= 1 and len(y) > len(a), got {m} and {n}")
+        raise ValueError(f"need p + d >= 1 and len(y) > p + d, got {m} and {n}")
     observed = np.isfinite(y_arr)
-    w = observed.astype(float) if weight is None else np.where(observed, np.asarray(weight, float), 0.0)
+    w = (
+        observed.astype(float)
+        if weight is None
+        else np.where(observed, np.asarray(weight, dtype=float), 0.0)
+    )
     v = np.ones(n - m) if process_weight is None else np.asarray(process_weight, dtype=float)
-    fit = _solve(np.where(observed, y_arr, 0.0), w, v, c, sigma_n**2, sigma_e**2, width)
+    prior = None
+    if initial == "stationary" and phi_arr.size:
+        prior = _stationary_prior(phi_arr, d)
+        if prior is None:
+            raise ValueError("phi is not stationary; use initial='conditional'")
+    y0 = np.where(observed, y_arr, 0.0)
+    fit = _solve(y0, w, v, c, sigma_n**2, sigma_e**2, width, prior)
     if fit is None or fit.zb is None:
         raise np.linalg.LinAlgError("normal matrix of the Gauss-Markov model is singular")
     return fit.x, fit.zb, fit.loglike
@@ -542,17 +642,25 @@ def _evaluate(
     v: FloatArray,
     p: int,
     d: int,
+    stationary: bool,
 ) -> tuple[_Fit, float, float, FloatArray] | None:
     """Fit at ``(phi, log sn2, log se2)``; redundancies and the gradient of ``-log L``.
 
     ``d(-log L)/d log sigma_k^2 = (r_k - Omega_k / sigma_k^2) / 2`` and
-    ``d(-log L)/d phi_j = sum_s v_s E[e_s u_{s-j}] / sigma_e^2``.
+    ``d(-log L)/d phi_j = sum_s v_s E[e_s u_{s-j}] / sigma_e^2`` (+ the stationary-start
+    term ``(d log det Gamma + tr(d Gamma^-1 E[u u^T]) / sigma_e^2) / 2``).
     """
     phi = vec[:p]
     sn2 = math.exp(vec[p])
     se2 = math.exp(vec[p + 1])
     c = ari_polynomial(phi, d)
-    fit = _solve(y0, w, v, c, sn2, se2, p + d)
+    prior = None
+    if stationary and p:
+        prior = _stationary_prior(phi, d)
+        if prior is None:
+            return None
+    m = p + d
+    fit = _solve(y0, w, v, c, sn2, se2, m, prior)
     if fit is None or fit.zb is None:
         return None
     zb = fit.zb
@@ -560,14 +668,46 @@ def _evaluate(
     n_v = float(np.count_nonzero(v > 0))
     # redundancies r_k = n_k - tr(N^-1 N_k) (Förstner 1979)
     r_n = n_w - float(np.sum(w * zb[0])) / sn2
-    r_e = n_v - float(np.sum(v * _process_variance(c, zb))) / se2
+    trace_e = float(np.sum(v * _process_variance(c, zb)))
+    z_top = None
+    if prior is not None:
+        z_top = _dense_block(zb, m)
+        trace_e += float(np.sum(prior.g_mat * z_top))
+        n_v += p
+    r_e = n_v - trace_e / se2
     grad = np.empty(p + 2)
     # d(-2 log L)/d log sigma_k^2 = r_k - Omega_k / sigma_k^2  (zero <=> VCE equation)
     grad[p] = 0.5 * (r_n - fit.omega_n / sn2)
     grad[p + 1] = 0.5 * (r_e - fit.omega_e / se2)
     if p:
         grad[:p] = _phi_gradient_terms(c, fit.x, zb, v, p, d) / se2
+    if prior is not None and z_top is not None:
+        u0 = prior.d_mat @ fit.x[:m]
+        moment = prior.d_mat @ z_top @ prior.d_mat.T + np.outer(u0, u0)
+        for j in range(p):
+            h = 1e-6
+            shifted = phi.copy()
+            shifted[j] += h
+            other = _stationary_prior(shifted, d)
+            if other is None:
+                shifted[j] -= 2 * h
+                other = _stationary_prior(shifted, d)
+                h = -h
+            if other is None:
+                return None
+            dlogdet = (other.logdet_gamma - prior.logdet_gamma) / h
+            dinv = (other.gamma_inv - prior.gamma_inv) / h
+            grad[j] += 0.5 * (dlogdet + float(np.sum(dinv * moment)) / se2)
     return fit, r_n, r_e, grad
+
+
+def _dense_block(zb: FloatArray, m: int) -> FloatArray:
+    """Top-left ``(m, m)`` block of ``Z`` from its band (needs ``zb.shape[0] >= m``)."""
+    block = np.empty((m, m))
+    for i in range(m):
+        for j in range(i, m):
+            block[i, j] = block[j, i] = zb[j - i, i]
+    return block
 
 
 def _make_estimate(
@@ -588,10 +728,16 @@ def _make_estimate(
 
 
 def _hessian(
-    vec: FloatArray, y0: FloatArray, w: FloatArray, v: FloatArray, p: int, d: int
+    vec: FloatArray,
+    y0: FloatArray,
+    w: FloatArray,
+    v: FloatArray,
+    p: int,
+    d: int,
+    stationary: bool,
 ) -> FloatArray:
     """Hessian of ``-log L`` by forward differences of the analytic gradient, made SPD."""
-    base = _evaluate(vec, y0, w, v, p, d)
+    base = _evaluate(vec, y0, w, v, p, d, stationary)
     k = vec.size
     if base is None:
         return np.eye(k)
@@ -600,7 +746,7 @@ def _hessian(
         h = 1e-5 * max(1.0, abs(vec[j]))
         shifted = vec.copy()
         shifted[j] += h
-        out = _evaluate(shifted, y0, w, v, p, d)
+        out = _evaluate(shifted, y0, w, v, p, d, stationary)
         hess[:, j] = (out[3] - base[3]) / h if out is not None else 0.0
     hess = 0.5 * (hess + hess.T)
     vals, vecs = np.linalg.eigh(hess)
@@ -616,6 +762,7 @@ def _refine(
     v: FloatArray,
     p: int,
     d: int,
+    stationary: bool,
     tol: float,
     max_iter: int,
     log_floor: float,
@@ -630,7 +777,7 @@ def _refine(
     ``[log_floor, log_ceiling]``. Stopping rule: the expected gain ``g^T H^-1 g / 2`` of the
     next step is below ``tol`` (log-likelihood units), or ``max_iter`` steps.
     """
-    out = _evaluate(vec, y0, w, v, p, d)
+    out = _evaluate(vec, y0, w, v, p, d, stationary)
     n_eval = 1
     if out is None:
         return None
@@ -654,7 +801,7 @@ def _refine(
         while t > 1e-6:
             trial = vec + t * step
             trial[p:] = np.clip(trial[p:], log_floor, log_ceiling)
-            new = _evaluate(trial, y0, w, v, p, d)
+            new = _evaluate(trial, y0, w, v, p, d, stationary)
             n_eval += 1
             if new is not None and -new[0].loglike <= f - 1e-4 * t * 2.0 * gain / cap:
                 accepted = (trial, new)
@@ -681,6 +828,7 @@ def _vce_polish(
     v: FloatArray,
     p: int,
     d: int,
+    stationary: bool,
     tol: float,
     max_iter: int,
     log_floor: float,
@@ -706,7 +854,7 @@ def _vce_polish(
         if change < tol:
             converged = True
             break
-        trial = _evaluate(new, y0, w, v, p, d)
+        trial = _evaluate(new, y0, w, v, p, d, stationary)
         n_eval += 1
         if trial is None or trial[0].loglike < fit.loglike:
             converged = change < 1e3 * tol
@@ -946,6 +1094,7 @@ def _fit_fixed(
     if starts is None:
         starts = _starts(yc, p, d, cfg.n_starts)
     log_ceiling = math.log((1e3 * scale) ** 2)
+    st = cfg.initial == "stationary"
     # Several starts on a leading window (the whole series when short): the likelihood is
     # multimodal (sigma_n -> 0 and sigma_e -> 0 are local optima on short series).
     head = min(n, cfg.screen_n)
@@ -954,9 +1103,11 @@ def _fit_fixed(
     found: list[_Estimate] = []
     n_iter = 0
     for start in starts:
-        hess0 = _hessian(start, y0[:head], hw, hv, p, d)
+        hess0 = _hessian(start, y0[:head], hw, hv, p, d, st)
         n_iter += p + 3
-        out = _refine(start, hess0, y0[:head], hw, hv, p, d, cfg.tol, cfg.max_iter, log_floor, log_ceiling)
+        out = _refine(
+            start, hess0, y0[:head], hw, hv, p, d, st, cfg.tol, cfg.max_iter, log_floor, log_ceiling
+        )
         if out is None:
             continue
         n_iter += out[0].n_iter
@@ -965,10 +1116,10 @@ def _fit_fixed(
         return _bad(y, "singular", "normal matrix singular at every start", p, d)
     best = _choose(found, cfg.boundary_margin)
     vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
-    hess = _hessian(vec, y0[:head], hw, hv, p, d) * (n_obs / max(np.count_nonzero(hw), 1))
+    hess = _hessian(vec, y0[:head], hw, hv, p, d, st) * (n_obs / max(np.count_nonzero(hw), 1))
     n_iter += p + 3
     # Newton-type refinement on the whole series (also certifies convergence of short ones)
-    refined = _refine(vec, hess, y0, w, v, p, d, cfg.tol, cfg.max_iter, log_floor, log_ceiling)
+    refined = _refine(vec, hess, y0, w, v, p, d, st, cfg.tol, cfg.max_iter, log_floor, log_ceiling)
     if refined is None:
         return _bad(y, "singular", "normal matrix singular on the full series", p, d)
     best, hess = refined
@@ -995,7 +1146,7 @@ def _fit_fixed(
         w, v = w_new, v_new
         vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
         refined = _refine(
-            vec, hess, y0, w, v, p, d, cfg.tol, cfg.max_iter, log_floor, log_ceiling
+            vec, hess, y0, w, v, p, d, st, cfg.tol, cfg.max_iter, log_floor, log_ceiling
         )
         if refined is None:
             break
@@ -1003,7 +1154,7 @@ def _fit_fixed(
         n_iter += best.n_iter
         if change < 1e-3:
             break
-    best = _vce_polish(best, y0, w, v, p, d, cfg.tol, cfg.max_iter, log_floor)
+    best = _vce_polish(best, y0, w, v, p, d, st, cfg.tol, cfg.max_iter, log_floor)
     n_iter += best.n_iter
     return _finish(y, offset, observed, y0, w, v, p, d, best, n_iter, cfg)
 
@@ -1024,7 +1175,8 @@ def _finish(
     sn2 = math.exp(est.log_sn2)
     se2 = math.exp(est.log_se2)
     c = ari_polynomial(est.phi, d)
-    fit = _solve(y0, w, v, c, sn2, se2, max(p + d, 4))
+    prior = _stationary_prior(est.phi, d) if cfg.initial == "stationary" and p else None
+    fit = _solve(y0, w, v, c, sn2, se2, max(p + d, 4), prior)
     if fit is None or fit.zb is None:
         return _bad(y, "singular", "normal matrix singular at the estimate", p, d)
     zb = fit.zb
@@ -1076,17 +1228,20 @@ def _finish(
     )
 
 
-def _conditional_loglike(res: AriResult, big_m: int) -> float:
+def _conditional_loglike(res: AriResult, big_m: int, initial: str) -> float:
     """Log-likelihood of ``y_{M..n-1}`` given ``y_{0..M-1}`` (prediction-error decomposition)."""
     m = res.p + res.d
-    if big_m <= m:
+    if big_m <= m and (initial != "stationary" or res.p == 0):
         return res.loglike
     head = res.y[:big_m] - float(np.nanmean(res.y))
     observed = np.isfinite(head)
     w = res.weight[:big_m]
     v = res.process_weight[: big_m - m]
     c = ari_polynomial(res.phi, res.d)
-    fit = _solve(np.where(observed, head, 0.0), w, v, c, res.sigma_n**2, res.sigma_e**2, None)
+    prior = _stationary_prior(res.phi, res.d) if initial == "stationary" and res.p else None
+    fit = _solve(
+        np.where(observed, head, 0.0), w, v, c, res.sigma_n**2, res.sigma_e**2, None, prior
+    )
     if fit is None:
         return math.nan
     return res.loglike - fit.loglike
@@ -1154,7 +1309,7 @@ def fit_ari(
         res = _fit_fixed(y_sel, p, d, cfg, robust=False)
         if res.status not in ("ok", "not_converged", "boundary"):
             continue
-        ll = _conditional_loglike(res, big_m)
+        ll = _conditional_loglike(res, big_m, cfg.initial)
         if not np.isfinite(ll):
             continue
         k = p + 2
@@ -1177,6 +1332,43 @@ def _replace(res: AriResult, **changes: object) -> AriResult:
     values = {name: getattr(res, name) for name in res.__dataclass_fields__}
     values.update(changes)
     return AriResult(**values)  # type: ignore[arg-type]
+
+
+def observed_information(
+    y: ArrayLike,
+    phi: ArrayLike,
+    d: int,
+    sigma_n: float,
+    sigma_e: float,
+    *,
+    initial: Literal["stationary", "conditional"] = "stationary",
+) -> FloatArray:
+    """Observed information (Hessian of ``-log L``) at given parameters, unit weights.
+
+    Parameters
+    ----------
+    y : array_like, shape (n,)
+        Series (NaN = missing).
+    phi : array_like, shape (p,)
+    d : int
+    sigma_n, sigma_e : float
+
+    Returns
+    -------
+    ndarray, shape (p + 2, p + 2)
+        With respect to ``(phi_1..phi_p, log sigma_n^2, log sigma_e^2)``; its inverse is the
+        Cramér–Rao covariance, so ``sqrt(inv[-2, -2]) / 2`` is the relative standard deviation
+        of ``sigma_n`` attainable from these data (used to decide identifiability).
+    """
+    y_arr = np.asarray(y, dtype=float)
+    phi_arr = np.asarray(phi, dtype=float).ravel()
+    p = phi_arr.size
+    m = p + d
+    observed = np.isfinite(y_arr)
+    y0 = np.where(observed, y_arr - float(np.mean(y_arr[observed])), 0.0)
+    vec = np.concatenate([phi_arr, [2 * math.log(sigma_n), 2 * math.log(sigma_e)]])
+    st = initial == "stationary"
+    return _hessian(vec, y0, observed.astype(float), np.ones(y_arr.size - m), p, d, st)
 
 
 def regularize_time(
