@@ -142,6 +142,8 @@ def _block_tridiagonal_inverse(
     nblocks, b, _ = diag_blocks.shape
     if nblocks == 1:
         return _spd_inv(diag_blocks), np.zeros((0, b, b))
+    if nblocks * b <= 64:
+        return _dense_inverse(diag_blocks, off_blocks)
     pad = nblocks % 2
     if pad:
         eye = np.broadcast_to(np.eye(b), (1, b, b))
@@ -179,6 +181,26 @@ def _block_tridiagonal_inverse(
     if pad:
         return zd[:-1], zo[:-1]
     return zd, zo
+
+
+def _dense_inverse(
+    diag_blocks: FloatArray, off_blocks: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Small systems: invert the assembled matrix directly (fewer NumPy calls)."""
+    nblocks, b, _ = diag_blocks.shape
+    size = nblocks * b
+    dense = np.zeros((size, size))
+    for k in range(nblocks):
+        dense[k * b : (k + 1) * b, k * b : (k + 1) * b] = diag_blocks[k]
+    for k in range(nblocks - 1):
+        dense[k * b : (k + 1) * b, (k + 1) * b : (k + 2) * b] = off_blocks[k]
+        dense[(k + 1) * b : (k + 2) * b, k * b : (k + 1) * b] = off_blocks[k].T
+    inv = np.linalg.inv(dense)
+    zd = np.stack([inv[k * b : (k + 1) * b, k * b : (k + 1) * b] for k in range(nblocks)])
+    zo = np.stack(
+        [inv[k * b : (k + 1) * b, (k + 1) * b : (k + 2) * b] for k in range(nblocks - 1)]
+    )
+    return 0.5 * (zd + np.swapaxes(zd, 1, 2)), zo
 
 
 def _spd_inv(blocks: FloatArray) -> FloatArray:

@@ -426,20 +426,26 @@ class _Prior:
 def _ar_autocovariance(phi: FloatArray) -> FloatArray | None:
     """``Gamma_p``: covariance of ``(u_t, ..., u_{t-p+1})`` of the AR(p) with unit innovation.
 
-    ``None`` when ``phi`` is not stationary (a root of ``phi(B)`` on or inside the unit circle).
+    Yule–Walker: ``gamma(k) + sum_i phi_i gamma(|k - i|) = [k == 0]``, ``k = 0..p``, solved for
+    ``gamma(0..p)``. ``None`` when ``phi`` is not stationary (a root of ``phi(B)`` on or inside
+    the unit circle).
     """
-    import scipy.linalg
-
     p = phi.size
     comp = np.zeros((p, p))
     comp[0] = -phi
     comp[1:, :-1] = np.eye(p - 1)
     if np.max(np.abs(np.linalg.eigvals(comp))) >= 1.0 - 1e-7:
         return None
-    q = np.zeros((p, p))
-    q[0, 0] = 1.0
-    gamma = scipy.linalg.solve_discrete_lyapunov(comp, q)
-    return 0.5 * (gamma + gamma.T)
+    coef = np.concatenate([[1.0], phi])
+    mat = np.zeros((p + 1, p + 1))
+    for k in range(p + 1):
+        for i in range(p + 1):
+            mat[k, abs(k - i)] += coef[i]
+    rhs = np.zeros(p + 1)
+    rhs[0] = 1.0
+    gam = np.linalg.solve(mat, rhs)
+    idx = np.arange(p)
+    return gam[np.abs(idx[:, None] - idx[None, :])]
 
 
 def _stationary_prior(phi: FloatArray, d: int) -> _Prior | None:
@@ -1305,10 +1311,21 @@ def fit_ari(
     best_key: tuple[int, int] | None = None
     best_score = math.inf
     fits: dict[tuple[int, int], tuple[float, float]] = {}
+    previous: dict[int, AriResult] = {}
     for p, d in candidates:
-        res = _fit_fixed(y_sel, p, d, cfg, robust=False)
+        # Warm start from ARI(p-1, d) (phi_p = 0) plus the high-noise default start.
+        starts = None
+        prev = previous.get(d)
+        if prev is not None and prev.p == p - 1 and p > 0:
+            warm = np.concatenate(
+                [prev.phi, [0.0, 2 * math.log(prev.sigma_n), 2 * math.log(prev.sigma_e)]]
+            )
+            yc = y_sel - float(np.nanmean(y_sel))
+            starts = [warm, *_starts(yc, p, d, cfg.n_starts)[-1:]]
+        res = _fit_fixed(y_sel, p, d, cfg, robust=False, starts=starts)
         if res.status not in ("ok", "not_converged", "boundary"):
             continue
+        previous[d] = res
         ll = _conditional_loglike(res, big_m, cfg.initial)
         if not np.isfinite(ll):
             continue
