@@ -154,7 +154,11 @@ class AriConfig:
     n_starts : int
         Starting points of the estimation (noise fractions spread over (0, 1)).
     tol : float
-        Stopping rule: max change of ``phi``, ``log sigma_n``, ``log sigma_e``.
+        Stopping rule of the VCE iteration: relative change of ``sigma_n`` and ``sigma_e``.
+    gain_tol : float
+        Stopping rule of the quasi-Newton search: predicted log-likelihood gain of the next
+        step (default 1e-3: parameter changes far below their standard errors; the last digits
+        of the likelihood along the weakly identified sigma_e/phi ridge cost many steps).
     max_iter : int
         Iteration limit of the VCE/AR fixed-point scheme (per start).
     max_robust_iter : int
@@ -189,6 +193,7 @@ class AriConfig:
     flag_threshold: float = 3.29
     n_starts: int = 3
     tol: float = 1e-6
+    gain_tol: float = 1e-3
     max_iter: int = 300
     max_robust_iter: int = 20
     screen_n: int = 4000
@@ -415,60 +420,66 @@ class _Prior:
 
     ``u = (1 - B)^d x``; ``D`` ``(p, m)`` maps ``x_0..x_{m-1}`` to ``u_d..u_{m-1}``;
     ``G = D^T Gamma^-1 D`` is the block added to the normal matrix (times ``1/sigma_e^2``).
+    ``dlogdet[j]`` and ``dgamma_inv[j]`` are the exact derivatives with respect to ``phi_j``.
     """
 
     d_mat: FloatArray
     gamma_inv: FloatArray
     g_mat: FloatArray
     logdet_gamma: float
+    dlogdet: FloatArray
+    dgamma_inv: FloatArray
 
 
-def _ar_autocovariance(phi: FloatArray) -> FloatArray | None:
-    """``Gamma_p``: covariance of ``(u_t, ..., u_{t-p+1})`` of the AR(p) with unit innovation.
-
-    Yule–Walker: ``gamma(k) + sum_i phi_i gamma(|k - i|) = [k == 0]``, ``k = 0..p``, solved for
-    ``gamma(0..p)``. ``None`` when ``phi`` is not stationary (a root of ``phi(B)`` on or inside
-    the unit circle).
-    """
+def _stationary_prior(phi: FloatArray, d: int) -> _Prior | None:
+    """Yule–Walker ``gamma(k) + sum_i phi_i gamma(|k - i|) = [k == 0]`` (unit innovation),
+    ``Gamma_p = toeplitz(gamma(0..p-1))`` and its derivatives; ``None`` unless stationary."""
     p = phi.size
+    m = p + d
     comp = np.zeros((p, p))
     comp[0] = -phi
     comp[1:, :-1] = np.eye(p - 1)
     if np.max(np.abs(np.linalg.eigvals(comp))) >= 1.0 - 1e-7:
         return None
     coef = np.concatenate([[1.0], phi])
+    lag = np.abs(np.arange(p + 1)[:, None] - np.arange(p + 1)[None, :])
     mat = np.zeros((p + 1, p + 1))
-    for k in range(p + 1):
-        for i in range(p + 1):
-            mat[k, abs(k - i)] += coef[i]
+    for i in range(p + 1):
+        np.add.at(mat, (np.arange(p + 1), lag[:, i]), coef[i])
     rhs = np.zeros(p + 1)
     rhs[0] = 1.0
-    gam = np.linalg.solve(mat, rhs)
-    idx = np.arange(p)
-    return gam[np.abs(idx[:, None] - idx[None, :])]
-
-
-def _stationary_prior(phi: FloatArray, d: int) -> _Prior | None:
-    p = phi.size
-    m = p + d
-    gamma = _ar_autocovariance(phi)
-    if gamma is None:
+    try:
+        gam = np.linalg.solve(mat, rhs)
+    except np.linalg.LinAlgError:
         return None
+    idx = np.abs(np.arange(p)[:, None] - np.arange(p)[None, :])
+    gamma = gam[idx]
     try:
         chol = np.linalg.cholesky(gamma)
     except np.linalg.LinAlgError:
         return None
     gamma_inv = np.linalg.inv(gamma)
     gamma_inv = 0.5 * (gamma_inv + gamma_inv.T)
+    # d gamma / d phi_j = -mat^-1 (d mat / d phi_j) gamma, d mat[k, |k-j|] / d phi_j = 1
+    dlogdet = np.empty(p)
+    dgamma_inv = np.empty((p, p, p))
+    for j in range(1, p + 1):
+        dgam = -np.linalg.solve(mat, gam[lag[:, j]])
+        dgamma = dgam[idx]
+        dgamma_inv[j - 1] = -gamma_inv @ dgamma @ gamma_inv
+        dlogdet[j - 1] = float(np.sum(gamma_inv * dgamma))
     delta = ari_polynomial(np.zeros(0), d)
     d_mat = np.zeros((p, m))
     for k in range(p):
         for j in range(d + 1):
             d_mat[k, d + k - j] = delta[j]
-    # Gamma is ordered (u_t, u_{t-1}, ...): reverse to time order (u_d, ..., u_{m-1}).
-    gamma_inv = gamma_inv[::-1, ::-1]
     return _Prior(
-        d_mat, gamma_inv, d_mat.T @ gamma_inv @ d_mat, 2.0 * float(np.sum(np.log(np.diag(chol))))
+        d_mat,
+        gamma_inv,
+        d_mat.T @ gamma_inv @ d_mat,
+        2.0 * float(np.sum(np.log(np.diag(chol)))),
+        dlogdet,
+        dgamma_inv,
     )
 
 
@@ -511,7 +522,8 @@ def _solve(
     if prior is not None:
         p = prior.d_mat.shape[0]
         diffuse = m - p
-        omega_e += float(x[:m] @ prior.g_mat @ x[:m])
+        u0 = prior.d_mat @ x[:m]  # differences first: x itself can be large (no cancellation)
+        omega_e += float(u0 @ prior.gamma_inv @ u0)
         extra = p * math.log(se2) + prior.logdet_gamma
     loglike = -0.5 * (
         (n_used - diffuse) * math.log(2 * math.pi)
@@ -691,19 +703,9 @@ def _evaluate(
         u0 = prior.d_mat @ fit.x[:m]
         moment = prior.d_mat @ z_top @ prior.d_mat.T + np.outer(u0, u0)
         for j in range(p):
-            h = 1e-6
-            shifted = phi.copy()
-            shifted[j] += h
-            other = _stationary_prior(shifted, d)
-            if other is None:
-                shifted[j] -= 2 * h
-                other = _stationary_prior(shifted, d)
-                h = -h
-            if other is None:
-                return None
-            dlogdet = (other.logdet_gamma - prior.logdet_gamma) / h
-            dinv = (other.gamma_inv - prior.gamma_inv) / h
-            grad[j] += 0.5 * (dlogdet + float(np.sum(dinv * moment)) / se2)
+            grad[j] += 0.5 * (
+                prior.dlogdet[j] + float(np.sum(prior.dgamma_inv[j] * moment)) / se2
+            )
     return fit, r_n, r_e, grad
 
 
@@ -1086,9 +1088,12 @@ def _fit_fixed(
             p,
             d,
         )
-    # Work on the series minus its mean: keeps the normal equations well scaled for large
-    # offsets (ECEF coordinates) and gives the AR (d = 0) model its zero mean.
-    offset = float(np.mean(y[observed]))
+    # Work on the series minus a polynomial of degree d - 1 (the mean when d <= 1): the process
+    # equations annihilate it, so nothing changes but the scale of the numbers (ECEF offsets,
+    # drifting integrated series); for d = 0 it gives the AR model its zero mean.
+    tt = np.linspace(-1.0, 1.0, n)
+    trend_coef = np.polynomial.polynomial.polyfit(tt[observed], y[observed], max(d - 1, 0))
+    offset = np.polynomial.polynomial.polyval(tt, trend_coef)
     yc = y - offset
     y0 = np.where(observed, yc, 0.0)
     scale = float(np.nanstd(np.convolve(yc, ari_polynomial(np.zeros(0), d), mode="valid")))
@@ -1112,7 +1117,18 @@ def _fit_fixed(
         hess0 = _hessian(start, y0[:head], hw, hv, p, d, st)
         n_iter += p + 3
         out = _refine(
-            start, hess0, y0[:head], hw, hv, p, d, st, cfg.tol, cfg.max_iter, log_floor, log_ceiling
+            start,
+            hess0,
+            y0[:head],
+            hw,
+            hv,
+            p,
+            d,
+            st,
+            cfg.gain_tol,
+            cfg.max_iter,
+            log_floor,
+            log_ceiling,
         )
         if out is None:
             continue
@@ -1122,15 +1138,42 @@ def _fit_fixed(
         return _bad(y, "singular", "normal matrix singular at every start", p, d)
     best = _choose(found, cfg.boundary_margin)
     vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
-    hess = _hessian(vec, y0[:head], hw, hv, p, d, st) * (n_obs / max(np.count_nonzero(hw), 1))
+    hess = _hessian(vec, y0[:head], hw, hv, p, d, st)
     n_iter += p + 3
-    # Newton-type refinement on the whole series (also certifies convergence of short ones)
-    refined = _refine(vec, hess, y0, w, v, p, d, st, cfg.tol, cfg.max_iter, log_floor, log_ceiling)
-    if refined is None:
-        return _bad(y, "singular", "normal matrix singular on the full series", p, d)
-    best, hess = refined
-    n_iter += best.n_iter
+    # Quasi-Newton refinement on the whole series from the window's optimum, with the window's
+    # Hessian scaled by the number of observations (also certifies convergence of short series).
+    # (Intermediate windows were tried: the carried-over BFGS matrix then crawls along the
+    # sigma_e/phi ridge and the total work grows.)
+    size = head
+    while True:
+        new_size = n
+        hess = hess * (
+            np.count_nonzero(w[:new_size]) / max(np.count_nonzero(w[:size]), 1)
+        )
+        refined = _refine(
+            vec,
+            hess,
+            y0[:new_size],
+            w[:new_size],
+            v[: new_size - m],
+            p,
+            d,
+            st,
+            cfg.gain_tol,
+            cfg.max_iter,
+            log_floor,
+            log_ceiling,
+        )
+        if refined is None:
+            return _bad(y, "singular", "normal matrix singular on the full series", p, d)
+        best, hess = refined
+        n_iter += best.n_iter
+        vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
+        size = new_size
+        if size >= n:
+            break
     use_robust = robust and cfg.robust != "off"
+    reweighted = False
     for _ in range(cfg.max_robust_iter if use_robust else 0):
         sn2 = math.exp(best.log_sn2)
         se2 = math.exp(best.log_se2)
@@ -1150,16 +1193,26 @@ def _fit_fixed(
         if np.count_nonzero(w_new > 0) < _min_observations(p, d):
             break
         w, v = w_new, v_new
+        reweighted = True
+        # IRLS inside the VCE: new weights, variance components re-estimated with phi fixed
+        # (one solve + selected inversion per step); phi follows in the joint step below.
         vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
-        refined = _refine(
-            vec, hess, y0, w, v, p, d, st, cfg.tol, cfg.max_iter, log_floor, log_ceiling
-        )
-        if refined is None:
+        out = _evaluate(vec, y0, w, v, p, d, st)
+        if out is None:
             break
-        best, hess = refined
-        n_iter += best.n_iter
+        est = _make_estimate(vec, out, p, 1, best.converged, log_floor)
+        best = _vce_polish(est, y0, w, v, p, d, st, 1e-3, 10, log_floor)
+        n_iter += 1 + best.n_iter
         if change < 1e-3:
             break
+    if reweighted:
+        vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
+        refined = _refine(
+            vec, hess, y0, w, v, p, d, st, cfg.gain_tol, cfg.max_iter, log_floor, log_ceiling
+        )
+        if refined is not None:
+            best, hess = refined
+            n_iter += best.n_iter
     best = _vce_polish(best, y0, w, v, p, d, st, cfg.tol, cfg.max_iter, log_floor)
     n_iter += best.n_iter
     return _finish(y, offset, observed, y0, w, v, p, d, best, n_iter, cfg)
@@ -1167,7 +1220,7 @@ def _fit_fixed(
 
 def _finish(
     y: FloatArray,
-    offset: float,
+    offset: FloatArray,
     observed: BoolArray,
     y0: FloatArray,
     w: FloatArray,
