@@ -12,7 +12,7 @@ both parameter sets.
 Usage::
 
     PYTHONPATH=src python benchmarks/bench_ari.py [--n 100000] [--repeat 3] [--big 1000000]
-        [--order 5,2] [--skip-sarimax]
+        [--order 5,2] [--skip-sarimax] [--threads 1]
 
 Prints medians of ``--repeat`` runs and the ratio; memory is measured with ``tracemalloc`` (peak
 of Python-allocated NumPy memory) at n/10 and n to show it is linear in n.
@@ -20,15 +20,26 @@ of Python-allocated NumPy memory) at n/10 and n to show it is linear in n.
 
 from __future__ import annotations
 
-import argparse
-import statistics
-import time
-import tracemalloc
-import warnings
+import os
+import sys
 
-import numpy as np
+# Single-threaded BLAS/LAPACK on both sides (the SARIMAX figure is single-threaded);
+# ``--threads N`` overrides. Must be set before NumPy is imported.
+_threads = "1"
+if "--threads" in sys.argv:
+    _threads = sys.argv[sys.argv.index("--threads") + 1]
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, _threads)
 
-from navtrack.smoothing.ari import AriConfig, fit_ari, simulate_ari
+import argparse  # noqa: E402
+import statistics  # noqa: E402
+import time  # noqa: E402
+import tracemalloc  # noqa: E402
+import warnings  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from navtrack.smoothing.ari import AriConfig, fit_ari, simulate_ari  # noqa: E402
 
 # The GPS case of the reproduction: smooth ARI(5,2), sigma_n = 0.02 m, sigma_e = 0.01 m.
 PHI = {
@@ -77,12 +88,16 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--order", default="5,2")
     parser.add_argument("--skip-sarimax", action="store_true")
+    parser.add_argument("--threads", default="1", help="BLAS threads (default 1)")
     args = parser.parse_args()
     order = tuple(int(v) for v in args.order.split(","))
     assert len(order) == 2
     order2: tuple[int, int] = (order[0], order[1])
     y = _series(args.n, order2)
-    print(f"series: ARI{order2}, n = {args.n}, sigma_n = 0.02, sigma_e = 0.01")
+    print(
+        f"series: ARI{order2}, n = {args.n}, sigma_n = 0.02, sigma_e = 0.01; "
+        f"BLAS threads {os.environ.get('OMP_NUM_THREADS')}"
+    )
     times = []
     res = None
     for _ in range(args.repeat):
@@ -134,7 +149,7 @@ def main() -> None:
             f"navtrack n={args.big} (robust off): {t_big:.1f} s; status {res_big.status}, "  # type: ignore[attr-defined]
             f"sigma_n {res_big.sigma_n:.5f}, sigma_e {res_big.sigma_e:.5f}"  # type: ignore[attr-defined]
         )
-        t_big_r, res_big_r = _time_navtrack(yb, order2, "danish")
+        t_big_r, _res_big_r = _time_navtrack(yb, order2, "danish")
         print(f"navtrack n={args.big} (danish):     {t_big_r:.1f} s")
         peak = _peak_memory(yb, order2)
         print(f"peak traced memory n={args.big}: {peak:.1f} MiB")

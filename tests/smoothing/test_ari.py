@@ -38,7 +38,16 @@ def _random_band(rng: np.random.Generator, n: int, m: int) -> tuple[np.ndarray, 
 
 @pytest.mark.parametrize(
     ("n", "m", "width"),
-    [(1, 1, 1), (2, 1, 1), (7, 2, 4), (17, 3, 3), (64, 2, 2), (101, 4, 4), (257, 7, 7), (300, 1, 4)],
+    [
+        (1, 1, 1),
+        (2, 1, 1),
+        (7, 2, 4),
+        (17, 3, 3),
+        (64, 2, 2),
+        (101, 4, 4),
+        (257, 7, 7),
+        (300, 1, 4),
+    ],
 )
 def test_banded_solve_and_selected_inverse_match_dense(n: int, m: int, width: int) -> None:
     rng = np.random.default_rng(n * 10 + m)
@@ -184,7 +193,7 @@ def test_autocorrelation_of_filtered_data_from_inverse() -> None:
 
 def test_missing_epochs_are_kept_and_interpolated() -> None:
     rng = np.random.default_rng(9)
-    y, x_true = simulate_ari(rng, 400, (-0.8,), 2, 0.01, 0.005)
+    y, _x_true = simulate_ari(rng, 400, (-0.8,), 2, 0.01, 0.005)
     y[100:110] = np.nan
     res = fit_ari(y, AriConfig(order=(1, 2)))
     assert res.n_missing == 10
@@ -221,7 +230,9 @@ def test_regularize_time_inserts_missing_epochs() -> None:
     tg, yg, inserted = regularize_time(t, y)
     assert inserted == 2
     np.testing.assert_allclose(tg, np.arange(7.0))
-    assert np.isnan(yg[3]) and np.isnan(yg[4]) and yg[5] == 6.0
+    assert np.isnan(yg[3])
+    assert np.isnan(yg[4])
+    assert yg[5] == 6.0
     with pytest.raises(ValueError, match="off the"):
         regularize_time(np.array([0.0, 1.0, 2.5, 3.0]), np.zeros(4))
     with pytest.raises(ValueError, match="strictly increasing"):
@@ -234,9 +245,11 @@ def test_robust_weight_functions() -> None:
     np.testing.assert_allclose(w[:5], [1, 1, 1.5 / 2.5, 0.5, 0.3])
     assert w[5] == 0.0
     w = robust_weight(t, "igg3", (1.5, 4.0))
-    assert w[1] == 1.0 and w[4] == 0.0
+    assert w[1] == 1.0
+    assert w[4] == 0.0
     assert w[3] == pytest.approx(1.5 / 3.0 * ((4.0 - 3.0) / 2.5) ** 2)
     w = robust_weight(np.array([2.5 - 1e-9, 2.5 + 1e-9, 5.0]), "danish", (2.5,))
-    assert w[0] == 1.0 and w[1] == pytest.approx(1.0, abs=1e-6)  # continuous at c
+    assert w[0] == 1.0
+    assert w[1] == pytest.approx(1.0, abs=1e-6)
     assert w[2] == pytest.approx(math.exp(1 - 4))
     np.testing.assert_array_equal(robust_weight(t, "off")[:5], 1.0)

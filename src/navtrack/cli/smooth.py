@@ -112,7 +112,9 @@ def run_smooth(args: argparse.Namespace) -> int:
             p_str, d_str = args.order.split(",")
             order = (int(p_str), int(d_str))
         except ValueError:
-            raise SystemExit(f"navtrack smooth: --order must be 'auto' or P,D, got {args.order!r}")
+            raise SystemExit(
+                f"navtrack smooth: --order must be 'auto' or P,D, got {args.order!r}"
+            ) from None
     try:
         cfg = AriConfig(
             order=order,
@@ -121,7 +123,7 @@ def run_smooth(args: argparse.Namespace) -> int:
             flag_threshold=args.flag_threshold,
         )
     except ValueError as exc:
-        raise SystemExit(f"navtrack smooth: {exc}")
+        raise SystemExit(f"navtrack smooth: {exc}") from None
     time_col = args.time
     if time_col is None:
         time_col = next((c for c in _TIME_CANDIDATES if c in df.columns), None)
@@ -135,7 +137,9 @@ def run_smooth(args: argparse.Namespace) -> int:
         columns = [
             c
             for c in df.columns
-            if c != time_col and pd.api.types.is_numeric_dtype(df[c]) and not c.startswith("Unnamed")
+            if c != time_col
+            and pd.api.types.is_numeric_dtype(df[c])
+            and not c.startswith("Unnamed")
         ]
     missing = [c for c in columns if c not in df.columns]
     if missing:
@@ -145,14 +149,16 @@ def run_smooth(args: argparse.Namespace) -> int:
         )
     if not columns:
         raise SystemExit("navtrack smooth: no numeric columns to smooth; give --columns")
-    values = np.column_stack([pd.to_numeric(df[c], errors="coerce").to_numpy(float) for c in columns])
+    values = np.column_stack(
+        [pd.to_numeric(df[c], errors="coerce").to_numpy(float) for c in columns]
+    )
     n_read = values.shape[0]
     if time_col is not None:
         t = df[time_col].to_numpy(dtype=float)
         try:
             t_grid, grid, inserted = regularize_time(t, values)
         except ValueError as exc:
-            raise SystemExit(f"navtrack smooth: {args.file}: {exc}")
+            raise SystemExit(f"navtrack smooth: {args.file}: {exc}") from None
     else:
         t_grid, grid, inserted = np.arange(n_read, dtype=float), values, 0
     print(

@@ -111,23 +111,35 @@ SYNTHETIC_CASES: tuple[SyntheticCase, ...] = (
     # AR(5) with roots 0.9, 0.6 ± 0.3i, -0.3, 0.2 of the characteristic polynomial, i.e.
     # phi(B) = (1 - 0.9B)(1 - 1.2B + 0.45B^2)(1 + 0.3B)(1 - 0.2B); sigma_e = 0.01 m gives
     # sigma_x/sigma_n ~ 0.6 (Table 3 vs Table 1: ~0.8).
-    SyntheticCase(
-        "gps_strip", "GPS strip ARI(5,2) 0.6 s", _GPS_PHI, 2, 0.02, 0.01, 130, 0.6, "m"
-    ),
+    SyntheticCase("gps_strip", "GPS strip ARI(5,2) 0.6 s", _GPS_PHI, 2, 0.02, 0.01, 130, 0.6, "m"),
     SyntheticCase(
         "gps_flight", "GPS flight ARI(5,2) 0.6 s", _GPS_PHI, 2, 0.02, 0.01, 2000, 0.6, "m"
     ),
     # Paper §3.2, Table 4: Shuttle INS ARI(6,1), 2 s, strips of 120–800 points,
     # sigma_n ~ 0.006 deg, sigma_e ~ 0.0019 deg (yaw).
     SyntheticCase(
-        "shuttle_ins", "Shuttle INS ARI(6,1) 2 s", (-0.8, 0.2, -0.1, 0.1, -0.05, 0.02), 1,
-        0.006, 0.0019, 400, 2.0, "deg",
+        "shuttle_ins",
+        "Shuttle INS ARI(6,1) 2 s",
+        (-0.8, 0.2, -0.1, 0.1, -0.05, 0.02),
+        1,
+        0.006,
+        0.0019,
+        400,
+        2.0,
+        "deg",
     ),
     # Paper §3.2, Table 5: aircraft INS ARI(2,2), 10 Hz, sigma_n ~ 0.003, sigma_e ~ 0.0013 deg
     # (pitch); 3000 epochs = 5 min of the undisturbed central part of a flight.
     SyntheticCase(
-        "aircraft_ins", "Aircraft INS ARI(2,2) 10 Hz", (-1.2, 0.5), 2,
-        0.003, 0.0013, 3000, 0.1, "deg",
+        "aircraft_ins",
+        "Aircraft INS ARI(2,2) 10 Hz",
+        (-1.2, 0.5),
+        2,
+        0.003,
+        0.0013,
+        3000,
+        0.1,
+        "deg",
     ),
 )
 
@@ -156,13 +168,18 @@ class AriExperimentParams:
     select_order: bool = True
 
 
+def default_params() -> AriExperimentParams:
+    """Parameters of the published-style reproduction (all cases, order selection on)."""
+    return AriExperimentParams()
+
+
 def synthetic_run(index: int, rng: np.random.Generator, params: AriExperimentParams) -> dict:
     """One Monte Carlo run: every case simulated, estimated, contaminated, re-estimated."""
     out: dict[str, dict[str, Any]] = {}
     for case in params.cases:
         p = len(case.phi)
         y, _ = simulate_ari(rng, case.n, case.phi, case.d, case.sigma_n, case.sigma_e)
-        k = max(1, int(round(params.outlier_rate * case.n)))
+        k = max(1, round(params.outlier_rate * case.n))
         idx = rng.choice(case.n, size=k, replace=False)
         lo, hi = params.outlier_sigma
         mag = rng.uniform(lo, hi, size=k) * rng.choice([-1.0, 1.0], size=k)
@@ -284,8 +301,12 @@ def summarize_synthetic(mc: MonteCarloResult, params: AriExperimentParams) -> di
             "false_flag_rate": false_rate,
             "orders_selected": orders,
             "bars": {
-                "sigma_n_within_10pct": abs(med_n - 1.0) <= 0.10 if crb_n < IDENTIFIABLE_CRB else None,
-                "sigma_e_within_10pct": abs(med_e - 1.0) <= 0.10 if crb_e < IDENTIFIABLE_CRB else None,
+                "sigma_n_within_10pct": abs(med_n - 1.0) <= 0.10
+                if crb_n < IDENTIFIABLE_CRB
+                else None,
+                "sigma_e_within_10pct": abs(med_e - 1.0) <= 0.10
+                if crb_e < IDENTIFIABLE_CRB
+                else None,
                 "recall_ge_95pct": recall >= 0.95,
                 "false_flags_le_1pct": false_rate <= 0.01,
             },
@@ -347,7 +368,8 @@ def broad_series(path: Path, *, decimate: int = 1) -> RealSeries:
         a[ok] = np.unwrap(a[ok])
         cols[name] = np.degrees(a)
     dt = decimate / rate
-    return RealSeries(f"BROAD {path.stem}", np.arange(n) * dt, cols, "deg", dt)
+    t_s = np.arange(n, dtype=np.float64) * dt
+    return RealSeries(f"BROAD {path.stem}", t_s, cols, "deg", dt)
 
 
 def pyins_series(path: Path) -> RealSeries:
@@ -562,9 +584,11 @@ def tables_markdown(results: dict[str, Any]) -> str:
         "| CRB σn | CRB σe | σx/σn est (truth) | orders chosen (BIC) |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for name, s in results["synthetic"].items():
+    for _name, s in results["synthetic"].items():
         t = s["truth"]
-        orders = ", ".join(f"{k}×{v}" for k, v in sorted(s["orders_selected"].items(), key=lambda kv: -kv[1]))
+        orders = ", ".join(
+            f"{k}×{v}" for k, v in sorted(s["orders_selected"].items(), key=lambda kv: -kv[1])
+        )
         lines.append(
             f"| {s['label']} | {t['n']} | ({t['order'][0]},{t['order'][1]}) | "
             f"{_fmt(t['sigma_n'])} {t['unit']} | {_fmt(t['sigma_e'])} {t['unit']} | "
@@ -594,8 +618,13 @@ def tables_markdown(results: dict[str, Any]) -> str:
             f"{s['robust_median_sigma_n_ratio']:.3f} | {s['plain_median_sigma_n_ratio']:.3f} | "
             f"{s['plain_recall']:.3f} |"
         )
-    lines += ["", "## Bars", "", "| case | σn within 10 % | σe within 10 % | recall ≥ 95 % | "
-              "false flags ≤ 1 % |", "|---|---|---|---|---|"]
+    lines += [
+        "",
+        "## Bars",
+        "",
+        "| case | σn within 10 % | σe within 10 % | recall ≥ 95 % | false flags ≤ 1 % |",
+        "|---|---|---|---|---|",
+    ]
     for s in results["synthetic"].values():
         b = s["bars"]
         lines.append(
@@ -629,7 +658,8 @@ def tables_markdown(results: dict[str, Any]) -> str:
             "## SARIMAX cross-check (same series, same order; both scored by both likelihoods)",
             "",
             "| series | (p,d) | n | navtrack s | SARIMAX s | speed-up | SARIMAX converged | "
-            "σn nav / SM | σe nav / SM | logL_SM(nav) − logL_SM(SM) | logL_nav(nav) − logL_nav(SM) |",
+            "σn nav / SM | σe nav / SM | logL_SM(nav) − logL_SM(SM) | "
+            "logL_nav(nav) − logL_nav(SM) |",
             "|---|---|---|---|---|---|---|---|---|---|---|",
         ]
         for c in results["sarimax"]:
@@ -655,7 +685,7 @@ def reproduce(options: ReproduceOptions) -> dict[str, Any]:
     import os
 
     runs = DEFAULT_RUNS if options.runs is None else options.runs
-    params = AriExperimentParams()
+    params = default_params()
     mc = run_monte_carlo(
         synthetic_run,
         runs,

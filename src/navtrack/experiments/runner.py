@@ -243,9 +243,7 @@ def run_monte_carlo(
         raise ValueError("give at most one of workers and scheduler")
     if backend not in ("auto", "loop"):
         raise ValueError(f"backend must be 'auto' or 'loop', got {backend!r}")
-    store = (
-        _Checkpoints(checkpoint_dir, name, seed, params) if checkpoint_dir is not None else None
-    )
+    store = _Checkpoints(checkpoint_dir, name, seed, params) if checkpoint_dir is not None else None
     records: dict[int, RunRecord] = {}
     if store is not None:
         for i in range(n_runs):
@@ -359,10 +357,7 @@ def _run_distributed(
     else:
         client = Client(scheduler)
     try:
-        futures = {
-            client.submit(_execute, fn, seed, i, params, pure=False): i
-            for i in pending
-        }
+        futures = {client.submit(_execute, fn, seed, i, params, pure=False): i for i in pending}
         for future in as_completed(futures):
             index = futures[future]
             try:

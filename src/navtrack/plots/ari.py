@@ -6,6 +6,7 @@ pyplot, no global backend change).
 
 from __future__ import annotations
 
+import itertools
 import re
 from collections.abc import Mapping, Sequence
 from os import fspath
@@ -77,7 +78,9 @@ def series_figure(t: ArrayLike, result: AriResult, title: str = "", unit: str = 
     )
     flagged = result.gross_error
     if flagged.any():
-        ax1.plot(t_arr[flagged], result.y[flagged], "o", mfc="none", color="C3", label="gross error")
+        ax1.plot(
+            t_arr[flagged], result.y[flagged], "o", mfc="none", color="C3", label="gross error"
+        )
     ax1.set_ylabel(unit)
     ax1.legend(loc="best", fontsize=8)
     ax1.set_title(
@@ -130,7 +133,7 @@ def recall_figure(detections: Mapping[str, tuple[Sequence[float], Sequence[bool]
         h = np.asarray(hits, dtype=bool)
         rec = [
             h[(m >= lo) & (m < hi)].mean() if np.any((m >= lo) & (m < hi)) else np.nan
-            for lo, hi in zip(edges[:-1], edges[1:], strict=True)
+            for lo, hi in itertools.pairwise(edges)
         ]
         ax.plot(centres, rec, "o-", label=name)
     ax.axhline(0.95, color="k", lw=0.8, ls="--")

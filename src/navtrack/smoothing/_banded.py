@@ -222,14 +222,12 @@ def _dense_inverse(
         dense[(k + 1) * b : (k + 2) * b, k * b : (k + 1) * b] = off_blocks[k].T
     inv = np.linalg.inv(dense)
     zd = np.stack([inv[k * b : (k + 1) * b, k * b : (k + 1) * b] for k in range(nblocks)])
-    zo = np.stack(
-        [inv[k * b : (k + 1) * b, (k + 1) * b : (k + 2) * b] for k in range(nblocks - 1)]
-    )
+    zo = np.stack([inv[k * b : (k + 1) * b, (k + 1) * b : (k + 2) * b] for k in range(nblocks - 1)])
     return 0.5 * (zd + np.swapaxes(zd, 1, 2)), zo
 
 
 def _spd_inv(blocks: FloatArray) -> FloatArray:
-    inv = np.linalg.inv(blocks)
+    inv = np.asarray(np.linalg.inv(blocks), dtype=np.float64)
     return 0.5 * (inv + np.swapaxes(inv, 1, 2))
 
 
