@@ -12,7 +12,13 @@ import math
 import numpy as np
 import pytest
 
-from navtrack.smoothing._banded import band_to_dense, inverse_band, solve_spd_banded
+from navtrack.smoothing._banded import (
+    band_to_dense,
+    cholesky_solve_banded,
+    inverse_band,
+    inverse_band_from_factor,
+    solve_spd_banded,
+)
 from navtrack.smoothing.ari import (
     AriConfig,
     ari_polynomial,
@@ -58,10 +64,16 @@ def test_banded_solve_and_selected_inverse_match_dense(n: int, m: int, width: in
     np.testing.assert_allclose(x, np.linalg.solve(dense, rhs), rtol=1e-9, atol=1e-10)
     assert logdet == pytest.approx(np.linalg.slogdet(dense)[1], rel=1e-10, abs=1e-9)
     inv = np.linalg.inv(dense)
-    zb = inverse_band(ab, width)
-    for lag in range(min(width, n - 1) + 1):
-        np.testing.assert_allclose(zb[lag, : n - lag], np.diag(inv, lag), rtol=1e-8, atol=1e-10)
-        assert np.all(np.isnan(zb[lag, n - lag :]))
+    _, _, factor = cholesky_solve_banded(ab, rhs)
+    # both selected inversions: odd-even block recursion, and Takahashi's recursion on the
+    # Cholesky factor (compiled when numba is installed, plain Python otherwise)
+    for zb in (
+        inverse_band(ab, width),
+        inverse_band_from_factor(factor, width, method="takahashi"),
+    ):
+        for lag in range(min(width, n - 1) + 1):
+            np.testing.assert_allclose(zb[lag, : n - lag], np.diag(inv, lag), rtol=1e-8, atol=1e-10)
+            assert np.all(np.isnan(zb[lag, n - lag :]))
 
 
 def _dense_gauss_markov(y, phi, d, sigma_n, sigma_e):
@@ -253,3 +265,17 @@ def test_robust_weight_functions() -> None:
     assert w[1] == pytest.approx(1.0, abs=1e-6)
     assert w[2] == pytest.approx(math.exp(1 - 4))
     np.testing.assert_array_equal(robust_weight(t, "off")[:5], 1.0)
+
+
+def test_robust_process_equations_downweight_an_edge() -> None:
+    # Paper §2.2: robust treatment of eq. (3) reduces the influence of edges/discontinuities.
+    rng = np.random.default_rng(13)
+    y, _ = simulate_ari(rng, 500, (-0.5,), 1, 0.01, 0.004)
+    y[250:] += 0.2  # a step of 50 sigma_e in the process
+    res = fit_ari(y, AriConfig(order=(1, 1), robust_process=True))
+    # process equation s ends at epoch s + p + d; the step enters equations ending at 250, 251
+    assert res.process_weight[250 - 2] < 0.1
+    assert np.median(res.process_weight) == 1.0
+    assert not res.gross_error[245:255].any()  # the step is not blamed on the observations
+    plain = fit_ari(y, AriConfig(order=(1, 1), robust="off"))
+    assert res.sigma_e < plain.sigma_e

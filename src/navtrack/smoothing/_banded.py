@@ -15,12 +15,33 @@ The band of the inverse is returned by diagonal offset: ``zb[l, t] = Z[t, t + l]
 
 from __future__ import annotations
 
+import os
+from typing import Any
+
 import numpy as np
 import scipy.linalg
 
 from navtrack._typing import FloatArray
 
-__all__ = ["band_matvec", "band_to_dense", "inverse_band", "solve_spd_banded"]
+try:  # optional accelerator (extra ``speed``); everything works without it
+    if os.environ.get("NAVTRACK_NO_NUMBA"):
+        raise ImportError("disabled by NAVTRACK_NO_NUMBA")
+    import numba as _numba
+except ImportError:
+    _numba = None
+
+__all__ = [
+    "HAVE_NUMBA",
+    "band_matvec",
+    "band_to_dense",
+    "cholesky_solve_banded",
+    "inverse_band",
+    "inverse_band_from_factor",
+    "solve_spd_banded",
+]
+
+#: True when the compiled Takahashi recursion (numba) is available.
+HAVE_NUMBA = _numba is not None
 
 
 def band_to_dense(ab: FloatArray) -> FloatArray:
@@ -85,6 +106,86 @@ def solve_spd_banded(
         )
     logdet = 2.0 * float(np.sum(np.log(cb[-1])))
     return x, logdet
+
+
+def cholesky_solve_banded(
+    ab: FloatArray, rhs: FloatArray, *, refine: int = 1
+) -> tuple[FloatArray, float, FloatArray]:
+    """As :func:`solve_spd_banded`, also returning the factor ``U`` (``N = U^T U``, upper
+    banded storage) for :func:`inverse_band_from_factor`."""
+    cb = scipy.linalg.cholesky_banded(ab, lower=False, check_finite=False)
+    x = scipy.linalg.cho_solve_banded((cb, False), rhs, check_finite=False)
+    for _ in range(refine):
+        x = x + scipy.linalg.cho_solve_banded(
+            (cb, False), rhs - band_matvec(ab, x), check_finite=False
+        )
+    logdet = 2.0 * float(np.sum(np.log(cb[-1])))
+    return x, logdet, cb
+
+
+def inverse_band_from_factor(
+    cb: FloatArray, width: int | None = None, *, method: str = "auto", ab: FloatArray | None = None
+) -> FloatArray:
+    """Band of ``N^-1`` from the banded Cholesky factor ``U`` of ``N = U^T U``.
+
+    Parameters
+    ----------
+    cb : ndarray, shape (m + 1, n)
+        Upper banded storage of ``U`` (:func:`scipy.linalg.cholesky_banded`, ``lower=False``).
+    width : int, optional
+        Largest diagonal offset wanted (default ``m``).
+    method : {"auto", "takahashi", "cyclic"}
+        ``takahashi``: the sequential recursion on ``U`` (compiled with numba, O(n m width));
+        ``cyclic``: the vectorised odd–even block recursion (:func:`inverse_band`, needs ``ab``);
+        ``auto``: ``takahashi`` when numba is installed.
+    ab : ndarray, optional
+        The matrix itself, for ``method="cyclic"``.
+
+    Notes
+    -----
+    With ``N = U^T U``, ``U Z = U^-T`` is lower triangular with diagonal ``1 / U_ii``, so for
+    ``j >= i``: ``Z_ij = (delta_ij / U_ii - sum_{k=i+1}^{i+m} U_ik Z_kj) / U_ii``
+    (Takahashi, Fagan & Chen 1973; Hutchinson & de Hoog 1985). Going backwards over ``i``, and
+    within row ``i`` from ``j = i + width`` down to ``j = i``, every ``Z_kj`` needed lies in
+    the band already computed.
+    """
+    m = cb.shape[0] - 1
+    width = m if width is None else int(width)
+    if width < 0:
+        raise ValueError(f"width must be >= 0, got {width}")
+    if method == "auto":
+        method = "takahashi" if _numba is not None else "cyclic"
+    if method == "takahashi":
+        return _takahashi(np.ascontiguousarray(cb), max(width, m))[: width + 1]
+    if method == "cyclic":
+        if ab is None:
+            raise ValueError("method='cyclic' needs the matrix ab")
+        return inverse_band(ab, width)
+    raise ValueError(f"method must be 'auto', 'takahashi' or 'cyclic', got {method!r}")
+
+
+def _takahashi_py(cb: FloatArray, width: int) -> FloatArray:
+    m = cb.shape[0] - 1
+    n = cb.shape[1]
+    zb = np.full((width + 1, n), np.nan)
+    for i in range(n - 1, -1, -1):
+        uii = cb[m, i]
+        kmax = min(i + m, n - 1)
+        for j in range(min(i + width, n - 1), i - 1, -1):
+            acc = 0.0
+            for k in range(i + 1, kmax + 1):
+                z = zb[j - k, k] if j >= k else zb[k - j, j]
+                acc += cb[m + i - k, k] * z
+            if j == i:
+                zb[0, i] = (1.0 / uii - acc) / uii
+            else:
+                zb[j - i, i] = -acc / uii
+    return zb
+
+
+_takahashi: Any = (
+    _numba.njit(cache=True, nogil=True)(_takahashi_py) if _numba is not None else _takahashi_py
+)
 
 
 def inverse_band(ab: FloatArray, width: int | None = None) -> FloatArray:

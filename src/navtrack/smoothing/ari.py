@@ -79,7 +79,7 @@ from typing import Any, Literal
 import numpy as np
 
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, Int8Array
-from navtrack.smoothing._banded import inverse_band, solve_spd_banded
+from navtrack.smoothing._banded import cholesky_solve_banded, inverse_band_from_factor
 
 __all__ = [
     "EPOCH_STATUS",
@@ -507,7 +507,7 @@ def _solve(
         for lag in range(m):
             ab[m - lag, lag:m] += np.diag(g, lag)
     try:
-        x, logdet = solve_spd_banded(ab, w * y0 / sn2)
+        x, logdet, factor = cholesky_solve_banded(ab, w * y0 / sn2)
     except np.linalg.LinAlgError:
         return None
     if not np.all(np.isfinite(x)):
@@ -536,7 +536,7 @@ def _solve(
         + omega_n / sn2
         + omega_e / se2
     )
-    zb = inverse_band(ab, width) if width is not None else None
+    zb = inverse_band_from_factor(factor, width, ab=ab) if width is not None else None
     return _Fit(x, zb, loglike, omega_n, omega_e, logdet)
 
 
