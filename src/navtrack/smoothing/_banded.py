@@ -23,6 +23,7 @@ import scipy.linalg
 
 from navtrack._typing import FloatArray
 
+_numba: Any
 try:  # optional accelerator (extra ``speed``); everything works without it
     if os.environ.get("NAVTRACK_NO_NUMBA"):
         raise ImportError("disabled by NAVTRACK_NO_NUMBA")
