@@ -14,42 +14,58 @@ the filtered series, ``log det N`` and — by selected inversion — the band of
 
 Everything the paper lists is estimated without a-priori stochastic information:
 
-* ``sigma_n^2, sigma_e^2`` by iterated, redundancy-based variance component estimation
-  (Förstner 1979; Koch 1986, "reproducing" form ``sigma_k^2 <- v_k^T P_k v_k / r_k`` with the
-  redundancy ``r_k = n_k - tr(N^-1 N_k)``). The paper recommends Förstner's (1984)
-  *frequency-domain* version, which replaces the redundancies by integrals of the stationary
-  filter's transfer function. We compute the exact time-domain redundancies instead, from the
-  band of ``N^-1``: with gaps (missing epochs), robust weights and short strips (the paper's GPS
-  strips have ~130 epochs) the series is not stationary and the frequency-domain values are
-  only asymptotic, while the selected inversion makes the exact ones O(n). The fixed point of
-  this iteration is the stationary point of the (diffuse) likelihood in the variances.
-* ``phi`` (the AR part; the ``d`` differences are fixed) by the paper's alternating scheme
-  (Lindenberger 1987): least squares of the process equations (3) on the filtered series — with
-  the expected second moments ``E[x x^T] = x_hat x_hat^T + N^-1`` (band only), i.e. the EM
-  M-step, so the scheme climbs the likelihood instead of fitting the over-smooth ``x_hat``.
-  The joint fixed-point map (VCE + AR step) is accelerated by SQUAREM (Varadhan & Roland 2008),
-  safeguarded by the likelihood. Stopping rule: largest change of ``phi`` and of
-  ``log sigma_n``, ``log sigma_e`` below ``tol`` (default 1e-6) between iterations, or
-  ``max_iter`` (status ``not_converged``). The likelihood in ``(phi, sigma_n, sigma_e)`` is
-  multimodal on short series (``sigma_n -> 0`` is a local optimum, the SARIMAX failure the
-  issue describes); several starts spread over the noise fraction are iterated and the one of
-  largest likelihood is kept (on long series the starts are screened on a leading window).
-* robust reweighting of both equation groups (IRLS) with a weight function of the
-  studentized *deletion* residual ``T`` (Baarda's w-test statistic for unit weight; for a
-  down-weighted observation it is the prediction residual from all other data, so the test does
-  not oscillate as weights change). Danish method (default), Huber, IGG-III; observations with
-  ``|T| > flag_threshold`` are flagged as gross errors.
+* ``sigma_n^2, sigma_e^2`` by redundancy-based variance component estimation (Förstner 1979;
+  Koch 1986: ``sigma_k^2 = v_k^T P_k v_k / r_k`` with the redundancy
+  ``r_k = n_k - tr(N^-1 N_k)``), iterated until the relative change of both sigmas is below
+  ``tol``. The paper recommends Förstner's (1984) *frequency-domain* formulation, which replaces
+  the redundancies by integrals of the stationary filter's transfer function. We use the exact
+  time-domain redundancies instead, from the band of ``N^-1``: with gaps (missing epochs),
+  robust weights and short strips (the paper's GPS strips have ~130 epochs) the series is not
+  stationary and the frequency-domain values are only asymptotic, while selected inversion makes
+  the exact ones O(n). The VCE fixed point is the stationary point of the likelihood below in
+  the two variances (``d(-2 log L)/d log sigma_k^2 = r_k - Omega_k / sigma_k^2``).
+* ``phi`` (the AR part; the ``d`` differences are fixed) jointly with the variances. The paper
+  alternates (Lindenberger 1987) between filtering and a least-squares fit of eq. (3); its
+  proper form is the EM step (moments ``E[x x^T] = x_hat x_hat^T + N^-1``, band only), whose
+  equation is the ``phi`` part of the likelihood gradient. That alternation converged linearly
+  and needed hundreds of iterations in our tests (even with SQUAREM acceleration), so the same
+  gradient — VCE equations for the variances, expected-moment equations for ``phi``, plus the
+  stationary-start term — drives a quasi-Newton (BFGS) search with Armijo backtracking,
+  started from a finite-difference Hessian; a final VCE iteration certifies the variance
+  components. Stopping rule: predicted log-likelihood gain of the next quasi-Newton step below
+  ``gain_tol`` (1e-3), then VCE relative change below ``tol`` (1e-6); ``max_iter`` otherwise
+  (status ``not_converged``).
+* The likelihood in ``(phi, sigma_n, sigma_e)`` is multimodal on short series (``sigma_n -> 0``
+  is a local optimum — the SARIMAX failure the issue describes); several starts spread over the
+  noise fraction are run (on long series on a leading window, then refined on the whole
+  series), and an interior optimum is kept over a boundary one unless the latter is
+  significantly better (``boundary_margin``).
+* robust reweighting (IRLS inside the VCE iteration) with a weight function of the studentized
+  *deletion* residual ``T`` (Baarda's w-test statistic for unit weight; for a down-weighted
+  observation it is the prediction residual from all other data, so the test does not
+  oscillate as weights change). Danish method (default), Huber, IGG-III; observations with
+  ``|T| > flag_threshold`` are flagged as gross errors; the process equations (3) can be
+  reweighted too (``robust_process``) for edges and discontinuities.
 * order ``(p, d)`` by BIC (or AIC) of the likelihood conditional on the first ``max(p + d)``
   epochs, so that candidates with different ``d`` are compared on the same data.
 * ``sigma_x`` per epoch and the correlations ``r(h)`` of the filtered data from ``N^-1``.
 
-Likelihood (diffuse in the first ``m`` states: the process equations start at ``t = m``), with
-``n_o`` observed epochs::
+Selected inversion: Takahashi's recursion on the banded Cholesky factor (compiled with numba
+when installed, extra ``speed``; O(n m^2)), else an odd–even block recursion in NumPy
+(:mod:`navtrack.smoothing._banded`). Both are tested against dense inverses.
 
-    -2 log L = (n_o - m) log 2 pi + sum log(sigma_n^2 / w_t) + sum log(sigma_e^2 / v_s)
-               + log det N + Omega,   Omega = sum w v^2 / sigma_n^2 + sum v e^2 / sigma_e^2
+Likelihood (``initial="stationary"``, the default; ``n_o`` observed epochs): the first ``d``
+states are diffuse, the first ``p`` differences ``u = (1 - B)^d x`` follow the AR's stationary
+distribution ``N(0, sigma_e^2 Gamma_p)``, then eq. (3)::
 
-(the change of variables ``x -> (x_1..x_m, e)`` has unit Jacobian because ``a_0 = 1``).
+    -2 log L = (n_o - d) log 2 pi + sum log(sigma_n^2 / w_t) + sum log(sigma_e^2 / v_s)
+               + p log sigma_e^2 + log det Gamma_p + log det N + Omega,
+    Omega = sum w v^2 / sigma_n^2 + (sum v e^2 + u_0^T Gamma_p^-1 u_0) / sigma_e^2
+
+(the change of variables ``x -> (x_1..x_d, u_0, e)`` has unit Jacobian because ``a_0 = 1``).
+This is exactly the likelihood of statsmodels' ``SARIMAX(order=(p, d, 0),
+measurement_error=True)`` (tested to 1e-5). ``initial="conditional"`` drops the stationary
+start (the plain Gauss–Markov model (2)–(3), conditional on the first ``p`` differences).
 
 References
 ----------
