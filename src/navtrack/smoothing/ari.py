@@ -1071,6 +1071,32 @@ def fit_ari_order(
     return _fit_fixed(y_arr, p, d, cfg, robust=True)
 
 
+def _robust_weights(
+    est: _Estimate,
+    y0: FloatArray,
+    observed: BoolArray,
+    w: FloatArray,
+    v: FloatArray,
+    d: int,
+    cfg: AriConfig,
+) -> tuple[FloatArray, FloatArray]:
+    """New observation and process weights from the studentized deletion residuals."""
+    zb = est.fit.zb
+    if zb is None:
+        return w, v
+    sn2 = math.exp(est.log_sn2)
+    se2 = math.exp(est.log_se2)
+    t_obs = _deletion_statistic(y0 - est.fit.x, zb[0], w, sn2)
+    w_new = np.where(observed, robust_weight(t_obs, cfg.robust, cfg.tuning), 0.0)
+    if not cfg.robust_process:
+        return w_new, v
+    c = ari_polynomial(est.phi, d)
+    e = _process_residuals(c, est.fit.x)
+    q = _process_variance(c, zb)
+    v_new = robust_weight(_deletion_statistic(-e, q, v, se2), cfg.robust, cfg.tuning)
+    return w_new, v_new
+
+
 def _choose(found: list[_Estimate], margin: float) -> _Estimate:
     """Largest likelihood, but an interior solution within ``margin`` beats a boundary one."""
     best = max(found, key=lambda e: e.fit.loglike)
@@ -1164,54 +1190,53 @@ def _fit_fixed(
     # work in total, because the last digits along the weakly identified sigma_e/phi ridge
     # dominate either way.
     hess = hess * (n_obs / max(int(np.count_nonzero(hw)), 1))
-    refined = _refine(
-        vec, hess, y0, w, v, p, d, st, cfg.gain_tol, cfg.max_iter, log_floor, log_ceiling
-    )
-    if refined is None:
-        return _bad(y, "singular", "normal matrix singular on the full series", p, d)
-    best, hess = refined
-    n_iter += best.n_iter
     use_robust = robust and cfg.robust != "off"
-    reweighted = False
-    for _ in range(cfg.max_robust_iter if use_robust else 0):
-        sn2 = math.exp(best.log_sn2)
-        se2 = math.exp(best.log_se2)
-        zb = best.fit.zb
-        if zb is None:
-            break
-        c = ari_polynomial(best.phi, d)
-        t_obs = _deletion_statistic(y0 - best.fit.x, zb[0], w, sn2)
-        w_new = np.where(observed, robust_weight(t_obs, cfg.robust, cfg.tuning), 0.0)
-        if cfg.robust_process:
-            e = _process_residuals(c, best.fit.x)
-            q = _process_variance(c, zb)
-            v_new = robust_weight(_deletion_statistic(-e, q, v, se2), cfg.robust, cfg.tuning)
-        else:
-            v_new = v
-        change = max(float(np.max(np.abs(w_new - w))), float(np.max(np.abs(v_new - v))))
-        if np.count_nonzero(w_new > 0) < _min_observations(p, d):
-            break
-        w, v = w_new, v_new
-        reweighted = True
+    if not (use_robust and head < n):
+        # Long robust fits skip this: their joint refinement comes after the reweighting.
+        refined = _refine(
+            vec, hess, y0, w, v, p, d, st, cfg.gain_tol, cfg.max_iter, log_floor, log_ceiling
+        )
+        if refined is None:
+            return _bad(y, "singular", "normal matrix singular on the full series", p, d)
+        best, hess = refined
+        n_iter += best.n_iter
+    elif best.fit.x.size < n:
+        out = _evaluate(vec, y0, w, v, p, d, st)
+        if out is None:
+            return _bad(y, "singular", "normal matrix singular on the full series", p, d)
+        best = _make_estimate(vec, out, p, 1, False, log_floor)
+        n_iter += 1
+    budget = cfg.max_robust_iter if use_robust else 0
+    for _ in range(3 if use_robust else 0):
         # IRLS inside the VCE: new weights, variance components re-estimated with phi fixed
-        # (one solve + selected inversion per step); phi follows in the joint step below.
-        vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
-        step_out = _evaluate(vec, y0, w, v, p, d, st)
-        if step_out is None:
+        # (one solve + selected inversion per step) until the weights settle (max change
+        # below 0.01); then phi and the variances jointly; repeated while that moves weights.
+        reweighted = False
+        while budget > 0:
+            budget -= 1
+            w_new, v_new = _robust_weights(best, y0, observed, w, v, d, cfg)
+            change = max(float(np.max(np.abs(w_new - w))), float(np.max(np.abs(v_new - v))))
+            if change < 1e-2 or np.count_nonzero(w_new > 0) < _min_observations(p, d):
+                break
+            w, v = w_new, v_new
+            reweighted = True
+            vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
+            step_out = _evaluate(vec, y0, w, v, p, d, st)
+            if step_out is None:
+                break
+            est = _make_estimate(vec, step_out, p, 1, best.converged, log_floor)
+            best = _vce_polish(est, y0, w, v, p, d, st, 1e-3, 10, log_floor)
+            n_iter += 1 + best.n_iter
+        if not reweighted and best.converged:
             break
-        est = _make_estimate(vec, step_out, p, 1, best.converged, log_floor)
-        best = _vce_polish(est, y0, w, v, p, d, st, 1e-3, 10, log_floor)
-        n_iter += 1 + best.n_iter
-        if change < 1e-3:
-            break
-    if reweighted:
         vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
         refined = _refine(
             vec, hess, y0, w, v, p, d, st, cfg.gain_tol, cfg.max_iter, log_floor, log_ceiling
         )
-        if refined is not None:
-            best, hess = refined
-            n_iter += best.n_iter
+        if refined is None:
+            break
+        best, hess = refined
+        n_iter += best.n_iter
     best = _vce_polish(best, y0, w, v, p, d, st, cfg.tol, cfg.max_iter, log_floor)
     n_iter += best.n_iter
     return _finish(y, offset, observed, y0, w, v, p, d, best, n_iter, cfg)
