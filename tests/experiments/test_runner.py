@@ -49,14 +49,23 @@ def test_local_cluster_two_workers_gives_identical_results() -> None:
     cloudpickle = pytest.importorskip("cloudpickle")
     # Workers cannot import this test module by name: ship toy_run by value.
     cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    from distributed import LocalCluster
+
     try:
         params = {"size": 2}
         loop = run_monte_carlo(toy_run, 5, 9, params, backend="loop", progress=False)
         cluster = run_monte_carlo(toy_run, 5, 9, params, workers=2, progress=False)
+        # an existing cluster, reached by its scheduler address
+        with LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=None) as lc:
+            remote = run_monte_carlo(
+                toy_run, 5, 9, params, scheduler=lc.scheduler_address, progress=False
+            )
     finally:
         cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
     assert cluster.backend == "dask-local-cluster"
+    assert remote.backend == "dask-scheduler"
     assert _results(cluster) == _results(loop)
+    assert _results(remote) == _results(loop)
 
 
 def test_without_dask_falls_back_to_loop_and_says_so(monkeypatch: pytest.MonkeyPatch) -> None:
