@@ -279,3 +279,14 @@ def test_robust_process_equations_downweight_an_edge() -> None:
     assert not res.gross_error[245:255].any()  # the step is not blamed on the observations
     plain = fit_ari(y, AriConfig(order=(1, 1), robust="off"))
     assert res.sigma_e < plain.sigma_e
+
+
+@pytest.mark.parametrize("name", ["danish", "huber", "igg3"])
+def test_robust_defaults_keep_sigma_n_on_clean_data(name: str) -> None:
+    # Reweighting with simultaneous VCE must not shrink sigma_n on data without gross errors
+    # (truth: simulated ARI(2,2), sigma_n = 0.003).
+    rng = np.random.default_rng(31)
+    y, _ = simulate_ari(rng, 2000, (-1.2, 0.5), 2, 0.003, 0.0013)
+    res = fit_ari(y, AriConfig(order=(2, 2), robust=name))  # type: ignore[arg-type]
+    assert res.sigma_n == pytest.approx(0.003, rel=0.06)
+    assert res.n_flagged <= 0.01 * y.size
