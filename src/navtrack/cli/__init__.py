@@ -16,7 +16,13 @@ from collections.abc import Sequence
 from navtrack import __version__
 
 # Command modules, each with ``register(subparsers)``; kept in the order ``--help`` lists them.
-COMMAND_MODULES = ("navtrack.cli.rinex", "navtrack.cli.pos", "navtrack.cli.track")
+COMMAND_MODULES = (
+    "navtrack.cli.pos",
+    "navtrack.cli.rinex",
+    "navtrack.cli.track",
+    "navtrack.cli.smooth",
+    "navtrack.cli.reproduce",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

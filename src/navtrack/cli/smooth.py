@@ -1,0 +1,217 @@
+"""``navtrack smooth FILE``: ARI filtering, variance components and gross errors of time series."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+_TIME_CANDIDATES = ("t_gps_s", "t_s", "time_s", "time", "t")
+_POSITION_COLUMNS = ("x_m", "y_m", "z_m")
+_UNIT_SUFFIXES = {
+    "_m": "m",
+    "_deg": "deg",
+    "_rad": "rad",
+    "_s": "s",
+    "_mps": "m/s",
+    "_mps2": "m/s^2",
+    "_hz": "Hz",
+}
+
+
+def register(subparsers: Any) -> None:
+    cmd = subparsers.add_parser(
+        "smooth",
+        help="ARI filtering of time series: sigma_n, sigma_e, sigma_x, r(h), gross errors",
+        description="Model each column as an ARI(p,d) process observed with white noise "
+        "(Lindenberger): estimate the filtered series, the observation noise sigma_n, the "
+        "prediction error sigma_e, sigma_x per epoch, r(1..4) and gross errors, without a-priori "
+        "stochastic information. Reads CSV/Parquet tables, navtrack solution tables and RTKLIB "
+        ".pos files; gaps in the time stamps become missing epochs.",
+    )
+    cmd.add_argument("file", type=Path, help="CSV, Parquet, navtrack solution table or RTKLIB .pos")
+    cmd.add_argument(
+        "--columns",
+        nargs="+",
+        help="columns to smooth (comma- or space-separated); default x_m y_m z_m for solution "
+        "files, else every numeric column except the time",
+    )
+    cmd.add_argument("--time", help="time column in seconds (default: t_gps_s, t_s, time, t)")
+    cmd.add_argument("--order", default="auto", help="'auto' (BIC) or P,D (default auto)")
+    cmd.add_argument(
+        "--robust",
+        default="danish",
+        choices=("danish", "huber", "igg3", "off"),
+        help="robust weight function (default danish)",
+    )
+    cmd.add_argument(
+        "--robust-process",
+        action="store_true",
+        help="also reweight the process equations (edges, discontinuities)",
+    )
+    cmd.add_argument(
+        "--flag-threshold",
+        type=float,
+        default=3.29,
+        help="|T| above which an epoch is a gross error (default 3.29)",
+    )
+    cmd.add_argument("--out", type=Path, help="write filtered series (.csv or .parquet)")
+    cmd.add_argument("--plot", type=Path, help="write one PNG per column into this directory")
+    cmd.set_defaults(func=run_smooth)
+
+
+def _unit(column: str) -> str:
+    for suffix, unit in sorted(_UNIT_SUFFIXES.items(), key=lambda kv: -len(kv[0])):
+        if column.endswith(suffix):
+            return unit
+    return "(input units)"
+
+
+def _read_table(path: Path) -> Any:
+    import pandas as pd
+
+    from navtrack.errors import FileFormatError, MissingDependencyError
+
+    suffix = path.suffix.lower()
+    if suffix == ".pos":
+        from navtrack.io.rtklib import read_pos
+
+        return read_pos(path)
+    if suffix == ".parquet":
+        try:
+            import pyarrow  # noqa: F401
+        except ImportError:
+            raise MissingDependencyError("pyarrow", "parquet", "Parquet input") from None
+        df = pd.read_parquet(path)
+    elif suffix in (".csv", ".txt"):
+        try:
+            df = pd.read_csv(path, comment="#")
+        except (pd.errors.ParserError, UnicodeDecodeError, pd.errors.EmptyDataError) as exc:
+            raise FileFormatError(path, None, f"not a CSV table: {exc}") from None
+    else:
+        raise SystemExit(f"navtrack smooth: unknown file type {suffix!r} (.csv, .parquet, .pos)")
+    if {"time_gps", "week", "tow_s"} <= set(df.columns):
+        from navtrack.io.solution import read_solution
+
+        return read_solution(path)
+    return df
+
+
+def run_smooth(args: argparse.Namespace) -> int:
+    import numpy as np
+    import pandas as pd
+
+    from navtrack.experiments import write_json
+    from navtrack.smoothing.ari import AriConfig, fit_ari, regularize_time
+
+    df = _read_table(args.file)
+    if args.order == "auto":
+        order = None
+    else:
+        try:
+            p_str, d_str = args.order.split(",")
+            order = (int(p_str), int(d_str))
+        except ValueError:
+            raise SystemExit(
+                f"navtrack smooth: --order must be 'auto' or P,D, got {args.order!r}"
+            ) from None
+    try:
+        cfg = AriConfig(
+            order=order,
+            robust=args.robust,
+            robust_process=args.robust_process,
+            flag_threshold=args.flag_threshold,
+        )
+    except ValueError as exc:
+        raise SystemExit(f"navtrack smooth: {exc}") from None
+    time_col = args.time
+    if time_col is None:
+        time_col = next((c for c in _TIME_CANDIDATES if c in df.columns), None)
+    elif time_col not in df.columns:
+        raise SystemExit(f"navtrack smooth: no time column {time_col!r} in {args.file}")
+    if args.columns:
+        columns = [c for item in args.columns for c in item.split(",") if c]
+    elif all(c in df.columns for c in _POSITION_COLUMNS):
+        columns = list(_POSITION_COLUMNS)
+    else:
+        columns = [
+            c
+            for c in df.columns
+            if c != time_col
+            and pd.api.types.is_numeric_dtype(df[c])
+            and not c.startswith("Unnamed")
+        ]
+    missing = [c for c in columns if c not in df.columns]
+    if missing:
+        raise SystemExit(
+            f"navtrack smooth: columns {', '.join(missing)} not in {args.file} "
+            f"(has {', '.join(map(str, df.columns))})"
+        )
+    if not columns:
+        raise SystemExit("navtrack smooth: no numeric columns to smooth; give --columns")
+    values = np.column_stack(
+        [pd.to_numeric(df[c], errors="coerce").to_numpy(float) for c in columns]
+    )
+    n_read = values.shape[0]
+    if time_col is not None:
+        t = df[time_col].to_numpy(dtype=float)
+        try:
+            t_grid, grid, inserted = regularize_time(t, values)
+        except ValueError as exc:
+            raise SystemExit(f"navtrack smooth: {args.file}: {exc}") from None
+    else:
+        t_grid, grid, inserted = np.arange(n_read, dtype=float), values, 0
+    print(
+        f"file       {args.file}: {n_read} epochs"
+        + (f", {inserted} missing epochs inserted into time gaps" if inserted else "")
+        + (f" (time column {time_col})" if time_col else " (no time column: equally spaced)")
+    )
+    out_cols: dict[str, Any] = {}
+    if time_col is not None:
+        out_cols[time_col] = t_grid
+    any_gross = np.zeros(t_grid.size, dtype=bool)
+    summary: dict[str, Any] = {"file": str(args.file), "epochs": int(t_grid.size), "columns": {}}
+    for k, col in enumerate(columns):
+        res = fit_ari(grid[:, k], cfg)
+        unit = _unit(col)
+        if res.status in ("ok", "boundary", "not_converged"):
+            r = " ".join(f"{v:.2f}" for v in res.autocorr)
+            print(
+                f"{col}: status {res.status}, order ({res.p},{res.d}), "
+                f"n {res.x.size} (missing {res.n_missing}), "
+                f"sigma_n = {res.sigma_n:.4g} {unit}, sigma_e = {res.sigma_e:.4g} {unit}, "
+                f"sigma_x = {res.sigma_x_rms:.4g} {unit}, r(1..4) = {r}, "
+                f"flagged {res.n_flagged}"
+            )
+        else:
+            print(f"{col}: status {res.status} ({res.message})")
+        summary["columns"][col] = {**res.summary(), "unit": unit}
+        out_cols[col] = grid[:, k]
+        out_cols[f"{col}_filtered"] = res.x
+        out_cols[f"{col}_sigma_x"] = res.sigma_x
+        out_cols[f"{col}_gross_error"] = res.gross_error
+        any_gross |= res.gross_error
+        if args.plot is not None and res.status in ("ok", "boundary", "not_converged"):
+            from navtrack.plots.ari import plot_series
+
+            args.plot.mkdir(parents=True, exist_ok=True)
+            path = plot_series(args.plot / f"{args.file.stem}_{col}.png", t_grid, res, col, unit)
+            print(f"figure     {path}")
+    out_cols["gross_error"] = any_gross
+    statuses: dict[str, int] = {}
+    for col_summary in summary["columns"].values():
+        statuses[col_summary["status"]] = statuses.get(col_summary["status"], 0) + 1
+    print(
+        "summary    "
+        + ", ".join(f"{k} {v}" for k, v in statuses.items())
+        + f"; epochs with a gross error {int(any_gross.sum())} of {t_grid.size}"
+    )
+    if args.out is not None:
+        table = pd.DataFrame(out_cols)
+        if args.out.suffix.lower() == ".parquet":
+            table.to_parquet(args.out, index=False)
+        else:
+            table.to_csv(args.out, index=False, float_format="%.10g")
+        write_json(args.out.with_suffix(".json"), summary)
+        print(f"wrote      {args.out} and {args.out.with_suffix('.json')}")
+    return 0

@@ -1,0 +1,179 @@
+"""Figures of ARI smoothing: filtered series with sigma_x band and gross errors; Monte Carlo.
+
+matplotlib (extra ``plot``) is imported only when a figure is drawn, on its own Agg canvas (no
+pyplot, no global backend change).
+"""
+
+from __future__ import annotations
+
+import itertools
+import re
+from collections.abc import Mapping, Sequence
+from os import fspath
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from navtrack._typing import ArrayLike, StrPath
+from navtrack.errors import MissingDependencyError
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from navtrack.smoothing.ari import AriResult
+
+__all__ = [
+    "estimates_figure",
+    "plot_series",
+    "recall_figure",
+    "series_figure",
+    "write_reproduction_figures",
+]
+
+
+def _new_figure(figsize: tuple[float, float]) -> Figure:
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise MissingDependencyError("matplotlib", "plot", "Plots") from None
+    fig = Figure(figsize=figsize, layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _save(fig: Figure, path: Path) -> Path:
+    try:
+        fig.savefig(path, dpi=110)
+    except OSError as exc:
+        raise OSError(exc.errno, f"cannot write plot: {exc.strerror}", fspath(path)) from exc
+    return path
+
+
+def _slug(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_")
+
+
+def series_figure(t: ArrayLike, result: AriResult, title: str = "", unit: str = "") -> Figure:
+    """Observed and filtered series (band ±2 sigma_x), gross errors; residuals below.
+
+    Top panel: observations ``y`` (dots), filtered ``x`` (line) and ``x ± 2 sigma_x``; flagged
+    gross errors circled. Bottom panel: ``y - x`` with ``±3 sigma_n``.
+    """
+    t_arr = np.asarray(t, dtype=float)
+    t_arr = t_arr - t_arr[0] if t_arr.size else t_arr
+    fig = _new_figure((9.0, 5.5))
+    ax1, ax2 = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
+    ax1.plot(t_arr, result.y, ".", ms=2, color="0.55", label="observed")
+    ax1.plot(t_arr, result.x, "-", lw=1.0, color="C0", label="filtered")
+    ax1.fill_between(
+        t_arr,
+        result.x - 2 * result.sigma_x,
+        result.x + 2 * result.sigma_x,
+        color="C0",
+        alpha=0.25,
+        lw=0,
+        label="±2σx",
+    )
+    flagged = result.gross_error
+    if flagged.any():
+        ax1.plot(
+            t_arr[flagged], result.y[flagged], "o", mfc="none", color="C3", label="gross error"
+        )
+    ax1.set_ylabel(unit)
+    ax1.legend(loc="best", fontsize=8)
+    ax1.set_title(
+        f"{title}  ARI({result.p},{result.d})  σn={result.sigma_n:.3g}  σe={result.sigma_e:.3g}  "
+        f"σx={result.sigma_x_rms:.3g} {unit}",
+        fontsize=9,
+    )
+    resid = result.y - result.x
+    ax2.plot(t_arr, resid, ".", ms=2, color="0.3")
+    if flagged.any():
+        ax2.plot(t_arr[flagged], resid[flagged], "o", mfc="none", color="C3")
+    for s in (-3, 3):
+        ax2.axhline(s * result.sigma_n, color="C1", lw=0.8, ls="--")
+    ax2.set_ylabel(f"y − x [{unit}]" if unit else "y − x")
+    ax2.set_xlabel("t − t0 [s]")
+    return fig
+
+
+def plot_series(
+    path: StrPath, t: ArrayLike, result: AriResult, title: str = "", unit: str = ""
+) -> Path:
+    """Write :func:`series_figure` as a PNG file."""
+    return _save(series_figure(t, result, title, unit), Path(path))
+
+
+def estimates_figure(ratios: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> Figure:
+    """Box plots of estimate/truth of sigma_n and sigma_e per synthetic case."""
+    names = list(ratios)
+    fig = _new_figure((8.0, 4.0))
+    ax1, ax2 = fig.subplots(1, 2, sharey=False)
+    for ax, k, label in ((ax1, 0, "σn estimate / truth"), (ax2, 1, "σe estimate / truth")):
+        data = [np.asarray(ratios[n][k], dtype=float) for n in names]
+        ax.boxplot(data, showfliers=False)
+        ax.set_xticks(range(1, len(names) + 1), names, rotation=20, fontsize=8)
+        ax.axhline(1.0, color="k", lw=0.8)
+        for b in (0.9, 1.1):
+            ax.axhline(b, color="C1", lw=0.8, ls="--")
+        ax.set_title(label, fontsize=9)
+    return fig
+
+
+def recall_figure(detections: Mapping[str, tuple[Sequence[float], Sequence[bool]]]) -> Figure:
+    """Recall of injected gross errors against their magnitude (in sigma_n), per case."""
+    fig = _new_figure((6.0, 4.0))
+    ax = fig.subplots()
+    edges = np.array([5, 6, 7, 8, 10, 12, 15.01])
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    for name, (mags, hits) in detections.items():
+        m = np.asarray(mags, dtype=float)
+        h = np.asarray(hits, dtype=bool)
+        rec = [
+            h[(m >= lo) & (m < hi)].mean() if np.any((m >= lo) & (m < hi)) else np.nan
+            for lo, hi in itertools.pairwise(edges)
+        ]
+        ax.plot(centres, rec, "o-", label=name)
+    ax.axhline(0.95, color="k", lw=0.8, ls="--")
+    ax.set_xlabel("gross error |Δ| / σn")
+    ax.set_ylabel("recall")
+    ax.set_ylim(0, 1.02)
+    ax.legend(fontsize=8)
+    return fig
+
+
+def write_reproduction_figures(
+    out_dir: Path,
+    mc: Any,
+    params: Any,
+    sources: Sequence[Any],
+    fits: Mapping[tuple[str, str], AriResult],
+) -> list[Path]:
+    """Figures of ``navtrack reproduce ari``: estimates, recall, one series per real source."""
+    written: list[Path] = []
+    ratios: dict[str, tuple[list[float], list[float]]] = {}
+    detections: dict[str, tuple[list[float], list[bool]]] = {}
+    for case in params.cases:
+        recs = [r[case.name] for r in mc.results if case.name in r]
+        if not recs:
+            continue
+        ratios[case.name] = ([r["sigma_n_ratio"] for r in recs], [r["sigma_e_ratio"] for r in recs])
+        detections[case.name] = (
+            [m for r in recs for m in r["magnitude_sigma"]],
+            [h for r in recs for h in r["detected"]],
+        )
+    if ratios:
+        written.append(_save(estimates_figure(ratios), out_dir / "synthetic_sigma_ratios.png"))
+        written.append(_save(recall_figure(detections), out_dir / "gross_error_recall.png"))
+    for src in sources:
+        col = next(iter(src.columns))
+        res = fits.get((src.source, col))
+        if res is None or res.status in ("too_short", "constant", "singular"):
+            continue
+        name = _slug(f"real_{src.source}_{col}") + ".png"
+        written.append(
+            _save(series_figure(src.t_s, res, f"{src.source} {col}", src.unit), out_dir / name)
+        )
+    return written

@@ -1,0 +1,57 @@
+"""``navtrack smooth``: CSV and RTKLIB input, summary lines, --out table."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from navtrack.cli import main
+from navtrack.smoothing.ari import simulate_ari
+
+
+def test_smooth_csv_with_gap_and_gross_error(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    rng = np.random.default_rng(2)
+    y, _ = simulate_ari(rng, 600, (-1.2, 0.5), 2, 0.003, 0.0013)
+    y[300] += 10 * 0.003
+    t = 0.1 * np.arange(600)
+    keep = np.ones(600, dtype=bool)
+    keep[100:105] = False  # a gap in the time stamps
+    src = tmp_path / "att.csv"
+    pd.DataFrame({"t_s": t[keep], "roll_deg": y[keep]}).to_csv(src, index=False)
+    out = tmp_path / "out.csv"
+    code = main(["smooth", str(src), "--columns", "roll_deg", "--order", "2,2", "--out", str(out)])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "5 missing epochs inserted" in text
+    assert "sigma_n = " in text
+    assert " deg" in text
+    assert "order (2,2)" in text
+    table = pd.read_csv(out)
+    assert len(table) == 600
+    assert {"roll_deg_filtered", "roll_deg_sigma_x", "roll_deg_gross_error", "gross_error"} <= set(
+        table.columns
+    )
+    assert bool(table["gross_error"].iloc[300])
+    assert table["roll_deg"].iloc[100:105].isna().all()
+    assert table["roll_deg_filtered"].notna().all()
+    assert out.with_suffix(".json").exists()
+
+
+def test_smooth_rtklib_pos(gnss_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    pos = gnss_data / "rtklib_spp" / "gsi0759_gps.pos"
+    code = main(["smooth", str(pos), "--order", "0,1", "--robust", "huber"])
+    assert code == 0
+    text = capsys.readouterr().out
+    for col in ("x_m", "y_m", "z_m"):
+        assert f"{col}: status" in text
+    assert text.count("sigma_n = ") == 3
+
+
+def test_smooth_bad_column(tmp_path: Path) -> None:
+    src = tmp_path / "a.csv"
+    pd.DataFrame({"t": [0.0, 1.0, 2.0], "v": [1.0, 2.0, 3.0]}).to_csv(src, index=False)
+    with pytest.raises(SystemExit, match="not in"):
+        main(["smooth", str(src), "--columns", "w"])
