@@ -23,6 +23,7 @@ import numpy as np
 from navtrack import geodesy, timescale
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, StrPath
 from navtrack.errors import MissingDependencyError
+from navtrack.gnss.accuracy import enu_error_stats, error_stats
 from navtrack.io.solution import ok_mask
 
 if TYPE_CHECKING:
@@ -300,11 +301,6 @@ def _new_figure(figsize: tuple[float, float]) -> Figure:
     return fig
 
 
-def _rms(x: FloatArray) -> float:
-    x = x[np.isfinite(x)]
-    return float(np.sqrt(np.mean(x**2))) if x.size else float("nan")
-
-
 def _what(data: SolutionPlotData) -> str:
     return "error" if data.ref_is_given else "deviation from median position"
 
@@ -315,18 +311,19 @@ def enu_error_figure(data: SolutionPlotData) -> Figure:
     Each panel holds one line with x = ``data.t`` and y = ``data.enu_m[:, k]`` (NaN gaps at
     failed epochs).
     """
+    stats = enu_error_stats(data.enu_m)
     fig = _new_figure((8.0, 6.5))
     axes = fig.subplots(3, 1, sharex=True)
     for k, (ax, name) in enumerate(zip(axes, ("East", "North", "Up"), strict=True)):
         ax.plot(data.t, data.enu_m[:, k], lw=0.8, color=("C0", "C1", "C2")[k])
         ax.axhline(0.0, color="k", lw=0.5)
         ax.set_ylabel(f"{name} (m)")
-        ax.set_title(f"{name}: RMS {_rms(data.enu_m[:, k]):.2f} m", fontsize="small", loc="left")
+        ax.set_title(f"{name}: RMS {stats[name.lower()].rms_m:.2f} m", fontsize="small", loc="left")
         ax.grid(True, lw=0.3)
     axes[-1].set_xlabel(f"time since {data.t0_label} GPST ({data.t_unit})")
     n_bad = int((~data.ok).sum())
     fig.suptitle(
-        f"ENU {_what(data)}: 3D RMS {_rms(np.linalg.norm(data.enu_m, axis=1)):.2f} m, "
+        f"ENU {_what(data)}: 3D RMS {stats['3D'].rms_m:.2f} m, "
         f"{int(data.ok.sum())} epochs" + (f" ({n_bad} without a valid position)" if n_bad else "")
     )
     return fig
@@ -350,7 +347,8 @@ def horizontal_figure(data: SolutionPlotData) -> Figure:
         label="reference" if data.ref_is_given else "median position",
     )
     h = data.horizontal_m[data.ok]
-    r95 = float(np.percentile(h, 95)) if h.size else float("nan")
+    h_stats = error_stats(h)
+    r95 = h_stats.p95_m
     ang = np.linspace(0.0, 2 * np.pi, 181)
     ax.plot(r95 * np.cos(ang), r95 * np.sin(ang), color="C3", lw=1, label=f"95 %: {r95:.2f} m")
     ax.set_aspect("equal", adjustable="datalim")
@@ -358,7 +356,7 @@ def horizontal_figure(data: SolutionPlotData) -> Figure:
     ax.set_ylabel("North (m)")
     ax.grid(True, lw=0.3)
     ax.legend(loc="upper right", fontsize="small")
-    ax.set_title(f"Horizontal {_what(data)}: RMS {_rms(h):.2f} m, {h.size} epochs")
+    ax.set_title(f"Horizontal {_what(data)}: RMS {h_stats.rms_m:.2f} m, {h.size} epochs")
     return fig
 
 
