@@ -22,9 +22,9 @@ import numpy as np
 
 from navtrack import geodesy, timescale
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, StrPath
-from navtrack.errors import MissingDependencyError
 from navtrack.gnss.accuracy import enu_error_stats, error_stats
 from navtrack.io.solution import ok_mask
+from navtrack.plots.canvas import figure_dir, new_figure, save_figure
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -290,17 +290,6 @@ def skyplot_tracks(azel_rad: ArrayLike, sats: Sequence[str]) -> list[SkyTrack]:
 # --------------------------------------------------------------------------------------------
 
 
-def _new_figure(figsize: tuple[float, float]) -> Figure:
-    try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-    except ImportError:
-        raise MissingDependencyError("matplotlib", "plot", "Plots") from None
-    fig = Figure(figsize=figsize, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
 def _what(data: SolutionPlotData) -> str:
     return "error" if data.ref_is_given else "deviation from median position"
 
@@ -312,7 +301,7 @@ def enu_error_figure(data: SolutionPlotData) -> Figure:
     failed epochs).
     """
     stats = enu_error_stats(data.enu_m)
-    fig = _new_figure((8.0, 6.5))
+    fig = new_figure((8.0, 6.5))
     axes = fig.subplots(3, 1, sharex=True)
     for k, (ax, name) in enumerate(zip(axes, ("East", "North", "Up"), strict=True)):
         ax.plot(data.t, data.enu_m[:, k], lw=0.8, color=("C0", "C1", "C2")[k])
@@ -332,7 +321,7 @@ def enu_error_figure(data: SolutionPlotData) -> Figure:
 def horizontal_figure(data: SolutionPlotData) -> Figure:
     """North against east error of the valid epochs (first line), the reference at the origin
     (second line) and the circle holding 95 % of the horizontal errors (third line)."""
-    fig = _new_figure((6.5, 6.5))
+    fig = new_figure((6.5, 6.5))
     ax = fig.subplots()
     e, n = data.enu_m[data.ok, 0], data.enu_m[data.ok, 1]
     ax.plot(e, n, ls="none", marker=".", ms=3, alpha=0.6, label="solution")
@@ -363,7 +352,7 @@ def horizontal_figure(data: SolutionPlotData) -> Figure:
 def sats_dop_figure(data: SolutionPlotData) -> Figure:
     """Satellites used (top panel, one line) and each DOP (bottom panel, one line per name in
     ``data.dop_names``) against time."""
-    fig = _new_figure((8.0, 5.5))
+    fig = new_figure((8.0, 5.5))
     top, bottom = fig.subplots(2, 1, sharex=True)
     top.plot(data.t, data.n_sats, drawstyle="steps-post", lw=1, color="C0")
     top.set_ylabel("satellites used")
@@ -384,7 +373,7 @@ def sats_dop_figure(data: SolutionPlotData) -> Figure:
 def skyplot_figure(tracks: Sequence[SkyTrack]) -> Figure:
     """Polar skyplot: north up, azimuth clockwise, zenith at the centre, horizon at the rim;
     one line per track (x = azimuth in rad, y = 90 - elevation in deg), coloured by system."""
-    fig = _new_figure((6.5, 6.5))
+    fig = new_figure((6.5, 6.5))
     ax = cast("PolarAxes", fig.add_subplot(projection="polar"))
     ax.set_theta_zero_location("N")
     ax.set_theta_direction(-1)
@@ -403,27 +392,6 @@ def skyplot_figure(tracks: Sequence[SkyTrack]) -> Figure:
 # --------------------------------------------------------------------------------------------
 # Files
 # --------------------------------------------------------------------------------------------
-
-
-def _save(fig: Figure, path: Path) -> Path:
-    try:
-        fig.savefig(path, dpi=110)
-    except OSError as exc:
-        raise OSError(exc.errno, f"cannot write plot: {exc.strerror}", fspath(path)) from exc
-    return path
-
-
-def _out_dir(out_dir: StrPath) -> Path:
-    d = Path(out_dir)
-    if d.exists() and not d.is_dir():
-        raise NotADirectoryError(20, "plot directory is not a directory", fspath(d))
-    try:
-        d.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OSError(
-            exc.errno, f"cannot create plot directory: {exc.strerror}", fspath(d)
-        ) from exc
-    return d
 
 
 def plot_solution(
@@ -466,15 +434,15 @@ def plot_solution(
     """
     data = solution_plot_data(df, ref_xyz_m, ok_status=ok_status)
     tracks = skyplot_tracks(*azel) if azel is not None else None
-    d = _out_dir(out_dir)
+    d = figure_dir(out_dir)
     paths = [
-        _save(enu_error_figure(data), d / "enu_error.png"),
-        _save(horizontal_figure(data), d / "horizontal.png"),
+        save_figure(enu_error_figure(data), d / "enu_error.png"),
+        save_figure(horizontal_figure(data), d / "horizontal.png"),
     ]
     if data.dop_names or np.isfinite(data.n_sats).any():
-        paths.append(_save(sats_dop_figure(data), d / "sats_dop.png"))
+        paths.append(save_figure(sats_dop_figure(data), d / "sats_dop.png"))
     if tracks is not None:
-        paths.append(_save(skyplot_figure(tracks), d / "skyplot.png"))
+        paths.append(save_figure(skyplot_figure(tracks), d / "skyplot.png"))
     return paths
 
 
@@ -499,4 +467,4 @@ def skyplot(azel_rad: ArrayLike, sats: Sequence[str], path: StrPath) -> Path:
         raise FileNotFoundError(
             2, f"cannot write plot: directory {fspath(p.parent)!r} does not exist", fspath(p)
         )
-    return _save(skyplot_figure(skyplot_tracks(azel_rad, sats)), p)
+    return save_figure(skyplot_figure(skyplot_tracks(azel_rad, sats)), p)
