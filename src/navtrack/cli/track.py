@@ -143,13 +143,11 @@ def _write(path: Path, res: Any, ref: tuple[float, float]) -> None:
     import numpy as np
     import pandas as pd
 
-    from navtrack.geodesy import ecef_to_geodetic, enu_rotation, geodetic_to_ecef
-    from navtrack.timescale import gps_to_utc
+    from navtrack.io.tracks import local_enu_to_geodetic
+    from navtrack.timescale import gps_to_utc, to_datetime64
 
     x = res.track_x
-    utc = gps_to_utc(res.track_time_s)
-    epoch = np.datetime64("1980-01-06T00:00:00", "ns")
-    times = epoch + np.round(utc * 1e9).astype("timedelta64[ns]")
+    times = to_datetime64(gps_to_utc(res.track_time_s))  # UTC calendar times
     df = pd.DataFrame({
         "time": pd.to_datetime(times).strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
         "track_id": res.track_id,
@@ -158,13 +156,9 @@ def _write(path: Path, res: Any, ref: tuple[float, float]) -> None:
         "std_m": res.track_std_m,
     })
     if np.isfinite(ref[0]):
-        lat0, lon0 = np.radians(ref[0]), np.radians(ref[1])
-        rot = enu_rotation(lat0, lon0)
-        enu = np.stack([x[:, 0], x[:, 2], np.zeros(len(x))], axis=-1)
-        xyz = geodetic_to_ecef([lat0, lon0, 0.0]) + enu @ rot
-        llh = ecef_to_geodetic(xyz)
-        df["lat_deg"] = np.degrees(llh[:, 0])
-        df["lon_deg"] = np.degrees(llh[:, 1])
+        latlon = local_enu_to_geodetic(x[:, [0, 2]], ref[0], ref[1])
+        df["lat_deg"] = latlon[:, 0]
+        df["lon_deg"] = latlon[:, 1]
     if path.suffix == ".parquet":
         df.to_parquet(path, index=False)
     else:
