@@ -53,6 +53,10 @@ def run_track(args: argparse.Namespace) -> int:
     from navtrack.tracking.metrics import clear_mot, interpolate_truth
     from navtrack.tracking.tracker import DET_STATUS_NAMES, TrackerConfig, run_tracker
 
+    for name, value in (("--report-s", args.report_s), ("--match-m", args.match_m),
+                        ("--max-range-km", args.max_range_km)):
+        if value is not None and not value > 0:  # also refuses NaN
+            raise SystemExit(f"navtrack track: {name} must be a positive number, got {value:g}")
     clock = time.perf_counter()
     det = read_tracks(args.file, args.fmt, args.max_range_km)
     t_read = time.perf_counter() - clock
@@ -63,8 +67,8 @@ def run_track(args: argparse.Namespace) -> int:
         return 1
     en, ref = to_local_enu(det)
     report_s, max_gap_s, match_m = DEFAULTS[args.fmt]
-    report_s = args.report_s or report_s
-    match_m = args.match_m or match_m
+    report_s = report_s if args.report_s is None else args.report_s
+    match_m = match_m if args.match_m is None else args.match_m
     if args.fmt == "opensky":
         cfg = TrackerConfig.for_aircraft(args.associator)
     elif args.fmt == "ais":
