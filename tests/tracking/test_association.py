@@ -228,3 +228,20 @@ def test_tensor_elimination_path_equals_brute_force(seed: int) -> None:
     assert np.bincount(jm.cluster).max() > 3
     assert (jm.method == 1).all()
     np.testing.assert_allclose(jm.beta, _brute_marginals(W), rtol=0, atol=1e-12)
+
+
+def test_chi2_threshold_against_scipy_stats() -> None:
+    # oracle: scipy.stats.chi2.ppf; spot values from printed chi-square tables (upper 1 %
+    # points: 6.635 for 1 and 9.210 for 2 degrees of freedom)
+    from scipy.stats import chi2
+
+    for p in (0.5, 0.9, 0.99, 0.9997):
+        for m in (1, 2, 3, 4, 6):
+            assert chi2_threshold(p, m) == pytest.approx(chi2.ppf(p, m), rel=1e-12)
+    assert round(chi2_threshold(0.99, 1), 2) == 6.63
+    assert round(chi2_threshold(0.99, 2), 2) == 9.21
+    assert chi2_threshold(1.0, 2) == float("inf")
+    with pytest.raises(ValueError, match="gate_probability"):
+        chi2_threshold(0.0, 2)
+    with pytest.raises(ValueError, match="dim_z"):
+        chi2_threshold(0.9, 0)
