@@ -585,7 +585,7 @@ def jpda_step_batch(
     JpdaStep with batched arrays; ``marginals.beta`` is (R, T, M+1) and the other marginal
     fields describe the flattened ``R·T`` tracks.
     """
-    from navtrack.tracking.gating import chi2_threshold
+    from navtrack.tracking.gating import chi2_threshold, gate
     from navtrack.tracking.kalman import kf_predict
 
     Z = np.asarray(z, dtype=float)
@@ -597,23 +597,13 @@ def jpda_step_batch(
     PHt = Pp @ np.swapaxes(Hj, -1, -2)
     S = Hj @ PHt + model.R
     S = 0.5 * (S + np.swapaxes(S, -1, -2))
-    zhat = model.h(xp)
     Zf = np.where(ok[..., None], Z, 0.0)
     if not np.all(np.isfinite(Zf)):
         raise ValueError("z: valid measurements must be finite")
-    y = Zf[:, None, :, :] - zhat[:, :, None, :]  # (R, T, M, m)
-    am = np.flatnonzero(model.angle_mask)
-    if am.size:
-        y[..., am] = (y[..., am] + np.pi) % (2 * np.pi) - np.pi
-    L = np.linalg.cholesky(S)
-    w = np.linalg.solve(L[:, :, None], y[..., None])[..., 0]
-    d2 = np.einsum("...i,...i->...", w, w)
-    m = S.shape[-1]
-    log_norm = -0.5 * (m * np.log(2 * np.pi)
-                       + 2 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1))
-    gamma = chi2_threshold(config.gate_probability, m)
-    inside = (d2 <= gamma) & ok[:, None, :]
-    W = association_weights(log_norm[..., None] - 0.5 * d2, inside, config.pd,
+    gamma = chi2_threshold(config.gate_probability, model.dim_z)
+    g = gate(model.h(xp), S, Zf, gamma, angle_mask=model.angle_mask)  # (R, T, M) pairs
+    y = g.innovation
+    W = association_weights(g.log_likelihood(), g.valid & ok[:, None, :], config.pd,
                             config.gate_probability, config.clutter_density)
     from math import comb, perm
 
