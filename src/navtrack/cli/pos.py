@@ -115,9 +115,11 @@ def _check_output(path: Path | None) -> str | None:
     """Why the output path cannot be written (checked before the solve), or None."""
     if path is None:
         return None
+    from navtrack.io.solution import FORMATS
+
     parent = path.parent if str(path.parent) else Path(".")
-    if path.suffix.lower() not in (".csv", ".parquet", ".nmea", ".kml", ".gpx"):
-        return f"unknown output format {path.suffix!r} (use .csv, .parquet, .nmea, .kml, .gpx)"
+    if path.suffix.lower() not in FORMATS:
+        return f"unknown output format {path.suffix!r} (use {', '.join(FORMATS)})"
     if not parent.is_dir():
         return f"directory {str(parent)!r} does not exist"
     if path.is_dir():
