@@ -24,6 +24,41 @@ OMEGA_E_RAD_S = 7.2921151467e-5
 C_MPS = 299792458.0
 
 
+# Plausible distance from the earth's centre of a point near its surface (m): 6357 km (pole)
+# - 150 km to 6378 km (equator) + 200 km; anything else is a position in the wrong units or
+# frame (latitude/longitude in degrees, kilometres).
+NEAR_SURFACE_NORM_M = (6.2e6, 6.6e6)
+
+
+def check_near_surface(xyz_m: ArrayLike, name: str = "xyz_m") -> FloatArray:
+    """One ECEF position as a float array of shape (3,), refusing implausible values.
+
+    Parameters
+    ----------
+    xyz_m : array-like, shape (3,)
+        ECEF position (m) of a point near the earth's surface (a receiver, a reference).
+    name : str
+        Parameter name used in the error message.
+
+    Raises
+    ------
+    ValueError
+        Not three finite numbers, or farther from the earth's centre than
+        :data:`NEAR_SURFACE_NORM_M` allows.
+    """
+    xyz = np.asarray(xyz_m, dtype=float)
+    if xyz.shape != (3,) or not np.all(np.isfinite(xyz)):
+        raise ValueError(f"{name}: expected three finite ECEF coordinates (m), got {xyz!r}")
+    norm = float(np.linalg.norm(xyz))
+    lo, hi = NEAR_SURFACE_NORM_M
+    if not lo <= norm <= hi:
+        raise ValueError(
+            f"{name}: distance from the earth's centre is {norm:.6g} m, not a point near the "
+            f"earth's surface ({lo:.3g}-{hi:.3g} m); give ECEF metres"
+        )
+    return xyz
+
+
 def _as_xyz(name: str, value: ArrayLike) -> FloatArray:
     arr = np.asarray(value, dtype=float)
     if arr.shape[-1:] != (3,):

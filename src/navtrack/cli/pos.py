@@ -61,13 +61,17 @@ def register(subparsers: Any) -> None:
 def _reference(args: argparse.Namespace) -> tuple[float, float, float] | None:
     """The reference position in ECEF metres, refusing clearly implausible values."""
     if args.ref is not None:
+        from navtrack.geodesy import check_near_surface
+
         x, y, z = args.ref
-        r = math.sqrt(x * x + y * y + z * z)
-        if not 6.2e6 < r < 6.5e6:
+        try:
+            check_near_surface(args.ref, "--ref")
+        except ValueError:
+            r = math.sqrt(x * x + y * y + z * z)
             raise SystemExit(
                 f"navtrack pos: --ref {x:g} {y:g} {z:g} is {r:.4g} m from the earth's centre, not "
                 "a point near the surface: give ECEF metres (use --ref-llh for degrees)"
-            )
+            ) from None
         return (x, y, z)
     if args.ref_llh is not None:
         lat, lon, h = args.ref_llh

@@ -44,9 +44,6 @@ __all__ = [
     "solution_plot_data",
 ]
 
-# Plausible norm of an ECEF position near the earth's surface (m): 6357 km (pole) - 150 km to
-# 6378 km (equator) + 200 km; anything else is a reference in the wrong units or frame.
-_EARTH_NORM_RANGE_M = (6.2e6, 6.6e6)
 _DOP_COLUMNS = ("gdop", "pdop", "hdop", "vdop")
 _SYSTEM_COLOURS = {
     "G": "tab:blue",
@@ -122,7 +119,8 @@ class SolutionPlotData:
 
 
 def check_reference(ref_xyz_m: ArrayLike) -> FloatArray:
-    """A reference position as a float array of shape (3,), refusing implausible values.
+    """A reference position as a float array of shape (3,), refusing implausible values
+    (:func:`navtrack.geodesy.check_near_surface`).
 
     Raises
     ------
@@ -130,17 +128,7 @@ def check_reference(ref_xyz_m: ArrayLike) -> FloatArray:
         Not three finite numbers, or not a point near the earth's surface in ECEF metres
         (e.g. latitude/longitude in degrees, or kilometres).
     """
-    ref = np.asarray(ref_xyz_m, dtype=float)
-    if ref.shape != (3,) or not np.all(np.isfinite(ref)):
-        raise ValueError(f"ref_xyz_m: expected three finite ECEF coordinates (m), got {ref!r}")
-    norm = float(np.linalg.norm(ref))
-    lo, hi = _EARTH_NORM_RANGE_M
-    if not lo <= norm <= hi:
-        raise ValueError(
-            f"ref_xyz_m: distance from the earth's centre is {norm:.6g} m, not a point near the "
-            f"earth's surface ({lo:.3g}-{hi:.3g} m); give ECEF metres"
-        )
-    return ref
+    return geodesy.check_near_surface(ref_xyz_m, "ref_xyz_m")
 
 
 def _time_axis(t_gps_s: FloatArray) -> tuple[FloatArray, str]:
