@@ -88,3 +88,17 @@ def test_zenith_satellite_has_ninety_degrees_elevation() -> None:
 def test_wrong_shape_names_the_parameter() -> None:
     with pytest.raises(ValueError, match="xyz"):
         ecef_to_geodetic([1.0, 2.0])
+
+
+def test_check_near_surface() -> None:
+    from navtrack.geodesy import check_near_surface
+
+    # station SEPT (cssrlib xyz_ref) and a point on the polar axis: accepted
+    sept = [-3962108.673, 3381309.574, 3668678.638]
+    np.testing.assert_array_equal(check_near_surface(sept), sept)
+    check_near_surface([0.0, 0.0, 6356752.3])
+    # kilometres, degrees/metres, a non-finite value, a wrong shape: refused, naming the input
+    for bad in ([-3962.1, 3381.3, 3668.7], [35.16, 139.61, 68.45], [np.nan, 0.0, 6.4e6],
+                [6.4e6, 0.0]):
+        with pytest.raises(ValueError, match="ref"):
+            check_near_surface(bad, "ref")

@@ -10,7 +10,13 @@ import numpy as np
 import pytest
 
 from navtrack.errors import FileFormatError
-from navtrack.io.tracks import read_ais_csv, read_opensky_csv, read_track_csv, to_local_enu
+from navtrack.io.tracks import (
+    local_enu_to_geodetic,
+    read_ais_csv,
+    read_opensky_csv,
+    read_track_csv,
+    to_local_enu,
+)
 
 
 @pytest.fixture(scope="module")
@@ -116,3 +122,23 @@ def test_velocity_from_speed_and_course(tracking_data: Path) -> None:
     ok = np.isfinite(speed)
     # rotating into the reference tangent plane drops the tiny vertical part (< 1e-4 relative)
     np.testing.assert_allclose(speed[ok], det.speed_mps[ok], rtol=1e-4)
+
+
+def test_local_enu_round_trip(tmp_path: Path) -> None:
+    # Property: local_enu_to_geodetic inverts to_local_enu (points 0-60 km from the reference,
+    # where the tangent plane and the ellipsoid differ by up to ~280 m in height, which the
+    # inverse must not turn into a horizontal error).
+    rng = np.random.default_rng(7)
+    lat = 50.8 + rng.uniform(-0.5, 0.5, 50)
+    lon = -1.3 + rng.uniform(-0.5, 0.5, 50)
+    f = tmp_path / "pts.csv"
+    f.write_text("time,lat,lon\n" + "".join(
+        f"2020-01-01T00:00:{k:02d}Z,{a!r},{b!r}\n" for k, (a, b) in enumerate(zip(lat, lon,
+                                                                                  strict=True))))
+    det = read_track_csv(f)
+    en, ref = to_local_enu(det)
+    latlon = local_enu_to_geodetic(en, *ref)
+    np.testing.assert_allclose(latlon[:, 0], det.lat_deg, atol=1e-9)
+    np.testing.assert_allclose(latlon[:, 1], det.lon_deg, atol=1e-9)
+    with pytest.raises(ValueError, match="en_m"):
+        local_enu_to_geodetic(np.zeros((3, 3)), *ref)

@@ -228,3 +228,58 @@ def test_tensor_elimination_path_equals_brute_force(seed: int) -> None:
     assert np.bincount(jm.cluster).max() > 3
     assert (jm.method == 1).all()
     np.testing.assert_allclose(jm.beta, _brute_marginals(W), rtol=0, atol=1e-12)
+
+
+def test_chi2_threshold_against_scipy_stats() -> None:
+    # oracle: scipy.stats.chi2.ppf; spot values from printed chi-square tables (upper 1 %
+    # points: 6.635 for 1 and 9.210 for 2 degrees of freedom)
+    from scipy.stats import chi2
+
+    for p in (0.5, 0.9, 0.99, 0.9997):
+        for m in (1, 2, 3, 4, 6):
+            assert chi2_threshold(p, m) == pytest.approx(chi2.ppf(p, m), rel=1e-12)
+    assert round(chi2_threshold(0.99, 1), 2) == 6.63
+    assert round(chi2_threshold(0.99, 2), 2) == 9.21
+    assert chi2_threshold(1.0, 2) == float("inf")
+    with pytest.raises(ValueError, match="gate_probability"):
+        chi2_threshold(0.0, 2)
+    with pytest.raises(ValueError, match="dim_z"):
+        chi2_threshold(0.9, 0)
+
+
+@pytest.mark.parametrize("max_events", [20_000, 0])  # dense enumeration / per-problem path
+@pytest.mark.parametrize("bearing", [False, True])
+def test_jpda_step_batch_equals_per_problem_step(max_events: int, bearing: bool) -> None:
+    # Conformance: the batched step over R problems (padded measurements, valid mask) must
+    # give what jpda_step gives for each problem alone with its valid measurements.
+    from navtrack.tracking.jpda import jpda_step, jpda_step_batch
+    from navtrack.tracking.models import RangeBearing, constant_velocity, linear_position
+
+    rng = np.random.default_rng(5)
+    R_, T, M = 6, 3, 5
+    mot = constant_velocity(2, 1.0)
+    F, Q = mot.F(1.0), mot.Q(1.0)
+    if bearing:  # sensor far off so bearings of tracks and clutter straddle +-pi
+        model = RangeBearing(np.diag([50.0**2, 0.01**2]), sensor_xy=np.array([5000.0, 0.0]))
+    else:
+        model = linear_position(4, (0, 2), 30.0)
+    x = rng.normal(0, 1, (R_, T, 4)) * [100.0, 5.0, 100.0, 5.0]
+    P = np.broadcast_to(np.diag([400.0, 25.0, 400.0, 25.0]), (R_, T, 4, 4)).copy()
+    xp = np.einsum("ij,rtj->rti", F, x)
+    z = np.empty((R_, M, 2))
+    for r in range(R_):  # measurements near the predicted tracks, then extra clutter
+        z[r, :T] = model.h(xp[r]) + rng.normal(0, 1, (T, 2)) @ np.linalg.cholesky(model.R).T
+        z[r, T:] = model.h(xp[r, :M - T] + rng.normal(0, 60.0, (M - T, 4)))
+    valid = rng.random((R_, M)) < 0.8
+    valid[0] = False  # a problem with no measurement at all
+    cfg = JpdaConfig(pd=0.9, clutter_density=1e-6, gate_probability=0.999)
+    batch = jpda_step_batch(x, P, z, valid, F, Q, model, cfg, max_events=max_events)
+    assert (batch.marginals.beta[:, 1:] > 0.5).sum() >= R_  # the gates do take measurements
+    for r in range(R_):
+        one = jpda_step(x[r], P[r], z[r][valid[r]], F, Q, model, cfg)
+        np.testing.assert_allclose(batch.x[r], one.x, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(batch.P[r], one.P, rtol=1e-9, atol=1e-9)
+        beta = batch.marginals.beta.reshape(R_, T, M + 1)[r]
+        np.testing.assert_allclose(beta[:, 1:][:, ~valid[r]], 0.0, atol=0)
+        np.testing.assert_allclose(beta[:, np.r_[True, valid[r]]], one.marginals.beta,
+                                   atol=1e-12)

@@ -46,3 +46,14 @@ def test_track_command_reports_missing_columns(tmp_path: Path,
     f.write_text("when,lat,lon\n2020-01-01T00:00:00Z,50,-1\n")
     assert main(["track", str(f), "--format", "csv"]) == 1
     assert "bad.csv, line 1: missing column" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("option", ["--report-s", "--match-m", "--max-range-km"])
+@pytest.mark.parametrize("value", ["0", "-5", "nan"])
+def test_track_cli_refuses_non_positive_settings(tmp_path: Path, option: str, value: str) -> None:
+    # before: "--report-s 0" silently fell back to the default and a negative value gave an
+    # empty scoring grid; now the command stops and names the option.
+    f = tmp_path / "d.csv"
+    f.write_text("time,x_m,y_m\n2020-01-01T00:00:00Z,0,0\n")
+    with pytest.raises(SystemExit, match=option):
+        main(["track", str(f), "--format", "csv", option, value])

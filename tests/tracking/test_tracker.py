@@ -146,3 +146,13 @@ def test_one_point_initiation_with_reported_velocity() -> None:
     assert first_velocity_error(one) < first_velocity_error(two)
     with pytest.raises(ValueError, match="velocity"):
         run_tracker(t, z, cfg, velocity=vel[:3])
+
+
+def test_simulate_detections_rejects_bad_clutter_box() -> None:
+    meas = linear_position(4, (0, 2), 5.0)
+    truth = np.zeros((3, 1, 4))
+    rng = np.random.default_rng(0)
+    with pytest.raises(ValueError, match="clutter_low"):
+        simulate_detections(truth, meas, 0.9, 1.0, [-1.0, -1.0, -1.0], [1.0, 1.0, 1.0], rng)
+    with pytest.raises(ValueError, match="clutter box"):
+        simulate_detections(truth, meas, 0.9, 1.0, [1.0, -1.0], [-1.0, 1.0], rng)

@@ -61,13 +61,17 @@ def register(subparsers: Any) -> None:
 def _reference(args: argparse.Namespace) -> tuple[float, float, float] | None:
     """The reference position in ECEF metres, refusing clearly implausible values."""
     if args.ref is not None:
+        from navtrack.geodesy import check_near_surface
+
         x, y, z = args.ref
-        r = math.sqrt(x * x + y * y + z * z)
-        if not 6.2e6 < r < 6.5e6:
+        try:
+            check_near_surface(args.ref, "--ref")
+        except ValueError:
+            r = math.sqrt(x * x + y * y + z * z)
             raise SystemExit(
                 f"navtrack pos: --ref {x:g} {y:g} {z:g} is {r:.4g} m from the earth's centre, not "
                 "a point near the surface: give ECEF metres (use --ref-llh for degrees)"
-            )
+            ) from None
         return (x, y, z)
     if args.ref_llh is not None:
         lat, lon, h = args.ref_llh
@@ -115,9 +119,11 @@ def _check_output(path: Path | None) -> str | None:
     """Why the output path cannot be written (checked before the solve), or None."""
     if path is None:
         return None
+    from navtrack.io.solution import FORMATS
+
     parent = path.parent if str(path.parent) else Path(".")
-    if path.suffix.lower() not in (".csv", ".parquet", ".nmea", ".kml", ".gpx"):
-        return f"unknown output format {path.suffix!r} (use .csv, .parquet, .nmea, .kml, .gpx)"
+    if path.suffix.lower() not in FORMATS:
+        return f"unknown output format {path.suffix!r} (use {', '.join(FORMATS)})"
     if not parent.is_dir():
         return f"directory {str(parent)!r} does not exist"
     if path.is_dir():
@@ -129,26 +135,13 @@ def _check_output(path: Path | None) -> str | None:
     return None
 
 
-def _error_stats(pos_m: Any, ref: tuple[float, float, float]) -> dict[str, tuple[float, ...]]:
+def _error_stats(pos_m: Any, ref: tuple[float, float, float]) -> dict[str, Any]:
     import numpy as np
 
     from navtrack.geodesy import ecef_to_enu
+    from navtrack.gnss.accuracy import enu_error_stats
 
-    enu = ecef_to_enu(pos_m, np.asarray(ref))
-    hor = np.hypot(enu[:, 0], enu[:, 1])
-    ver = enu[:, 2]
-    d3 = np.linalg.norm(enu, axis=1)
-
-    def stats(x: Any, signed: Any = None) -> tuple[float, ...]:
-        mean = float(np.mean(x if signed is None else signed))
-        return (mean, float(np.sqrt(np.mean(x**2))), float(np.percentile(np.abs(x), 95)))
-
-    return {
-        "horizontal": stats(hor),
-        "vertical": stats(np.abs(ver), ver),
-        "3D": stats(d3),
-        "mean ENU": tuple(float(v) for v in enu.mean(axis=0)),
-    }
+    return enu_error_stats(ecef_to_enu(pos_m, np.asarray(ref)))
 
 
 def run_pos(args: argparse.Namespace) -> int:
@@ -223,10 +216,10 @@ def run_pos(args: argparse.Namespace) -> int:
     if ref is not None and solved:
         st = _error_stats(result.pos_m[result.status == 0], ref)
         print("error vs ref   mean      RMS       95 %    (m)")
-        for key in ("horizontal", "vertical", "3D"):
-            m, r, p95 = st[key]
-            print(f"  {key:<12} {m:8.3f}  {r:8.3f}  {p95:8.3f}")
-        e, n, u = st["mean ENU"]
+        for key, name in (("horizontal", "horizontal"), ("up", "vertical"), ("3D", "3D")):
+            print(f"  {name:<12} {st[key].mean_m:8.3f}  {st[key].rms_m:8.3f}  "
+                  f"{st[key].p95_m:8.3f}")
+        e, n, u = (st[k].mean_m for k in ("east", "north", "up"))
         print(f"  mean ENU     {e:8.3f}  {n:8.3f}  {u:8.3f}")
     if solved == 0:
         cause = max(((v, k) for k, v in counts.items() if k != "ok"), default=(0, "?"))[1]

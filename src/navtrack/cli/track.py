@@ -53,6 +53,10 @@ def run_track(args: argparse.Namespace) -> int:
     from navtrack.tracking.metrics import clear_mot, interpolate_truth
     from navtrack.tracking.tracker import DET_STATUS_NAMES, TrackerConfig, run_tracker
 
+    for name, value in (("--report-s", args.report_s), ("--match-m", args.match_m),
+                        ("--max-range-km", args.max_range_km)):
+        if value is not None and not value > 0:  # also refuses NaN
+            raise SystemExit(f"navtrack track: {name} must be a positive number, got {value:g}")
     clock = time.perf_counter()
     det = read_tracks(args.file, args.fmt, args.max_range_km)
     t_read = time.perf_counter() - clock
@@ -63,8 +67,8 @@ def run_track(args: argparse.Namespace) -> int:
         return 1
     en, ref = to_local_enu(det)
     report_s, max_gap_s, match_m = DEFAULTS[args.fmt]
-    report_s = args.report_s or report_s
-    match_m = args.match_m or match_m
+    report_s = report_s if args.report_s is None else args.report_s
+    match_m = match_m if args.match_m is None else args.match_m
     if args.fmt == "opensky":
         cfg = TrackerConfig.for_aircraft(args.associator)
     elif args.fmt == "ais":
@@ -143,13 +147,11 @@ def _write(path: Path, res: Any, ref: tuple[float, float]) -> None:
     import numpy as np
     import pandas as pd
 
-    from navtrack.geodesy import ecef_to_geodetic, enu_rotation, geodetic_to_ecef
-    from navtrack.timescale import gps_to_utc
+    from navtrack.io.tracks import local_enu_to_geodetic
+    from navtrack.timescale import gps_to_utc, to_datetime64
 
     x = res.track_x
-    utc = gps_to_utc(res.track_time_s)
-    epoch = np.datetime64("1980-01-06T00:00:00", "ns")
-    times = epoch + np.round(utc * 1e9).astype("timedelta64[ns]")
+    times = to_datetime64(gps_to_utc(res.track_time_s))  # UTC calendar times
     df = pd.DataFrame({
         "time": pd.to_datetime(times).strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
         "track_id": res.track_id,
@@ -158,13 +160,9 @@ def _write(path: Path, res: Any, ref: tuple[float, float]) -> None:
         "std_m": res.track_std_m,
     })
     if np.isfinite(ref[0]):
-        lat0, lon0 = np.radians(ref[0]), np.radians(ref[1])
-        rot = enu_rotation(lat0, lon0)
-        enu = np.stack([x[:, 0], x[:, 2], np.zeros(len(x))], axis=-1)
-        xyz = geodetic_to_ecef([lat0, lon0, 0.0]) + enu @ rot
-        llh = ecef_to_geodetic(xyz)
-        df["lat_deg"] = np.degrees(llh[:, 0])
-        df["lon_deg"] = np.degrees(llh[:, 1])
+        latlon = local_enu_to_geodetic(x[:, [0, 2]], ref[0], ref[1])
+        df["lat_deg"] = latlon[:, 0]
+        df["lon_deg"] = latlon[:, 1]
     if path.suffix == ".parquet":
         df.to_parquet(path, index=False)
     else:

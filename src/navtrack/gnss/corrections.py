@@ -210,8 +210,3 @@ def ionofree(p1_m: ArrayLike, p2_m: ArrayLike, f1_hz: ArrayLike, f2_hz: ArrayLik
     g1 = np.asarray(f1_hz, dtype=float) ** 2
     g2 = np.asarray(f2_hz, dtype=float) ** 2
     return (g1 * np.asarray(p1_m) - g2 * np.asarray(p2_m)) / (g1 - g2)
-
-
-def elevation_mask(el_rad: ArrayLike, mask_rad: float) -> np.ndarray:
-    """Boolean mask of elevations at or above the cut-off."""
-    return np.asarray(el_rad) >= mask_rad

@@ -324,10 +324,6 @@ def chi2_quantile(p: float, k: int) -> float:
 
 
 # --------------------------------------------------------------------------- measurements
-def _band_of(code: str) -> str:
-    return code[1]
-
-
 def select_pseudoranges(
     obs: Observations, sats: list[str], band_by_sys: Mapping[str, str]
 ) -> tuple[FloatArray, FloatArray, np.ndarray]:

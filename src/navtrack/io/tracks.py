@@ -19,11 +19,12 @@ from typing import Any
 
 import numpy as np
 
-from navtrack._typing import FloatArray, IntArray, StrPath
+from navtrack._typing import ArrayLike, FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError
 
 __all__ = [
     "TrackDetections",
+    "local_enu_to_geodetic",
     "read_ais_csv",
     "read_opensky_csv",
     "read_track_csv",
@@ -270,6 +271,15 @@ def read_tracks(path: StrPath, fmt: str, max_range_km: float | None = 1000.0) ->
     return readers[fmt](path, max_range_km)
 
 
+def _reference_deg(
+    det: TrackDetections, ref_lat_deg: float | None, ref_lon_deg: float | None
+) -> tuple[float, float]:
+    """The tangent-plane reference: the given latitude/longitude or the detections' medians."""
+    lat0 = float(np.median(det.lat_deg)) if ref_lat_deg is None else ref_lat_deg
+    lon0 = float(np.median(det.lon_deg)) if ref_lon_deg is None else ref_lon_deg
+    return lat0, lon0
+
+
 def to_local_enu(
     det: TrackDetections, ref_lat_deg: float | None = None, ref_lon_deg: float | None = None
 ) -> tuple[FloatArray, tuple[float, float]]:
@@ -287,8 +297,7 @@ def to_local_enu(
 
     if not det.geodetic:
         return np.stack([det.x_m, det.y_m], axis=-1), (float("nan"), float("nan"))
-    lat0 = float(np.median(det.lat_deg)) if ref_lat_deg is None else ref_lat_deg
-    lon0 = float(np.median(det.lon_deg)) if ref_lon_deg is None else ref_lon_deg
+    lat0, lon0 = _reference_deg(det, ref_lat_deg, ref_lon_deg)
     n = len(det)
     xyz = geodetic_to_ecef(
         np.stack([np.radians(det.lat_deg), np.radians(det.lon_deg), np.zeros(n)], axis=-1)
@@ -321,8 +330,7 @@ def velocity_local_enu(
     cr = np.radians(c)
     v_local = np.stack([s * np.sin(cr), s * np.cos(cr), np.zeros_like(s)], axis=-1)
     if det.geodetic:
-        lat0 = float(np.median(det.lat_deg)) if ref_lat_deg is None else ref_lat_deg
-        lon0 = float(np.median(det.lon_deg)) if ref_lon_deg is None else ref_lon_deg
+        lat0, lon0 = _reference_deg(det, ref_lat_deg, ref_lon_deg)
         R_i = enu_rotation(np.radians(det.lat_deg), np.radians(det.lon_deg))  # (N, 3, 3)
         R_0 = enu_rotation(np.radians(lat0), np.radians(lon0))
         v_ecef = np.einsum("nji,nj->ni", R_i, v_local)
@@ -330,3 +338,32 @@ def velocity_local_enu(
     out = np.asarray(v_local[:, :2], dtype=float)
     out[bad] = np.nan
     return out
+
+
+def local_enu_to_geodetic(en_m: ArrayLike, ref_lat_deg: float, ref_lon_deg: float) -> FloatArray:
+    """Latitude and longitude of east/north positions in the tangent plane of
+    :func:`to_local_enu` (the inverse of that function).
+
+    Parameters
+    ----------
+    en_m : array-like, shape (n, 2)
+        East and north (m) in the plane tangent to the ellipsoid (height 0) at the reference.
+    ref_lat_deg, ref_lon_deg : float
+        The reference (deg), as returned by :func:`to_local_enu`.
+
+    Returns
+    -------
+    ndarray, shape (n, 2)
+        Geodetic latitude and longitude (deg, WGS-84) of the points (up = 0 in the plane, so
+        the points lie slightly above the ellipsoid away from the reference).
+    """
+    from navtrack.geodesy import ecef_to_geodetic, enu_rotation, geodetic_to_ecef
+
+    en = np.asarray(en_m, dtype=float)
+    if en.ndim != 2 or en.shape[1] != 2:
+        raise ValueError(f"en_m: expected shape (n, 2), got {en.shape}")
+    lat0, lon0 = np.radians(ref_lat_deg), np.radians(ref_lon_deg)
+    enu = np.concatenate([en, np.zeros((len(en), 1))], axis=1)
+    # the rows of enu_rotation are the east, north, up unit vectors in ECEF
+    xyz = geodetic_to_ecef([lat0, lon0, 0.0]) + enu @ enu_rotation(lat0, lon0)
+    return np.degrees(ecef_to_geodetic(xyz)[:, :2])

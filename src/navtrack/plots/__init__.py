@@ -2,7 +2,8 @@
 
 * :mod:`navtrack.plots.gnss` — positioning solutions: ENU errors, horizontal scatter,
   satellites/DOP, skyplot;
-* :mod:`navtrack.plots.tracks` — map-like plot of tracks against the scored truth.
+* :mod:`navtrack.plots.tracks` — map-like plot of detections and confirmed tracks;
+* :mod:`navtrack.plots.canvas` — figure set-up shared by the modules (Agg canvas, PNG files).
 
 matplotlib is imported only when a figure is drawn.
 """

@@ -22,8 +22,9 @@ import numpy as np
 
 from navtrack import geodesy, timescale
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, StrPath
-from navtrack.errors import MissingDependencyError
+from navtrack.gnss.accuracy import enu_error_stats, error_stats
 from navtrack.io.solution import ok_mask
+from navtrack.plots.canvas import figure_dir, new_figure, save_figure
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -43,9 +44,6 @@ __all__ = [
     "solution_plot_data",
 ]
 
-# Plausible norm of an ECEF position near the earth's surface (m): 6357 km (pole) - 150 km to
-# 6378 km (equator) + 200 km; anything else is a reference in the wrong units or frame.
-_EARTH_NORM_RANGE_M = (6.2e6, 6.6e6)
 _DOP_COLUMNS = ("gdop", "pdop", "hdop", "vdop")
 _SYSTEM_COLOURS = {
     "G": "tab:blue",
@@ -121,7 +119,8 @@ class SolutionPlotData:
 
 
 def check_reference(ref_xyz_m: ArrayLike) -> FloatArray:
-    """A reference position as a float array of shape (3,), refusing implausible values.
+    """A reference position as a float array of shape (3,), refusing implausible values
+    (:func:`navtrack.geodesy.check_near_surface`).
 
     Raises
     ------
@@ -129,17 +128,7 @@ def check_reference(ref_xyz_m: ArrayLike) -> FloatArray:
         Not three finite numbers, or not a point near the earth's surface in ECEF metres
         (e.g. latitude/longitude in degrees, or kilometres).
     """
-    ref = np.asarray(ref_xyz_m, dtype=float)
-    if ref.shape != (3,) or not np.all(np.isfinite(ref)):
-        raise ValueError(f"ref_xyz_m: expected three finite ECEF coordinates (m), got {ref!r}")
-    norm = float(np.linalg.norm(ref))
-    lo, hi = _EARTH_NORM_RANGE_M
-    if not lo <= norm <= hi:
-        raise ValueError(
-            f"ref_xyz_m: distance from the earth's centre is {norm:.6g} m, not a point near the "
-            f"earth's surface ({lo:.3g}-{hi:.3g} m); give ECEF metres"
-        )
-    return ref
+    return geodesy.check_near_surface(ref_xyz_m, "ref_xyz_m")
 
 
 def _time_axis(t_gps_s: FloatArray) -> tuple[FloatArray, str]:
@@ -289,22 +278,6 @@ def skyplot_tracks(azel_rad: ArrayLike, sats: Sequence[str]) -> list[SkyTrack]:
 # --------------------------------------------------------------------------------------------
 
 
-def _new_figure(figsize: tuple[float, float]) -> Figure:
-    try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-    except ImportError:
-        raise MissingDependencyError("matplotlib", "plot", "Plots") from None
-    fig = Figure(figsize=figsize, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
-def _rms(x: FloatArray) -> float:
-    x = x[np.isfinite(x)]
-    return float(np.sqrt(np.mean(x**2))) if x.size else float("nan")
-
-
 def _what(data: SolutionPlotData) -> str:
     return "error" if data.ref_is_given else "deviation from median position"
 
@@ -315,18 +288,19 @@ def enu_error_figure(data: SolutionPlotData) -> Figure:
     Each panel holds one line with x = ``data.t`` and y = ``data.enu_m[:, k]`` (NaN gaps at
     failed epochs).
     """
-    fig = _new_figure((8.0, 6.5))
+    stats = enu_error_stats(data.enu_m)
+    fig = new_figure((8.0, 6.5))
     axes = fig.subplots(3, 1, sharex=True)
     for k, (ax, name) in enumerate(zip(axes, ("East", "North", "Up"), strict=True)):
         ax.plot(data.t, data.enu_m[:, k], lw=0.8, color=("C0", "C1", "C2")[k])
         ax.axhline(0.0, color="k", lw=0.5)
         ax.set_ylabel(f"{name} (m)")
-        ax.set_title(f"{name}: RMS {_rms(data.enu_m[:, k]):.2f} m", fontsize="small", loc="left")
+        ax.set_title(f"{name}: RMS {stats[name.lower()].rms_m:.2f} m", fontsize="small", loc="left")
         ax.grid(True, lw=0.3)
     axes[-1].set_xlabel(f"time since {data.t0_label} GPST ({data.t_unit})")
     n_bad = int((~data.ok).sum())
     fig.suptitle(
-        f"ENU {_what(data)}: 3D RMS {_rms(np.linalg.norm(data.enu_m, axis=1)):.2f} m, "
+        f"ENU {_what(data)}: 3D RMS {stats['3D'].rms_m:.2f} m, "
         f"{int(data.ok.sum())} epochs" + (f" ({n_bad} without a valid position)" if n_bad else "")
     )
     return fig
@@ -335,7 +309,7 @@ def enu_error_figure(data: SolutionPlotData) -> Figure:
 def horizontal_figure(data: SolutionPlotData) -> Figure:
     """North against east error of the valid epochs (first line), the reference at the origin
     (second line) and the circle holding 95 % of the horizontal errors (third line)."""
-    fig = _new_figure((6.5, 6.5))
+    fig = new_figure((6.5, 6.5))
     ax = fig.subplots()
     e, n = data.enu_m[data.ok, 0], data.enu_m[data.ok, 1]
     ax.plot(e, n, ls="none", marker=".", ms=3, alpha=0.6, label="solution")
@@ -350,7 +324,8 @@ def horizontal_figure(data: SolutionPlotData) -> Figure:
         label="reference" if data.ref_is_given else "median position",
     )
     h = data.horizontal_m[data.ok]
-    r95 = float(np.percentile(h, 95)) if h.size else float("nan")
+    h_stats = error_stats(h)
+    r95 = h_stats.p95_m
     ang = np.linspace(0.0, 2 * np.pi, 181)
     ax.plot(r95 * np.cos(ang), r95 * np.sin(ang), color="C3", lw=1, label=f"95 %: {r95:.2f} m")
     ax.set_aspect("equal", adjustable="datalim")
@@ -358,14 +333,14 @@ def horizontal_figure(data: SolutionPlotData) -> Figure:
     ax.set_ylabel("North (m)")
     ax.grid(True, lw=0.3)
     ax.legend(loc="upper right", fontsize="small")
-    ax.set_title(f"Horizontal {_what(data)}: RMS {_rms(h):.2f} m, {h.size} epochs")
+    ax.set_title(f"Horizontal {_what(data)}: RMS {h_stats.rms_m:.2f} m, {h.size} epochs")
     return fig
 
 
 def sats_dop_figure(data: SolutionPlotData) -> Figure:
     """Satellites used (top panel, one line) and each DOP (bottom panel, one line per name in
     ``data.dop_names``) against time."""
-    fig = _new_figure((8.0, 5.5))
+    fig = new_figure((8.0, 5.5))
     top, bottom = fig.subplots(2, 1, sharex=True)
     top.plot(data.t, data.n_sats, drawstyle="steps-post", lw=1, color="C0")
     top.set_ylabel("satellites used")
@@ -386,7 +361,7 @@ def sats_dop_figure(data: SolutionPlotData) -> Figure:
 def skyplot_figure(tracks: Sequence[SkyTrack]) -> Figure:
     """Polar skyplot: north up, azimuth clockwise, zenith at the centre, horizon at the rim;
     one line per track (x = azimuth in rad, y = 90 - elevation in deg), coloured by system."""
-    fig = _new_figure((6.5, 6.5))
+    fig = new_figure((6.5, 6.5))
     ax = cast("PolarAxes", fig.add_subplot(projection="polar"))
     ax.set_theta_zero_location("N")
     ax.set_theta_direction(-1)
@@ -405,27 +380,6 @@ def skyplot_figure(tracks: Sequence[SkyTrack]) -> Figure:
 # --------------------------------------------------------------------------------------------
 # Files
 # --------------------------------------------------------------------------------------------
-
-
-def _save(fig: Figure, path: Path) -> Path:
-    try:
-        fig.savefig(path, dpi=110)
-    except OSError as exc:
-        raise OSError(exc.errno, f"cannot write plot: {exc.strerror}", fspath(path)) from exc
-    return path
-
-
-def _out_dir(out_dir: StrPath) -> Path:
-    d = Path(out_dir)
-    if d.exists() and not d.is_dir():
-        raise NotADirectoryError(20, "plot directory is not a directory", fspath(d))
-    try:
-        d.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OSError(
-            exc.errno, f"cannot create plot directory: {exc.strerror}", fspath(d)
-        ) from exc
-    return d
 
 
 def plot_solution(
@@ -468,15 +422,15 @@ def plot_solution(
     """
     data = solution_plot_data(df, ref_xyz_m, ok_status=ok_status)
     tracks = skyplot_tracks(*azel) if azel is not None else None
-    d = _out_dir(out_dir)
+    d = figure_dir(out_dir)
     paths = [
-        _save(enu_error_figure(data), d / "enu_error.png"),
-        _save(horizontal_figure(data), d / "horizontal.png"),
+        save_figure(enu_error_figure(data), d / "enu_error.png"),
+        save_figure(horizontal_figure(data), d / "horizontal.png"),
     ]
     if data.dop_names or np.isfinite(data.n_sats).any():
-        paths.append(_save(sats_dop_figure(data), d / "sats_dop.png"))
+        paths.append(save_figure(sats_dop_figure(data), d / "sats_dop.png"))
     if tracks is not None:
-        paths.append(_save(skyplot_figure(tracks), d / "skyplot.png"))
+        paths.append(save_figure(skyplot_figure(tracks), d / "skyplot.png"))
     return paths
 
 
@@ -501,4 +455,4 @@ def skyplot(azel_rad: ArrayLike, sats: Sequence[str], path: StrPath) -> Path:
         raise FileNotFoundError(
             2, f"cannot write plot: directory {fspath(p.parent)!r} does not exist", fspath(p)
         )
-    return _save(skyplot_figure(skyplot_tracks(azel_rad, sats)), p)
+    return save_figure(skyplot_figure(skyplot_tracks(azel_rad, sats)), p)

@@ -8,6 +8,9 @@ from typing import Any
 import numpy as np
 
 from navtrack._typing import ArrayLike, StrPath
+from navtrack.plots.canvas import figure_dir, new_figure, save_figure
+
+__all__ = ["plot_tracks"]
 
 
 def plot_tracks(out_dir: StrPath, en: ArrayLike, result: Any, title: str = "") -> Path:
@@ -15,30 +18,44 @@ def plot_tracks(out_dir: StrPath, en: ArrayLike, result: Any, title: str = "") -
 
     Parameters
     ----------
-    out_dir : directory (created if absent)
-    en : (N, 2) detections, east/north m
-    result : :class:`navtrack.tracking.tracker.TrackerResult`
-    title : figure title
+    out_dir : str or path-like
+        Directory for the figure (created if missing).
+    en : array-like, shape (n_detections, 2)
+        Detections, east and north (m) in the local frame of the tracker.
+    result : navtrack.tracking.tracker.TrackerResult
+        Tracker output; the lines are ``track_x[:, 0]`` (east) against ``track_x[:, 2]``
+        (north) of the rows of each confirmed ``track_id``.
+    title : str, optional
+        First line of the figure title (the second gives the number of confirmed tracks).
+
+    Returns
+    -------
+    pathlib.Path
+        The written ``tracks.png``.
+
+    Raises
+    ------
+    ValueError
+        ``en`` is not of shape (n, 2).
+    OSError
+        The directory or the file cannot be written (the message names it).
+    MissingDependencyError
+        matplotlib is not installed.
     """
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        from navtrack.errors import MissingDependencyError
-
-        raise MissingDependencyError("matplotlib", "plot", "--plot") from None
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     en = np.asarray(en, dtype=float)
-    fig, ax = plt.subplots(figsize=(9, 8))
+    if en.ndim != 2 or en.shape[1] != 2:
+        raise ValueError(f"en: expected shape (n_detections, 2), got {en.shape}")
+    out = figure_dir(out_dir)
+    fig = new_figure((9.0, 8.0))
+    ax = fig.subplots()
     ax.plot(en[:, 0] / 1e3, en[:, 1] / 1e3, ".", color="0.75", ms=1.5, label="detections")
     conf = np.asarray(result.track_confirmed)
     ids = np.asarray(result.track_id)
     x = np.asarray(result.track_x)
     confirmed_ids = np.unique(ids[conf])
-    cmap = plt.get_cmap("tab20")
+    from matplotlib import colormaps
+
+    cmap = colormaps["tab20"]
     for k, tid in enumerate(confirmed_ids):
         sel = ids == tid
         ax.plot(x[sel, 0] / 1e3, x[sel, 2] / 1e3, "-", lw=0.9, color=cmap(k % 20))
@@ -47,7 +64,4 @@ def plot_tracks(out_dir: StrPath, en: ArrayLike, result: Any, title: str = "") -
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_title(f"{title}\n{len(confirmed_ids)} confirmed tracks")
     ax.legend(loc="best", fontsize=8)
-    path = out / "tracks.png"
-    fig.savefig(path, dpi=130, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    return save_figure(fig, out / "tracks.png", dpi=130)

@@ -21,26 +21,46 @@ __all__ = ["Gate", "chi2_threshold", "gate", "kdtree_pregate"]
 
 @lru_cache(maxsize=64)
 def chi2_threshold(gate_probability: float, dim_z: int) -> float:
-    """Gate size ``gamma`` with ``P(chi²_m <= gamma) = gate_probability``."""
-    from scipy.stats import chi2
+    """Gate size ``gamma`` with ``P(chi²_m <= gamma) = gate_probability``.
+
+    Parameters
+    ----------
+    gate_probability : float
+        ``P_G`` in (0, 1]; 1 gives ``inf`` (no gate).
+    dim_z : int
+        Measurement dimension ``m`` (degrees of freedom).
+
+    Returns
+    -------
+    float
+        ``gamma = 2 P^-1(m / 2, P_G)`` with ``P`` the regularised lower incomplete gamma
+        function, the chi-square quantile (``scipy.stats.chi2.ppf`` computes the same; calling
+        ``scipy.special`` directly spares the ~0.4 s import of ``scipy.stats``).
+    """
+    from scipy.special import gammaincinv
 
     if not 0.0 < gate_probability < 1.0:
         if gate_probability == 1.0:
             return float("inf")
         raise ValueError(f"gate_probability must be in (0, 1], got {gate_probability}")
-    return float(chi2.ppf(gate_probability, dim_z))
+    if dim_z < 1:
+        raise ValueError(f"dim_z must be >= 1, got {dim_z}")
+    return float(2.0 * gammaincinv(0.5 * dim_z, gate_probability))
 
 
 @dataclass(frozen=True, slots=True, eq=False)
 class Gate:
     """Track-to-measurement gating of one scan (arrays read-only).
 
+    ``...`` are optional leading batch axes (independent problems: Monte Carlo runs,
+    particles), as given to :func:`gate`.
+
     Attributes
     ----------
-    innovation : (T, M, m) ``z_j - ẑ_t`` (angles wrapped)
-    d2 : (T, M) squared Mahalanobis distance (``inf`` where not computed by the pre-gate)
-    valid : (T, M) bool, ``d2 <= gamma``
-    log_norm : (T,) ``-0.5 (m log 2π + log det S_t)``, the log of the Gaussian's peak
+    innovation : (..., T, M, m) ``z_j - ẑ_t`` (angles wrapped)
+    d2 : (..., T, M) squared Mahalanobis distance (``inf`` where not computed by the pre-gate)
+    valid : (..., T, M) bool, ``d2 <= gamma``
+    log_norm : (..., T) ``-0.5 (m log 2π + log det S_t)``, the log of the Gaussian's peak
     """
 
     innovation: FloatArray
@@ -53,8 +73,8 @@ class Gate:
             getattr(self, name).setflags(write=False)
 
     def log_likelihood(self) -> FloatArray:
-        """``log N(z_j; ẑ_t, S_t)``, shape (T, M)."""
-        return np.asarray(self.log_norm[:, None] - 0.5 * self.d2)
+        """``log N(z_j; ẑ_t, S_t)``, shape (..., T, M)."""
+        return np.asarray(self.log_norm[..., None] - 0.5 * self.d2)
 
 
 def gate(
@@ -70,22 +90,32 @@ def gate(
 
     Parameters
     ----------
-    z_pred : (T, m) predicted measurements
-    S : (T, m, m) innovation covariances (positive definite)
-    z : (M, m) measurements (finite)
+    z_pred : (..., T, m) predicted measurements
+    S : (..., T, m, m) innovation covariances (positive definite)
+    z : (..., M, m) measurements (finite); without batch axes a flat array is read as (M, m)
     gamma : float
         Gate size (see :func:`chi2_threshold`); ``inf`` accepts everything.
     angle_mask : bool (m,) or None
-    candidates : bool (T, M) or None
+    candidates : bool (..., T, M) or None
         Pairs to evaluate (from :func:`kdtree_pregate`); others get ``d2 = inf``.
+
+    Raises
+    ------
+    ValueError
+        Non-finite measurements, mismatched batch axes, or an ``S`` that is not positive
+        definite.
     """
     zp = np.asarray(z_pred, dtype=float)
     S = np.asarray(S, dtype=float)
-    Z = np.asarray(z, dtype=float).reshape(-1, zp.shape[-1])
+    m = zp.shape[-1]
+    Z = np.asarray(z, dtype=float)
+    Z = Z.reshape(-1, m) if zp.ndim == 2 else Z
+    if Z.shape[:-2] != zp.shape[:-2] or Z.shape[-1] != m:
+        raise ValueError(f"z: expected shape (..., M, {m}) like z_pred {zp.shape}, got {Z.shape}")
     if not np.all(np.isfinite(Z)):
         raise ValueError("z: measurements must be finite")
-    T, m = zp.shape
-    y = Z[None, :, :] - zp[:, None, :]
+    T, M = zp.shape[-2], Z.shape[-2]
+    y = Z[..., None, :, :] - zp[..., :, None, :]
     if angle_mask is not None and np.any(angle_mask):
         am = np.flatnonzero(angle_mask)
         y[..., am] = wrap_angle(y[..., am])
@@ -95,12 +125,12 @@ def gate(
         raise ValueError("S: innovation covariance not positive definite") from None
     log_det = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
     log_norm = -0.5 * (m * np.log(2 * np.pi) + log_det)
-    if T == 0 or Z.shape[0] == 0:
-        d2 = np.zeros((T, Z.shape[0]))
+    if T == 0 or M == 0:
+        d2 = np.zeros(y.shape[:-1])
     else:
         # whitened innovations: solve L w = y for every (t, j)
-        w = np.linalg.solve(L[:, None, :, :], y[..., None])[..., 0]
-        d2 = np.einsum("tji,tji->tj", w, w)
+        w = np.linalg.solve(L[..., :, None, :, :], y[..., None])[..., 0]
+        d2 = np.einsum("...i,...i->...", w, w)
     if candidates is not None:
         d2 = np.where(candidates, d2, np.inf)
     return Gate(y, d2, d2 <= gamma, log_norm)

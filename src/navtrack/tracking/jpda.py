@@ -465,6 +465,20 @@ class JpdaStep:
             getattr(self, name).setflags(write=False)
 
 
+def _innovation_cov_gain(
+    xp: FloatArray, Pp: FloatArray, model: Any
+) -> tuple[FloatArray, FloatArray]:
+    """``S = H P Hᵀ + R`` (symmetrised) and ``K = P Hᵀ S⁻¹``, ``H`` the model's Jacobian at the
+    prediction: the gain of :func:`navtrack.tracking.kalman.ekf_update`, shared by the PDA
+    update of every track."""
+    H = model.jacobian(xp)
+    PHt = Pp @ np.swapaxes(H, -1, -2)
+    S = H @ PHt + model.R
+    S = 0.5 * (S + np.swapaxes(S, -1, -2))
+    K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)
+    return S, K
+
+
 def jpda_step(
     x: ArrayLike,
     P: ArrayLike,
@@ -491,17 +505,12 @@ def jpda_step(
     from navtrack.tracking.kalman import kf_predict
 
     xp, Pp = kf_predict(x, P, F, Q)
-    Hj = model.jacobian(xp)
-    Ht = np.swapaxes(Hj, -1, -2)
-    PHt = Pp @ Ht
-    S = Hj @ PHt + model.R
-    S = 0.5 * (S + np.swapaxes(S, -1, -2))
+    S, K = _innovation_cov_gain(xp, Pp, model)
     gamma = chi2_threshold(config.gate_probability, model.dim_z)
     g = gate(model.h(xp), S, z, gamma, angle_mask=model.angle_mask)
     W = association_weights(g.log_likelihood(), g.valid, config.pd, config.gate_probability,
                             config.clutter_density)
     jm = jpda_marginals(W, config)
-    K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)
     xn, Pn = pda_update(xp, Pp, g.innovation, S, K, jm.beta)
     return JpdaStep(xn, Pn, xp, Pp, jm)
 
@@ -585,7 +594,7 @@ def jpda_step_batch(
     JpdaStep with batched arrays; ``marginals.beta`` is (R, T, M+1) and the other marginal
     fields describe the flattened ``R·T`` tracks.
     """
-    from navtrack.tracking.gating import chi2_threshold
+    from navtrack.tracking.gating import chi2_threshold, gate
     from navtrack.tracking.kalman import kf_predict
 
     Z = np.asarray(z, dtype=float)
@@ -593,27 +602,14 @@ def jpda_step_batch(
     xp, Pp = kf_predict(x, P, F, Q)
     R_, T = xp.shape[:2]
     M = Z.shape[1]
-    Hj = model.jacobian(xp)
-    PHt = Pp @ np.swapaxes(Hj, -1, -2)
-    S = Hj @ PHt + model.R
-    S = 0.5 * (S + np.swapaxes(S, -1, -2))
-    zhat = model.h(xp)
+    S, K = _innovation_cov_gain(xp, Pp, model)
     Zf = np.where(ok[..., None], Z, 0.0)
     if not np.all(np.isfinite(Zf)):
         raise ValueError("z: valid measurements must be finite")
-    y = Zf[:, None, :, :] - zhat[:, :, None, :]  # (R, T, M, m)
-    am = np.flatnonzero(model.angle_mask)
-    if am.size:
-        y[..., am] = (y[..., am] + np.pi) % (2 * np.pi) - np.pi
-    L = np.linalg.cholesky(S)
-    w = np.linalg.solve(L[:, :, None], y[..., None])[..., 0]
-    d2 = np.einsum("...i,...i->...", w, w)
-    m = S.shape[-1]
-    log_norm = -0.5 * (m * np.log(2 * np.pi)
-                       + 2 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1))
-    gamma = chi2_threshold(config.gate_probability, m)
-    inside = (d2 <= gamma) & ok[:, None, :]
-    W = association_weights(log_norm[..., None] - 0.5 * d2, inside, config.pd,
+    gamma = chi2_threshold(config.gate_probability, model.dim_z)
+    g = gate(model.h(xp), S, Zf, gamma, angle_mask=model.angle_mask)  # (R, T, M) pairs
+    y = g.innovation
+    W = association_weights(g.log_likelihood(), g.valid & ok[:, None, :], config.pd,
                             config.gate_probability, config.clutter_density)
     from math import comb, perm
 
@@ -634,6 +630,5 @@ def jpda_step_batch(
             np.concatenate([p.error_bound for p in parts]),
             np.concatenate([p.n_events for p in parts]),
         )
-    K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)
     xn, Pn = pda_update(xp, Pp, y, S, K, beta)
     return JpdaStep(xn, Pn, xp, Pp, flat)

@@ -48,7 +48,10 @@ def _points(A: ArrayLike) -> FloatArray:
 
 
 def _dist(X: FloatArray, Y: FloatArray) -> FloatArray:
-    return np.asarray(np.sqrt(((X[:, None, :] - Y[None, :, :]) ** 2).sum(-1)))
+    """Euclidean distances ``(n, m)`` between the rows of ``X (n, d)`` and ``Y (m, d)``."""
+    from scipy.spatial.distance import cdist
+
+    return np.asarray(cdist(X, Y))
 
 
 def ospa(X: ArrayLike, Y: ArrayLike, c: float, p: float = 2.0) -> float:

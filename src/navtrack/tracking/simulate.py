@@ -117,6 +117,12 @@ def simulate_detections(
     hi = np.asarray(clutter_high, dtype=float)
     K, n, _ = X.shape
     m = model.dim_z
+    if lo.shape != (m,) or hi.shape != (m,):
+        raise ValueError(
+            f"clutter_low, clutter_high: expected shape ({m},), got {lo.shape} and {hi.shape}"
+        )
+    if not np.all(np.isfinite(lo) & np.isfinite(hi) & (hi >= lo)):
+        raise ValueError(f"clutter box: need finite clutter_low <= clutter_high, got {lo}, {hi}")
     present = np.all(np.isfinite(X), axis=-1)
     Lr = np.linalg.cholesky(model.R)
     zt = model.h(np.where(present[..., None], X, 0.0)) + rng.standard_normal((K, n, m)) @ Lr.T

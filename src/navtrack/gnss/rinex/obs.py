@@ -21,7 +21,6 @@ from __future__ import annotations
 import itertools
 import re
 from dataclasses import dataclass, field, replace
-from datetime import date
 from os import fspath
 
 import numpy as np
@@ -36,13 +35,12 @@ from navtrack.gnss.observations import (
     SkippedLine,
 )
 from navtrack.gnss.rinex._io import read_bytes, sniff
-from navtrack.timescale import to_gps
+from navtrack.timescale import calendar_gps_seconds, to_gps
 
 __all__ = ["read_obs"]
 
 _NAN = float("nan")
 _FIELD = 16  # F14.3 value + LLI + SSI
-_GPS_EPOCH_ORDINAL = date(1980, 1, 6).toordinal()
 
 # Time system of the epochs when TIME OF FIRST OBS leaves it blank (RINEX 3.05 table A2).
 _DEFAULT_TIME_SYSTEM = {
@@ -289,12 +287,28 @@ def _three_floats(text: str) -> FloatArray | None:
 def _header_time(text: str) -> float:
     """Calendar seconds since 1980-01-06 of a TIME OF FIRST/LAST OBS record (5I6,F13.7)."""
     y, mo, d, h, mi = (int(text[k : k + 6]) for k in range(0, 30, 6))
-    return _calendar_s(y, mo, d, h, mi, float(text[30:43]))
+    return calendar_gps_seconds(y, mo, d, h, mi, float(text[30:43]))
 
 
-def _calendar_s(y: int, mo: int, d: int, h: int, mi: int, s: float) -> float:
-    return (date(y, mo, d).toordinal() - _GPS_EPOCH_ORDINAL) * 86400.0 + (
-        h * 3600.0 + mi * 60.0 + s
+def _epoch_time_s(rec: bytes, start: int, stop: int, days: dict[bytes, float]) -> float:
+    """Calendar seconds since 1980-01-06 of the date and time of an epoch record.
+
+    ``rec[start:stop]`` is the date, ``YYYY MM DD`` (RINEX 3) or ``YY MM DD`` (RINEX 2, years
+    80-99 are 19xx); the time ``hh mm ss.sssssss`` (I2,1X,I2,F11.7) follows one blank later in
+    both versions. ``days`` caches the seconds of each date's midnight: a file has few dates but
+    one record per epoch, and ``datetime.date`` is the costly part.
+    """
+    key = rec[start:stop]
+    day_s = days.get(key)
+    if day_s is None:
+        year = int(key[:-6])
+        if stop - start == 8:
+            year += 1900 if year >= 80 else 2000
+        day_s = days[key] = calendar_gps_seconds(year, int(key[-5:-3]), int(key[-2:]), 0, 0, 0.0)
+    return day_s + (
+        int(rec[stop + 1 : stop + 3]) * 3600.0
+        + int(rec[stop + 4 : stop + 6]) * 60.0
+        + float(rec[stop + 6 : stop + 17])
     )
 
 
@@ -413,7 +427,7 @@ def _scan_v3(
     starts = [j for j in range(body, end) if lines[j][:1] == b">"]
     starts.append(end)
     seg = len(segments) - 1
-    days: dict[bytes, int] = {}
+    days: dict[bytes, float] = {}
     last: tuple[int, int, int] | None = None  # last data epoch: record line, count, end
     i = body
     pos = 0
@@ -438,16 +452,7 @@ def _scan_v3(
             if not 0 <= flag <= 6 or count < 0:
                 raise ValueError(f"epoch flag {rec[31:32]!r}")
             if rec[2:29].strip():
-                key = rec[2:12]
-                day = days.get(key)
-                if day is None:
-                    day = days[key] = (
-                        date(int(rec[2:6]), int(rec[7:9]), int(rec[10:12])).toordinal()
-                        - _GPS_EPOCH_ORDINAL
-                    )
-                t_cal = day * 86400.0 + (
-                    int(rec[13:15]) * 3600.0 + int(rec[16:18]) * 60.0 + float(rec[18:29])
-                )
+                t_cal = _epoch_time_s(rec, 2, 12, days)
             elif flag in (0, 1, 6):
                 raise ValueError("no epoch time")
             else:
@@ -525,7 +530,7 @@ def _scan_v2(
     limit = len(lines) - (lines[-1] == b"")
     seg = len(segments) - 1
     per_sat = (len(segments[seg].obs_types["G"]) + 4) // 5
-    days: dict[bytes, int] = {}
+    days: dict[bytes, float] = {}
     previous = (-1, 0, 0, 0)  # last data epoch: record line, satellites, first/stop data line
     i = body
     while i < end:
@@ -536,19 +541,7 @@ def _scan_v2(
             flag = rec[28] - 48
             count = int(rec[29:32])
             if rec[1:26].strip():
-                key = rec[1:9]
-                day = days.get(key)
-                if day is None:
-                    yy = int(rec[1:3])
-                    day = days[key] = (
-                        date(
-                            yy + (1900 if yy >= 80 else 2000), int(rec[4:6]), int(rec[7:9])
-                        ).toordinal()
-                        - _GPS_EPOCH_ORDINAL
-                    )
-                t_cal = day * 86400.0 + (
-                    int(rec[10:12]) * 3600.0 + int(rec[13:15]) * 60.0 + float(rec[15:26])
-                )
+                t_cal = _epoch_time_s(rec, 1, 9, days)
             elif flag in (0, 1, 6):
                 raise ValueError("no epoch time")
             else:
