@@ -9,14 +9,13 @@ from __future__ import annotations
 import itertools
 import re
 from collections.abc import Mapping, Sequence
-from os import fspath
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from navtrack._typing import ArrayLike, StrPath
-from navtrack.errors import MissingDependencyError
+from navtrack.plots.canvas import new_figure, save_figure
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -32,25 +31,6 @@ __all__ = [
 ]
 
 
-def _new_figure(figsize: tuple[float, float]) -> Figure:
-    try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-    except ImportError:
-        raise MissingDependencyError("matplotlib", "plot", "Plots") from None
-    fig = Figure(figsize=figsize, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
-def _save(fig: Figure, path: Path) -> Path:
-    try:
-        fig.savefig(path, dpi=110)
-    except OSError as exc:
-        raise OSError(exc.errno, f"cannot write plot: {exc.strerror}", fspath(path)) from exc
-    return path
-
-
 def _slug(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_")
 
@@ -63,7 +43,7 @@ def series_figure(t: ArrayLike, result: AriResult, title: str = "", unit: str = 
     """
     t_arr = np.asarray(t, dtype=float)
     t_arr = t_arr - t_arr[0] if t_arr.size else t_arr
-    fig = _new_figure((9.0, 5.5))
+    fig = new_figure((9.0, 5.5))
     ax1, ax2 = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
     ax1.plot(t_arr, result.y, ".", ms=2, color="0.55", label="observed")
     ax1.plot(t_arr, result.x, "-", lw=1.0, color="C0", label="filtered")
@@ -103,13 +83,13 @@ def plot_series(
     path: StrPath, t: ArrayLike, result: AriResult, title: str = "", unit: str = ""
 ) -> Path:
     """Write :func:`series_figure` as a PNG file."""
-    return _save(series_figure(t, result, title, unit), Path(path))
+    return save_figure(series_figure(t, result, title, unit), Path(path))
 
 
 def estimates_figure(ratios: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> Figure:
     """Box plots of estimate/truth of sigma_n and sigma_e per synthetic case."""
     names = list(ratios)
-    fig = _new_figure((8.0, 4.0))
+    fig = new_figure((8.0, 4.0))
     ax1, ax2 = fig.subplots(1, 2, sharey=False)
     for ax, k, label in ((ax1, 0, "σn estimate / truth"), (ax2, 1, "σe estimate / truth")):
         data = [np.asarray(ratios[n][k], dtype=float) for n in names]
@@ -124,7 +104,7 @@ def estimates_figure(ratios: Mapping[str, tuple[Sequence[float], Sequence[float]
 
 def recall_figure(detections: Mapping[str, tuple[Sequence[float], Sequence[bool]]]) -> Figure:
     """Recall of injected gross errors against their magnitude (in sigma_n), per case."""
-    fig = _new_figure((6.0, 4.0))
+    fig = new_figure((6.0, 4.0))
     ax = fig.subplots()
     edges = np.array([5, 6, 7, 8, 10, 12, 15.01])
     centres = 0.5 * (edges[:-1] + edges[1:])
@@ -165,8 +145,10 @@ def write_reproduction_figures(
             [h for r in recs for h in r["detected"]],
         )
     if ratios:
-        written.append(_save(estimates_figure(ratios), out_dir / "synthetic_sigma_ratios.png"))
-        written.append(_save(recall_figure(detections), out_dir / "gross_error_recall.png"))
+        written.append(
+            save_figure(estimates_figure(ratios), out_dir / "synthetic_sigma_ratios.png")
+        )
+        written.append(save_figure(recall_figure(detections), out_dir / "gross_error_recall.png"))
     for src in sources:
         col = next(iter(src.columns))
         res = fits.get((src.source, col))
@@ -174,6 +156,8 @@ def write_reproduction_figures(
             continue
         name = _slug(f"real_{src.source}_{col}") + ".png"
         written.append(
-            _save(series_figure(src.t_s, res, f"{src.source} {col}", src.unit), out_dir / name)
+            save_figure(
+                series_figure(src.t_s, res, f"{src.source} {col}", src.unit), out_dir / name
+            )
         )
     return written
