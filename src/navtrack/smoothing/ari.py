@@ -95,7 +95,11 @@ from typing import Any, Literal
 import numpy as np
 
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, Int8Array
-from navtrack.smoothing._banded import cholesky_solve_banded, inverse_band_from_factor
+from navtrack.smoothing._banded import (
+    cholesky_solve_banded,
+    inverse_band_from_factor,
+    weighted_band_sums,
+)
 
 __all__ = [
     "EPOCH_STATUS",
@@ -631,35 +635,35 @@ def gauss_markov_filter(
 
 
 def _phi_gradient_terms(
-    c: FloatArray, x: FloatArray, zb: FloatArray, v: FloatArray, p: int, d: int
+    c: FloatArray,
+    x: FloatArray,
+    v: FloatArray,
+    p: int,
+    d: int,
+    big_s: FloatArray,
 ) -> FloatArray:
     """``sum_s v_s E[e_s u_{s-j}]``, ``j = 1..p`` (``u = (1 - B)^d x``, ``E`` under ``N^-1``).
 
     This is half the derivative of ``sum v_s E[e_s^2]`` with respect to ``phi_j``: the AR part of
     the likelihood gradient (and of the EM / alternating least-squares step of the paper's
-    iterative scheme).
+    iterative scheme). ``E[e_s u_{s-j}] = e_s u_{s-j} + sum_{i,k} c_i delta_k Z[s-i, s-j-k]``;
+    the covariance part summed over ``s`` is ``sum_{i,k} c_i delta_k S[i, j+k]``
+    (:func:`navtrack.smoothing._banded.weighted_band_sums`).
     """
     m = p + d
     n = x.size
     ns = n - m
     delta = ari_polynomial(np.zeros(0), d)
     e = _process_residuals(c, x)  # e_s, s = m..n-1
+    ve = v * e
+    u = np.convolve(x, delta, mode="valid")  # u_t, t = d..n-1
     out = np.empty(p)
     for j in range(1, p + 1):
-        # u_{s-j} = sum_k delta_k x_{s-j-k}
-        uj = np.zeros(ns)
-        cov = np.zeros(ns)
-        for k in range(d + 1):
-            col = m - j - k  # x index of s - j - k at s = m
-            uj += delta[k] * x[col : col + ns]
-            for i in range(m + 1):
-                row = m - i  # x index of s - i at s = m
-                lag = col - row  # Z[s - i, s - j - k]
-                if lag >= 0:
-                    cov += c[i] * delta[k] * zb[lag, row : row + ns]
-                else:
-                    cov += c[i] * delta[k] * zb[-lag, col : col + ns]
-        out[j - 1] = float(np.sum(v * (e * uj + cov)))
+        # u_{s-j} for s = m..n-1 is u[m - j - d : m - j - d + ns]
+        start = m - j - d
+        mean_part = float(np.dot(ve, u[start : start + ns]))
+        cov_part = float(c @ big_s[:, j : j + d + 1] @ delta)
+        out[j - 1] = mean_part + cov_part
     return out
 
 
@@ -674,6 +678,7 @@ class _Estimate:
     n_iter: int
     converged: bool
     boundary: bool
+    grad: FloatArray | None = None  # gradient of -log L at the estimate, when evaluated
 
 
 def _evaluate(
@@ -709,7 +714,8 @@ def _evaluate(
     n_v = float(np.count_nonzero(v > 0))
     # redundancies r_k = n_k - tr(N^-1 N_k) (Förstner 1979)
     r_n = n_w - float(np.sum(w * zb[0])) / sn2
-    trace_e = float(np.sum(v * _process_variance(c, zb)))
+    big_s = weighted_band_sums(zb, v, m)
+    trace_e = float(c @ big_s @ c)  # sum_s v_s c^T Z_s c
     z_top = None
     if prior is not None:
         z_top = _dense_block(zb, m)
@@ -721,7 +727,7 @@ def _evaluate(
     grad[p] = 0.5 * (r_n - fit.omega_n / sn2)
     grad[p + 1] = 0.5 * (r_e - fit.omega_e / se2)
     if p:
-        grad[:p] = _phi_gradient_terms(c, fit.x, zb, v, p, d) / se2
+        grad[:p] = _phi_gradient_terms(c, fit.x, v, p, d, big_s) / se2
     if prior is not None and z_top is not None:
         u0 = prior.d_mat @ fit.x[:m]
         moment = prior.d_mat @ z_top @ prior.d_mat.T + np.outer(u0, u0)
@@ -741,18 +747,27 @@ def _dense_block(zb: FloatArray, m: int) -> FloatArray:
 
 def _make_estimate(
     vec: FloatArray,
-    out: tuple[_Fit, float, float, FloatArray],
+    out: tuple[_Fit, float, float, FloatArray | None],
     p: int,
     n_eval: int,
     converged: bool,
     log_floor: float,
 ) -> _Estimate:
-    fit, r_n, r_e, _ = out
+    fit, r_n, r_e, grad = out
     # A component at its floor, or with less than one observation's worth of redundancy, is
     # not estimable from these data (the likelihood is flat towards zero variance).
     boundary = min(vec[p], vec[p + 1]) <= log_floor + 1e-6 or min(r_n, r_e) < 1.0
     return _Estimate(
-        vec[:p].copy(), float(vec[p]), float(vec[p + 1]), fit, r_n, r_e, n_eval, converged, boundary
+        vec[:p].copy(),
+        float(vec[p]),
+        float(vec[p + 1]),
+        fit,
+        r_n,
+        r_e,
+        n_eval,
+        converged,
+        boundary,
+        grad,
     )
 
 
@@ -796,6 +811,7 @@ def _refine(
     max_iter: int,
     log_floor: float,
     log_ceiling: float,
+    start: _Estimate | None = None,
 ) -> tuple[_Estimate, FloatArray] | None:
     """Quasi-Newton (BFGS from ``hess``) with Armijo backtracking.
 
@@ -804,10 +820,16 @@ def _refine(
     the expected-moment least-squares equation of the paper's alternating scheme. Steps are
     capped (1 in ``phi``, 2 in ``log sigma^2``) and the log-variances kept in
     ``[log_floor, log_ceiling]``. Stopping rule: the expected gain ``g^T H^-1 g / 2`` of the
-    next step is below ``tol`` (log-likelihood units), or ``max_iter`` steps.
+    next step is below ``tol`` (log-likelihood units), or ``max_iter`` steps. ``start``, an
+    estimate already evaluated at ``vec`` with the same weights, saves that evaluation.
     """
-    out = _evaluate(vec, y0, w, v, p, d, stationary)
-    n_eval = 1
+    out: tuple[_Fit, float, float, FloatArray] | None
+    if start is not None and start.grad is not None:
+        out = (start.fit, start.r_n, start.r_e, start.grad)
+        n_eval = 0
+    else:
+        out = _evaluate(vec, y0, w, v, p, d, stationary)
+        n_eval = 1
     if out is None:
         return None
     b_mat = hess.copy()
@@ -869,7 +891,7 @@ def _vce_polish(
     point to the likelihood's resolution).
     """
     vec = np.concatenate([est.phi, [est.log_sn2, est.log_se2]])
-    out: tuple[_Fit, float, float, FloatArray] = (est.fit, est.r_n, est.r_e, np.zeros(p + 2))
+    out: tuple[_Fit, float, float, FloatArray | None] = (est.fit, est.r_n, est.r_e, est.grad)
     n_eval = 0
     converged = False
     for _ in range(max_iter):
@@ -1236,16 +1258,27 @@ def _fit_fixed(
             n_iter += 1 + best.n_iter
         if not reweighted and best.converged:
             break
-        vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
         # fresh curvature (window, current weights) rather than the BFGS matrix of the last
         # search, which crawls along the sigma_e/phi ridge once the weights have changed
         hw, hv = w[:head], v[: head - m]
-        hess = _hessian(vec, y0[:head], hw, hv, p, d, st) * (
-            np.count_nonzero(w) / max(int(np.count_nonzero(hw)), 1)
-        )
+        h_scale = np.count_nonzero(w) / max(int(np.count_nonzero(hw)), 1)
+        vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
+        hess = _hessian(vec, y0[:head], hw, hv, p, d, st) * h_scale
         n_iter += p + 3
         refined = _refine(
-            vec, hess, y0, w, v, p, d, st, cfg.gain_tol, cfg.max_iter, log_floor, log_ceiling
+            vec,
+            hess,
+            y0,
+            w,
+            v,
+            p,
+            d,
+            st,
+            cfg.gain_tol,
+            cfg.max_iter,
+            log_floor,
+            log_ceiling,
+            start=best,  # already evaluated at vec with these weights
         )
         if refined is None:
             break
