@@ -439,6 +439,9 @@ class _Fit:
     omega_n: float
     omega_e: float
     logdet: float
+    # without zb: the Cholesky factor and the matrix, to add zb later (_with_inverse)
+    factor: FloatArray | None = None
+    ab: FloatArray | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -561,8 +564,20 @@ def _solve(
         + omega_n / sn2
         + omega_e / se2
     )
-    zb = inverse_band_from_factor(factor, width, ab=ab) if width is not None else None
+    if width is None:
+        return _Fit(x, None, loglike, omega_n, omega_e, logdet, factor, ab)
+    zb = inverse_band_from_factor(factor, width, ab=ab)
     return _Fit(x, zb, loglike, omega_n, omega_e, logdet)
+
+
+def _with_inverse(fit: _Fit, width: int) -> _Fit:
+    """``fit`` (solved with ``width=None``) completed with the band of ``N^-1``."""
+    if fit.zb is not None and fit.zb.shape[0] > width:
+        return fit
+    if fit.factor is None:
+        raise ValueError("the fit keeps no factor")
+    zb = inverse_band_from_factor(fit.factor, width, ab=fit.ab)
+    return _Fit(fit.x, zb, fit.loglike, fit.omega_n, fit.omega_e, fit.logdet)
 
 
 def gauss_markov_filter(
@@ -681,6 +696,26 @@ class _Estimate:
     grad: FloatArray | None = None  # gradient of -log L at the estimate, when evaluated
 
 
+def _trial(
+    vec: FloatArray,
+    y0: FloatArray,
+    w: FloatArray,
+    v: FloatArray,
+    p: int,
+    d: int,
+    stationary: bool,
+) -> _Fit | None:
+    """Solution and likelihood at ``(phi, log sn2, log se2)`` without the selected inversion
+    (a line-search trial: :func:`_evaluate` completes it when it is accepted)."""
+    c = ari_polynomial(vec[:p], d)
+    prior = None
+    if stationary and p:
+        prior = _stationary_prior(vec[:p], d)
+        if prior is None:
+            return None
+    return _solve(y0, w, v, c, math.exp(vec[p]), math.exp(vec[p + 1]), None, prior)
+
+
 def _evaluate(
     vec: FloatArray,
     y0: FloatArray,
@@ -689,12 +724,14 @@ def _evaluate(
     p: int,
     d: int,
     stationary: bool,
+    partial: _Fit | None = None,
 ) -> tuple[_Fit, float, float, FloatArray] | None:
     """Fit at ``(phi, log sn2, log se2)``; redundancies and the gradient of ``-log L``.
 
     ``d(-log L)/d log sigma_k^2 = (r_k - Omega_k / sigma_k^2) / 2`` and
     ``d(-log L)/d phi_j = sum_s v_s E[e_s u_{s-j}] / sigma_e^2`` (+ the stationary-start
-    term ``(d log det Gamma + tr(d Gamma^-1 E[u u^T]) / sigma_e^2) / 2``).
+    term ``(d log det Gamma + tr(d Gamma^-1 E[u u^T]) / sigma_e^2) / 2``). ``partial``: the
+    result of :func:`_trial` at the same point (its factor is reused).
     """
     phi = vec[:p]
     sn2 = math.exp(vec[p])
@@ -706,7 +743,10 @@ def _evaluate(
         if prior is None:
             return None
     m = p + d
-    fit = _solve(y0, w, v, c, sn2, se2, m, prior)
+    if partial is not None:
+        fit: _Fit | None = _with_inverse(partial, m)
+    else:
+        fit = _solve(y0, w, v, c, sn2, se2, m, prior)
     if fit is None or fit.zb is None:
         return None
     zb = fit.zb
@@ -852,11 +892,14 @@ def _refine(
         while t > 1e-6:
             trial = vec + t * step
             trial[p:] = np.clip(trial[p:], log_floor, log_ceiling)
-            new = _evaluate(trial, y0, w, v, p, d, stationary)
+            # likelihood first; the selected inversion and gradient only for an accepted step
+            part = _trial(trial, y0, w, v, p, d, stationary)
             n_eval += 1
-            if new is not None and -new[0].loglike <= f - 1e-4 * t * 2.0 * gain / cap:
-                accepted = (trial, new)
-                break
+            if part is not None and -part.loglike <= f - 1e-4 * t * 2.0 * gain / cap:
+                new = _evaluate(trial, y0, w, v, p, d, stationary, partial=part)
+                if new is not None:
+                    accepted = (trial, new)
+                    break
             t *= 0.25
         if accepted is None:
             converged = gain < 1e3 * tol
