@@ -100,6 +100,26 @@ def test_weighted_band_sums_match_dense(n: int, m: int, monkeypatch: pytest.Monk
         weighted_band_sums(zb[:m], v, m)
 
 
+def test_convolution_band_matches_dense(monkeypatch: pytest.MonkeyPatch) -> None:
+    rng = np.random.default_rng(8)
+    n, c = 30, np.array([1.0, -1.7, 0.9, -0.15])
+    m = c.size - 1
+    vs = rng.uniform(0.2, 2.0, size=n - m)
+    a = np.zeros((n - m, n))
+    for s in range(m, n):
+        a[s - m, s - np.arange(m + 1)] = c
+    dense = a.T @ (vs[:, None] * a)
+    compiled = np.zeros((m + 1, n))
+    _banded.add_convolution_band(compiled, c, vs)
+    np.testing.assert_allclose(band_to_dense(compiled), dense, rtol=1e-13, atol=1e-13)
+    monkeypatch.setattr(_banded, "_add_convolution_band", None)  # NumPy path
+    plain = np.zeros((m + 1, n))
+    _banded.add_convolution_band(plain, c, vs)
+    np.testing.assert_array_equal(plain, compiled)  # same sums in the same order
+    with pytest.raises(ValueError, match="do not match"):
+        _banded.add_convolution_band(plain, c, vs[1:])
+
+
 def _dense_gauss_markov(y, phi, d, sigma_n, sigma_e):
     """Eqs. (2)-(3) as a dense weighted least-squares problem (independent construction)."""
     c = ari_polynomial(phi, d)

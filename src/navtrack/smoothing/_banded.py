@@ -35,6 +35,7 @@ except ImportError:
 
 __all__ = [
     "HAVE_NUMBA",
+    "add_convolution_band",
     "band_matvec",
     "band_to_dense",
     "cholesky_solve_banded",
@@ -233,6 +234,43 @@ def _band_sums_py(zb: FloatArray, v: FloatArray, m: int) -> FloatArray:
 
 
 _band_sums: Any = _numba.njit(cache=True, nogil=True)(_band_sums_py) if _numba is not None else None
+
+
+def _add_convolution_band_py(ab: FloatArray, c: FloatArray, vs: FloatArray) -> None:
+    m = c.size - 1
+    ns = vs.size
+    for i in range(m + 1):
+        for i2 in range(i + 1):
+            cc = c[i] * c[i2]
+            row = m - (i - i2)
+            off = m - i2
+            for s in range(ns):
+                ab[row, off + s] += vs[s] * cc
+
+
+_add_convolution_band: Any = (
+    _numba.njit(cache=True, nogil=True)(_add_convolution_band_py) if _numba is not None else None
+)
+
+
+def add_convolution_band(ab: FloatArray, c: FloatArray, vs: FloatArray) -> None:
+    """Add ``sum_s vs_s a_s a_s^T`` to the upper band ``ab`` ``(m + 1, n)`` in place, where
+    ``a_s`` has ``c_i`` at column ``s - i`` (``s = m..n-1``, ``m = len(c) - 1``): the normal
+    matrix of the equations ``sum_i c_i x_{s-i}`` with weights ``vs`` ``(n - m,)``.
+
+    The same sums in the same order with or without numba (identical rounding).
+    """
+    m = c.size - 1
+    n = ab.shape[1]
+    if ab.shape[0] != m + 1 or vs.size != n - m:
+        raise ValueError(f"ab {ab.shape}, c ({c.size},) and vs ({vs.size},) do not match")
+    if _add_convolution_band is not None:
+        _add_convolution_band(ab, np.ascontiguousarray(c, dtype=np.float64), vs)
+        return
+    for i in range(m + 1):
+        for i2 in range(i + 1):
+            lag = i - i2
+            ab[m - lag, m - i2 : n - i2] += vs * (c[i] * c[i2])
 
 
 def weighted_band_sums(zb: FloatArray, v: FloatArray, m: int) -> FloatArray:

@@ -96,6 +96,7 @@ import numpy as np
 
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, Int8Array
 from navtrack.smoothing._banded import (
+    add_convolution_band,
     cholesky_solve_banded,
     inverse_band_from_factor,
     weighted_band_sums,
@@ -400,12 +401,8 @@ def _normal_band(c: FloatArray, w: FloatArray, v: FloatArray, sn2: float, se2: f
     n = w.size
     ab = np.zeros((m + 1, n))
     ab[m] = w / sn2
-    vs = v / se2
     # equation s (0-based, s = m..n-1) involves x_{s-i} with coefficient c_i
-    for i in range(m + 1):
-        for i2 in range(i + 1):
-            lag = i - i2
-            ab[m - lag, m - i2 : n - i2] += vs * (c[i] * c[i2])
+    add_convolution_band(ab, c, v / se2)
     return ab
 
 
