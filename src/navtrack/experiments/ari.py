@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from navtrack._typing import FloatArray
+from navtrack.errors import FileFormatError
 from navtrack.experiments import ReproduceOptions, write_json
 from navtrack.experiments.runner import MonteCarloResult, run_monte_carlo
 from navtrack.smoothing.ari import (
@@ -613,7 +614,10 @@ def default_real_sources(
         if missing:
             skipped.append(f"navtrack SPP {run.name}: input absent ({', '.join(missing)})")
         else:
-            sources.append(spp_series(gnss, run))
+            try:
+                sources.append(spp_series(gnss, run))
+            except (ValueError, FileFormatError) as exc:  # unreadable file, nothing solved
+                skipped.append(f"navtrack SPP {run.name}: {exc}")
     return sources, skipped
 
 
