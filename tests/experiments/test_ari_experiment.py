@@ -52,6 +52,36 @@ def test_solution_series_regularizes_rtklib_file(gnss_data: Path) -> None:
     assert abs(np.nanmean(e)) < 1e-6  # ENU about the mean position
 
 
+def test_navtrack_spp_rows_next_to_rtklib(gnss_data: Path, tmp_path: Path) -> None:
+    # reduced: only station 0759 (120 epochs); the shared tree holds just the GNSS folder
+    (tmp_path / "gnss").symlink_to(gnss_data)
+    run = next(r for r in exp.SPP_RUNS if r.name == "gsi0759_gps")
+    sources, skipped = exp.default_real_sources(tmp_path, spp_runs=(run,))
+    assert [s.source for s in sources] == ["RTKLIB gsi0759_gps", "navtrack gsi0759_gps"]
+    assert any("broad" in s for s in skipped)  # absent data are skipped with a reason
+    rows, _ = exp.real_data_rows(sources)
+    ours = [r for r in rows if r["source"] == "navtrack gsi0759_gps"]
+    theirs = {r["column"]: r for r in rows if r["source"] == "RTKLIB gsi0759_gps"}
+    assert [r["column"] for r in ours] == ["e_m", "n_m", "u_m"]
+    # RTKLIB 2.4.3 solves 115 of the 120 epochs (5 with GDOP > 30): shared/data/gnss/rtklib_spp
+    # README; the rejected epochs are missing observations of the ARI model, not dropped.
+    assert ours[0]["meta"]["solved"] == 115
+    assert ours[0]["meta"]["spp_status"]["high_dop"] == 5
+    for row in ours:
+        assert row["status"] in ("ok", "boundary", "not_converged")
+        assert np.isfinite(row["sigma_n"])
+        assert row["sigma_n"] > 0
+        assert np.isfinite(row["sigma_e"])
+        assert row["sigma_e"] > 0
+        assert row["n"] - row["n_missing"] == 115
+        # navtrack's SPP equals RTKLIB's to millimetres here (tests/gnss/test_spp.py), so the
+        # noise it shows must be RTKLIB's: sigma_n of the same column within 5 %
+        assert row["sigma_n"] == pytest.approx(theirs[row["column"]]["sigma_n"], rel=0.05)
+    comp = exp.spp_comparison(rows)
+    assert {c["column"] for c in comp} == {"e_m", "n_m", "u_m"}
+    assert all(c["navtrack"] is not None and c["rtklib"] is not None for c in comp)
+
+
 def test_sarimax_comparison_same_or_better_likelihood() -> None:
     pytest.importorskip("statsmodels")
     rng = np.random.default_rng(5)
@@ -73,7 +103,8 @@ def test_reproduce_end_to_end_reduced(tmp_path: Path, monkeypatch: pytest.Monkey
 
     y, _ = simulate_ari(rng, 300, (-0.5,), 1, 0.05, 0.02)
     y[40:43] = np.nan
-    fake = exp.RealSeries("fake", np.arange(300.0), {"a_m": y}, "m", 1.0)
+    meta = {"solver": "navtrack", "run": "fake", "solved": 297, "kinematic": False}
+    fake = exp.RealSeries("fake", np.arange(300.0), {"a_m": y}, "m", 1.0, 0, meta)
     monkeypatch.setattr(exp, "default_real_sources", lambda shared: ([fake], []))
     monkeypatch.setattr(exp, "SYNTHETIC_CASES", (SMALL,))
     opts = ReproduceOptions(out_dir=tmp_path, runs=2, seed=3, progress=False)
@@ -87,6 +118,8 @@ def test_reproduce_end_to_end_reduced(tmp_path: Path, monkeypatch: pytest.Monkey
     tables = (tmp_path / "tables.md").read_text()
     assert "## Synthetic series" in tables
     assert "## Real data" in tables
+    assert "## GNSS SPP: navtrack's own solutions vs RTKLIB's" in tables
+    assert "| fake | a_m | 297 / – |" in tables
     assert len(list((tmp_path / "runs").glob("run_*.pkl"))) == 2
     if "figures" in results:
         assert all(Path(f).exists() for f in results["figures"])

@@ -12,12 +12,14 @@ import math
 import numpy as np
 import pytest
 
+from navtrack.smoothing import _banded
 from navtrack.smoothing._banded import (
     band_to_dense,
     cholesky_solve_banded,
     inverse_band,
     inverse_band_from_factor,
     solve_spd_banded,
+    weighted_band_sums,
 )
 from navtrack.smoothing.ari import (
     AriConfig,
@@ -70,10 +72,52 @@ def test_banded_solve_and_selected_inverse_match_dense(n: int, m: int, width: in
     for zb in (
         inverse_band(ab, width),
         inverse_band_from_factor(factor, width, method="takahashi"),
+        _banded._takahashi_py(factor, max(width, m))[: width + 1],  # uncompiled recursion
     ):
         for lag in range(min(width, n - 1) + 1):
             np.testing.assert_allclose(zb[lag, : n - lag], np.diag(inv, lag), rtol=1e-8, atol=1e-10)
             assert np.all(np.isnan(zb[lag, n - lag :]))
+
+
+@pytest.mark.parametrize(("n", "m"), [(9, 2), (40, 3), (120, 7)])
+def test_weighted_band_sums_match_dense(n: int, m: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    rng = np.random.default_rng(n + m)
+    ab, dense = _random_band(rng, n, m)
+    inv = np.linalg.inv(dense)
+    v = rng.uniform(0.0, 1.0, size=n - m)
+    expected = np.array(
+        [
+            [sum(v[s - m] * inv[s - a, s - b] for s in range(m, n)) for b in range(m + 1)]
+            for a in range(m + 1)
+        ]
+    )
+    zb = inverse_band(ab, m)
+    np.testing.assert_allclose(weighted_band_sums(zb, v, m), expected, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(_banded._band_sums_py(zb, v, m), expected, rtol=1e-9, atol=1e-12)
+    monkeypatch.setattr(_banded, "_band_sums", None)  # NumPy path (numba not installed)
+    np.testing.assert_allclose(weighted_band_sums(zb, v, m), expected, rtol=1e-9, atol=1e-12)
+    with pytest.raises(ValueError, match="offsets"):
+        weighted_band_sums(zb[:m], v, m)
+
+
+def test_convolution_band_matches_dense(monkeypatch: pytest.MonkeyPatch) -> None:
+    rng = np.random.default_rng(8)
+    n, c = 30, np.array([1.0, -1.7, 0.9, -0.15])
+    m = c.size - 1
+    vs = rng.uniform(0.2, 2.0, size=n - m)
+    a = np.zeros((n - m, n))
+    for s in range(m, n):
+        a[s - m, s - np.arange(m + 1)] = c
+    dense = a.T @ (vs[:, None] * a)
+    compiled = np.zeros((m + 1, n))
+    _banded.add_convolution_band(compiled, c, vs)
+    np.testing.assert_allclose(band_to_dense(compiled), dense, rtol=1e-13, atol=1e-13)
+    monkeypatch.setattr(_banded, "_add_convolution_band", None)  # NumPy path
+    plain = np.zeros((m + 1, n))
+    _banded.add_convolution_band(plain, c, vs)
+    np.testing.assert_array_equal(plain, compiled)  # same sums in the same order
+    with pytest.raises(ValueError, match="do not match"):
+        _banded.add_convolution_band(plain, c, vs[1:])
 
 
 def _dense_gauss_markov(y, phi, d, sigma_n, sigma_e):

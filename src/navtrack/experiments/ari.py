@@ -12,8 +12,9 @@
 2. **Real data** (the paper's Tables 1–5 quantities for each series): BROAD optical orientation
    as roll/pitch/yaw (decimated 285.7 Hz -> 28.6 Hz, near the paper's 10 Hz INS rate, which also
    keeps the run short), the pyins receiver track (ENU), RTKLIB SPP solutions of the shared GNSS
-   stations (ENU about their mean), and any further solution tables passed with ``--input``
-   (navtrack CSV/Parquet solution tables or RTKLIB ``.pos``).
+   stations and the walking rover next to navtrack's own SPP solutions of the same files with
+   the same options (:data:`SPP_RUNS`, :func:`spp_series`; ENU about their mean), and any
+   further solution tables passed with ``--input`` (navtrack CSV/Parquet or RTKLIB ``.pos``).
 3. **SARIMAX cross-check**: statsmodels' ``SARIMAX(order=(p, d, 0), measurement_error=True)`` fit
    and smooth on the same series at the same order; both parameter sets scored by both
    likelihoods (they are the same exact likelihood, see :class:`navtrack.smoothing.ari.AriConfig`
@@ -30,13 +31,14 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from navtrack._typing import FloatArray
+from navtrack.errors import FileFormatError
 from navtrack.experiments import ReproduceOptions, write_json
 from navtrack.experiments.runner import MonteCarloResult, run_monte_carlo
 from navtrack.smoothing.ari import (
@@ -52,9 +54,11 @@ from navtrack.smoothing.ari import (
 __all__ = [
     "DEFAULT_RUNS",
     "DESCRIPTION",
+    "SPP_RUNS",
     "SYNTHETIC_CASES",
     "AriExperimentParams",
     "RealSeries",
+    "SppRun",
     "SyntheticCase",
     "broad_series",
     "pyins_series",
@@ -62,6 +66,8 @@ __all__ = [
     "reproduce",
     "sarimax_compare",
     "solution_series",
+    "spp_comparison",
+    "spp_series",
     "summarize_synthetic",
     "synthetic_run",
 ]
@@ -331,6 +337,8 @@ class RealSeries:
     dt_s : float
     n_inserted : int
         Epochs inserted into gaps by :func:`regularize_time`.
+    meta : dict
+        Provenance of the series (for GNSS solutions: solver, run, epochs, solved, statuses).
     """
 
     source: str
@@ -339,6 +347,7 @@ class RealSeries:
     unit: str
     dt_s: float
     n_inserted: int = 0
+    meta: dict[str, Any] = field(default_factory=dict)
 
 
 def broad_series(path: Path, *, decimate: int = 1) -> RealSeries:
@@ -395,8 +404,6 @@ def solution_series(path: Path) -> RealSeries:
 
     Epochs missing from the file are inserted as missing (NaN) on the median time step.
     """
-    from navtrack import geodesy
-
     suffix = path.suffix.lower()
     if suffix == ".pos":
         from navtrack.io.rtklib import read_pos
@@ -406,17 +413,119 @@ def solution_series(path: Path) -> RealSeries:
         from navtrack.io.solution import read_solution
 
         df = read_solution(path)
+    return _table_series(path.name, df)
+
+
+def _table_series(source: str, df: Any, meta: dict[str, Any] | None = None) -> RealSeries:
+    """ENU (m) about the mean of the usable epochs of a solution table (``t_gps_s``, ``x_m``,
+    ``y_m``, ``z_m``, optional ``status``); unusable epochs and gaps are missing (NaN)."""
+    from navtrack import geodesy
+
     xyz = df[["x_m", "y_m", "z_m"]].to_numpy(dtype=float)
     t = df["t_gps_s"].to_numpy(dtype=float)
     ok = np.all(np.isfinite(xyz), axis=1)
     if "status" in df.columns:
         ok &= df["status"].astype(str).str.lower().isin(["ok", "0", "fix", "single"]).to_numpy()
+    if not np.any(ok):
+        raise ValueError(f"{source}: no usable epoch in the solution")
     ref = np.mean(xyz[ok], axis=0)
     enu = np.full_like(xyz, np.nan)
     enu[ok] = geodesy.ecef_to_enu(xyz[ok], ref)
     t_grid, enu_grid, inserted = regularize_time(t, enu)
     cols = {name: enu_grid[:, k] for k, name in enumerate(("e_m", "n_m", "u_m"))}
-    return RealSeries(path.name, t_grid, cols, "m", float(np.median(np.diff(t))), inserted)
+    return RealSeries(
+        source, t_grid, cols, "m", float(np.median(np.diff(t))), inserted, dict(meta or {})
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class SppRun:
+    """One shared GNSS data set solved by navtrack's SPP like RTKLIB's reference run ``name``.
+
+    Attributes
+    ----------
+    name : str
+        Name of the RTKLIB run (``shared/data/gnss/rtklib_spp/<name>.pos``).
+    obs : str
+        Observation file, relative to ``shared/data/gnss``.
+    nav : tuple of str
+        Navigation files, relative to ``shared/data/gnss``.
+    systems : str
+        Systems used (RTKLIB ``pos1-navsys``: ``G`` = 1, ``GEJ`` = 25).
+    kinematic : bool
+        The receiver moves (the walking rover); static stations otherwise.
+    """
+
+    name: str
+    obs: str
+    nav: tuple[str, ...]
+    systems: str
+    kinematic: bool = False
+
+
+#: The RTKLIB SPP runs of ``shared/data/gnss/rtklib_spp/README.md`` (single point, L1, mask
+#: 15 deg, Klobuchar, Saastamoinen, broadcast ephemeris, GDOP > 30 rejected): navtrack solves the
+#: same files with :class:`navtrack.gnss.spp.SppConfig` defaults, which reproduce those options.
+SPP_RUNS: tuple[SppRun, ...] = (
+    SppRun("gsi0759_gps", "rtklib_gsi0759/07590920.05o", ("rtklib_gsi0759/07590920.05n",), "G"),
+    SppRun("arl1_gps", "gpstk_arl1/arlm200a.15o", ("gpstk_arl1/arlm2000.15n",), "G"),
+    SppRun("sept078_gps", "cssrlib_sept/SEPT078M.21O", ("cssrlib_sept/SEPT078M.21P",), "G"),
+    SppRun("sept078_gej", "cssrlib_sept/SEPT078M.21O", ("cssrlib_sept/SEPT078M.21P",), "GEJ"),
+    SppRun(
+        "yamatogawa_master_gps",
+        "gogps_yamatogawa/yamatogawa_master.obs",
+        ("gogps_yamatogawa/brdc0060.10n",),
+        "G",
+    ),
+    SppRun(
+        "yamatogawa_rover_gps",
+        "gogps_yamatogawa/yamatogawa_rover.obs",
+        ("gogps_yamatogawa/brdc0060.10n",),
+        "G",
+        kinematic=True,
+    ),
+)
+
+
+def spp_series(gnss: Path, run: SppRun) -> RealSeries:
+    """navtrack's own single point solution of ``run`` as ENU (m) about its mean position.
+
+    Parameters
+    ----------
+    gnss : Path
+        ``shared/data/gnss``.
+    run : SppRun
+
+    Returns
+    -------
+    RealSeries
+        Source ``navtrack <name>``; epochs without a solution (any status but ``ok``) are
+        missing (NaN). ``meta`` holds the SPP epoch count, status counts and solve time.
+    """
+    import pandas as pd
+
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.spp import SppConfig, solution_columns, solve_spp
+
+    obs = read_obs(gnss / run.obs)
+    navs = [read_nav(gnss / p) for p in run.nav]
+    t0 = time.perf_counter()
+    result = solve_spp(obs, navs, config=SppConfig(systems=run.systems))
+    elapsed = time.perf_counter() - t0
+    counts = {k: v for k, v in result.status_counts().items() if v}
+    meta = {
+        "solver": "navtrack",
+        "run": run.name,
+        "kinematic": run.kinematic,
+        "epochs": int(result.t_gps_s.size),
+        "solved": int(counts.get("ok", 0)),
+        "spp_status": counts,
+        "spp_seconds": elapsed,
+    }
+    cols = solution_columns(result)
+    df = pd.DataFrame({k: cols[k] for k in ("t_gps_s", "x_m", "y_m", "z_m", "status")})
+    return _table_series(f"navtrack {run.name}", df, meta)
 
 
 def real_data_rows(
@@ -449,13 +558,20 @@ def real_data_rows(
                     "r": [float(v) for v in res.autocorr],
                     "n_flagged": res.n_flagged,
                     "seconds": elapsed,
+                    "meta": src.meta,
                 }
             )
     return rows, fits
 
 
-def default_real_sources(shared: Path) -> tuple[list[RealSeries], list[str]]:
-    """The shared real data sets that are present; also a list of what was skipped."""
+def default_real_sources(
+    shared: Path, spp_runs: Sequence[SppRun] = SPP_RUNS
+) -> tuple[list[RealSeries], list[str]]:
+    """The shared real data sets that are present; also a list of what was skipped and why.
+
+    For every run of ``spp_runs``: RTKLIB's stored solution and navtrack's own SPP solution of
+    the same observation and navigation files (:func:`spp_series`), each as ENU about its mean.
+    """
     sources: list[RealSeries] = []
     skipped: list[str] = []
     broad = shared / "trajectory" / "broad"
@@ -470,20 +586,38 @@ def default_real_sources(shared: Path) -> tuple[list[RealSeries], list[str]]:
         sources.append(pyins_series(path))
     else:
         skipped.append(str(path))
-    spp = shared / "gnss" / "rtklib_spp"
-    for name in (
-        "gsi0759_gps.pos",
-        "arl1_gps.pos",
-        "sept078_gps.pos",
-        "sept078_gej.pos",
-        "yamatogawa_master_gps.pos",
-        "yamatogawa_rover_gps.pos",
-    ):
-        path = spp / name
+    gnss = shared / "gnss"
+    for run in spp_runs:
+        path = gnss / "rtklib_spp" / f"{run.name}.pos"
         if path.exists():
-            sources.append(solution_series(path))
+            src = solution_series(path)
+            meta = {
+                "solver": "RTKLIB 2.4.3 b34",
+                "run": run.name,
+                "kinematic": run.kinematic,
+                "solved": int(np.count_nonzero(np.isfinite(src.columns["e_m"]))),
+            }
+            sources.append(
+                RealSeries(
+                    f"RTKLIB {run.name}",
+                    src.t_s,
+                    src.columns,
+                    src.unit,
+                    src.dt_s,
+                    src.n_inserted,
+                    meta,
+                )
+            )
         else:
-            skipped.append(str(path))
+            skipped.append(f"{path}: RTKLIB solution absent")
+        missing = [str(gnss / p) for p in (run.obs, *run.nav) if not (gnss / p).exists()]
+        if missing:
+            skipped.append(f"navtrack SPP {run.name}: input absent ({', '.join(missing)})")
+        else:
+            try:
+                sources.append(spp_series(gnss, run))
+            except (ValueError, FileFormatError) as exc:  # unreadable file, nothing solved
+                skipped.append(f"navtrack SPP {run.name}: {exc}")
     return sources, skipped
 
 
@@ -692,6 +826,36 @@ def tables_markdown(results: dict[str, Any]) -> str:
             + " | ".join(_fmt(v, 2) for v in r)
             + f" | {row['n_flagged']} | {row['status']} |"
         )
+    if results.get("real_skipped"):
+        lines += ["", "Skipped: " + "; ".join(results["real_skipped"])]
+    if results.get("spp_comparison"):
+        lines += [
+            "",
+            "## GNSS SPP: navtrack's own solutions vs RTKLIB's (same files and options)",
+            "",
+            "ENU about each solution's mean; static stations except the walking rover. "
+            "Cells are navtrack / RTKLIB.",
+            "",
+            "| run | column | solved | order | σn (m) | σe (m) | σx (m) | r(1) | flagged "
+            "| status |",
+            "|---|---|---|---|---|---|---|---|---|---|",
+        ]
+
+        def pair(c: dict[str, Any], key: str, fmt: Any = _fmt) -> str:
+            return " / ".join(
+                "–" if c[s] is None else fmt(c[s][key]) for s in ("navtrack", "rtklib")
+            )
+
+        for c in results["spp_comparison"]:
+            kin = any(c[s] and c[s]["kinematic"] for s in ("navtrack", "rtklib"))
+            lines.append(
+                f"| {c['run']}{' (kinematic)' if kin else ''} | {c['column']} | "
+                f"{pair(c, 'solved')} | "
+                f"{pair(c, 'order', lambda o: f'({o[0]},{o[1]})')} | {pair(c, 'sigma_n')} | "
+                f"{pair(c, 'sigma_e')} | {pair(c, 'sigma_x')} | "
+                f"{pair(c, 'r', lambda r: _fmt(r[0], 2))} | {pair(c, 'n_flagged')} | "
+                f"{pair(c, 'status')} |"
+            )
     if results.get("sarimax"):
         lines += [
             "",
@@ -718,6 +882,38 @@ def tables_markdown(results: dict[str, Any]) -> str:
             )
     lines.append("")
     return "\n".join(lines)
+
+
+#: GNSS solutions also cross-checked against SARIMAX (RTKLIB's and navtrack's of the same file).
+SARIMAX_SPP_SOURCES = ("RTKLIB sept078_gps", "navtrack sept078_gps")
+
+
+_COMPARED = ("n", "n_missing", "order", "sigma_n", "sigma_e", "sigma_x", "r", "n_flagged", "status")
+
+
+def spp_comparison(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """navtrack's and RTKLIB's SPP rows of the same run and column side by side."""
+    by_key: dict[tuple[str, str], dict[str, dict[str, Any]]] = {}
+    for row in rows:
+        meta = row.get("meta") or {}
+        if "run" not in meta:
+            continue
+        solver = "navtrack" if meta.get("solver") == "navtrack" else "rtklib"
+        by_key.setdefault((meta["run"], row["column"]), {})[solver] = row
+    out = []
+    for (run, col), pair in by_key.items():
+        rec: dict[str, Any] = {"run": run, "column": col}
+        for solver in ("navtrack", "rtklib"):
+            found = pair.get(solver)
+            if found is None:
+                rec[solver] = None
+                continue
+            rec[solver] = {k: found[k] for k in _COMPARED} | {
+                "solved": found["meta"].get("solved"),
+                "kinematic": found["meta"].get("kinematic"),
+            }
+        out.append(rec)
+    return out
 
 
 def reproduce(options: ReproduceOptions) -> dict[str, Any]:
@@ -762,6 +958,7 @@ def reproduce(options: ReproduceOptions) -> dict[str, Any]:
     rows, fits = real_data_rows(sources)
     results["real"] = rows
     results["real_skipped"] = skipped
+    results["spp_comparison"] = spp_comparison(rows)
     comparisons = []
     rng = np.random.default_rng(np.random.SeedSequence(options.seed, spawn_key=(10**6,)))
     for case in params.cases:
@@ -770,7 +967,7 @@ def reproduce(options: ReproduceOptions) -> dict[str, Any]:
         if comp is not None:
             comparisons.append(comp)
     for src in sources:
-        if src.source.startswith("pyins") or src.source.startswith("sept078_gps"):
+        if src.source.startswith("pyins") or src.source in SARIMAX_SPP_SOURCES:
             for col, values in src.columns.items():
                 res = fits[(src.source, col)]
                 if res.status in ("ok", "boundary", "not_converged"):
@@ -810,6 +1007,12 @@ def summary_lines(results: dict[str, Any]) -> list[str]:
     for row in real:
         statuses[row["status"]] = statuses.get(row["status"], 0) + 1
     lines.append(f"real series {len(real)}: " + ", ".join(f"{k} {v}" for k, v in statuses.items()))
+    ours = [r for r in real if (r.get("meta") or {}).get("solver") == "navtrack"]
+    if ours:
+        runs = sorted({r["meta"]["run"] for r in ours})
+        lines.append(f"navtrack SPP series {len(ours)} ({len(runs)} runs: {', '.join(runs)})")
+    for why in results.get("real_skipped", []):
+        lines.append(f"skipped: {why}")
     for c in results.get("sarimax", []):
         lines.append(
             f"SARIMAX {c['series']:<28} speed-up {c['speedup']:.1f}x  "

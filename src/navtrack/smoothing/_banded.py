@@ -6,6 +6,8 @@ Three kernels, each O(n) in time and memory for a fixed half-bandwidth ``m``:
   :func:`scipy.linalg.cholesky_banded` / :func:`scipy.linalg.cho_solve_banded`) with the
   log-determinant of the matrix.
 * :func:`inverse_band` — the band of the inverse ("selected inversion") without forming it.
+* :func:`weighted_band_sums` — weighted sums along shifted diagonals of that band (the
+  expected process moments of the estimation).
 * :func:`band_to_dense` — the dense matrix, for tests and small problems only.
 
 Storage is LAPACK's *upper* banded form: ``ab[m + i - j, j] = N[i, j]`` for ``i <= j <= i + m``.
@@ -33,12 +35,14 @@ except ImportError:
 
 __all__ = [
     "HAVE_NUMBA",
+    "add_convolution_band",
     "band_matvec",
     "band_to_dense",
     "cholesky_solve_banded",
     "inverse_band",
     "inverse_band_from_factor",
     "solve_spd_banded",
+    "weighted_band_sums",
 ]
 
 #: True when the compiled Takahashi recursion (numba) is available.
@@ -157,7 +161,9 @@ def inverse_band_from_factor(
     if method == "auto":
         method = "takahashi" if _numba is not None else "cyclic"
     if method == "takahashi":
-        return _takahashi(np.ascontiguousarray(cb), max(width, m))[: width + 1]
+        # cb as LAPACK returns it (Fortran order): the columns the recursion walks are contiguous
+        zb: FloatArray = _takahashi(cb, max(width, m))
+        return zb[: width + 1]
     if method == "cyclic":
         if ab is None:
             raise ValueError("method='cyclic' needs the matrix ab")
@@ -166,27 +172,139 @@ def inverse_band_from_factor(
 
 
 def _takahashi_py(cb: FloatArray, width: int) -> FloatArray:
+    # Row i of Z needs rows i+1..i+width only: they live in a ring buffer of rows (cache
+    # friendly), and the off-diagonal entries of row i, which are independent of each other,
+    # are accumulated together (k outer, j inner) instead of one dependent sum at a time.
+    # Every sum runs over k ascending, as in the textbook recursion: same rounding.
     m = cb.shape[0] - 1
     n = cb.shape[1]
-    zb = np.full((width + 1, n), np.nan)
+    w1 = width + 1
+    size = 1
+    while size < w1:
+        size *= 2
+    mask = size - 1
+    ring = np.zeros((size, w1))  # ring[t & mask, l] = Z[t, t + l]
+    zb = np.empty((w1, n))
+    acc = np.zeros(w1)
     for i in range(n - 1, -1, -1):
         uii = cb[m, i]
         kmax = min(i + m, n - 1)
-        for j in range(min(i + width, n - 1), i - 1, -1):
-            acc = 0.0
-            for k in range(i + 1, kmax + 1):
-                z = zb[j - k, k] if j >= k else zb[k - j, j]
-                acc += cb[m + i - k, k] * z
-            if j == i:
-                zb[0, i] = (1.0 / uii - acc) / uii
-            else:
-                zb[j - i, i] = -acc / uii
+        jmax = min(i + width, n - 1)
+        for lag in range(w1):
+            acc[lag] = 0.0
+        for k in range(i + 1, kmax + 1):
+            u = cb[m + i - k, k]
+            for j in range(i + 1, k):  # Z[k, j] = Z[j, k], j < k
+                acc[j - i] += u * ring[j & mask, k - j]
+            rk = k & mask
+            for j in range(k, jmax + 1):  # Z[k, j], j >= k
+                acc[j - i] += u * ring[rk, j - k]
+        ri = i & mask
+        for lag in range(1, jmax - i + 1):
+            ring[ri, lag] = -acc[lag] / uii
+        diag = 0.0
+        for k in range(i + 1, kmax + 1):
+            diag += cb[m + i - k, k] * ring[ri, k - i]
+        ring[ri, 0] = (1.0 / uii - diag) / uii
+        for lag in range(jmax - i + 1, w1):
+            ring[ri, lag] = np.nan
+        for lag in range(w1):
+            zb[lag, i] = ring[ri, lag]
     return zb
 
 
 _takahashi: Any = (
     _numba.njit(cache=True, nogil=True)(_takahashi_py) if _numba is not None else _takahashi_py
 )
+
+
+def _band_sums_py(zb: FloatArray, v: FloatArray, m: int) -> FloatArray:
+    ns = v.size
+    out = np.zeros((m + 1, m + 1))
+    for b in range(m + 1):
+        start = m - b
+        for a in range(b + 1):
+            row = b - a
+            acc = 0.0
+            for s in range(ns):
+                acc += v[s] * zb[row, start + s]
+            out[a, b] = acc
+            out[b, a] = acc
+    return out
+
+
+_band_sums: Any = _numba.njit(cache=True, nogil=True)(_band_sums_py) if _numba is not None else None
+
+
+def _add_convolution_band_py(ab: FloatArray, c: FloatArray, vs: FloatArray) -> None:
+    m = c.size - 1
+    ns = vs.size
+    for i in range(m + 1):
+        for i2 in range(i + 1):
+            cc = c[i] * c[i2]
+            row = m - (i - i2)
+            off = m - i2
+            for s in range(ns):
+                ab[row, off + s] += vs[s] * cc
+
+
+_add_convolution_band: Any = (
+    _numba.njit(cache=True, nogil=True)(_add_convolution_band_py) if _numba is not None else None
+)
+
+
+def add_convolution_band(ab: FloatArray, c: FloatArray, vs: FloatArray) -> None:
+    """Add ``sum_s vs_s a_s a_s^T`` to the upper band ``ab`` ``(m + 1, n)`` in place, where
+    ``a_s`` has ``c_i`` at column ``s - i`` (``s = m..n-1``, ``m = len(c) - 1``): the normal
+    matrix of the equations ``sum_i c_i x_{s-i}`` with weights ``vs`` ``(n - m,)``.
+
+    The same sums in the same order with or without numba (identical rounding).
+    """
+    m = c.size - 1
+    n = ab.shape[1]
+    if ab.shape[0] != m + 1 or vs.size != n - m:
+        raise ValueError(f"ab {ab.shape}, c ({c.size},) and vs ({vs.size},) do not match")
+    if _add_convolution_band is not None:
+        _add_convolution_band(ab, np.ascontiguousarray(c, dtype=np.float64), vs)
+        return
+    for i in range(m + 1):
+        for i2 in range(i + 1):
+            lag = i - i2
+            ab[m - lag, m - i2 : n - i2] += vs * (c[i] * c[i2])
+
+
+def weighted_band_sums(zb: FloatArray, v: FloatArray, m: int) -> FloatArray:
+    """``S[a, b] = sum_s v_s Z[s - a, s - b]`` for ``s = m..m + len(v) - 1``, ``a, b = 0..m``.
+
+    Parameters
+    ----------
+    zb : ndarray, shape (width + 1, n)
+        Band of a symmetric ``Z`` by diagonal offset (``width >= m``), as returned by
+        :func:`inverse_band_from_factor`.
+    v : ndarray, shape (n - m,)
+        Weights.
+    m : int
+
+    Returns
+    -------
+    S : ndarray, shape (m + 1, m + 1), symmetric
+
+    Notes
+    -----
+    ``S[a, b]`` depends on ``|a - b|`` and ``max(a, b)`` only: ``(m + 1)(m + 2)/2`` weighted
+    sums along shifted diagonals (compiled loop with numba, else one ``numpy.dot`` each).
+    """
+    ns = v.size
+    if zb.shape[0] <= m or ns + m > zb.shape[1]:
+        raise ValueError(f"zb of shape {zb.shape} does not hold offsets 0..{m} for {ns} sums")
+    if _band_sums is not None:
+        return np.asarray(_band_sums(zb, np.ascontiguousarray(v, dtype=np.float64), m))
+    out = np.empty((m + 1, m + 1))
+    for b in range(m + 1):
+        start = m - b
+        for a in range(b + 1):
+            out[a, b] = out[b, a] = float(np.dot(v, zb[b - a, start : start + ns]))
+    return out
 
 
 def inverse_band(ab: FloatArray, width: int | None = None) -> FloatArray:

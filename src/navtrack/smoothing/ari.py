@@ -95,7 +95,12 @@ from typing import Any, Literal
 import numpy as np
 
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, Int8Array
-from navtrack.smoothing._banded import cholesky_solve_banded, inverse_band_from_factor
+from navtrack.smoothing._banded import (
+    add_convolution_band,
+    cholesky_solve_banded,
+    inverse_band_from_factor,
+    weighted_band_sums,
+)
 
 __all__ = [
     "EPOCH_STATUS",
@@ -396,12 +401,8 @@ def _normal_band(c: FloatArray, w: FloatArray, v: FloatArray, sn2: float, se2: f
     n = w.size
     ab = np.zeros((m + 1, n))
     ab[m] = w / sn2
-    vs = v / se2
     # equation s (0-based, s = m..n-1) involves x_{s-i} with coefficient c_i
-    for i in range(m + 1):
-        for i2 in range(i + 1):
-            lag = i - i2
-            ab[m - lag, m - i2 : n - i2] += vs * (c[i] * c[i2])
+    add_convolution_band(ab, c, v / se2)
     return ab
 
 
@@ -435,6 +436,9 @@ class _Fit:
     omega_n: float
     omega_e: float
     logdet: float
+    # without zb: the Cholesky factor and the matrix, to add zb later (_with_inverse)
+    factor: FloatArray | None = None
+    ab: FloatArray | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -557,8 +561,20 @@ def _solve(
         + omega_n / sn2
         + omega_e / se2
     )
-    zb = inverse_band_from_factor(factor, width, ab=ab) if width is not None else None
+    if width is None:
+        return _Fit(x, None, loglike, omega_n, omega_e, logdet, factor, ab)
+    zb = inverse_band_from_factor(factor, width, ab=ab)
     return _Fit(x, zb, loglike, omega_n, omega_e, logdet)
+
+
+def _with_inverse(fit: _Fit, width: int) -> _Fit:
+    """``fit`` (solved with ``width=None``) completed with the band of ``N^-1``."""
+    if fit.zb is not None and fit.zb.shape[0] > width:
+        return fit
+    if fit.factor is None:
+        raise ValueError("the fit keeps no factor")
+    zb = inverse_band_from_factor(fit.factor, width, ab=fit.ab)
+    return _Fit(fit.x, zb, fit.loglike, fit.omega_n, fit.omega_e, fit.logdet)
 
 
 def gauss_markov_filter(
@@ -631,35 +647,35 @@ def gauss_markov_filter(
 
 
 def _phi_gradient_terms(
-    c: FloatArray, x: FloatArray, zb: FloatArray, v: FloatArray, p: int, d: int
+    c: FloatArray,
+    x: FloatArray,
+    v: FloatArray,
+    p: int,
+    d: int,
+    big_s: FloatArray,
 ) -> FloatArray:
     """``sum_s v_s E[e_s u_{s-j}]``, ``j = 1..p`` (``u = (1 - B)^d x``, ``E`` under ``N^-1``).
 
     This is half the derivative of ``sum v_s E[e_s^2]`` with respect to ``phi_j``: the AR part of
     the likelihood gradient (and of the EM / alternating least-squares step of the paper's
-    iterative scheme).
+    iterative scheme). ``E[e_s u_{s-j}] = e_s u_{s-j} + sum_{i,k} c_i delta_k Z[s-i, s-j-k]``;
+    the covariance part summed over ``s`` is ``sum_{i,k} c_i delta_k S[i, j+k]``
+    (:func:`navtrack.smoothing._banded.weighted_band_sums`).
     """
     m = p + d
     n = x.size
     ns = n - m
     delta = ari_polynomial(np.zeros(0), d)
     e = _process_residuals(c, x)  # e_s, s = m..n-1
+    ve = v * e
+    u = np.convolve(x, delta, mode="valid")  # u_t, t = d..n-1
     out = np.empty(p)
     for j in range(1, p + 1):
-        # u_{s-j} = sum_k delta_k x_{s-j-k}
-        uj = np.zeros(ns)
-        cov = np.zeros(ns)
-        for k in range(d + 1):
-            col = m - j - k  # x index of s - j - k at s = m
-            uj += delta[k] * x[col : col + ns]
-            for i in range(m + 1):
-                row = m - i  # x index of s - i at s = m
-                lag = col - row  # Z[s - i, s - j - k]
-                if lag >= 0:
-                    cov += c[i] * delta[k] * zb[lag, row : row + ns]
-                else:
-                    cov += c[i] * delta[k] * zb[-lag, col : col + ns]
-        out[j - 1] = float(np.sum(v * (e * uj + cov)))
+        # u_{s-j} for s = m..n-1 is u[m - j - d : m - j - d + ns]
+        start = m - j - d
+        mean_part = float(np.dot(ve, u[start : start + ns]))
+        cov_part = float(c @ big_s[:, j : j + d + 1] @ delta)
+        out[j - 1] = mean_part + cov_part
     return out
 
 
@@ -674,6 +690,27 @@ class _Estimate:
     n_iter: int
     converged: bool
     boundary: bool
+    grad: FloatArray | None = None  # gradient of -log L at the estimate, when evaluated
+
+
+def _trial(
+    vec: FloatArray,
+    y0: FloatArray,
+    w: FloatArray,
+    v: FloatArray,
+    p: int,
+    d: int,
+    stationary: bool,
+) -> _Fit | None:
+    """Solution and likelihood at ``(phi, log sn2, log se2)`` without the selected inversion
+    (a line-search trial: :func:`_evaluate` completes it when it is accepted)."""
+    c = ari_polynomial(vec[:p], d)
+    prior = None
+    if stationary and p:
+        prior = _stationary_prior(vec[:p], d)
+        if prior is None:
+            return None
+    return _solve(y0, w, v, c, math.exp(vec[p]), math.exp(vec[p + 1]), None, prior)
 
 
 def _evaluate(
@@ -684,12 +721,14 @@ def _evaluate(
     p: int,
     d: int,
     stationary: bool,
+    partial: _Fit | None = None,
 ) -> tuple[_Fit, float, float, FloatArray] | None:
     """Fit at ``(phi, log sn2, log se2)``; redundancies and the gradient of ``-log L``.
 
     ``d(-log L)/d log sigma_k^2 = (r_k - Omega_k / sigma_k^2) / 2`` and
     ``d(-log L)/d phi_j = sum_s v_s E[e_s u_{s-j}] / sigma_e^2`` (+ the stationary-start
-    term ``(d log det Gamma + tr(d Gamma^-1 E[u u^T]) / sigma_e^2) / 2``).
+    term ``(d log det Gamma + tr(d Gamma^-1 E[u u^T]) / sigma_e^2) / 2``). ``partial``: the
+    result of :func:`_trial` at the same point (its factor is reused).
     """
     phi = vec[:p]
     sn2 = math.exp(vec[p])
@@ -701,7 +740,10 @@ def _evaluate(
         if prior is None:
             return None
     m = p + d
-    fit = _solve(y0, w, v, c, sn2, se2, m, prior)
+    if partial is not None:
+        fit: _Fit | None = _with_inverse(partial, m)
+    else:
+        fit = _solve(y0, w, v, c, sn2, se2, m, prior)
     if fit is None or fit.zb is None:
         return None
     zb = fit.zb
@@ -709,7 +751,8 @@ def _evaluate(
     n_v = float(np.count_nonzero(v > 0))
     # redundancies r_k = n_k - tr(N^-1 N_k) (Förstner 1979)
     r_n = n_w - float(np.sum(w * zb[0])) / sn2
-    trace_e = float(np.sum(v * _process_variance(c, zb)))
+    big_s = weighted_band_sums(zb, v, m)
+    trace_e = float(c @ big_s @ c)  # sum_s v_s c^T Z_s c
     z_top = None
     if prior is not None:
         z_top = _dense_block(zb, m)
@@ -721,7 +764,7 @@ def _evaluate(
     grad[p] = 0.5 * (r_n - fit.omega_n / sn2)
     grad[p + 1] = 0.5 * (r_e - fit.omega_e / se2)
     if p:
-        grad[:p] = _phi_gradient_terms(c, fit.x, zb, v, p, d) / se2
+        grad[:p] = _phi_gradient_terms(c, fit.x, v, p, d, big_s) / se2
     if prior is not None and z_top is not None:
         u0 = prior.d_mat @ fit.x[:m]
         moment = prior.d_mat @ z_top @ prior.d_mat.T + np.outer(u0, u0)
@@ -741,18 +784,27 @@ def _dense_block(zb: FloatArray, m: int) -> FloatArray:
 
 def _make_estimate(
     vec: FloatArray,
-    out: tuple[_Fit, float, float, FloatArray],
+    out: tuple[_Fit, float, float, FloatArray | None],
     p: int,
     n_eval: int,
     converged: bool,
     log_floor: float,
 ) -> _Estimate:
-    fit, r_n, r_e, _ = out
+    fit, r_n, r_e, grad = out
     # A component at its floor, or with less than one observation's worth of redundancy, is
     # not estimable from these data (the likelihood is flat towards zero variance).
     boundary = min(vec[p], vec[p + 1]) <= log_floor + 1e-6 or min(r_n, r_e) < 1.0
     return _Estimate(
-        vec[:p].copy(), float(vec[p]), float(vec[p + 1]), fit, r_n, r_e, n_eval, converged, boundary
+        vec[:p].copy(),
+        float(vec[p]),
+        float(vec[p + 1]),
+        fit,
+        r_n,
+        r_e,
+        n_eval,
+        converged,
+        boundary,
+        grad,
     )
 
 
@@ -796,6 +848,7 @@ def _refine(
     max_iter: int,
     log_floor: float,
     log_ceiling: float,
+    start: _Estimate | None = None,
 ) -> tuple[_Estimate, FloatArray] | None:
     """Quasi-Newton (BFGS from ``hess``) with Armijo backtracking.
 
@@ -804,10 +857,16 @@ def _refine(
     the expected-moment least-squares equation of the paper's alternating scheme. Steps are
     capped (1 in ``phi``, 2 in ``log sigma^2``) and the log-variances kept in
     ``[log_floor, log_ceiling]``. Stopping rule: the expected gain ``g^T H^-1 g / 2`` of the
-    next step is below ``tol`` (log-likelihood units), or ``max_iter`` steps.
+    next step is below ``tol`` (log-likelihood units), or ``max_iter`` steps. ``start``, an
+    estimate already evaluated at ``vec`` with the same weights, saves that evaluation.
     """
-    out = _evaluate(vec, y0, w, v, p, d, stationary)
-    n_eval = 1
+    out: tuple[_Fit, float, float, FloatArray] | None
+    if start is not None and start.grad is not None:
+        out = (start.fit, start.r_n, start.r_e, start.grad)
+        n_eval = 0
+    else:
+        out = _evaluate(vec, y0, w, v, p, d, stationary)
+        n_eval = 1
     if out is None:
         return None
     b_mat = hess.copy()
@@ -830,11 +889,14 @@ def _refine(
         while t > 1e-6:
             trial = vec + t * step
             trial[p:] = np.clip(trial[p:], log_floor, log_ceiling)
-            new = _evaluate(trial, y0, w, v, p, d, stationary)
+            # likelihood first; the selected inversion and gradient only for an accepted step
+            part = _trial(trial, y0, w, v, p, d, stationary)
             n_eval += 1
-            if new is not None and -new[0].loglike <= f - 1e-4 * t * 2.0 * gain / cap:
-                accepted = (trial, new)
-                break
+            if part is not None and -part.loglike <= f - 1e-4 * t * 2.0 * gain / cap:
+                new = _evaluate(trial, y0, w, v, p, d, stationary, partial=part)
+                if new is not None:
+                    accepted = (trial, new)
+                    break
             t *= 0.25
         if accepted is None:
             converged = gain < 1e3 * tol
@@ -869,7 +931,7 @@ def _vce_polish(
     point to the likelihood's resolution).
     """
     vec = np.concatenate([est.phi, [est.log_sn2, est.log_se2]])
-    out: tuple[_Fit, float, float, FloatArray] = (est.fit, est.r_n, est.r_e, np.zeros(p + 2))
+    out: tuple[_Fit, float, float, FloatArray | None] = (est.fit, est.r_n, est.r_e, est.grad)
     n_eval = 0
     converged = False
     for _ in range(max_iter):
@@ -1236,16 +1298,27 @@ def _fit_fixed(
             n_iter += 1 + best.n_iter
         if not reweighted and best.converged:
             break
-        vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
         # fresh curvature (window, current weights) rather than the BFGS matrix of the last
         # search, which crawls along the sigma_e/phi ridge once the weights have changed
         hw, hv = w[:head], v[: head - m]
-        hess = _hessian(vec, y0[:head], hw, hv, p, d, st) * (
-            np.count_nonzero(w) / max(int(np.count_nonzero(hw)), 1)
-        )
+        h_scale = np.count_nonzero(w) / max(int(np.count_nonzero(hw)), 1)
+        vec = np.concatenate([best.phi, [best.log_sn2, best.log_se2]])
+        hess = _hessian(vec, y0[:head], hw, hv, p, d, st) * h_scale
         n_iter += p + 3
         refined = _refine(
-            vec, hess, y0, w, v, p, d, st, cfg.gain_tol, cfg.max_iter, log_floor, log_ceiling
+            vec,
+            hess,
+            y0,
+            w,
+            v,
+            p,
+            d,
+            st,
+            cfg.gain_tol,
+            cfg.max_iter,
+            log_floor,
+            log_ceiling,
+            start=best,  # already evaluated at vec with these weights
         )
         if refined is None:
             break
