@@ -68,8 +68,10 @@ def accuracy(names: list[str]) -> None:
     from navtrack.gnss.spp import SppConfig, solve_spp
     from navtrack.io.rtklib import read_pos
 
-    print(f"{'run':<24} {'solved':>7} {'RTKLIB':>6} {'RMS3D':>6} {'RTKLIB':>6} "
-          f"{'med d':>6} {'max d':>6}  (m; d = distance to RTKLIB's solution)")
+    print(
+        f"{'run':<24} {'solved':>7} {'RTKLIB':>6} {'RMS3D':>6} {'RTKLIB':>6} "
+        f"{'med d':>6} {'max d':>6}  (m; d = distance to RTKLIB's solution)"
+    )
     for name in names:
         run = REFERENCE["runs"][name]
         obs = read_obs(SHARED / run["obs"])
@@ -77,8 +79,9 @@ def accuracy(names: list[str]) -> None:
         sp3 = read_sp3(SHARED / run["sp3"]) if run.get("sp3") else None
         variants = [("", SppConfig(systems=run["systems"]))]
         if sp3 is not None:
-            variants.append((" (RTKLIB rule)", SppConfig(systems=run["systems"],
-                                                         sp3_needs_broadcast=True)))
+            variants.append(
+                (" (RTKLIB rule)", SppConfig(systems=run["systems"], sp3_needs_broadcast=True))
+            )
         rtk = read_pos(SHARED / "rtklib_spp" / f"{name}.pos")
         t_rtk = rtk["t_gps_s"].to_numpy()
         xyz_rtk = rtk[["x_m", "y_m", "z_m"]].to_numpy()
@@ -94,8 +97,10 @@ def accuracy(names: list[str]) -> None:
             rms = float(np.sqrt(np.mean(np.sum(ecef_to_enu(res.pos_m[ok], ref) ** 2, axis=1))))
             i = np.clip(np.searchsorted(res.t_gps_s, t_rtk - 0.1), 0, res.t_gps_s.size - 1)
             d = np.linalg.norm(res.pos_m[i] - xyz_rtk, axis=1)
-            print(f"{name + label:<24} {int(ok.sum()):>7} {run['solved']:>6} {rms:6.2f} "
-                  f"{run['rms_3d_m']:6.2f} {np.nanmedian(d):6.3f} {np.nanmax(d):6.3f}")
+            print(
+                f"{name + label:<24} {int(ok.sum()):>7} {run['solved']:>6} {rms:6.2f} "
+                f"{run['rms_3d_m']:6.2f} {np.nanmedian(d):6.3f} {np.nanmax(d):6.3f}"
+            )
 
 
 def main() -> None:
@@ -129,9 +134,18 @@ def main() -> None:
             phases = ""
             if not run.get("sp3"):
                 phases = subprocess.run(
-                    [sys.executable, str(script), str(SHARED / run["obs"]), run["systems"],
-                     *[str(SHARED / p) for p in run["nav"]]],
-                    env=env, check=True, capture_output=True, text=True).stdout.strip()
+                    [
+                        sys.executable,
+                        str(script),
+                        str(SHARED / run["obs"]),
+                        run["systems"],
+                        *[str(SHARED / p) for p in run["nav"]],
+                    ],
+                    env=env,
+                    check=True,
+                    capture_output=True,
+                    text=True,
+                ).stdout.strip()
             rtk_s = f"{rtk:9.3f}" if rtk else "        -"
             print(f"{name:<24} {med:10.3f} {rtk_s} {ratio}   {phases}")
 

@@ -77,8 +77,10 @@ def bench_paper3(n_runs: int, ss_runs: int, n_steps: int = 140) -> None:
         per_run_nt.append((time.perf_counter() - t0) / n_steps)
         outs.append(res)
     nt = statistics.median(per_run_nt)
-    print(f"[paper 3] navtrack JPDA: {nt * 1e6:8.1f} us/step (median of {n_runs} runs x "
-          f"{n_steps} steps)")
+    print(
+        f"[paper 3] navtrack JPDA: {nt * 1e6:8.1f} us/step (median of {n_runs} runs x "
+        f"{n_steps} steps)"
+    )
     try:
         from stonesoup_ref import run_stonesoup_jpda
     except ImportError:
@@ -87,18 +89,24 @@ def bench_paper3(n_runs: int, ss_runs: int, n_steps: int = 140) -> None:
     per_run_ss, db, dx = [], 0.0, 0.0
     for r in range(ss_runs):
         t0 = time.perf_counter()
-        B, X, _ = run_stonesoup_jpda(runs[r], sc["x0"], P0, 1.0, sc["sigma_r_m"],
-                                     sc["sigma_theta_rad"], sc["pd"], lam, 0.99)
+        B, X, _ = run_stonesoup_jpda(
+            runs[r], sc["x0"], P0, 1.0, sc["sigma_r_m"], sc["sigma_theta_rad"], sc["pd"], lam, 0.99
+        )
         per_run_ss.append((time.perf_counter() - t0) / n_steps)
         if r < n_runs:
-            db = max(db, max(np.abs(o.marginals.beta - b).max() for o, b in zip(outs[r], B,
-                                                                                   strict=True)))
+            db = max(
+                db, max(np.abs(o.marginals.beta - b).max() for o, b in zip(outs[r], B, strict=True))
+            )
             dx = max(dx, max(np.abs(o.x - xx).max() for o, xx in zip(outs[r], X, strict=True)))
     ss = statistics.median(per_run_ss)
-    print(f"[paper 3] Stone Soup JPDA: {ss * 1e6:8.1f} us/step (median of {ss_runs} runs x "
-          f"{n_steps} steps, {ss * n_steps:.2f} s per run)")
-    print(f"[paper 3] ratio Stone Soup / navtrack per step: {ss / nt:.0f}x   "
-          f"max |d beta| = {db:.1e}, max |d x| = {dx:.1e} m over {min(ss_runs, n_runs)} runs")
+    print(
+        f"[paper 3] Stone Soup JPDA: {ss * 1e6:8.1f} us/step (median of {ss_runs} runs x "
+        f"{n_steps} steps, {ss * n_steps:.2f} s per run)"
+    )
+    print(
+        f"[paper 3] ratio Stone Soup / navtrack per step: {ss / nt:.0f}x   "
+        f"max |d beta| = {db:.1e}, max |d x| = {dx:.1e} m over {min(ss_runs, n_runs)} runs"
+    )
 
 
 def close_targets(n: int, rng: np.random.Generator):
@@ -161,24 +169,44 @@ def bench_close(ns: list[int], q: float = 1.0) -> None:
             t0 = time.perf_counter()
             jpda_marginals(W, cfg)
             tm.append(time.perf_counter() - t0)
-        rows.append((n, x, P, Z, st, statistics.median(tt), statistics.median(tm),
-                     int(g.valid.sum()), min(tt)))
+        rows.append(
+            (
+                n,
+                x,
+                P,
+                Z,
+                st,
+                statistics.median(tt),
+                statistics.median(tm),
+                int(g.valid.sum()),
+                min(tt),
+            )
+        )
     for n, x, P, Z, st, nt, tmarg, n_pairs, tmin in rows:
-        line = (f"[close n={n:2d}] navtrack exact JPDA step {nt * 1e3:7.2f} ms "
-                f"(min {tmin * 1e3:.2f}; marginals "
-                f"{tmarg * 1e3:6.2f} ms, exact={bool((st.marginals.method == 1).all())}, "
-                f"{n_pairs} gated pairs of {n}x{len(Z)})")
+        line = (
+            f"[close n={n:2d}] navtrack exact JPDA step {nt * 1e3:7.2f} ms "
+            f"(min {tmin * 1e3:.2f}; marginals "
+            f"{tmarg * 1e3:6.2f} ms, exact={bool((st.marginals.method == 1).all())}, "
+            f"{n_pairs} gated pairs of {n}x{len(Z)})"
+        )
         if have_ss:
-            trans = CombinedLinearGaussianTransitionModel([ConstantVelocity(q),
-                                                           ConstantVelocity(q)])
+            trans = CombinedLinearGaussianTransitionModel(
+                [ConstantVelocity(q), ConstantVelocity(q)]
+            )
             mm = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2) * 400.0)
-            hyp = PDAHypothesiser(predictor=KalmanPredictor(trans), updater=KalmanUpdater(mm),
-                                  clutter_spatial_density=lam, prob_detect=0.9, prob_gate=0.99)
+            hyp = PDAHypothesiser(
+                predictor=KalmanPredictor(trans),
+                updater=KalmanUpdater(mm),
+                clutter_spatial_density=lam,
+                prob_detect=0.9,
+                prob_gate=0.99,
+            )
             assoc = JPDAwithEHM2(hypothesiser=hyp)
             t_0 = dt.datetime(2020, 1, 1)
             ts = t_0 + dt.timedelta(seconds=1)
-            tracks = [Track([GaussianState(x[i].reshape(4, 1), P[i], timestamp=t_0)])
-                      for i in range(n)]
+            tracks = [
+                Track([GaussianState(x[i].reshape(4, 1), P[i], timestamp=t_0)]) for i in range(n)
+            ]
             dets = [Detection(z.reshape(2, 1), timestamp=ts, measurement_model=mm) for z in Z]
             ss_reps = 3 if n <= 8 else 1
             st_ss = []
@@ -193,8 +221,10 @@ def bench_close(ns: list[int], q: float = 1.0) -> None:
                 for h in hyps[tr]:
                     B[i, 0 if not h else 1 + index[id(h.measurement)]] += float(h.probability)
             db = np.abs(B - st.marginals.beta).max()
-            line += (f" | Stone Soup JPDAwithEHM2 {ss * 1e3:8.1f} ms ({ss_reps} rep) "
-                     f"ratio {ss / nt:5.0f}x, max |d beta| {db:.1e}")
+            line += (
+                f" | Stone Soup JPDAwithEHM2 {ss * 1e3:8.1f} ms ({ss_reps} rep) "
+                f"ratio {ss / nt:5.0f}x, max |d beta| {db:.1e}"
+            )
         print(line, flush=True)
 
 
@@ -212,8 +242,10 @@ def bench_kf(n_tracks: int = 1000, reps: int = 20) -> None:
         kf_update(x, P, z, meas.H, meas.R)
         tb.append(time.perf_counter() - t0)
     nt = statistics.median(tb) / n_tracks
-    print(f"[kalman] navtrack batched update: {nt * 1e6:.3f} us/track "
-          f"(median of {reps} calls over {n_tracks} tracks)")
+    print(
+        f"[kalman] navtrack batched update: {nt * 1e6:.3f} us/track "
+        f"(median of {reps} calls over {n_tracks} tracks)"
+    )
     try:
         from filterpy.kalman import KalmanFilter
     except ImportError:
@@ -239,8 +271,10 @@ def bench_kf(n_tracks: int = 1000, reps: int = 20) -> None:
     fp = statistics.median(tf) / n_tracks
     u = kf_update(x, P, z, meas.H, meas.R, joseph=True)
     dx = max(np.abs(kf.x - u.x[i]).max() for i, kf in enumerate(kfs))
-    print(f"[kalman] FilterPy KalmanFilter.update loop: {fp * 1e6:.2f} us/track; ratio "
-          f"{fp / nt:.0f}x; max |dx| vs navtrack Joseph form {dx:.1e}")
+    print(
+        f"[kalman] FilterPy KalmanFilter.update loop: {fp * 1e6:.2f} us/track; ratio "
+        f"{fp / nt:.0f}x; max |dx| vs navtrack Joseph form {dx:.1e}"
+    )
 
 
 def main() -> None:

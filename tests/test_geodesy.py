@@ -98,7 +98,11 @@ def test_check_near_surface() -> None:
     np.testing.assert_array_equal(check_near_surface(sept), sept)
     check_near_surface([0.0, 0.0, 6356752.3])
     # kilometres, degrees/metres, a non-finite value, a wrong shape: refused, naming the input
-    for bad in ([-3962.1, 3381.3, 3668.7], [35.16, 139.61, 68.45], [np.nan, 0.0, 6.4e6],
-                [6.4e6, 0.0]):
+    for bad in (
+        [-3962.1, 3381.3, 3668.7],
+        [35.16, 139.61, 68.45],
+        [np.nan, 0.0, 6.4e6],
+        [6.4e6, 0.0],
+    ):
         with pytest.raises(ValueError, match="ref"):
             check_near_surface(bad, "ref")

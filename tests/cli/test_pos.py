@@ -12,8 +12,9 @@ from navtrack.cli import main
 from navtrack.data import sample_path
 
 
-def test_example_prints_summary_and_writes_csv(tmp_path: Path,
-                                               capsys: pytest.CaptureFixture[str]) -> None:
+def test_example_prints_summary_and_writes_csv(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     out = tmp_path / "sept.csv"
     assert main(["pos", "--example", "--out", str(out)]) == 0
     text = capsys.readouterr().out
@@ -46,8 +47,17 @@ def test_plots(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
 
 
 def test_rinex2_with_ref_llh(capsys: pytest.CaptureFixture[str]) -> None:
-    rc = main(["pos", str(sample_path("07590920.05o")), str(sample_path("07590920.05n")),
-               "--ref-llh", "35.160867766", "139.613844940", "68.4545"])
+    rc = main(
+        [
+            "pos",
+            str(sample_path("07590920.05o")),
+            str(sample_path("07590920.05n")),
+            "--ref-llh",
+            "35.160867766",
+            "139.613844940",
+            "68.4545",
+        ]
+    )
     assert rc == 0
     text = capsys.readouterr().out
     assert "solved         115" in text
@@ -69,8 +79,7 @@ def test_reference_in_wrong_units_is_refused() -> None:
         main(["pos", "--example", "--ref-llh", "-3962108.6", "3381309.5", "3668678.6"])
 
 
-def test_unwritable_output_still_solves(tmp_path: Path,
-                                        capsys: pytest.CaptureFixture[str]) -> None:
+def test_unwritable_output_still_solves(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     rc = main(["pos", "--example", "--out", str(tmp_path / "missing" / "x.csv")])
     assert rc == 1
     captured = capsys.readouterr()
@@ -90,9 +99,19 @@ def test_missing_inputs() -> None:
 
 def test_android_log(capsys: pytest.CaptureFixture[str]) -> None:
     pytest.importorskip("navtrack.gnss.android")
-    rc = main(["pos", str(sample_path("pseudoranges_log_2016_08_22_14_45_50.txt")),
-               str(sample_path("hour2350.16n")), "--systems", "G",
-               "--ref-llh", "37.422578", "-122.081678", "-28"])
+    rc = main(
+        [
+            "pos",
+            str(sample_path("pseudoranges_log_2016_08_22_14_45_50.txt")),
+            str(sample_path("hour2350.16n")),
+            "--systems",
+            "G",
+            "--ref-llh",
+            "37.422578",
+            "-122.081678",
+            "-28",
+        ]
+    )
     assert rc == 0
     text = capsys.readouterr().out
     assert "weighting cn0" in text

@@ -33,8 +33,9 @@ def test_sagnac_matches_rotating_the_satellite() -> None:
         tau = np.linalg.norm(sat - rcv) / C_MPS
         for _ in range(5):
             a = OMEGA_E_RAD_S * tau
-            rot = np.array([[np.cos(a), np.sin(a), 0.0], [-np.sin(a), np.cos(a), 0.0],
-                            [0.0, 0.0, 1.0]])
+            rot = np.array(
+                [[np.cos(a), np.sin(a), 0.0], [-np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]]
+            )
             exact = np.linalg.norm(rot @ sat - rcv)
             tau = exact / C_MPS
         assert rho == pytest.approx(exact, abs=2e-3)
@@ -68,7 +69,8 @@ def test_klobuchar_closed_form_peak_and_night() -> None:
     # PER floor 72000 s and AMP floor 0
     low = np.array([-1e-6, 0.0, 0.0, 0.0, 1e3, 0.0, 0.0, 0.0])
     assert klobuchar_delay_m(50400.0, 0.3, 0.0, 0.0, np.pi / 2, low) == pytest.approx(
-        f * 5e-9 * C_MPS)
+        f * 5e-9 * C_MPS
+    )
 
 
 def test_klobuchar_geometry_and_defaults() -> None:
@@ -76,8 +78,7 @@ def test_klobuchar_geometry_and_defaults() -> None:
     d = klobuchar_delay_m(45000.0, np.radians(35.0), np.radians(139.0), 0.0, el, None)
     assert np.all(np.diff(d) < 0)  # obliquity: larger delays at low elevation
     assert 1.0 < d[-1] < 30.0
-    assert d[0] / d[-1] == pytest.approx(1 + 16 * (0.53 - 5 / 180) ** 3,
-                                                                 rel=0.2)
+    assert d[0] / d[-1] == pytest.approx(1 + 16 * (0.53 - 5 / 180) ** 3, rel=0.2)
     zero = klobuchar_delay_m(45000.0, 0.6, 2.4, 0.0, 1.0, np.zeros(8))
     dflt = klobuchar_delay_m(45000.0, 0.6, 2.4, 0.0, 1.0, KLOBUCHAR_DEFAULT)
     assert zero == dflt
@@ -98,7 +99,8 @@ def test_saastamoinen_zenith_and_mapping() -> None:
     assert 0.05 < wet < 0.2  # wet delay at 15 degC, 70 % humidity: ~0.1 m
     el = np.radians(30.0)
     assert saastamoinen_delay_m(0.7, 100.0, el) == pytest.approx(
-        saastamoinen_delay_m(0.7, 100.0, np.pi / 2) / np.sin(el), rel=1e-12)
+        saastamoinen_delay_m(0.7, 100.0, np.pi / 2) / np.sin(el), rel=1e-12
+    )
     h = np.array([-200.0, 2000.0, 2.0e4])
     out = saastamoinen_delay_m(0.7, h, 0.5)
     assert out[0] == 0.0
@@ -118,7 +120,8 @@ def test_ionofree_removes_first_order_ionosphere() -> None:
 def test_frequencies() -> None:
     assert frequency_hz("E", "5") == 1176.45e6
     assert frequency_hz("C", "2") == 1561.098e6
-    np.testing.assert_allclose(frequency_hz("R", "1", [-7, 0, 6]),
-                               [1598.0625e6, 1602.0e6, 1605.375e6])
+    np.testing.assert_allclose(
+        frequency_hz("R", "1", [-7, 0, 6]), [1598.0625e6, 1602.0e6, 1605.375e6]
+    )
     with pytest.raises(ValueError, match="band"):
         frequency_hz("G", "7")

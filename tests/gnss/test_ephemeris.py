@@ -24,10 +24,12 @@ def _sept():  # type: ignore[no-untyped-def]
     return nav, sp3
 
 
-@pytest.mark.parametrize(("system", "max_pos_m", "max_clk_ns"),
-                         [("G", 4.0, 8.0), ("E", 3.0, 8.0), ("J", 6.0, 15.0)])
-def test_broadcast_agrees_with_precise_orbits(system: str, max_pos_m: float,
-                                              max_clk_ns: float) -> None:
+@pytest.mark.parametrize(
+    ("system", "max_pos_m", "max_clk_ns"), [("G", 4.0, 8.0), ("E", 3.0, 8.0), ("J", 6.0, 15.0)]
+)
+def test_broadcast_agrees_with_precise_orbits(
+    system: str, max_pos_m: float, max_clk_ns: float
+) -> None:
     """Broadcast GPS/Galileo/QZSS orbits and clocks at 12:00-12:15 GPST on 2021-03-19 against
     CODE's final MGEX orbits at the SP3 epochs. The SP3 refers to the centre of mass and the
     broadcast to the antenna phase centre (offsets up to ~1-2.5 m) and the clocks differ by a
@@ -138,8 +140,7 @@ def _glonass_inertial(state0: np.ndarray, acc: np.ndarray, dt: float) -> np.ndar
         g += 1.5 * j2 * mu * a**2 / rn**5 * r * np.array([5 * z2 - 1, 5 * z2 - 1, 5 * z2 - 3])
         return np.concatenate([s[3:], g + rot(w * t) @ acc])
 
-    sol = solve_ivp(f, (0.0, dt), np.concatenate([x, v_in]), method="DOP853", rtol=1e-12,
-                    atol=1e-6)
+    sol = solve_ivp(f, (0.0, dt), np.concatenate([x, v_in]), method="DOP853", rtol=1e-12, atol=1e-6)
     r_in, v_in_end = sol.y[:3, -1], sol.y[3:, -1]
     back = rot(-w * dt)
     r_ef = back @ r_in
@@ -184,8 +185,12 @@ def _toy_table(**cols: list[float]) -> eph.EphemerisTable:
 
 
 def test_select_nearest_healthy_consistent() -> None:
-    tab = _toy_table(toe_gps_s=[0.0, 7200.0, 7200.0, 14400.0], svh=[0, 0, 0, 1],
-                     iode=[1, 2, 3, 4], iodc=[1, 2, 3 + 256, 4])
+    tab = _toy_table(
+        toe_gps_s=[0.0, 7200.0, 7200.0, 14400.0],
+        svh=[0, 0, 0, 1],
+        iode=[1, 2, 3, 4],
+        iodc=[1, 2, 3 + 256, 4],
+    )
     t = np.array([1000.0, 5000.0, 7000.0, 13000.0, 30000.0])
     idx = eph.select_ephemeris(tab, ["G01"], t)[:, 0]
     # 5000 -> record 1 (IODE 2; record 2 has IODC low byte == IODE too, ties go to the later)
@@ -197,10 +202,17 @@ def test_select_nearest_healthy_consistent() -> None:
 
 
 def test_galileo_data_source_selection() -> None:
-    tab = eph.EphemerisTable("E", np.array(["E01", "E01"]), {
-        "toe_gps_s": np.array([0.0, 0.0]), "svh": np.array([0, 0]),
-        "data_source": np.array([516, 258]), "bgd_e5a": np.array([1e-9, 2e-9]),
-        "bgd_e5b": np.array([3e-9, 0.0])})
+    tab = eph.EphemerisTable(
+        "E",
+        np.array(["E01", "E01"]),
+        {
+            "toe_gps_s": np.array([0.0, 0.0]),
+            "svh": np.array([0, 0]),
+            "data_source": np.array([516, 258]),
+            "bgd_e5a": np.array([1e-9, 2e-9]),
+            "bgd_e5b": np.array([3e-9, 0.0]),
+        },
+    )
     t = np.array([10.0])
     i_inav = eph.select_ephemeris(tab, ["E01"], t, galileo_nav="inav")
     i_fnav = eph.select_ephemeris(tab, ["E01"], t, galileo_nav="fnav")
@@ -234,8 +246,9 @@ def test_sp3_interpolation_reproduces_dropped_nodes() -> None:
     from types import SimpleNamespace
 
     _, sp3 = _sept()
-    thin = SimpleNamespace(sats=sp3.sats, t_gps_s=sp3.t_gps_s[::2], pos_m=sp3.pos_m[::2],
-                           clock_s=sp3.clock_s[::2])
+    thin = SimpleNamespace(
+        sats=sp3.sats, t_gps_s=sp3.t_gps_s[::2], pos_m=sp3.pos_m[::2], clock_s=sp3.clock_s[::2]
+    )
     sats = [s for s in sp3.sats if s[0] in "GEJ"][:20]
     cols = [list(sp3.sats).index(s) for s in sats]
     mid = slice(11, -11, 2)  # dropped epochs well inside the span

@@ -57,8 +57,9 @@ def test_matches_scipy_least_squares(solver: str) -> None:
         # scipy starts at the truth (from the origin its xtol stops it early at this scale)
         ref = _scipy_solution(beacons[b], y[b], sigma[b], truth[b])
         # ours no worse in cost, and the same estimate to 1e-4 of the formal sigma
-        cost_ref = np.sum(((np.linalg.norm(beacons[b] - ref[:3], axis=-1) + ref[3] - y[b])
-                           / sigma[b]) ** 2)
+        cost_ref = np.sum(
+            ((np.linalg.norm(beacons[b] - ref[:3], axis=-1) + ref[3] - y[b]) / sigma[b]) ** 2
+        )
         assert res.cost[b] <= cost_ref * (1 + 1e-7)
         sd = np.sqrt(np.diag(res.cov[b]))
         assert np.all(np.abs(res.x[b] - ref) < 1e-4 * sd)

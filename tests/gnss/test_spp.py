@@ -221,9 +221,25 @@ def test_sample_solution_columns_and_statuses() -> None:
     assert res.status_counts()["ok"] == 120
     assert set(res.status_counts()) == set(STATUS_NAMES)
     cols = solution_columns(res)
-    for name in ("time_gps", "week", "tow_s", "x_m", "y_m", "z_m", "lat_deg", "lon_deg", "h_m",
-                 "clock_m", "sd_e_m", "sd_n_m", "sd_u_m", "n_sats", "pdop", "status",
-                 "excluded"):
+    for name in (
+        "time_gps",
+        "week",
+        "tow_s",
+        "x_m",
+        "y_m",
+        "z_m",
+        "lat_deg",
+        "lon_deg",
+        "h_m",
+        "clock_m",
+        "sd_e_m",
+        "sd_n_m",
+        "sd_u_m",
+        "n_sats",
+        "pdop",
+        "status",
+        "excluded",
+    ):
         assert len(cols[name]) == 120
     assert cols["time_gps"][0] == "2021-03-19T12:00:00.000"
     assert cols["week"][0] == 2149
@@ -244,8 +260,10 @@ def test_chunked_solution_equals_whole() -> None:
     obs, nav = _sample()
     cfg = SppConfig(systems="GEJ")
     whole = solve_spp(obs, [nav], config=cfg)
-    parts = [solve_spp(subset_epochs(obs, slice(a, a + 50)), [nav], config=cfg)
-             for a in range(0, 120, 50)]
+    parts = [
+        solve_spp(subset_epochs(obs, slice(a, a + 50)), [nav], config=cfg)
+        for a in range(0, 120, 50)
+    ]
     joined = concatenate_results(parts)
     np.testing.assert_allclose(joined.pos_m, whole.pos_m, atol=1e-6)
     np.testing.assert_allclose(joined.isb_m, whole.isb_m, atol=1e-6)
@@ -254,10 +272,12 @@ def test_chunked_solution_equals_whole() -> None:
 
 def test_ionofree_and_other_weightings_solve_the_sample() -> None:
     obs, nav = _sample()
-    for cfg in (SppConfig(systems="GEJ", iono="ionofree"),
-                SppConfig(systems="GEJ", weighting="cn0"),
-                SppConfig(systems="GEJ", weighting="elevation"),
-                SppConfig(systems="G", weighting="equal")):
+    for cfg in (
+        SppConfig(systems="GEJ", iono="ionofree"),
+        SppConfig(systems="GEJ", weighting="cn0"),
+        SppConfig(systems="GEJ", weighting="elevation"),
+        SppConfig(systems="G", weighting="equal"),
+    ):
         res = solve_spp(obs, [nav], config=cfg)
         ok = res.status == SppStatus.OK
         assert ok.sum() >= 110, cfg
@@ -351,8 +371,7 @@ def test_chi2_validity_rejects_a_large_fault() -> None:
 
 def test_max_iter_gives_no_convergence() -> None:
     obs, nav = _sample()
-    res = solve_spp(obs, [nav], config=SppConfig(systems="GEJ", max_iter=1),
-                    x0_m=np.zeros(3))
+    res = solve_spp(obs, [nav], config=SppConfig(systems="GEJ", max_iter=1), x0_m=np.zeros(3))
     assert np.all(res.status == SppStatus.NO_CONVERGENCE)
     assert np.all(np.isnan(res.pos_m))
 
@@ -367,8 +386,9 @@ def test_glonass_only_synthetic_recovery() -> None:
     from navtrack.gnss.observations import Observations, ObsHeader
     from navtrack.gnss.rinex.nav import read_nav
 
-    nav = read_nav(Path(__file__).resolve().parents[1] / "data"
-                   / "BRDM00DLR_S_20230730000_01D_MN_cut.rnx")
+    nav = read_nav(
+        Path(__file__).resolve().parents[1] / "data" / "BRDM00DLR_S_20230730000_01D_MN_cut.rnx"
+    )
     src = eph.ephemeris_tables(nav)["R"]
     cols: dict[str, list[float]] = {k: [] for k in src.columns}
     sats = []
@@ -394,14 +414,23 @@ def test_glonass_only_synthetic_recovery() -> None:
     values = pr[..., None]
     n_e, n_s = pr.shape
     obs = Observations(
-        path="synthetic", header=ObsHeader(version=3.04, file_type="O", system="R",
-                                           obs_types={"R": ("C1C",)}),
-        t_gps_s=t, epoch_flag=np.zeros(n_e, np.int8), clock_offset_s=np.full(n_e, np.nan),
-        sats=tuple(sats), codes=("C1C",), values=values,
-        lli=np.full((n_e, n_s, 1), -1, np.int8), ssi=np.full((n_e, n_s, 1), -1, np.int8))
-    res = solve_spp(obs, None, config=SppConfig(systems="R", iono="off", tropo="off",
-                                                weighting="equal", elmask_deg=5.0),
-                    ephemeris={"R": table})
+        path="synthetic",
+        header=ObsHeader(version=3.04, file_type="O", system="R", obs_types={"R": ("C1C",)}),
+        t_gps_s=t,
+        epoch_flag=np.zeros(n_e, np.int8),
+        clock_offset_s=np.full(n_e, np.nan),
+        sats=tuple(sats),
+        codes=("C1C",),
+        values=values,
+        lli=np.full((n_e, n_s, 1), -1, np.int8),
+        ssi=np.full((n_e, n_s, 1), -1, np.int8),
+    )
+    res = solve_spp(
+        obs,
+        None,
+        config=SppConfig(systems="R", iono="off", tropo="off", weighting="equal", elmask_deg=5.0),
+        ephemeris={"R": table},
+    )
     ok = res.status == SppStatus.OK
     assert ok.all(), (res.status_counts(), res.status, res.n_sats, res.dop[:, 0])
     assert np.max(np.linalg.norm(res.pos_m - rcv, axis=1)) < 1e-3

@@ -46,8 +46,9 @@ def test_ais_reader_counts_and_bad_row(tracking_data: Path) -> None:
     assert np.unique(det.id).size == 91
     assert np.all(np.diff(det.t_gps_s) >= 0)
     # first report 2016-01-12 13:02:11.218 UTC, GPST - UTC = 17 s in 2016
-    assert det.t_gps_s[0] == pytest.approx(_gps_s(dt.datetime(2016, 1, 12, 13, 2, 11, 218000),
-                                                  17.0), abs=1e-6)
+    assert det.t_gps_s[0] == pytest.approx(
+        _gps_s(dt.datetime(2016, 1, 12, 13, 2, 11, 218000), 17.0), abs=1e-6
+    )
     assert rows[0]["MMSI"] == det.id[0]
     assert det.speed_mps[0] == pytest.approx(5.9 * 1852 / 3600)
     en, _ref = to_local_enu(det)
@@ -81,8 +82,11 @@ def test_generic_csv_bad_rows_order_and_columns(tmp_path: Path) -> None:
     assert det.line.tolist() == [3, 2, 7]  # sorted by time, lines kept
     assert det.n_reordered == 1
     assert det.bad_lines.tolist() == [4, 5, 6]
-    assert det.bad_reasons == ("latitude outside [-90, 90]",
-                               "latitude/longitude not a finite number", "time not readable")
+    assert det.bad_reasons == (
+        "latitude outside [-90, 90]",
+        "latitude/longitude not a finite number",
+        "time not readable",
+    )
     assert det.ignored_columns == ("colour",)
     s = det.summary()
     assert s["bad rows skipped"] == 3
@@ -114,8 +118,9 @@ def test_velocity_from_speed_and_course(tracking_data: Path) -> None:
     v = velocity_local_enu(det)
     # first report: SOG 5.9 kn, COG 157.8 deg; 2 km from the reference the frames agree to 1e-3
     s = 5.9 * 1852 / 3600
-    np.testing.assert_allclose(v[0], [s * np.sin(np.radians(157.8)),
-                                      s * np.cos(np.radians(157.8))], atol=2e-3)
+    np.testing.assert_allclose(
+        v[0], [s * np.sin(np.radians(157.8)), s * np.cos(np.radians(157.8))], atol=2e-3
+    )
     # AIS "not available" course (360) gives NaN
     assert np.all(np.isnan(v[det.course_deg >= 360]))
     speed = np.hypot(v[:, 0], v[:, 1])
@@ -132,9 +137,13 @@ def test_local_enu_round_trip(tmp_path: Path) -> None:
     lat = 50.8 + rng.uniform(-0.5, 0.5, 50)
     lon = -1.3 + rng.uniform(-0.5, 0.5, 50)
     f = tmp_path / "pts.csv"
-    f.write_text("time,lat,lon\n" + "".join(
-        f"2020-01-01T00:00:{k:02d}Z,{a!r},{b!r}\n" for k, (a, b) in enumerate(zip(lat, lon,
-                                                                                  strict=True))))
+    f.write_text(
+        "time,lat,lon\n"
+        + "".join(
+            f"2020-01-01T00:00:{k:02d}Z,{a!r},{b!r}\n"
+            for k, (a, b) in enumerate(zip(lat, lon, strict=True))
+        )
+    )
     det = read_track_csv(f)
     en, ref = to_local_enu(det)
     latlon = local_enu_to_geodetic(en, *ref)

@@ -49,6 +49,7 @@ def run_stonesoup_jpda(
     from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
     transition = CombinedLinearGaussianTransitionModel([ConstantVelocity(q), ConstantVelocity(q)])
+
     class AnalyticBearingRange(CartesianToBearingRange):
         """Stone Soup's model with the analytic Jacobian (its default is a finite difference,
         off by ~1e-3 relative, which would hide everything else in the comparison)."""
@@ -74,13 +75,15 @@ def run_stonesoup_jpda(
     )
     assoc = JPDA(hypothesiser=hyp) if associator == "jpda" else JPDAwithEHM2(hypothesiser=hyp)
     t0 = _dt.datetime(2005, 8, 18)
-    tracks = [Track([GaussianState(x0[i].reshape(4, 1), P0[i], timestamp=t0)])
-              for i in range(len(x0))]
+    tracks = [
+        Track([GaussianState(x0[i].reshape(4, 1), P0[i], timestamp=t0)]) for i in range(len(x0))
+    ]
     out_b, out_x, out_P = [], [], []
     for k, Z in enumerate(scans):
         ts = t0 + _dt.timedelta(seconds=dt * (k + 1))
-        dets = [Detection(np.array([[z[1]], [z[0]]]), timestamp=ts, measurement_model=meas)
-                for z in Z]
+        dets = [
+            Detection(np.array([[z[1]], [z[0]]]), timestamp=ts, measurement_model=meas) for z in Z
+        ]
         index = {id(d): j for j, d in enumerate(dets)}
         hyps = assoc.associate(set(tracks), set(dets), ts)
         B = np.zeros((len(tracks), len(dets) + 1))

@@ -49,8 +49,9 @@ def test_gnn_is_optimal_against_brute_force(seed: int, T: int, M: int) -> None:
     assert len(taken) == len(set(taken.tolist()))
 
 
-@given(seed=st.integers(0, 2**32 - 1), T=st.integers(1, 4), M=st.integers(0, 4),
-       k=st.integers(1, 40))
+@given(
+    seed=st.integers(0, 2**32 - 1), T=st.integers(1, 4), M=st.integers(0, 4), k=st.integers(1, 40)
+)
 @settings(max_examples=60, deadline=None)
 def test_murty_equals_sorted_brute_force(seed: int, T: int, M: int, k: int) -> None:
     C, miss = _cost_problem(seed, T, M)
@@ -88,8 +89,12 @@ def _random_weights(seed: int, T: int, M: int, density: float) -> np.ndarray:
     return W
 
 
-@given(seed=st.integers(0, 2**32 - 1), T=st.integers(1, 6), M=st.integers(0, 7),
-       density=st.floats(0.1, 1.0))
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    T=st.integers(1, 6),
+    M=st.integers(0, 7),
+    density=st.floats(0.1, 1.0),
+)
 @settings(max_examples=120, deadline=None)
 def test_jpda_marginals_equal_brute_force(seed: int, T: int, M: int, density: float) -> None:
     W = _random_weights(seed, T, M, density)
@@ -101,8 +106,12 @@ def test_jpda_marginals_equal_brute_force(seed: int, T: int, M: int, density: fl
     assert np.all(jm.error_bound == 0)
 
 
-@given(seed=st.integers(0, 2**32 - 1), T=st.integers(1, 4), M=st.integers(0, 4),
-       density=st.floats(0.1, 1.0))
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    T=st.integers(1, 4),
+    M=st.integers(0, 4),
+    density=st.floats(0.1, 1.0),
+)
 @settings(max_examples=40, deadline=None)
 def test_jpda_kbest_with_all_events_is_exact(seed: int, T: int, M: int, density: float) -> None:
     # at most 209 events for 4 tracks x 4 measurements: k = 1000 holds them all
@@ -124,13 +133,16 @@ def test_kbest_error_bound_holds(seed: int, k: int) -> None:
 
 
 def test_clusters_split_independent_tracks() -> None:
-    W = np.array([
-        [1, 1, 0, 0, 0],
-        [1, 1, 1, 0, 0],
-        [1, 0, 0, 0, 1],
-        [1, 0, 0, 0, 0],
-        [1, 0, 1, 0, 0],
-    ], dtype=float)
+    W = np.array(
+        [
+            [1, 1, 0, 0, 0],
+            [1, 1, 1, 0, 0],
+            [1, 0, 0, 0, 1],
+            [1, 0, 0, 0, 0],
+            [1, 0, 1, 0, 0],
+        ],
+        dtype=float,
+    )
     n, lab = clusters(W)
     assert n == 3
     assert lab[0] == lab[1] == lab[4]
@@ -167,8 +179,10 @@ def test_pda_update_equals_moment_matched_mixture() -> None:
         means = [x[t]] + [kf_update(x[t], P[t], z, meas.H, meas.R).x for z in Z]
         covs = [P[t]] + [kf_update(x[t], P[t], z, meas.H, meas.R).P for z in Z]
         m = sum(b * mu for b, mu in zip(beta[t], means, strict=True))
-        C = sum(b * (c + np.outer(mu - m, mu - m))
-                for b, mu, c in zip(beta[t], means, covs, strict=True))
+        C = sum(
+            b * (c + np.outer(mu - m, mu - m))
+            for b, mu, c in zip(beta[t], means, covs, strict=True)
+        )
         np.testing.assert_allclose(xn[t], m, rtol=1e-10, atol=1e-10)
         np.testing.assert_allclose(Pn[t], C, rtol=1e-9, atol=1e-9)
 
@@ -269,7 +283,7 @@ def test_jpda_step_batch_equals_per_problem_step(max_events: int, bearing: bool)
     z = np.empty((R_, M, 2))
     for r in range(R_):  # measurements near the predicted tracks, then extra clutter
         z[r, :T] = model.h(xp[r]) + rng.normal(0, 1, (T, 2)) @ np.linalg.cholesky(model.R).T
-        z[r, T:] = model.h(xp[r, :M - T] + rng.normal(0, 60.0, (M - T, 4)))
+        z[r, T:] = model.h(xp[r, : M - T] + rng.normal(0, 60.0, (M - T, 4)))
     valid = rng.random((R_, M)) < 0.8
     valid[0] = False  # a problem with no measurement at all
     cfg = JpdaConfig(pd=0.9, clutter_density=1e-6, gate_probability=0.999)
@@ -281,5 +295,4 @@ def test_jpda_step_batch_equals_per_problem_step(max_events: int, bearing: bool)
         np.testing.assert_allclose(batch.P[r], one.P, rtol=1e-9, atol=1e-9)
         beta = batch.marginals.beta.reshape(R_, T, M + 1)[r]
         np.testing.assert_allclose(beta[:, 1:][:, ~valid[r]], 0.0, atol=0)
-        np.testing.assert_allclose(beta[:, np.r_[True, valid[r]]], one.marginals.beta,
-                                   atol=1e-12)
+        np.testing.assert_allclose(beta[:, np.r_[True, valid[r]]], one.marginals.beta, atol=1e-12)

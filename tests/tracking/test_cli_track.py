@@ -24,8 +24,23 @@ def test_track_command_generic_csv(tmp_path: Path, capsys: pytest.CaptureFixture
     out = tmp_path / "tracks.csv"
     pytest.importorskip("matplotlib")
     plots = tmp_path / "plots"
-    assert main(["track", str(f), "--format", "csv", "--out", str(out), "--report-s", "10",
-                 "--plot", str(plots)]) == 0
+    assert (
+        main(
+            [
+                "track",
+                str(f),
+                "--format",
+                "csv",
+                "--out",
+                str(out),
+                "--report-s",
+                "10",
+                "--plot",
+                str(plots),
+            ]
+        )
+        == 0
+    )
     assert (plots / "tracks.png").stat().st_size > 1000
     text = capsys.readouterr().out
     assert "bad rows skipped" in text
@@ -40,8 +55,9 @@ def test_track_command_generic_csv(tmp_path: Path, capsys: pytest.CaptureFixture
     assert df.loc[df.confirmed, "track_id"].nunique() == 3
 
 
-def test_track_command_reports_missing_columns(tmp_path: Path,
-                                               capsys: pytest.CaptureFixture[str]) -> None:
+def test_track_command_reports_missing_columns(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     f = tmp_path / "bad.csv"
     f.write_text("when,lat,lon\n2020-01-01T00:00:00Z,50,-1\n")
     assert main(["track", str(f), "--format", "csv"]) == 1

@@ -103,8 +103,11 @@ def test_discrete_white_noise_matches_bar_shalom() -> None:
 
 @pytest.mark.parametrize("order", [1, 2])
 def test_continuous_noise_is_consistent_under_splitting(order: int) -> None:
-    m = constant_velocity(2, 0.3, "continuous") if order == 1 else constant_acceleration(
-        2, 0.3, "continuous")
+    m = (
+        constant_velocity(2, 0.3, "continuous")
+        if order == 1
+        else constant_acceleration(2, 0.3, "continuous")
+    )
     a, b = 0.7, 1.9
     F_b = m.F(b)
     np.testing.assert_allclose(F_b @ m.Q(a) @ F_b.T + m.Q(b), m.Q(a + b), rtol=1e-12)
@@ -124,8 +127,9 @@ def test_angle_innovation_is_wrapped() -> None:
 def test_range_bearing_jacobian_matches_finite_differences() -> None:
     rng = np.random.default_rng(5)
     for from_north in (False, True):
-        rb = RangeBearing(np.diag([1.0, 1e-4]), sensor_xy=np.array([30.0, -20.0]),
-                          from_north=from_north)
+        rb = RangeBearing(
+            np.diag([1.0, 1e-4]), sensor_xy=np.array([30.0, -20.0]), from_north=from_north
+        )
         x = rng.normal(size=(6, 4)) * 1000
         J = rb.jacobian(x)
         h = 1e-4
@@ -143,8 +147,9 @@ def test_coordinated_turn_jacobian_and_limit() -> None:
     rng = np.random.default_rng(9)
     x = rng.normal(size=(5, 5)) * np.array([100, 10, 100, 10, 0.05])
     x[0, 4] = 0.0  # straight line: must equal constant velocity
-    np.testing.assert_allclose(ct.f(x[:1], 2.0)[0, :4],
-                               constant_velocity(2, 1.0).f(x[0, :4], 2.0), rtol=1e-12)
+    np.testing.assert_allclose(
+        ct.f(x[:1], 2.0)[0, :4], constant_velocity(2, 1.0).f(x[0, :4], 2.0), rtol=1e-12
+    )
     J = ct.jacobian(x, 2.0)
     h = 1e-6
     for k in range(5):
@@ -223,5 +228,6 @@ def test_function_measurement_hook_foveal_sensor() -> None:
     assert np.all(np.abs(ue.x[:, 0] - target) < np.abs(x[:, 0] - target))
     # with a small prior spread the model is locally linear: UKF -> EKF
     Ps = np.diag([1e-6, 1e-7])
-    np.testing.assert_allclose(ukf_update(x, Ps, z, analytic).x,
-                               ekf_update(x, Ps, z, analytic).x, rtol=1e-5)
+    np.testing.assert_allclose(
+        ukf_update(x, Ps, z, analytic).x, ekf_update(x, Ps, z, analytic).x, rtol=1e-5
+    )

@@ -91,7 +91,12 @@ def test_rmse_and_interpolation() -> None:
     est = np.zeros((4, 3, 2))
     tru = np.ones((4, 3, 2))
     np.testing.assert_allclose(rmse(est, tru), np.sqrt(2.0))
-    f, i, p = interpolate_truth([0, 5, 10, 100], [0, 10, 10.0, 20], ["a", "a", "b", "b"],
-                                [[0, 0], [10, 20], [0, 0], [10, 0]], max_gap_s=30)
+    f, i, p = interpolate_truth(
+        [0, 5, 10, 100],
+        [0, 10, 10.0, 20],
+        ["a", "a", "b", "b"],
+        [[0, 0], [10, 20], [0, 0], [10, 0]],
+        max_gap_s=30,
+    )
     got = {(int(a), str(b)): tuple(c) for a, b, c in zip(f, i, p, strict=True)}
     assert got == {(0, "a"): (0, 0), (1, "a"): (5, 10), (2, "a"): (10, 20), (2, "b"): (0, 0)}

@@ -22,8 +22,9 @@ def test_simulators_are_seeded_and_statistically_right() -> None:
     np.testing.assert_array_equal(t1, t2)
     assert t1.shape == (400, 2, 4)
     np.testing.assert_allclose(simulate_truth(mot, x0, 3, 2.0)[2, 0], [40, 10, 0, 0])
-    det = simulate_detections(t1, meas, 0.8, 3.0, [-5000, -5000], [5000, 5000],
-                              np.random.default_rng(2))
+    det = simulate_detections(
+        t1, meas, 0.8, 3.0, [-5000, -5000], [5000, 5000], np.random.default_rng(2)
+    )
     n_clutter = ((det.origin == -1) & det.valid).sum(axis=1)
     n_target = ((det.origin >= 0) & det.valid).sum()
     # Poisson(3) mean over 400 scans: sd of the mean 0.087; Pd 0.8 over 800: sd 0.014
@@ -56,8 +57,15 @@ def _scenario(seed: int, n_targets: int = 5, steps: int = 60):
 @pytest.mark.parametrize("associator", ["gnn", "jpda"])
 def test_tracker_follows_separated_targets(associator: str) -> None:
     truth, t, z, origin = _scenario(4)
-    cfg = TrackerConfig(sigma_m=10.0, associator=associator, pd=0.9, clutter_density=0.5 / 4.5e7,
-                        max_coast_s=60.0, confirm_window_s=60.0, init_max_dt_s=30.0)
+    cfg = TrackerConfig(
+        sigma_m=10.0,
+        associator=associator,
+        pd=0.9,
+        clutter_density=0.5 / 4.5e7,
+        max_coast_s=60.0,
+        confirm_window_s=60.0,
+        init_max_dt_s=30.0,
+    )
     frames = np.arange(0, 600.0, 10.0)
     res = run_tracker(t, z, cfg, report_times=frames)
     K, n = truth.shape[:2]
@@ -91,12 +99,19 @@ def test_imm_with_identical_models_equals_single_model() -> None:
     # Blom & Bar-Shalom 1988: with identical models the mixing is exact and the IMM reduces to
     # the single-model filter, whatever the switching probability
     _, t, z, _ = _scenario(5, n_targets=3, steps=30)
-    base = TrackerConfig(sigma_m=10.0, pd=0.9, clutter_density=0.5 / 4.5e7, max_coast_s=60.0,
-                         confirm_window_s=60.0, init_max_dt_s=30.0)
+    base = TrackerConfig(
+        sigma_m=10.0,
+        pd=0.9,
+        clutter_density=0.5 / 4.5e7,
+        max_coast_s=60.0,
+        confirm_window_s=60.0,
+        init_max_dt_s=30.0,
+    )
     for assoc in ("gnn", "jpda"):
         a = run_tracker(t, z, replace(base, associator=assoc))
-        b = run_tracker(t, z, replace(base, associator=assoc, imm_q=(base.motion.q,) * 3,
-                                      imm_sojourn_s=20.0))
+        b = run_tracker(
+            t, z, replace(base, associator=assoc, imm_q=(base.motion.q,) * 3, imm_sojourn_s=20.0)
+        )
         np.testing.assert_array_equal(a.det_track, b.det_track)
         np.testing.assert_allclose(a.track_x, b.track_x, rtol=1e-9, atol=1e-6)
 
@@ -124,8 +139,15 @@ def test_one_point_initiation_with_reported_velocity() -> None:
     truth, t, z, origin = _scenario(6, n_targets=4, steps=40)
     k = np.round(t / 10.0).astype(int)
     vel = np.where(origin[:, None] >= 0, truth[k, np.maximum(origin, 0)][:, [1, 3]], np.nan)
-    cfg = TrackerConfig(sigma_m=10.0, pd=0.9, clutter_density=0.5 / 4.5e7, max_coast_s=60.0,
-                        confirm_window_s=60.0, init_max_dt_s=30.0, init_velocity_std_mps=0.5)
+    cfg = TrackerConfig(
+        sigma_m=10.0,
+        pd=0.9,
+        clutter_density=0.5 / 4.5e7,
+        max_coast_s=60.0,
+        confirm_window_s=60.0,
+        init_max_dt_s=30.0,
+        init_velocity_std_mps=0.5,
+    )
     two = run_tracker(t, z, cfg)
     one = run_tracker(t, z, cfg, velocity=vel)
     assert one.counts["tracks_confirmed"] == 4

@@ -35,25 +35,52 @@ def register(subparsers: Any) -> None:
     p.add_argument("obs", nargs="?", type=Path, help="RINEX observation file or GnssLogger log")
     p.add_argument("nav", nargs="*", type=Path, help="RINEX navigation file(s)")
     p.add_argument("--sp3", type=Path, help="precise orbits/clocks (SP3) instead of broadcast")
-    p.add_argument("--systems", default="GREJC",
-                   help="systems to use, e.g. GEJ (default: all present)")
-    p.add_argument("--elmask", type=float, default=15.0, metavar="DEG",
-                   help="elevation mask in degrees (default 15)")
-    p.add_argument("--weighting", choices=WEIGHTINGS, default=None,
-                   help="measurement weighting model (default: rtklib for RINEX, cn0 for "
-                   "Android logs)")
-    p.add_argument("--iono", choices=("klobuchar", "ionofree", "off"), default="klobuchar",
-                   help="ionosphere: broadcast Klobuchar, dual-frequency iono-free, or none")
+    p.add_argument(
+        "--systems", default="GREJC", help="systems to use, e.g. GEJ (default: all present)"
+    )
+    p.add_argument(
+        "--elmask",
+        type=float,
+        default=15.0,
+        metavar="DEG",
+        help="elevation mask in degrees (default 15)",
+    )
+    p.add_argument(
+        "--weighting",
+        choices=WEIGHTINGS,
+        default=None,
+        help="measurement weighting model (default: rtklib for RINEX, cn0 for Android logs)",
+    )
+    p.add_argument(
+        "--iono",
+        choices=("klobuchar", "ionofree", "off"),
+        default="klobuchar",
+        help="ionosphere: broadcast Klobuchar, dual-frequency iono-free, or none",
+    )
     ref = p.add_mutually_exclusive_group()
-    ref.add_argument("--ref", nargs=3, type=float, metavar=("X", "Y", "Z"),
-                     help="reference position, ECEF metres")
-    ref.add_argument("--ref-llh", nargs=3, type=float, metavar=("LAT", "LON", "H"),
-                     help="reference position, degrees and ellipsoidal metres")
-    p.add_argument("--out", type=Path,
-                   help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)")
+    ref.add_argument(
+        "--ref",
+        nargs=3,
+        type=float,
+        metavar=("X", "Y", "Z"),
+        help="reference position, ECEF metres",
+    )
+    ref.add_argument(
+        "--ref-llh",
+        nargs=3,
+        type=float,
+        metavar=("LAT", "LON", "H"),
+        help="reference position, degrees and ellipsoidal metres",
+    )
+    p.add_argument(
+        "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
+    )
     p.add_argument("--plot", type=Path, metavar="DIR", help="write figures into this directory")
-    p.add_argument("--example", action="store_true",
-                   help=f"run on the bundled {EXAMPLE_OBS} + {EXAMPLE_NAV} with its reference")
+    p.add_argument(
+        "--example",
+        action="store_true",
+        help=f"run on the bundled {EXAMPLE_OBS} + {EXAMPLE_NAV} with its reference",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run_pos)
 
@@ -179,8 +206,9 @@ def run_pos(args: argparse.Namespace) -> int:
     # phone pseudoranges are far noisier than RTKLIB's receiver model assumes: C/N0 weights
     weighting = args.weighting or ("cn0" if args.android else "rtklib")
     try:
-        config = SppConfig(systems=systems, elmask_deg=args.elmask, weighting=weighting,
-                           iono=args.iono)
+        config = SppConfig(
+            systems=systems, elmask_deg=args.elmask, weighting=weighting, iono=args.iono
+        )
     except ValueError as exc:
         raise SystemExit(f"navtrack pos: {exc}") from None
 
@@ -195,40 +223,51 @@ def run_pos(args: argparse.Namespace) -> int:
     used_systems = "".join(s for s in "GRECJI" if any(sat[0] == s for sat in result.sats))
 
     print(f"observations   {args.obs}")
-    print(f"navigation     {', '.join(str(p) for p in args.nav) or '-'}"
-          + (f"  sp3 {args.sp3}" if args.sp3 else ""))
-    print(f"systems        {used_systems or '-'}  (clocks: {', '.join(result.clock_groups)}; "
-          f"weighting {weighting}, elevation mask {args.elmask:g} deg)")
+    print(
+        f"navigation     {', '.join(str(p) for p in args.nav) or '-'}"
+        + (f"  sp3 {args.sp3}" if args.sp3 else "")
+    )
+    print(
+        f"systems        {used_systems or '-'}  (clocks: {', '.join(result.clock_groups)}; "
+        f"weighting {weighting}, elevation mask {args.elmask:g} deg)"
+    )
     print(f"epochs         {n_epochs}")
     print(f"solved         {solved}")
     for name in STATUS_NAMES:
         if counts[name]:
             print(f"  {name:<18} {counts[name]}")
-    no_eph = sorted({s for s, m in zip(result.sats, result.no_ephemeris.any(axis=0), strict=True)
-                     if m})
+    no_eph = sorted(
+        {s for s, m in zip(result.sats, result.no_ephemeris.any(axis=0), strict=True) if m}
+    )
     if no_eph:
-        print(f"no ephemeris   {len(no_eph)} satellites ({' '.join(no_eph)}); their measurements "
-              "were not used")
+        print(
+            f"no ephemeris   {len(no_eph)} satellites ({' '.join(no_eph)}); their measurements "
+            "were not used"
+        )
     if solved:
         ok = result.status == 0
-        print(f"satellites     {np.mean(result.n_sats[ok]):.1f} used per solved epoch; "
-              f"PDOP median {np.nanmedian(result.dop[ok, 1]):.2f}")
+        print(
+            f"satellites     {np.mean(result.n_sats[ok]):.1f} used per solved epoch; "
+            f"PDOP median {np.nanmedian(result.dop[ok, 1]):.2f}"
+        )
     if ref is not None and solved:
         st = _error_stats(result.pos_m[result.status == 0], ref)
         print("error vs ref   mean      RMS       95 %    (m)")
         for key, name in (("horizontal", "horizontal"), ("up", "vertical"), ("3D", "3D")):
-            print(f"  {name:<12} {st[key].mean_m:8.3f}  {st[key].rms_m:8.3f}  "
-                  f"{st[key].p95_m:8.3f}")
+            print(f"  {name:<12} {st[key].mean_m:8.3f}  {st[key].rms_m:8.3f}  {st[key].p95_m:8.3f}")
         e, n, u = (st[k].mean_m for k in ("east", "north", "up"))
         print(f"  mean ENU     {e:8.3f}  {n:8.3f}  {u:8.3f}")
     if solved == 0:
         cause = max(((v, k) for k, v in counts.items() if k != "ok"), default=(0, "?"))[1]
         hint = ""
         if cause == "no_ephemeris":
-            hint = (" (the navigation data do not cover these satellites and epochs: check that "
-                    "the NAV file matches the observation day and systems)")
-        print(f"navtrack pos: no epoch could be solved; most epochs: {cause}{hint}",
-              file=sys.stderr)
+            hint = (
+                " (the navigation data do not cover these satellites and epochs: check that "
+                "the NAV file matches the observation day and systems)"
+            )
+        print(
+            f"navtrack pos: no epoch could be solved; most epochs: {cause}{hint}", file=sys.stderr
+        )
 
     table = solution_columns(result)
     status_code = 0 if solved else 1
@@ -240,8 +279,9 @@ def run_pos(args: argparse.Namespace) -> int:
             from navtrack.io.solution import write_solution
 
             try:
-                path = write_solution(table, args.out, talker="GN" if len(used_systems) > 1
-                                      else "GP")
+                path = write_solution(
+                    table, args.out, talker="GN" if len(used_systems) > 1 else "GP"
+                )
                 print(f"written        {path}")
             except OSError as exc:
                 print(f"navtrack pos: solution NOT written: {exc}", file=sys.stderr)
@@ -249,8 +289,9 @@ def run_pos(args: argparse.Namespace) -> int:
     if args.plot is not None:
         from navtrack.plots.gnss import plot_solution
 
-        paths = plot_solution(table, args.plot, ref_xyz_m=ref,
-                              azel=(result.azel_rad, list(result.sats)))
+        paths = plot_solution(
+            table, args.plot, ref_xyz_m=ref, azel=(result.azel_rad, list(result.sats))
+        )
         print(f"figures        {', '.join(str(p) for p in paths)}")
     return status_code
 
@@ -269,11 +310,17 @@ def _solve(obs: Any, navs: list[Any], sp3: Any, config: Any, *, progress: bool) 
     if progress:
         from tqdm import tqdm
 
-        it = tqdm(starts, total=len(starts), unit="chunk", desc="solving", file=sys.stderr,
-                  disable=None)
+        it = tqdm(
+            starts, total=len(starts), unit="chunk", desc="solving", file=sys.stderr, disable=None
+        )
     parts = [
-        solve_spp(subset_epochs(obs, slice(s, s + CHUNK_EPOCHS)), navs, sp3=sp3, config=config,
-                  ephemeris=tables)
+        solve_spp(
+            subset_epochs(obs, slice(s, s + CHUNK_EPOCHS)),
+            navs,
+            sp3=sp3,
+            config=config,
+            ephemeris=tables,
+        )
         for s in it
     ]
     return concatenate_results(parts)

@@ -28,19 +28,31 @@ def register(subparsers: Any) -> None:
         "hidden from the tracker) and score the confirmed tracks against the ids.",
     )
     p.add_argument("file", type=Path, help="detections file (CSV)")
-    p.add_argument("--format", dest="fmt", choices=("ais", "opensky", "csv"), required=True,
-                   help="ais = Solent AIS CSV; opensky = OpenSky states CSV; csv = generic "
-                   "(time ISO 8601 UTC, lat/lon deg or x_m/y_m, optional id, alt_m, speed_mps, "
-                   "course_deg)")
+    p.add_argument(
+        "--format",
+        dest="fmt",
+        choices=("ais", "opensky", "csv"),
+        required=True,
+        help="ais = Solent AIS CSV; opensky = OpenSky states CSV; csv = generic "
+        "(time ISO 8601 UTC, lat/lon deg or x_m/y_m, optional id, alt_m, speed_mps, "
+        "course_deg)",
+    )
     p.add_argument("--associator", choices=("gnn", "jpda"), default="gnn")
     p.add_argument("--out", type=Path, help="write track states to this .csv or .parquet file")
     p.add_argument("--plot", type=Path, metavar="DIR", help="write a map of the tracks here")
     p.add_argument("--report-s", type=float, help="scoring grid interval, s")
     p.add_argument("--match-m", type=float, help="CLEAR-MOT match threshold, m")
-    p.add_argument("--no-velocity", action="store_true",
-                   help="do not use reported speed/course for one-point track initiation")
-    p.add_argument("--max-range-km", type=float, default=1000.0,
-                   help="skip rows farther than this from the median position (default 1000)")
+    p.add_argument(
+        "--no-velocity",
+        action="store_true",
+        help="do not use reported speed/course for one-point track initiation",
+    )
+    p.add_argument(
+        "--max-range-km",
+        type=float,
+        default=1000.0,
+        help="skip rows farther than this from the median position (default 1000)",
+    )
     p.set_defaults(func=run_track)
 
 
@@ -53,8 +65,11 @@ def run_track(args: argparse.Namespace) -> int:
     from navtrack.tracking.metrics import clear_mot, interpolate_truth
     from navtrack.tracking.tracker import DET_STATUS_NAMES, TrackerConfig, run_tracker
 
-    for name, value in (("--report-s", args.report_s), ("--match-m", args.match_m),
-                        ("--max-range-km", args.max_range_km)):
+    for name, value in (
+        ("--report-s", args.report_s),
+        ("--match-m", args.match_m),
+        ("--max-range-km", args.max_range_km),
+    ):
         if value is not None and not value > 0:  # also refuses NaN
             raise SystemExit(f"navtrack track: {name} must be a positive number, got {value:g}")
     clock = time.perf_counter()
@@ -85,7 +100,8 @@ def run_track(args: argparse.Namespace) -> int:
     summary["reference (lat, lon deg)"] = f"{ref[0]:.6f} {ref[1]:.6f}"
     summary["associator"] = args.associator
     summary["reported velocity used for initiation"] = (
-        "no" if vel is None else f"yes ({int(np.isfinite(vel).all(axis=1).sum())} rows)")
+        "no" if vel is None else f"yes ({int(np.isfinite(vel).all(axis=1).sum())} rows)"
+    )
     summary["scans"] = int(res.counts["scans"])
     summary["detections by fate"] = {
         n: int(c) for n, c in zip(DET_STATUS_NAMES, status, strict=True)
@@ -152,13 +168,18 @@ def _write(path: Path, res: Any, ref: tuple[float, float]) -> None:
 
     x = res.track_x
     times = to_datetime64(gps_to_utc(res.track_time_s))  # UTC calendar times
-    df = pd.DataFrame({
-        "time": pd.to_datetime(times).strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
-        "track_id": res.track_id,
-        "confirmed": res.track_confirmed,
-        "x_m": x[:, 0], "y_m": x[:, 2], "vx_mps": x[:, 1], "vy_mps": x[:, 3],
-        "std_m": res.track_std_m,
-    })
+    df = pd.DataFrame(
+        {
+            "time": pd.to_datetime(times).strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
+            "track_id": res.track_id,
+            "confirmed": res.track_confirmed,
+            "x_m": x[:, 0],
+            "y_m": x[:, 2],
+            "vx_mps": x[:, 1],
+            "vy_mps": x[:, 3],
+            "std_m": res.track_std_m,
+        }
+    )
     if np.isfinite(ref[0]):
         latlon = local_enu_to_geodetic(x[:, [0, 2]], ref[0], ref[1])
         df["lat_deg"] = latlon[:, 0]

@@ -33,8 +33,7 @@ FREQUENCY_HZ: dict[str, dict[str, float]] = {
 """Carrier frequencies (Hz) per system and RINEX 3 band digit (RINEX 3.05 table 4-10)."""
 
 KLOBUCHAR_DEFAULT = np.array(
-    [0.1118e-07, -0.7451e-08, -0.5961e-07, 0.1192e-06, 0.1167e06, -0.2294e06, -0.1311e06,
-     0.1049e07]
+    [0.1118e-07, -0.7451e-08, -0.5961e-07, 0.1192e-06, 0.1167e06, -0.2294e06, -0.1311e06, 0.1049e07]
 )
 """Klobuchar alpha/beta used when a navigation file gives none (RTKLIB's default set, a typical
 broadcast of 2004), so that results stay comparable with RTKLIB's SPP."""

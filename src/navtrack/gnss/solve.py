@@ -34,9 +34,7 @@ import numpy as np
 
 from navtrack._typing import BoolArray, FloatArray, IntArray
 
-ModelFn = Callable[
-    [FloatArray, IntArray], tuple[FloatArray, FloatArray, FloatArray, BoolArray]
-]
+ModelFn = Callable[[FloatArray, IntArray], tuple[FloatArray, FloatArray, FloatArray, BoolArray]]
 """``fun(x (b, P), idx (b,)) -> (v (b, M), J (b, M, P), w (b, M), valid (b, M))``."""
 
 

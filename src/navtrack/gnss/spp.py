@@ -66,19 +66,32 @@ STATUS_NAMES = tuple(s.name.lower() for s in SppStatus)
 # Pseudorange codes per system and logical band, in order of preference (RINEX 3 codes first,
 # then RINEX 2). The logical band is the frequency (BeiDou B1I is band "2" in RINEX >= 3.03 and
 # was written C1I in 3.02).
-CODE_PRIORITY: Mapping[str, Mapping[str, tuple[str, ...]]] = MappingProxyType({
-    "G": {"1": ("C1C", "C1S", "C1L", "C1X", "C1P", "C1W", "C1Y", "C1M", "C1", "P1"),
-          "2": ("C2W", "C2P", "C2Y", "C2L", "C2S", "C2X", "C2C", "C2D", "P2", "C2"),
-          "5": ("C5Q", "C5X", "C5I", "C5")},
-    "J": {"1": ("C1C", "C1S", "C1L", "C1X", "C1Z", "C1"),
-          "2": ("C2L", "C2S", "C2X", "C2"), "5": ("C5Q", "C5X", "C5I", "C5")},
-    "E": {"1": ("C1C", "C1X", "C1B", "C1Z", "C1A", "C1"),
-          "5": ("C5Q", "C5X", "C5I", "C5"), "7": ("C7Q", "C7X", "C7I", "C7")},
-    "C": {"2": ("C2I", "C2X", "C2Q", "C1I", "C2"), "6": ("C6I", "C6X", "C6Q", "C6"),
-          "7": ("C7I", "C7X", "C7Q", "C7")},
-    "R": {"1": ("C1C", "C1P", "C1", "P1"), "2": ("C2C", "C2P", "C2", "P2")},
-    "I": {"5": ("C5A", "C5X", "C5")},
-})
+CODE_PRIORITY: Mapping[str, Mapping[str, tuple[str, ...]]] = MappingProxyType(
+    {
+        "G": {
+            "1": ("C1C", "C1S", "C1L", "C1X", "C1P", "C1W", "C1Y", "C1M", "C1", "P1"),
+            "2": ("C2W", "C2P", "C2Y", "C2L", "C2S", "C2X", "C2C", "C2D", "P2", "C2"),
+            "5": ("C5Q", "C5X", "C5I", "C5"),
+        },
+        "J": {
+            "1": ("C1C", "C1S", "C1L", "C1X", "C1Z", "C1"),
+            "2": ("C2L", "C2S", "C2X", "C2"),
+            "5": ("C5Q", "C5X", "C5I", "C5"),
+        },
+        "E": {
+            "1": ("C1C", "C1X", "C1B", "C1Z", "C1A", "C1"),
+            "5": ("C5Q", "C5X", "C5I", "C5"),
+            "7": ("C7Q", "C7X", "C7I", "C7"),
+        },
+        "C": {
+            "2": ("C2I", "C2X", "C2Q", "C1I", "C2"),
+            "6": ("C6I", "C6X", "C6Q", "C6"),
+            "7": ("C7I", "C7X", "C7Q", "C7"),
+        },
+        "R": {"1": ("C1C", "C1P", "C1", "P1"), "2": ("C2C", "C2P", "C2", "P2")},
+        "I": {"5": ("C5A", "C5X", "C5")},
+    }
+)
 PRIMARY_BAND = MappingProxyType({"G": "1", "J": "1", "E": "1", "R": "1", "C": "2", "I": "5"})
 IONOFREE_BANDS = MappingProxyType(
     {"G": ("1", "2"), "J": ("1", "2"), "E": ("1", "7"), "R": ("1", "2"), "C": ("2", "6")}
@@ -164,8 +177,9 @@ class SppConfig:
         if self.max_age_s is not None:
             object.__setattr__(self, "max_age_s", MappingProxyType(dict(self.max_age_s)))
         if self.weighting not in ("rtklib", "elevation", "cn0", "equal"):
-            raise ValueError(f"weighting: expected rtklib, elevation, cn0 or equal, got "
-                             f"{self.weighting!r}")
+            raise ValueError(
+                f"weighting: expected rtklib, elevation, cn0 or equal, got {self.weighting!r}"
+            )
         if self.iono not in ("klobuchar", "ionofree", "off"):
             raise ValueError(f"iono: expected klobuchar, ionofree or off, got {self.iono!r}")
         if self.tropo not in ("saastamoinen", "off"):
@@ -432,7 +446,7 @@ class _Model:
             var_trop = np.full_like(el, 3.0**2)
         b = idx.size
         n_s = self.group.size
-        clk = x[:, 3:3 + self.n_groups]
+        clk = x[:, 3 : 3 + self.n_groups]
         clock = clk[:, 0:1] + np.where(self.group > 0, clk[:, np.maximum(self.group, 0)], 0.0)
         v = self.y[idx] - (g["rho"] + clock + iono + trop)
         J = np.zeros((b, n_s, 3 + self.n_groups))
@@ -470,8 +484,9 @@ def _klobuchar_params(nav_iono: Mapping[str, Any] | None) -> FloatArray | None:
         return None
     for a, b in (("GPSA", "GPSB"), ("QZSA", "QZSB"), ("BDSA", "BDSB")):
         if a in nav_iono and b in nav_iono:
-            p = np.concatenate([np.asarray(nav_iono[a], float)[:4],
-                                np.asarray(nav_iono[b], float)[:4]])
+            p = np.concatenate(
+                [np.asarray(nav_iono[a], float)[:4], np.asarray(nav_iono[b], float)[:4]]
+            )
             if np.all(np.isfinite(p)) and np.any(p):
                 return p
     return None
@@ -591,7 +606,12 @@ def solve_spp(
         states = eph.sp3_states(sp3, sats, t_sv)
     else:
         states = eph.broadcast_states(
-            tables, sats, t_rx, t_sv, max_age_s=cfg.max_age_s, healthy_only=cfg.healthy_only,
+            tables,
+            sats,
+            t_rx,
+            t_sv,
+            max_age_s=cfg.max_age_s,
+            healthy_only=cfg.healthy_only,
             galileo_nav=cfg.galileo_nav,
         )
     # group delays, frequencies (from broadcast records; for SP3 the nearest record)
@@ -609,8 +629,14 @@ def solve_spp(
             if sp3 is None:
                 idx = states.eph_index[:, cols]
             else:
-                idx = eph.select_ephemeris(table, [sats[c] for c in cols], t_rx, max_age_s=1e9,
-                                           healthy_only=False, galileo_nav=cfg.galileo_nav)
+                idx = eph.select_ephemeris(
+                    table,
+                    [sats[c] for c in cols],
+                    t_rx,
+                    max_age_s=1e9,
+                    healthy_only=False,
+                    galileo_nav=cfg.galileo_nav,
+                )
         else:
             idx = np.full((n_e, cols.size), -1, dtype=np.int64)
         fnum = None
@@ -640,7 +666,12 @@ def solve_spp(
     y = y + C_MPS * (states.clock_s - gd)
     if sp3 is not None and cfg.sp3_needs_broadcast:
         bc = eph.broadcast_states(
-            tables, sats, t_rx, t_sv, max_age_s=cfg.max_age_s, healthy_only=False,
+            tables,
+            sats,
+            t_rx,
+            t_sv,
+            max_age_s=cfg.max_age_s,
+            healthy_only=False,
             galileo_nav=cfg.galileo_nav,
         )
         has_eph_bc = bc.valid
@@ -667,14 +698,26 @@ def solve_spp(
     if not group_sys:
         group_sys = [systems[0]] if systems else ["G"]
     gidx = {g: i for i, g in enumerate(group_sys)}
-    group = np.array([gidx.get(cfg.clock_groups.get(s[0], s[0]), gidx.get(s[0], 0))
-                      for s in sats], dtype=np.int64)
+    group = np.array(
+        [gidx.get(cfg.clock_groups.get(s[0], s[0]), gidx.get(s[0], 0)) for s in sats],
+        dtype=np.int64,
+    )
     n_groups = len(group_sys)
 
     model = _Model(
-        t_rx=t_rx, y=y, sat_pos=states.pos_m, base_valid=base_valid, group=group,
-        n_groups=n_groups, iono_scale=scale, var_sat=var_sat, var_fact=fact, cn0=cn0,
-        klob=klob, config=cfg, ionofree=ionofree_mode,
+        t_rx=t_rx,
+        y=y,
+        sat_pos=states.pos_m,
+        base_valid=base_valid,
+        group=group,
+        n_groups=n_groups,
+        iono_scale=scale,
+        var_sat=var_sat,
+        var_fact=fact,
+        cn0=cn0,
+        klob=klob,
+        config=cfg,
+        ionofree=ionofree_mode,
     )
     x0 = np.zeros((n_e, 3 + n_groups))
     x0[:, :3] = _start_position(obs) if x0_m is None else np.asarray(x0_m, dtype=float)
@@ -699,8 +742,9 @@ def solve_spp(
     dop = dops(los_enu, lsq.valid)
     conv = status == SppStatus.OK
     if cfg.chi2_alpha > 0:
-        thr = np.array([chi2_quantile(1.0 - cfg.chi2_alpha, int(k)) if k > 0 else np.inf
-                        for k in lsq.dof])
+        thr = np.array(
+            [chi2_quantile(1.0 - cfg.chi2_alpha, int(k)) if k > 0 else np.inf for k in lsq.dof]
+        )
         status[conv & (lsq.dof > 0) & (lsq.cost > thr)] = SppStatus.REJECTED_VALIDITY
     gdop = dop[:, 0]
     status[conv & (status == SppStatus.OK) & ~(gdop <= cfg.max_gdop)] = SppStatus.HIGH_DOP
@@ -772,8 +816,9 @@ def concatenate_results(parts: list[SppResult]) -> SppResult:
         e = p.t_gps_s.size
         isb = np.full((e, len(groups) - 1), np.nan)
         cov = np.full((e, n_p, n_p), np.nan)
-        src = [0, 1, 2] + [3 + p.clock_groups.index(g) if g in p.clock_groups else -1
-                           for g in groups]
+        src = [0, 1, 2] + [
+            3 + p.clock_groups.index(g) if g in p.clock_groups else -1 for g in groups
+        ]
         for i, si in enumerate(src):
             for j, sj in enumerate(src):
                 if si >= 0 and sj >= 0:
@@ -789,13 +834,24 @@ def concatenate_results(parts: list[SppResult]) -> SppResult:
         return np.concatenate([getattr(p, name) for p in parts])
 
     return SppResult(
-        t_gps_s=cat("t_gps_s"), sats=parts[0].sats, clock_groups=tuple(groups),
-        pos_m=cat("pos_m"), clock_m=cat("clock_m"),
+        t_gps_s=cat("t_gps_s"),
+        sats=parts[0].sats,
+        clock_groups=tuple(groups),
+        pos_m=cat("pos_m"),
+        clock_m=cat("clock_m"),
         isb_m=np.concatenate([a[0] for a in aligned]),
-        cov=np.concatenate([a[1] for a in aligned]), cov_enu_m2=cat("cov_enu_m2"),
-        status=cat("status"), used=cat("used"), observed=cat("observed"),
-        no_ephemeris=cat("no_ephemeris"), residuals_m=cat("residuals_m"), sigma_m=cat("sigma_m"),
-        azel_rad=cat("azel_rad"), dop=cat("dop"), chi2=cat("chi2"), dof=cat("dof"),
+        cov=np.concatenate([a[1] for a in aligned]),
+        cov_enu_m2=cat("cov_enu_m2"),
+        status=cat("status"),
+        used=cat("used"),
+        observed=cat("observed"),
+        no_ephemeris=cat("no_ephemeris"),
+        residuals_m=cat("residuals_m"),
+        sigma_m=cat("sigma_m"),
+        azel_rad=cat("azel_rad"),
+        dop=cat("dop"),
+        chi2=cat("chi2"),
+        dof=cat("dof"),
         iterations=cat("iterations"),
     )
 

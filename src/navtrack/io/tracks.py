@@ -73,8 +73,19 @@ class TrackDetections:
     ignored_columns: tuple[str, ...] = field(default=())
 
     def __post_init__(self) -> None:
-        for name in ("t_gps_s", "lat_deg", "lon_deg", "x_m", "y_m", "alt_m", "speed_mps",
-                     "course_deg", "id", "line", "bad_lines"):
+        for name in (
+            "t_gps_s",
+            "lat_deg",
+            "lon_deg",
+            "x_m",
+            "y_m",
+            "alt_m",
+            "speed_mps",
+            "course_deg",
+            "id",
+            "line",
+            "bad_lines",
+        ):
             getattr(self, name).setflags(write=False)
 
     def __len__(self) -> int:
@@ -190,17 +201,32 @@ def _finish(
             dist = np.linalg.norm(xyz - centre, axis=-1)
         else:
             dist = np.hypot(x - np.median(x[ok]), y - np.median(y[ok]))
-        flag(ok & (dist > max_range_km * 1e3),
-             f"position more than {max_range_km:g} km from the median position")
+        flag(
+            ok & (dist > max_range_km * 1e3),
+            f"position more than {max_range_km:g} km from the median position",
+        )
     ok = reason == ""
     idx = np.flatnonzero(ok)
     order = idx[np.argsort(t[idx], kind="stable")]
     n_reordered = int(np.sum(np.diff(t[idx]) < 0))
     ignored = tuple(c for c in df.columns if c not in used)
     return TrackDetections(
-        str(path), fmt, t[order], lat[order], lon[order], x[order], y[order], alt[order],
-        speed[order], course[order], np.asarray(ids, dtype=str)[order], line[order],
-        line[~ok], tuple(str(r) for r in reason[~ok]), n_reordered, ignored,
+        str(path),
+        fmt,
+        t[order],
+        lat[order],
+        lon[order],
+        x[order],
+        y[order],
+        alt[order],
+        speed[order],
+        course[order],
+        np.asarray(ids, dtype=str)[order],
+        line[order],
+        line[~ok],
+        tuple(str(r) for r in reason[~ok]),
+        n_reordered,
+        ignored,
     )
 
 
@@ -212,10 +238,20 @@ def read_ais_csv(path: StrPath, max_range_km: float | None = 1000.0) -> TrackDet
     _require(path, df, cols)
     n = len(df)
     return _finish(
-        path, "ais", df, _iso_utc_to_gps(df["Time"]), _num(df, "Latitude_degrees"),
-        _num(df, "Longitude_degrees"), np.full(n, np.nan), np.full(n, np.nan),
-        np.full(n, np.nan), _num(df, "SOG_knots") * KNOT_MPS, _num(df, "COG_degrees"),
-        df["MMSI"].to_numpy(), [*cols, "COG_degrees", "SOG_knots"], max_range_km,
+        path,
+        "ais",
+        df,
+        _iso_utc_to_gps(df["Time"]),
+        _num(df, "Latitude_degrees"),
+        _num(df, "Longitude_degrees"),
+        np.full(n, np.nan),
+        np.full(n, np.nan),
+        np.full(n, np.nan),
+        _num(df, "SOG_knots") * KNOT_MPS,
+        _num(df, "COG_degrees"),
+        df["MMSI"].to_numpy(),
+        [*cols, "COG_degrees", "SOG_knots"],
+        max_range_km,
     )
 
 
@@ -231,9 +267,20 @@ def read_opensky_csv(path: StrPath, max_range_km: float | None = 1000.0) -> Trac
     alt_col = "geoaltitude" if "geoaltitude" in df.columns else "baroaltitude"
     t = utc_to_gps(_num(df, "time") - UNIX_TO_GPS_EPOCH_S)
     return _finish(
-        path, "opensky", df, t, _num(df, "lat"), _num(df, "lon"), np.full(n, np.nan),
-        np.full(n, np.nan), _num(df, alt_col), _num(df, "velocity"), _num(df, "heading"),
-        df["icao24"].to_numpy(), [*cols, alt_col, "velocity", "heading"], max_range_km,
+        path,
+        "opensky",
+        df,
+        t,
+        _num(df, "lat"),
+        _num(df, "lon"),
+        np.full(n, np.nan),
+        np.full(n, np.nan),
+        _num(df, alt_col),
+        _num(df, "velocity"),
+        _num(df, "heading"),
+        df["icao24"].to_numpy(),
+        [*cols, alt_col, "velocity", "heading"],
+        max_range_km,
     )
 
 
@@ -255,10 +302,19 @@ def read_track_csv(path: StrPath, max_range_km: float | None = 1000.0) -> TrackD
     used += ["lat", "lon"] if has_ll else ["x_m", "y_m"]
     ids = df["id"].to_numpy() if "id" in df.columns else np.full(n, "", dtype=object)
     return _finish(
-        path, "csv", df, _iso_utc_to_gps(df["time"]),
-        _num(df, "lat") if has_ll else nan, _num(df, "lon") if has_ll else nan,
-        nan if has_ll else _num(df, "x_m"), nan if has_ll else _num(df, "y_m"),
-        _num(df, "alt_m"), _num(df, "speed_mps"), _num(df, "course_deg"), ids, used,
+        path,
+        "csv",
+        df,
+        _iso_utc_to_gps(df["time"]),
+        _num(df, "lat") if has_ll else nan,
+        _num(df, "lon") if has_ll else nan,
+        nan if has_ll else _num(df, "x_m"),
+        nan if has_ll else _num(df, "y_m"),
+        _num(df, "alt_m"),
+        _num(df, "speed_mps"),
+        _num(df, "course_deg"),
+        ids,
+        used,
         max_range_km,
     )
 

@@ -176,9 +176,7 @@ def murty(cost: ArrayLike, miss_cost: ArrayLike, k: int) -> KBest:
     )
 
 
-def _solve_fixed(
-    B: FloatArray, fixed: np.ndarray, cols: IntArray
-) -> tuple[IntArray, float] | None:
+def _solve_fixed(B: FloatArray, fixed: np.ndarray, cols: IntArray) -> tuple[IntArray, float] | None:
     """Solve ``B`` with ``fixed`` rows pinned to ``cols`` (solving only the free sub-matrix)."""
     free_r = np.flatnonzero(~fixed)
     used = np.zeros(B.shape[1], dtype=bool)

@@ -136,9 +136,7 @@ def gate(
     return Gate(y, d2, d2 <= gamma, log_norm)
 
 
-def kdtree_pregate(
-    z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, gamma: float
-) -> BoolArray:
+def kdtree_pregate(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, gamma: float) -> BoolArray:
     """Coarse spatial pre-gate: pairs within the ball enclosing each track's gate ellipsoid.
 
     The ball radius is ``sqrt(gamma · λ_max(S_t))``, so every pair inside the chi-square gate

@@ -52,9 +52,7 @@ def imm_mix(
     w = mu[..., :, None] * Pi / np.where(c > 0, c, 1.0)[..., None, :]  # w[i, j] = mu_{i|j}
     x0 = np.einsum("...ij,...in->...jn", w, x)
     d = x[..., None, :, :] - x0[..., :, None, :]  # (..., j, i, n)
-    P0 = np.einsum("...ij,...inm->...jnm", w, P) + np.einsum(
-        "...ij,...jin,...jim->...jnm", w, d, d
-    )
+    P0 = np.einsum("...ij,...inm->...jnm", w, P) + np.einsum("...ij,...jin,...jim->...jnm", w, d, d)
     return x0, P0, c
 
 
@@ -68,9 +66,7 @@ def imm_model_probabilities(c: ArrayLike, log_likelihood: ArrayLike) -> FloatArr
     return np.asarray(p / p.sum(axis=-1, keepdims=True))
 
 
-def imm_combine(
-    x: ArrayLike, P: ArrayLike, mu: ArrayLike
-) -> tuple[FloatArray, FloatArray]:
+def imm_combine(x: ArrayLike, P: ArrayLike, mu: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Moment-matched combination of the model-conditioned estimates (eq. 11.6.6-17, -18)."""
     x = np.asarray(x, dtype=float)
     P = np.asarray(P, dtype=float)

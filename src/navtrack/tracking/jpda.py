@@ -144,7 +144,10 @@ class JpdaMarginals:
 
 
 def association_weights(
-    log_likelihood: ArrayLike, valid: ArrayLike, pd: float, gate_probability: float,
+    log_likelihood: ArrayLike,
+    valid: ArrayLike,
+    pd: float,
+    gate_probability: float,
     clutter_density: float,
 ) -> FloatArray:
     """Weights ``W (..., T, M+1)`` as in the module notes, each row scaled to max 1.
@@ -508,8 +511,9 @@ def jpda_step(
     S, K = _innovation_cov_gain(xp, Pp, model)
     gamma = chi2_threshold(config.gate_probability, model.dim_z)
     g = gate(model.h(xp), S, z, gamma, angle_mask=model.angle_mask)
-    W = association_weights(g.log_likelihood(), g.valid, config.pd, config.gate_probability,
-                            config.clutter_density)
+    W = association_weights(
+        g.log_likelihood(), g.valid, config.pd, config.gate_probability, config.clutter_density
+    )
     jm = jpda_marginals(W, config)
     xn, Pn = pda_update(xp, Pp, g.innovation, S, K, jm.beta)
     return JpdaStep(xn, Pn, xp, Pp, jm)
@@ -609,16 +613,24 @@ def jpda_step_batch(
     gamma = chi2_threshold(config.gate_probability, model.dim_z)
     g = gate(model.h(xp), S, Zf, gamma, angle_mask=model.angle_mask)  # (R, T, M) pairs
     y = g.innovation
-    W = association_weights(g.log_likelihood(), g.valid & ok[:, None, :], config.pd,
-                            config.gate_probability, config.clutter_density)
+    W = association_weights(
+        g.log_likelihood(),
+        g.valid & ok[:, None, :],
+        config.pd,
+        config.gate_probability,
+        config.clutter_density,
+    )
     from math import comb, perm
 
     n_ev = sum(comb(T, k) * perm(M, k) for k in range(min(T, M) + 1))
     if n_ev <= max_events:
         beta = jpda_marginals_batch(W, joint_events(T, M))
         flat = JpdaMarginals(
-            beta.reshape(R_ * T, M + 1), np.repeat(np.arange(R_), T).astype(np.int64),
-            np.ones(R_ * T, dtype=np.int8), np.zeros(R_ * T), np.full(R_ * T, n_ev),
+            beta.reshape(R_ * T, M + 1),
+            np.repeat(np.arange(R_), T).astype(np.int64),
+            np.ones(R_ * T, dtype=np.int8),
+            np.zeros(R_ * T),
+            np.full(R_ * T, n_ev),
         )
     else:
         parts = [jpda_marginals(W[r], config) for r in range(R_)]

@@ -88,9 +88,7 @@ class GospaResult:
     n_switches: float
 
 
-def _gospa_assign(
-    X: FloatArray, Y: FloatArray, c: float, p: float
-) -> tuple[IntArray, float]:
+def _gospa_assign(X: FloatArray, Y: FloatArray, c: float, p: float) -> tuple[IntArray, float]:
     """Truth-to-estimate assignment (``-1`` = missed) and its localisation term."""
     from scipy.optimize import linear_sum_assignment
 
@@ -223,11 +221,13 @@ def clear_mot(
     frames = np.union1d(tf, hf)
     t_order = np.argsort(tf, kind="stable")
     h_order = np.argsort(hf, kind="stable")
-    t_bounds = np.searchsorted(tf[t_order], frames, side="left"), np.searchsorted(
-        tf[t_order], frames, side="right"
+    t_bounds = (
+        np.searchsorted(tf[t_order], frames, side="left"),
+        np.searchsorted(tf[t_order], frames, side="right"),
     )
-    h_bounds = np.searchsorted(hf[h_order], frames, side="left"), np.searchsorted(
-        hf[h_order], frames, side="right"
+    h_bounds = (
+        np.searchsorted(hf[h_order], frames, side="left"),
+        np.searchsorted(hf[h_order], frames, side="right"),
     )
     last_match: dict[object, object] = {}
     prev_frame_match: dict[object, object] = {}
@@ -289,7 +289,15 @@ def clear_mot(
     mota = 1.0 - (n_miss + n_false + n_sw) / n_truth if n_truth else float("nan")
     motp = dist_sum / n_match if n_match else float("nan")
     return ClearMot(
-        mota, motp, n_truth, n_match, n_miss, n_false, n_sw, n_frag, purity,
+        mota,
+        motp,
+        n_truth,
+        n_match,
+        n_miss,
+        n_false,
+        n_sw,
+        n_frag,
+        purity,
         len(np.unique(hid)) if len(hid) else 0,
     )
 
@@ -339,5 +347,4 @@ def interpolate_truth(
         out_p.append(p[ok])
     if not out_f:
         return np.zeros(0, np.int64), np.zeros(0, ids.dtype), np.zeros((0, pos.shape[-1]))
-    return (np.concatenate(out_f).astype(np.int64), np.concatenate(out_i),
-            np.concatenate(out_p))
+    return (np.concatenate(out_f).astype(np.int64), np.concatenate(out_i), np.concatenate(out_p))

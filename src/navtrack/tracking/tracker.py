@@ -96,13 +96,21 @@ class TrackerConfig:
         if self.motion.ndim != 2:
             raise ValueError("the tracker works on 2-D (east, north) positions: motion.ndim = 2")
         if self.init_from not in ("outside_gates", "unassociated"):
-            raise ValueError(f"init_from must be 'outside_gates' or 'unassociated', "
-                             f"got {self.init_from!r}")
+            raise ValueError(
+                f"init_from must be 'outside_gates' or 'unassociated', got {self.init_from!r}"
+            )
         if self.associator not in ("gnn", "jpda"):
             raise ValueError(f"associator must be 'gnn' or 'jpda', got {self.associator!r}")
-        for name in ("sigma_m", "clutter_density", "init_max_speed_mps", "init_max_dt_s",
-                     "init_velocity_std_mps", "confirm_window_s", "max_coast_s",
-                     "max_position_std_m"):
+        for name in (
+            "sigma_m",
+            "clutter_density",
+            "init_max_speed_mps",
+            "init_max_dt_s",
+            "init_velocity_std_mps",
+            "confirm_window_s",
+            "max_coast_s",
+            "max_position_std_m",
+        ):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
@@ -122,8 +130,13 @@ class TrackerConfig:
         report), tracks started from unassociated reports, 3 updates within 15 min to confirm,
         coast 10 min. Values tuned on the Solent file (moored ships report every 3 min, moving
         ones every 2-10 s)."""
-        return TrackerConfig(associator=associator, imm_q=(1e-5, 1e-2), confirm_hits=3,
-                             clutter_density=1e-6, init_from="unassociated")
+        return TrackerConfig(
+            associator=associator,
+            imm_q=(1e-5, 1e-2),
+            confirm_hits=3,
+            clutter_density=1e-6,
+            init_from="unassociated",
+        )
 
     @staticmethod
     def for_aircraft(associator: Literal["gnn", "jpda"] = "gnn") -> TrackerConfig:
@@ -180,8 +193,18 @@ class TrackerResult:
     counts: dict[str, float]
 
     def __post_init__(self) -> None:
-        for name in ("det_track", "det_status", "track_time_s", "track_id", "track_x",
-                     "track_std_m", "track_confirmed", "report_frame", "report_id", "report_xy"):
+        for name in (
+            "det_track",
+            "det_status",
+            "track_time_s",
+            "track_id",
+            "track_x",
+            "track_std_m",
+            "track_confirmed",
+            "report_frame",
+            "report_id",
+            "report_xy",
+        ):
             getattr(self, name).setflags(write=False)
 
 
@@ -289,8 +312,9 @@ def run_tracker(
     r = len(models)
     R = np.eye(2) * cfg.sigma_m**2
     gamma = chi2_threshold(cfg.gate_probability, 2)
-    jcfg = JpdaConfig(cfg.pd, cfg.clutter_density, cfg.gate_probability, cfg.max_exact_bits,
-                      cfg.k_best)
+    jcfg = JpdaConfig(
+        cfg.pd, cfg.clutter_density, cfg.gate_probability, cfg.max_exact_bits, cfg.k_best
+    )
     log_miss = np.log1p(-cfg.pd * cfg.gate_probability)
     log_det_gain = np.log(cfg.pd) - np.log(cfg.clutter_density)
 
@@ -303,8 +327,18 @@ def run_tracker(
     seeds_i: list[int] = []
     next_id = 0
     counts = dict.fromkeys(
-        ("scans", "tracks_started", "tracks_confirmed", "deleted_coast", "deleted_covariance",
-         "deleted_unconfirmed", "jpda_exact_clusters", "jpda_kbest_clusters"), 0.0)
+        (
+            "scans",
+            "tracks_started",
+            "tracks_confirmed",
+            "deleted_coast",
+            "deleted_covariance",
+            "deleted_unconfirmed",
+            "jpda_exact_clusters",
+            "jpda_kbest_clusters",
+        ),
+        0.0,
+    )
     log_t: list[FloatArray] = []
     log_id: list[IntArray] = []
     log_x: list[FloatArray] = []
@@ -395,27 +429,33 @@ def run_tracker(
                     used[a_t[ti]] = True
                 claimed = used.copy() if cfg.init_from == "unassociated" else gated_any
             else:
-                W = association_weights(ll_mix, valid, cfg.pd, cfg.gate_probability,
-                                        cfg.clutter_density)
+                W = association_weights(
+                    ll_mix, valid, cfg.pd, cfg.gate_probability, cfg.clutter_density
+                )
                 jm = jpda_marginals(W, jcfg)
                 beta = jm.beta
                 active = np.flatnonzero(beta[:, 0] < 1.0)
                 if active.size:
                     b_r = np.broadcast_to(beta[active, None, :], (active.size, r, M + 1))
-                    xa, Pa = pda_update(tr.x[active], tr.P[active], y4[active], S4[active],
-                                        K4[active], b_r)
+                    xa, Pa = pda_update(
+                        tr.x[active], tr.P[active], y4[active], S4[active], K4[active], b_r
+                    )
                     tr.x[active], tr.P[active] = xa, Pa
                     if r > 1:
                         # model likelihood: missed term plus each measurement's likelihood
                         # ratio against the mixture (Blom & Bloem 2000, IMM-JPDA)
                         ratio = np.exp(ll_rm[active] - ll_mix[active][:, None, :])
                         lam_r = beta[active, None, 0] + np.einsum(
-                            "tj,trj->tr", beta[active, 1:], ratio)
+                            "tj,trj->tr", beta[active, 1:], ratio
+                        )
                         tr.mu[active] = imm_model_probabilities(
-                            c_pred[active], np.log(np.maximum(lam_r, 1e-300)))
+                            c_pred[active], np.log(np.maximum(lam_r, 1e-300))
+                        )
                 hit = beta[:, 0] < 0.5
-                for key, code in (("jpda_exact_clusters", METHOD_EXACT),
-                                  ("jpda_kbest_clusters", METHOD_KBEST)):
+                for key, code in (
+                    ("jpda_exact_clusters", METHOD_EXACT),
+                    ("jpda_kbest_clusters", METHOD_KBEST),
+                ):
                     counts[key] += len(np.unique(jm.cluster[jm.method == code]))
                 if M:
                     best_t = np.argmax(beta[:, 1:], axis=0)
@@ -423,8 +463,9 @@ def run_tracker(
                     ok = best_b >= 0.5
                     det_track[s0 + np.flatnonzero(ok)] = tr.id[best_t[ok]]
                     used[ok] = True
-                claimed = (beta[:, 1:].sum(axis=0) >= 0.5 if cfg.init_from == "unassociated"
-                           else gated_any)
+                claimed = (
+                    beta[:, 1:].sum(axis=0) >= 0.5 if cfg.init_from == "unassociated" else gated_any
+                )
             # 4. manage
             tr.hits[hit] += 1
             tr.last[hit] = tk
@@ -432,8 +473,11 @@ def run_tracker(
             for j in np.flatnonzero(used):
                 k = np.flatnonzero(tr.id == det_track[s0 + j])[0]
                 det_status[s0 + j] = DET_CONFIRMED if tr.confirmed[k] else DET_TENTATIVE
-            new_conf = (~tr.confirmed & (tr.hits >= cfg.confirm_hits)
-                        & (tk - tr.born <= cfg.confirm_window_s))
+            new_conf = (
+                ~tr.confirmed
+                & (tr.hits >= cfg.confirm_hits)
+                & (tk - tr.born <= cfg.confirm_window_s)
+            )
             counts["tracks_confirmed"] += int(new_conf.sum())
             tr.confirmed |= new_conf
             xc, Pc = tr.combined()
@@ -524,9 +568,15 @@ def run_tracker(
         return np.concatenate(parts) if parts else np.zeros(shape, dtype=dtype)
 
     return TrackerResult(
-        det_track, det_status,
-        cat(log_t, (0,), float), cat(log_id, (0,), np.int64), cat(log_x, (0, n), float),
-        cat(log_std, (0,), float), cat(log_conf, (0,), bool),
-        cat(rep_f, (0,), np.int64), cat(rep_id, (0,), np.int64), cat(rep_xy, (0, 2), float),
+        det_track,
+        det_status,
+        cat(log_t, (0,), float),
+        cat(log_id, (0,), np.int64),
+        cat(log_x, (0, n), float),
+        cat(log_std, (0,), float),
+        cat(log_conf, (0,), bool),
+        cat(rep_f, (0,), np.int64),
+        cat(rep_id, (0,), np.int64),
+        cat(rep_xy, (0, 2), float),
         counts,
     )
