@@ -193,9 +193,10 @@ def run_smooth(args: argparse.Namespace) -> int:
         any_gross |= res.gross_error
         if args.plot is not None and res.status in ("ok", "boundary", "not_converged"):
             from navtrack.plots.ari import plot_series
+            from navtrack.plots.canvas import figure_dir
 
-            args.plot.mkdir(parents=True, exist_ok=True)
-            path = plot_series(args.plot / f"{args.file.stem}_{col}.png", t_grid, res, col, unit)
+            plot_dir = figure_dir(args.plot)
+            path = plot_series(plot_dir / f"{args.file.stem}_{col}.png", t_grid, res, col, unit)
             print(f"figure     {path}")
     out_cols["gross_error"] = any_gross
     statuses: dict[str, int] = {}
