@@ -1,0 +1,1 @@
+"""Smoothing of navigation time series: ARI(p,d) filtering with variance components (paper 5)."""
