@@ -1427,6 +1427,15 @@ def _conditional_loglike(res: AriResult, big_m: int, initial: str) -> float:
     return res.loglike - fit.loglike
 
 
+def _better(new: AriResult, old: AriResult, cfg: AriConfig) -> bool:
+    """``new`` has the larger likelihood, with :func:`_choose`'s preference for interior
+    solutions (a boundary one must beat an interior one by ``boundary_margin``)."""
+    margin = 0.0
+    if (new.status == "boundary") != (old.status == "boundary"):
+        margin = cfg.boundary_margin if new.status == "boundary" else -cfg.boundary_margin
+    return new.loglike > old.loglike + margin
+
+
 def fit_ari(
     y: ArrayLike,
     config: AriConfig | None = None,
@@ -1509,7 +1518,7 @@ def fit_ari(
         start = np.concatenate([phi, [2 * math.log(upper.sigma_n), 2 * math.log(upper.sigma_e)]])
         res = _fit_fixed(y_sel, p, d, cfg, robust=False, starts=[start])
         current = found.get((p, d))
-        if res.status in ok_status and (current is None or res.loglike > current.loglike):
+        if res.status in ok_status and (current is None or _better(res, current, cfg)):
             found[(p, d)] = res
     scores: list[tuple[int, int, float]] = []
     best_key: tuple[int, int] | None = None
