@@ -1399,14 +1399,24 @@ def _finish(
 
 
 def _conditional_loglike(res: AriResult, big_m: int, initial: str) -> float:
-    """Log-likelihood of ``y_{M..n-1}`` given ``y_{0..M-1}`` (prediction-error decomposition)."""
+    """Log-likelihood of the observations after the first ``M`` observed ones given those
+    (prediction-error decomposition).
+
+    The conditioning head ends at the ``M``-th observed epoch, not at epoch ``M``: a series
+    that starts with a gap (BROAD: tracking lost at the start) would otherwise condition on an
+    unobserved head, whose normal matrix is singular up to rounding, so that candidates were
+    dropped or kept by rounding-level differences.
+    """
     m = res.p + res.d
     if big_m <= m and (initial != "stationary" or res.p == 0):
         return res.loglike
-    head = res.y[:big_m] - float(np.nanmean(res.y))
+    seen = np.flatnonzero(np.isfinite(res.y))
+    k = int(seen[big_m - 1]) + 1 if seen.size >= big_m else big_m
+    k = max(k, m + 1)
+    head = res.y[:k] - float(np.nanmean(res.y))
     observed = np.isfinite(head)
-    w = res.weight[:big_m]
-    v = res.process_weight[: big_m - m]
+    w = res.weight[:k]
+    v = res.process_weight[: k - m]
     c = ari_polynomial(res.phi, res.d)
     prior = _stationary_prior(res.phi, res.d) if initial == "stationary" and res.p else None
     fit = _solve(
@@ -1415,6 +1425,15 @@ def _conditional_loglike(res: AriResult, big_m: int, initial: str) -> float:
     if fit is None:
         return math.nan
     return res.loglike - fit.loglike
+
+
+def _better(new: AriResult, old: AriResult, cfg: AriConfig) -> bool:
+    """``new`` has the larger likelihood, with :func:`_choose`'s preference for interior
+    solutions (a boundary one must beat an interior one by ``boundary_margin``)."""
+    margin = 0.0
+    if (new.status == "boundary") != (old.status == "boundary"):
+        margin = cfg.boundary_margin if new.status == "boundary" else -cfg.boundary_margin
+    return new.loglike > old.loglike + margin
 
 
 def fit_ari(
@@ -1468,26 +1487,47 @@ def fit_ari(
     if not candidates:
         return _bad(y_arr, "too_short", f"{n_obs} observed epochs are too few for any ARI model")
     big_m = max(p + d for p, d in candidates)
+    ok_status = ("ok", "not_converged", "boundary")
+    yc = y_sel - float(np.nanmean(y_sel))
+    found: dict[tuple[int, int], AriResult] = {}
+    # Upward pass: ARI(p, d) warm from ARI(p-1, d) (phi_p = 0) plus the high-noise default start.
+    for p, d in candidates:
+        starts = None
+        prev = found.get((p - 1, d))
+        if prev is not None:
+            warm = np.concatenate(
+                [prev.phi, [0.0, 2 * math.log(prev.sigma_n), 2 * math.log(prev.sigma_e)]]
+            )
+            starts = [warm, *_starts(yc, p, d, cfg.n_starts)[-1:]]
+        res = _fit_fixed(y_sel, p, d, cfg, robust=False, starts=starts)
+        if res.status in ok_status:
+            found[(p, d)] = res
+    # Downward pass: ARI(p, d) again from ARI(p+1, d) without its last coefficient, the better
+    # optimum kept. On heavy-tailed series the non-robust likelihood is multimodal (a
+    # low-noise/rough-process mode and a high-noise/smooth-process one); reaching a candidate
+    # from both neighbours makes its optimum, and so the selected order, independent of the
+    # path that led to it in all the cases we tried (BROAD orientation; see docs/ari.md).
+    for p, d in reversed(candidates):
+        upper = found.get((p + 1, d))
+        if upper is None:
+            continue
+        phi = upper.phi[:p].copy()
+        # the truncated AR part need not be stationary: shrink it towards 0 until it is
+        while phi.size and not np.all(np.abs(np.roots(np.concatenate([[1.0], phi]))) < 0.98):
+            phi = np.zeros(p) if float(np.max(np.abs(phi))) < 1e-3 else 0.5 * phi
+        start = np.concatenate([phi, [2 * math.log(upper.sigma_n), 2 * math.log(upper.sigma_e)]])
+        res = _fit_fixed(y_sel, p, d, cfg, robust=False, starts=[start])
+        current = found.get((p, d))
+        if res.status in ok_status and (current is None or _better(res, current, cfg)):
+            found[(p, d)] = res
     scores: list[tuple[int, int, float]] = []
     best_key: tuple[int, int] | None = None
     best_score = math.inf
     fits: dict[tuple[int, int], tuple[float, float]] = {}
-    previous: dict[int, AriResult] = {}
     for p, d in candidates:
-        # Warm start from ARI(p-1, d) (phi_p = 0) plus the high-noise default start.
-        starts = None
-        prev = previous.get(d)
-        if prev is not None and prev.p == p - 1 and p > 0:
-            warm = np.concatenate(
-                [prev.phi, [0.0, 2 * math.log(prev.sigma_n), 2 * math.log(prev.sigma_e)]]
-            )
-            yc = y_sel - float(np.nanmean(y_sel))
-            starts = [warm, *_starts(yc, p, d, cfg.n_starts)[-1:]]
-        res = _fit_fixed(y_sel, p, d, cfg, robust=False, starts=starts)
-        if res.status not in ("ok", "not_converged", "boundary"):
+        if (p, d) not in found:
             continue
-        previous[d] = res
-        ll = _conditional_loglike(res, big_m, cfg.initial)
+        ll = _conditional_loglike(found[(p, d)], big_m, cfg.initial)
         if not np.isfinite(ll):
             continue
         k = p + 2
