@@ -99,6 +99,7 @@ from navtrack.smoothing._banded import (
     add_convolution_band,
     cholesky_solve_banded,
     inverse_band_from_factor,
+    single_threaded_blas,
     weighted_band_sums,
 )
 
@@ -1136,7 +1137,8 @@ def fit_ari_order(
     y_arr, status, message = _check_input(y, t)
     if status != "ok":
         return _bad(y_arr, status, message, p, d)
-    return _fit_fixed(y_arr, p, d, cfg, robust=True)
+    with single_threaded_blas():
+        return _fit_fixed(y_arr, p, d, cfg, robust=True)
 
 
 def _robust_weights(
@@ -1476,6 +1478,12 @@ def fit_ari(
     y_arr, status, message = _check_input(y, t)
     if status != "ok":
         return _bad(y_arr, status, message)
+    with single_threaded_blas():
+        return _select_and_fit(y_arr, cfg)
+
+
+def _select_and_fit(y_arr: FloatArray, cfg: AriConfig) -> AriResult:
+    """Body of :func:`fit_ari` after input checks: order selection, then the robust fit."""
     if cfg.order is not None:
         return _fit_fixed(y_arr, cfg.order[0], cfg.order[1], cfg, robust=True)
     candidates = [
