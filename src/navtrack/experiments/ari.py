@@ -916,10 +916,21 @@ def spp_comparison(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
-def reproduce(options: ReproduceOptions) -> dict[str, Any]:
-    """Run the whole reproduction; write ``results.json``, ``tables.md`` and figures."""
+def shared_data_dir() -> Path:
+    """Root of the shared real data sets: ``NAVTRACK_SHARED_DATA`` if set, else ``shared/data``
+    next to the development checkout (``<repo>/../shared/data``), else ``../shared/data`` from the
+    working directory. Missing data sets are skipped with a stated reason, never an error."""
     import os
 
+    env = os.environ.get("NAVTRACK_SHARED_DATA")
+    if env:
+        return Path(env)
+    checkout = Path(__file__).resolve().parents[3].parent / "shared" / "data"
+    return checkout if checkout.is_dir() else Path.cwd().parent / "shared" / "data"
+
+
+def reproduce(options: ReproduceOptions) -> dict[str, Any]:
+    """Run the whole reproduction; write ``results.json``, ``tables.md`` and figures."""
     runs = DEFAULT_RUNS if options.runs is None else options.runs
     params = default_params()
     mc = run_monte_carlo(
@@ -951,7 +962,7 @@ def reproduce(options: ReproduceOptions) -> dict[str, Any]:
         "synthetic": summarize_synthetic(mc, params),
         "paper_tables": PAPER_TABLES,
     }
-    shared = Path(os.environ.get("NAVTRACK_SHARED_DATA", "/work/shared/data"))
+    shared = shared_data_dir()
     sources, skipped = default_real_sources(shared)
     for path in options.inputs:
         sources.append(solution_series(Path(path)))
