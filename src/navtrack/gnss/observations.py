@@ -14,15 +14,11 @@ from typing import Any
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, Int8Array
 
 SYSTEMS = "GRECJSI"
 """RINEX system letters: GPS, GLONASS, Galileo, BeiDou, QZSS, SBAS, NavIC/IRNSS."""
-
-
-def _freeze(*arrays: np.ndarray) -> None:
-    for arr in arrays:
-        arr.flags.writeable = False
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -121,9 +117,7 @@ class ObsHeader:
     def __post_init__(self) -> None:
         object.__setattr__(self, "obs_types", MappingProxyType(dict(self.obs_types)))
         object.__setattr__(self, "glonass_fcn", MappingProxyType(dict(self.glonass_fcn)))
-        for arr in (self.approx_xyz_m, self.antenna_delta_hen_m):
-            if arr is not None:
-                _freeze(arr)
+        freeze_arrays(self)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -183,7 +177,7 @@ class Observations:
         for name in ("epoch_flag", "clock_offset_s"):
             if getattr(self, name).shape != (n_e,):
                 raise ValueError(f"{name}: expected shape ({n_e},)")
-        _freeze(self.t_gps_s, self.epoch_flag, self.clock_offset_s, self.values, self.lli, self.ssi)
+        freeze_arrays(self)
 
     @property
     def time(self) -> np.ndarray:

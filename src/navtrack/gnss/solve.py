@@ -32,6 +32,7 @@ from enum import IntEnum
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, IntArray
 
 ModelFn = Callable[[FloatArray, IntArray], tuple[FloatArray, FloatArray, FloatArray, BoolArray]]
@@ -87,10 +88,7 @@ class LsqResult:
     status: np.ndarray
 
     def __post_init__(self) -> None:
-        for name in self.__slots__:
-            arr = getattr(self, name)
-            if isinstance(arr, np.ndarray):
-                arr.flags.writeable = False
+        freeze_arrays(self)
 
 
 def _normal_equations(

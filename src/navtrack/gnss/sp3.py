@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, Int8Array, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.timescale import calendar_gps_seconds, to_datetime64, to_gps
@@ -90,7 +91,7 @@ class Sp3Header:
     comments: tuple[str, ...] = field(default=())
 
     def __post_init__(self) -> None:
-        self.accuracy_m.flags.writeable = False
+        freeze_arrays(self)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -160,8 +161,7 @@ class Sp3:
                 continue
             if arr.shape != shape:
                 raise ValueError(f"{name}: expected shape {shape}, got {arr.shape}")
-            arr.flags.writeable = False
-        self.t_gps_s.flags.writeable = False
+        freeze_arrays(self)
 
     @property
     def time(self) -> np.ndarray:

@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
 
@@ -259,10 +260,7 @@ class SppResult:
     iterations: IntArray
 
     def __post_init__(self) -> None:
-        for name in self.__slots__:
-            arr = getattr(self, name)
-            if isinstance(arr, np.ndarray):
-                arr.flags.writeable = False
+        freeze_arrays(self)
 
     @property
     def n_sats(self) -> IntArray:

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError
 
@@ -73,20 +74,7 @@ class TrackDetections:
     ignored_columns: tuple[str, ...] = field(default=())
 
     def __post_init__(self) -> None:
-        for name in (
-            "t_gps_s",
-            "lat_deg",
-            "lon_deg",
-            "x_m",
-            "y_m",
-            "alt_m",
-            "speed_mps",
-            "course_deg",
-            "id",
-            "line",
-            "bad_lines",
-        ):
-            getattr(self, name).setflags(write=False)
+        freeze_arrays(self)
 
     def __len__(self) -> int:
         return int(self.t_gps_s.size)

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from navtrack import geodesy, timescale
+from navtrack._frozen import readonly_copy
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, StrPath
 from navtrack.gnss.accuracy import enu_error_stats, error_stats
 from navtrack.io.solution import ok_mask
@@ -54,12 +55,6 @@ _SYSTEM_COLOURS = {
     "S": "tab:gray",
     "I": "tab:brown",
 }
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a = np.array(a, copy=True)
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -105,7 +100,7 @@ class SolutionPlotData:
 
     def __post_init__(self) -> None:
         for name in ("t", "enu_m", "ok", "ref_xyz_m", "n_sats", "dops"):
-            object.__setattr__(self, name, _readonly(getattr(self, name)))
+            object.__setattr__(self, name, readonly_copy(getattr(self, name)))
 
     @property
     def horizontal_m(self) -> FloatArray:
@@ -222,8 +217,8 @@ class SkyTrack:
     zenith_deg: FloatArray
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "az_rad", _readonly(self.az_rad))
-        object.__setattr__(self, "zenith_deg", _readonly(self.zenith_deg))
+        object.__setattr__(self, "az_rad", readonly_copy(self.az_rad))
+        object.__setattr__(self, "zenith_deg", readonly_copy(self.zenith_deg))
 
 
 def skyplot_tracks(azel_rad: ArrayLike, sats: Sequence[str]) -> list[SkyTrack]:

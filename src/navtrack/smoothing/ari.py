@@ -94,6 +94,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, Int8Array
 from navtrack.smoothing._banded import (
     add_convolution_band,
@@ -329,20 +330,7 @@ class AriResult:
     candidates: tuple[tuple[int, int, float], ...] = field(default=())
 
     def __post_init__(self) -> None:
-        for name in (
-            "x",
-            "sigma_x",
-            "y",
-            "weight",
-            "process_weight",
-            "test_statistic",
-            "gross_error",
-            "epoch_status",
-            "phi",
-            "a",
-            "autocorr",
-        ):
-            getattr(self, name).setflags(write=False)
+        freeze_arrays(self)
 
     @property
     def n_flagged(self) -> int:

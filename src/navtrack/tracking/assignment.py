@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray, IntArray
 
 __all__ = ["Assignment", "KBest", "assign2d", "augmented_cost", "murty"]
@@ -36,7 +37,7 @@ class Assignment:
     cost: float
 
     def __post_init__(self) -> None:
-        self.track_to_meas.setflags(write=False)
+        freeze_arrays(self)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -53,8 +54,7 @@ class KBest:
     cost: FloatArray
 
     def __post_init__(self) -> None:
-        self.track_to_meas.setflags(write=False)
-        self.cost.setflags(write=False)
+        freeze_arrays(self)
 
 
 def _check(cost: ArrayLike, miss_cost: ArrayLike) -> tuple[FloatArray, FloatArray]:

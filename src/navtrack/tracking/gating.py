@@ -13,6 +13,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
 from navtrack.tracking.models import wrap_angle
 
@@ -69,8 +70,7 @@ class Gate:
     log_norm: FloatArray
 
     def __post_init__(self) -> None:
-        for name in ("innovation", "d2", "valid", "log_norm"):
-            getattr(self, name).setflags(write=False)
+        freeze_arrays(self)
 
     def log_likelihood(self) -> FloatArray:
         """``log N(z_j; ẑ_t, S_t)``, shape (..., T, M)."""

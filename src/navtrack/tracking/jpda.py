@@ -52,6 +52,7 @@ from typing import Any
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
 
 __all__ = [
@@ -139,8 +140,7 @@ class JpdaMarginals:
     n_events: IntArray
 
     def __post_init__(self) -> None:
-        for name in ("beta", "cluster", "method", "error_bound", "n_events"):
-            getattr(self, name).setflags(write=False)
+        freeze_arrays(self)
 
 
 def association_weights(
@@ -476,8 +476,7 @@ class JpdaStep:
     marginals: JpdaMarginals
 
     def __post_init__(self) -> None:
-        for name in ("x", "P", "x_pred", "P_pred"):
-            getattr(self, name).setflags(write=False)
+        freeze_arrays(self)
 
 
 def _innovation_cov_gain(

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
 from navtrack.tracking.models import MeasurementModel, MotionModel, wrap_angle
 
@@ -55,8 +56,7 @@ class KalmanUpdate:
     K: FloatArray
 
     def __post_init__(self) -> None:
-        for name in ("x", "P", "innovation", "S", "K"):
-            getattr(self, name).setflags(write=False)
+        freeze_arrays(self)
 
     @property
     def nis(self) -> FloatArray:

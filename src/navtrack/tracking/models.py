@@ -26,6 +26,7 @@ from typing import Literal, Protocol
 
 import numpy as np
 
+from navtrack._frozen import readonly_copy
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
 
 __all__ = [
@@ -46,12 +47,6 @@ __all__ = [
 def wrap_angle(a: ArrayLike) -> FloatArray:
     """Wrap angles to ``[-pi, pi)`` (rad)."""
     return np.asarray((np.asarray(a, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi, dtype=float)
-
-
-def _readonly(a: ArrayLike) -> FloatArray:
-    arr = np.array(a, dtype=float)
-    arr.setflags(write=False)
-    return arr
 
 
 class MotionModel(Protocol):
@@ -301,14 +296,13 @@ class LinearMeasurement:
     angle_mask: BoolArray = field(default=None)  # type: ignore[arg-type]
 
     def __post_init__(self) -> None:
-        H = _readonly(self.H)
-        R = _readonly(self.R)
+        H = readonly_copy(self.H, float)
+        R = readonly_copy(self.R, float)
         if H.ndim != 2 or R.shape != (H.shape[0], H.shape[0]):
             raise ValueError(f"H must be (m, n) and R (m, m); got H {H.shape}, R {R.shape}")
         _check_spd("R", R)
         mask = np.zeros(H.shape[0], bool) if self.angle_mask is None else self.angle_mask
-        mask = np.array(mask, dtype=bool)
-        mask.setflags(write=False)
+        mask = readonly_copy(mask, bool)
         object.__setattr__(self, "H", H)
         object.__setattr__(self, "R", R)
         object.__setattr__(self, "angle_mask", mask)
@@ -372,11 +366,11 @@ class RangeBearing:
     from_north: bool = False
 
     def __post_init__(self) -> None:
-        R = _readonly(self.R)
+        R = readonly_copy(self.R, float)
         if R.shape != (2, 2):
             raise ValueError(f"R must be (2, 2), got {R.shape}")
         _check_spd("R", R)
-        s = _readonly(self.sensor_xy)
+        s = readonly_copy(self.sensor_xy, float)
         if s.shape != (2,) or not np.all(np.isfinite(s)):
             raise ValueError(f"sensor_xy must be 2 finite numbers, got {s}")
         object.__setattr__(self, "R", R)
@@ -448,11 +442,10 @@ class FunctionMeasurement:
     angle_mask: BoolArray = field(default=None)  # type: ignore[arg-type]
 
     def __post_init__(self) -> None:
-        R = _readonly(np.atleast_2d(self.R))
+        R = readonly_copy(np.atleast_2d(self.R), float)
         _check_spd("R", R)
         mask = np.zeros(R.shape[0], bool) if self.angle_mask is None else self.angle_mask
-        mask = np.array(mask, dtype=bool)
-        mask.setflags(write=False)
+        mask = readonly_copy(mask, bool)
         object.__setattr__(self, "R", R)
         object.__setattr__(self, "angle_mask", mask)
 

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
 from navtrack.tracking.models import MeasurementModel, MotionModel, wrap_angle
 
@@ -75,8 +76,7 @@ class Scans:
     origin: IntArray
 
     def __post_init__(self) -> None:
-        for name in ("z", "valid", "origin"):
-            getattr(self, name).setflags(write=False)
+        freeze_arrays(self)
 
     def scan(self, k: int) -> FloatArray:
         """The valid measurements of scan ``k``, shape ``(M_k, m)``."""

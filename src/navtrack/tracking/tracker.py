@@ -33,6 +33,7 @@ from typing import Literal
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray, IntArray
 from navtrack.tracking.models import LinearMotion, constant_velocity
 
@@ -193,19 +194,7 @@ class TrackerResult:
     counts: dict[str, float]
 
     def __post_init__(self) -> None:
-        for name in (
-            "det_track",
-            "det_status",
-            "track_time_s",
-            "track_id",
-            "track_x",
-            "track_std_m",
-            "track_confirmed",
-            "report_frame",
-            "report_id",
-            "report_xy",
-        ):
-            getattr(self, name).setflags(write=False)
+        freeze_arrays(self)
 
 
 class _Tracks:

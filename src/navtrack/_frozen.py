@@ -1,0 +1,27 @@
+"""Read-only arrays for the frozen value classes (results, configurations, models)."""
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+
+def freeze_arrays(value: Any) -> None:
+    """Make every NumPy array field of a dataclass instance read-only, in place.
+
+    Called from ``__post_init__`` of the frozen result classes, so that a result cannot be
+    changed through its arrays after it was made. Fields holding something other than an
+    array (numbers, tuples, ``None``) are left as they are.
+    """
+    for f in dataclasses.fields(value):
+        arr = getattr(value, f.name)
+        if isinstance(arr, np.ndarray):
+            arr.flags.writeable = False
+
+
+def readonly_copy(a: npt.ArrayLike, dtype: npt.DTypeLike | None = None) -> np.ndarray:
+    """A read-only copy of ``a`` (the caller's array stays writable)."""
+    arr = np.array(a, dtype=dtype, copy=True)
+    arr.flags.writeable = False
+    return arr
