@@ -1,4 +1,5 @@
-"""RTKLIB solution file reader on the shared RTKLIB outputs and on re-written variants of them.
+"""RTKLIB solution file reader on the shared RTKLIB outputs, on the bundled cut of one of them
+(``tests/data/sept078_gej_cut.pos``, read without the shared data) and on re-written variants.
 
 Oracles: the files' own header lines (``obs start ... (weekW T s)``), an independent plain-Python
 parse of the data lines (datetime + float), pymap3d (geodetic/ENU conversions) for the llh, dms
@@ -39,33 +40,51 @@ def plain_parse(path: Path) -> tuple[np.ndarray, np.ndarray]:
     return np.array(times), np.array(values)
 
 
+def _matches_plain_parse_and_header(path: Path) -> int:
+    """Check ``read_pos`` against the plain parse and the header's first epoch; return the rows."""
+    df = read_pos(path)
+    t, v = plain_parse(path)
+    assert len(df) == len(t), path.name
+    np.testing.assert_allclose(df["t_gps_s"], t, rtol=0, atol=1e-6, err_msg=path.name)
+    np.testing.assert_array_equal(df[["x_m", "y_m", "z_m"]].to_numpy(), v[:, 0:3])
+    np.testing.assert_array_equal(df["q"], v[:, 3].astype(int))
+    np.testing.assert_array_equal(df["ns"], v[:, 4].astype(int))
+    names = ["sdx_m", "sdy_m", "sdz_m", "sdxy_m", "sdyz_m", "sdzx_m", "age_s", "ratio"]
+    np.testing.assert_array_equal(df[names].to_numpy(), v[:, 5:13])
+    assert df["q"].dtype == np.int64
+    assert df.attrs["time_scale"] == "GPST"
+    # The header's first epoch in week/tow, an independent statement of the time.
+    head = next(h for h in df.attrs["header"] if h.startswith("obs start"))
+    m = re.search(r"week\s*(\d+)\s+([\d.]+)s", head)
+    assert m is not None
+    assert df["t_gps_s"].iloc[0] == pytest.approx(
+        int(m.group(1)) * 604800 + float(m.group(2)), abs=1e-3
+    )
+    return len(df)
+
+
 def test_every_shared_file_matches_plain_parse_and_header(gnss_data: Path) -> None:
     files = pos_files(gnss_data)
     assert len(files) == 16
     for path in files:
-        df = read_pos(path)
-        t, v = plain_parse(path)
-        assert len(df) == len(t) > 100, path.name
-        np.testing.assert_allclose(df["t_gps_s"], t, rtol=0, atol=1e-6, err_msg=path.name)
-        np.testing.assert_array_equal(df[["x_m", "y_m", "z_m"]].to_numpy(), v[:, 0:3])
-        np.testing.assert_array_equal(df["q"], v[:, 3].astype(int))
-        np.testing.assert_array_equal(df["ns"], v[:, 4].astype(int))
-        names = ["sdx_m", "sdy_m", "sdz_m", "sdxy_m", "sdyz_m", "sdzx_m", "age_s", "ratio"]
-        np.testing.assert_array_equal(df[names].to_numpy(), v[:, 5:13])
-        assert df["q"].dtype == np.int64
-        assert df.attrs["time_scale"] == "GPST"
-        # The header's first epoch in week/tow, an independent statement of the time.
-        head = next(h for h in df.attrs["header"] if h.startswith("obs start"))
-        m = re.search(r"week\s*(\d+)\s+([\d.]+)s", head)
-        assert m is not None
-        assert df["t_gps_s"].iloc[0] == pytest.approx(
-            int(m.group(1)) * 604800 + float(m.group(2)), abs=1e-3
-        )
+        assert _matches_plain_parse_and_header(path) > 100, path.name
 
 
-def test_geodetic_columns_agree_with_pymap3d(gnss_data: Path) -> None:
+def test_bundled_cut_matches_plain_parse_and_header(sept_pos_cut: Path) -> None:
+    # As RTKLIB wrote them, header lines 1-5 and 12 end in LF, the other lines in CR LF.
+    raw = sept_pos_cut.read_bytes().splitlines(keepends=True)
+    assert [k for k, line in enumerate(raw, 1) if not line.endswith(b"\r\n")] == [1, 2, 3, 4, 5, 12]
+    assert _matches_plain_parse_and_header(sept_pos_cut) == 60
+
+
+def test_bundled_cut_is_the_head_of_the_shared_file(gnss_data: Path, sept_pos_cut: Path) -> None:
+    full = (gnss_data / "rtklib_spp" / "sept078_gej.pos").read_bytes().splitlines(keepends=True)
+    assert sept_pos_cut.read_bytes() == b"".join(full[:74])
+
+
+def test_geodetic_columns_agree_with_pymap3d(sept_pos_cut: Path) -> None:
     pymap3d = pytest.importorskip("pymap3d")
-    df = read_pos(gnss_data / "rtklib_spp" / "sept078_gej.pos")
+    df = read_pos(sept_pos_cut)
     lat, lon, h = pymap3d.ecef2geodetic(df["x_m"], df["y_m"], df["z_m"])
     np.testing.assert_allclose(df["lat_deg"], lat, atol=1e-9)
     np.testing.assert_allclose(df["lon_deg"], lon, atol=1e-9)
@@ -177,8 +196,8 @@ def test_enu_baseline_variant(gnss_data: Path, tmp_path: Path) -> None:
     np.testing.assert_allclose(df[["e_m", "n_m", "u_m"]].abs().max(), [20, 20, 20], atol=20)
 
 
-def test_to_solution_frame_rotates_covariance(gnss_data: Path) -> None:
-    pos = read_pos(gnss_data / "rtklib_spp" / "gsi0759_gps.pos")
+def test_to_solution_frame_rotates_covariance(sept_pos_cut: Path) -> None:
+    pos = read_pos(sept_pos_cut)
     sol = to_solution_frame(pos)
     assert (sol["status"] == "ok").all()
     np.testing.assert_array_equal(sol["n_sats"], pos["ns"])
@@ -206,42 +225,47 @@ def test_to_solution_frame_rotates_covariance(gnss_data: Path) -> None:
 # ---- bad input ----------------------------------------------------------------------------
 
 
-def _copy_with(gnss_data: Path, tmp_path: Path, lineno: int, new: str) -> Path:
-    lines = (gnss_data / "rtklib_spp" / "arl1_gps.pos").read_text().splitlines(keepends=True)
+def _copy_with(path: Path, tmp_path: Path, lineno: int, new: str) -> Path:
+    lines = path.read_text().splitlines(keepends=True)
     lines[lineno - 1] = new
     f = tmp_path / "bad.pos"
     f.write_text("".join(lines))
     return f
 
 
+# Line 18 of the cut: "2021/03/19 12:00:03.000  -3962108.0650   3381308.8399   3668677.9471   5  21
+# 2.5023   1.9529   1.9293  -1.7931   1.4931  -1.6529   0.00    0.0", damaged in one place each.
+SIGMAS_18 = "   2.5023   1.9529   1.9293  -1.7931   1.4931  -1.6529   0.00    0.0\n"
+
+
 @pytest.mark.parametrize(
     ("replacement", "message"),
     [
         (
-            "2015/07/19 00:01:00.000   -740290.2703  -5457072.9763   3207247.4022   5   6\n",
+            "2021/03/19 12:00:03.000  -3962108.0650   3381308.8399   3668677.9471   5  21\n",
             "expected 15 fields",
         ),
         (
-            "2015/07/19 00:01:00.000   -740290.2703  -5457072.97x3   3207247.4022   5   6   6.0213"
-            "   7.9146   6.6328   5.8468  -6.5364  -5.4016   0.00    0.0\n",
+            "2021/03/19 12:00:03.000  -3962108.0650   33813x8.8399   3668677.9471   5  21"
+            + SIGMAS_18,
             "y-ecef",
         ),
         (
-            "2015/07/19 00:01:00.000   -740290.2703  -5457072.9763   3207247.4022   5.5   6"
-            "   6.0213   7.9146   6.6328   5.8468  -6.5364  -5.4016   0.00    0.0\n",
+            "2021/03/19 12:00:03.000  -3962108.0650   3381308.8399   3668677.9471   5.5  21"
+            + SIGMAS_18,
             "not an integer",
         ),
         (
-            "2015/13/19 00:01:00.000   -740290.2703  -5457072.9763   3207247.4022   5   6   6.0213"
-            "   7.9146   6.6328   5.8468  -6.5364  -5.4016   0.00    0.0\n",
+            "2021/13/19 12:00:03.000  -3962108.0650   3381308.8399   3668677.9471   5  21"
+            + SIGMAS_18,
             "time",
         ),
     ],
 )
 def test_bad_line_names_file_and_line(
-    gnss_data: Path, tmp_path: Path, replacement: str, message: str
+    sept_pos_cut: Path, tmp_path: Path, replacement: str, message: str
 ) -> None:
-    f = _copy_with(gnss_data, tmp_path, 18, replacement)
+    f = _copy_with(sept_pos_cut, tmp_path, 18, replacement)
     with pytest.raises(FileFormatError, match=message) as info:
         read_pos(f)
     assert info.value.line == 18
@@ -268,8 +292,8 @@ def test_geoid_heights_refused(tmp_path: Path) -> None:
         read_pos(f)
 
 
-def test_extra_field_and_header_only(gnss_data: Path, tmp_path: Path) -> None:
-    lines = (gnss_data / "rtklib_spp" / "arl1_gps.pos").read_text().splitlines(keepends=True)
+def test_extra_field_and_header_only(sept_pos_cut: Path, tmp_path: Path) -> None:
+    lines = sept_pos_cut.read_text().splitlines(keepends=True)
     lines[40] = lines[40].rstrip("\n") + "   9.9\n"
     f = tmp_path / "extra.pos"
     f.write_text("".join(lines))

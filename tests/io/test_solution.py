@@ -1,4 +1,5 @@
-"""Solution writers and reader on a solution frame built from a real RTKLIB solution file.
+"""Solution writers and reader on a solution frame built from a real RTKLIB solution file (the
+bundled 60-epoch cut of RTKLIB's SEPT solution, ``tests/data/sept078_gej_cut.pos``).
 
 Oracles: the RTKLIB file's own text (times, coordinates), pymap3d (geodetic conversions), an
 independent XOR checksum and pynmea2 (NMEA), xml.etree and gpxpy (GPX/KML), IERS Bulletin C
@@ -32,12 +33,12 @@ from navtrack.io.solution import (
 
 GPX_NS = {"g": "http://www.topografix.com/GPX/1/1"}
 KML_NS = {"k": "http://www.opengis.net/kml/2.2"}
-FAILED_ROWS = (3, 4, 10, 899)
+FAILED_ROWS = (3, 4, 10, 59)  # 59: the last epoch of the cut
 
 
 @pytest.fixture(scope="module")
-def sept_pos(gnss_data: Path) -> pd.DataFrame:
-    return read_pos(gnss_data / "rtklib_spp" / "sept078_gej.pos")
+def sept_pos(sept_pos_cut: Path) -> pd.DataFrame:
+    return read_pos(sept_pos_cut)
 
 
 @pytest.fixture
