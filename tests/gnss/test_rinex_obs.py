@@ -797,10 +797,22 @@ def test_missing_end_of_header(tmp_path: Path) -> None:
 
 
 def test_missing_obs_types(tmp_path: Path) -> None:
-    rows = [r for r in _lines("07590920.05o") if "TYPES OF OBSERV" not in r]
-    _raises_at(_write(tmp_path, "t.o", rows), 16, "TYPES OF OBSERV")
-    rows = [r for r in _lines("SEPT078M_120.21O") if "SYS / # / OBS TYPES" not in r]
-    _raises_at(_write(tmp_path, "t3.o", rows), 29, "OBS TYPES")
+    """A header without its observation-types record is refused at END OF HEADER, naming the
+    record, even when reading leniently (no data line could be decoded)."""
+    rows = _lines("07590920.05o")
+    assert rows[11].endswith("# / TYPES OF OBSERV")
+    del rows[11]
+    assert rows[15].strip() == "END OF HEADER"
+    path = _write(tmp_path, "t.o", rows)
+    for lenient in (False, True):
+        _raises_at(path, 16, "no '# / TYPES OF OBSERV' record in the header", lenient=lenient)
+    rows = _lines("SEPT078M_120.21O")
+    kept = [r for r in rows if not r.endswith("SYS / # / OBS TYPES")]
+    assert len(rows) - len(kept) == 4  # G (2 lines), E, J
+    assert kept[28].strip() == "END OF HEADER"
+    path = _write(tmp_path, "t3.o", kept)
+    for lenient in (False, True):
+        _raises_at(path, 29, "no 'SYS / # / OBS TYPES' record in the header", lenient=lenient)
 
 
 def test_obs_type_count_mismatch(tmp_path: Path) -> None:
@@ -899,12 +911,16 @@ def test_unknown_system_letter(tmp_path: Path) -> None:
     _raises_at(path, 18, "unknown satellite system 'X'")  # in the epoch record, line 18
     obs = read_obs(path, lenient=True)
     assert [s.line for s in obs.skipped] == [20]  # X07's data line is what is skipped
+    rows = _lines("SEPT078M_120.21O")
+    assert rows[12].endswith("SYS / # / OBS TYPES")
+    rows[12] = "X" + rows[12][1:]
+    _raises_at(_write(tmp_path, "xh.o", rows), 13, "unknown satellite system")
+
+
+def test_satellite_list_shorter_than_announced(tmp_path: Path) -> None:
     rows = _lines("07590920.05o")
     rows[17] = rows[17][:-3]  # 8 satellites announced, 7 listed
     _raises_at(_write(tmp_path, "x2b.o", rows), 18, "malformed satellite id")
-    rows = _lines("SEPT078M_120.21O")
-    rows[12] = "X" + rows[12][1:]
-    _raises_at(_write(tmp_path, "xh.o", rows), 13, "unknown satellite system")
 
 
 def test_blank_line_inside_rinex3_data(tmp_path: Path) -> None:
