@@ -19,7 +19,6 @@ from navtrack._typing import ArrayLike, FloatArray
 WGS84_A_M = 6378137.0
 WGS84_F = 1.0 / 298.257223563
 WGS84_E2 = WGS84_F * (2.0 - WGS84_F)
-WGS84_B_M = WGS84_A_M * (1.0 - WGS84_F)
 OMEGA_E_RAD_S = 7.2921151467e-5
 C_MPS = 299792458.0
 

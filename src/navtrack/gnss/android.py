@@ -51,7 +51,6 @@ _DAY_NS = 86400 * 10**9
 _100MS_NS = 100 * 10**6
 
 # android.location.GnssMeasurement state bits
-_CODE_LOCK = 1
 _TOW_DECODED = 8
 _MSEC_AMBIGUOUS = 16
 _GLO_TOD_DECODED = 128
