@@ -112,7 +112,9 @@ def test_georinex_cross_check(gnss_data: Path, name: str) -> None:
     clk = ds.clock.values
     expected = np.where(clk >= 999999.0, np.nan, clk * 1e-6)
     np.testing.assert_allclose(sp3.clock_s, expected, rtol=1e-15, atol=0)
-    if sp3.vel_mps is not None:
+    # NGA's file (SP3-a "V") carries velocities, CODE's ("P") does not.
+    assert (sp3.vel_mps is not None) == (name == NGA)
+    if name == NGA:
         np.testing.assert_allclose(sp3.vel_mps, ds.velocity.values * 0.1, rtol=1e-15)
 
 
