@@ -50,7 +50,7 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 from functools import lru_cache
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -835,6 +835,18 @@ def corrected_measurements(
 
 
 # --------------------------------------------------------------------------- kernel
+class _Geometry(NamedTuple):
+    """Receiver-satellite geometry of a batch ``(b, S)`` at the receiver positions ``(b, 3)``."""
+
+    rho: FloatArray  # (b, S) geometric range with Sagnac term, m
+    los: FloatArray  # (b, S, 3) unit line of sight, ECEF
+    llh: FloatArray  # (b, 3) receiver latitude, longitude (rad), height (m)
+    rot: FloatArray  # (b, 3, 3) ECEF -> ENU
+    az: FloatArray  # (b, S) rad
+    el: FloatArray  # (b, S) rad; 90 deg for receivers inside the earth
+    deep: BoolArray  # (b,) receiver inside the earth (start at the centre)
+
+
 @dataclass(frozen=True, slots=True, eq=False)
 class _PseudorangeModel:
     """The per-epoch pseudorange model of a batch of epochs (the SPP kernel, RTKLIB ``rescode``):
@@ -845,7 +857,7 @@ class _PseudorangeModel:
     usable: BoolArray  # (B, S)
     epochs: IntArray  # (B,)
 
-    def geometry(self, x: FloatArray, b: IntArray) -> dict[str, Any]:
+    def geometry(self, x: FloatArray, b: IntArray) -> _Geometry:
         from navtrack.gnss.corrections import geometric_range
 
         rcv = x[:, :3]
@@ -859,7 +871,7 @@ class _PseudorangeModel:
         # inside the earth (start from the centre): no mask, no atmosphere (el = 90 deg)
         deep = np.linalg.norm(rcv, axis=1) < 1e6
         el = np.where(deep[:, None], np.pi / 2.0, el)
-        return {"rho": rho, "los": los, "llh": llh, "rot": rot, "az": az, "el": el, "deep": deep}
+        return _Geometry(rho, los, llh, rot, az, el, deep)
 
     def __call__(
         self, x: FloatArray, b: IntArray
@@ -869,7 +881,7 @@ class _PseudorangeModel:
         cfg, m = self.config, self.meas
         e = self.epochs[b]
         g = self.geometry(x, b)
-        el, az, llh, deep = g["el"], g["az"], g["llh"], g["deep"]
+        el, az, llh, deep = g.el, g.az, g.llh, g.deep
         valid = self.usable[b] & (el >= math.radians(cfg.elmask_deg))
         lat = llh[:, 0:1]
         lon = llh[:, 1:2]
@@ -895,9 +907,9 @@ class _PseudorangeModel:
         n_groups = len(m.clock_groups)
         clk = x[:, 3 : 3 + n_groups]
         clock = clk[:, 0:1] + np.where(m.group > 0, clk[:, np.maximum(m.group, 0)], 0.0)
-        v = m.y_m[e] - (g["rho"] + clock + iono + trop)
+        v = m.y_m[e] - (g.rho + clock + iono + trop)
         J = np.zeros((b.size, m.group.size, 3 + n_groups))
-        J[..., :3] = -g["los"]
+        J[..., :3] = -g.los
         J[..., 3] = 1.0
         for k in range(1, n_groups):
             J[..., 3 + k] = (m.group == k).astype(float)
@@ -1102,7 +1114,7 @@ def estimate_position(
     status[~observed] = SppStatus.TOO_FEW_SATS
 
     geo = model.geometry(lsq.x, np.arange(idx.size))
-    los_enu = np.einsum("eij,esj->esi", geo["rot"], geo["los"])
+    los_enu = np.einsum("eij,esj->esi", geo.rot, geo.los)
     return Estimate(
         epochs=idx,
         x=lsq.x,
@@ -1111,8 +1123,8 @@ def estimate_position(
         design=lsq.jacobian,
         weights=lsq.weights,
         used=lsq.valid,
-        azel_rad=np.stack([geo["az"], geo["el"]], axis=-1),
-        enu_rotation=geo["rot"],
+        azel_rad=np.stack([geo.az, geo.el], axis=-1),
+        enu_rotation=geo.rot,
         dop=dops(los_enu, lsq.valid),
         chi2=lsq.cost,
         dof=lsq.dof,
@@ -1258,7 +1270,7 @@ def solve_spp(
     return parts[0] if len(parts) == 1 else concatenate_results(parts)
 
 
-def _klobuchar_params(nav_iono: Mapping[str, Any] | None) -> FloatArray | None:
+def _klobuchar_params(nav_iono: Mapping[str, FloatArray]) -> FloatArray | None:
     if not nav_iono:
         return None
     for a, b in (("GPSA", "GPSB"), ("QZSA", "QZSB"), ("BDSA", "BDSB")):
