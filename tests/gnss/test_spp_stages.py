@@ -23,6 +23,7 @@ from navtrack.gnss.spp import (
     code_pseudoranges,
     corrected_measurements,
     estimate_position,
+    merge_estimates,
     satellite_states,
     solution_frame,
     solve_spp,
@@ -258,6 +259,16 @@ def test_validation_then_exclusion_on_the_failed_epochs() -> None:
     clean = solve_spp(obs, [nav], config=GEJ)
     assert np.max(np.linalg.norm(again.x[:, :3] - clean.pos_m[:5], axis=1)) < 1.0
     assert np.max(np.linalg.norm(est.x[failed, :3] - clean.pos_m[:5], axis=1)) > 5.0
+    # the re-estimates replace the failed rows; the assembled result is all ok
+    merged = merge_estimates(est, again)
+    res = spp_result(meas, merged, validate(merged, GEJ))
+    assert np.all(res.status == SppStatus.OK)
+    np.testing.assert_array_equal(res.pos_m[:5], again.x[:, :3])
+    np.testing.assert_array_equal(res.pos_m[5:], est.x[5:, :3])
+    assert not res.used[:5, meas.sats.index("G03")].any()
+    assert res.used[5:, meas.sats.index("G03")].all()
+    with pytest.raises(ValueError, match="epochs"):
+        merge_estimates(again, est)
     # the test can be switched off, and the GDOP limit is the other rule
     assert np.all(validate(est, replace(GEJ, chi2_alpha=0.0)) == SppStatus.OK)
     assert np.all(validate(est, replace(GEJ, chi2_alpha=0.0, max_gdop=1.0)) == SppStatus.HIGH_DOP)

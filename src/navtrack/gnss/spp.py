@@ -13,7 +13,8 @@ masks, in the order of RTKLIB's ``pntpos``:
    elevation mask, ionosphere, troposphere and weights at every iterate, as RTKLIB's
    ``rescode`` does (``estpos``). It takes a per-(epoch, satellite) exclusion mask and a subset
    of epochs and returns residuals, design matrix, weights, state, covariance, redundancy,
-   iterations and status: what fault detection and exclusion need;
+   iterations and status: what fault detection and exclusion need (:func:`merge_estimates`
+   puts the re-estimates of some epochs back into the estimate of all);
 5. :func:`validate`: chi-square test of the weighted residuals and GDOP limit (``valsol``; the
    stage integrity monitoring replaces);
 6. :func:`spp_result` -> :class:`SppResult`.
@@ -1131,6 +1132,41 @@ def estimate_position(
         iterations=lsq.iterations,
         status=status,
     )
+
+
+def merge_estimates(estimate: Estimate, update: Estimate) -> Estimate:
+    """``estimate`` with the epochs of ``update`` replaced by ``update``'s rows (e.g. the
+    re-estimates of fault exclusion on the failed epochs); ``update.epochs`` must be among
+    ``estimate.epochs``.
+
+    Parameters
+    ----------
+    estimate : Estimate
+        Of epochs ``(B,)``.
+    update : Estimate
+        Of epochs ``(b,)`` of the same measurements (same satellites and parameters).
+
+    Returns
+    -------
+    Estimate
+        Of epochs ``(B,)``.
+    """
+    if (
+        update.x.shape[1:] != estimate.x.shape[1:]
+        or update.used.shape[1:] != estimate.used.shape[1:]
+    ):
+        raise ValueError("update: estimate of other satellites or parameters")
+    pos = {int(e): i for i, e in enumerate(estimate.epochs)}
+    if any(int(e) not in pos for e in update.epochs):
+        raise ValueError("update: epochs that estimate does not have")
+    rows = np.array([pos[int(e)] for e in update.epochs], dtype=np.int64)
+    fields = {}
+    for name in Estimate.__dataclass_fields__:
+        value = np.array(getattr(estimate, name))
+        if name != "epochs":
+            value[rows] = getattr(update, name)
+        fields[name] = value
+    return Estimate(**fields)
 
 
 # --------------------------------------------------------------------------- stage 5: validation
