@@ -238,6 +238,8 @@ def test_estimation_input_checks() -> None:
         estimate_position(meas, GEJ, epochs=np.array([0, 500]))
     with pytest.raises(ValueError, match="epochs"):
         estimate_position(meas, GEJ, epochs=np.array([0.5]))
+    with pytest.raises(ValueError, match="x0_m"):
+        estimate_position(meas, GEJ, x0_m=np.zeros(4))
 
 
 # --------------------------------------------------------------------------- stage 5

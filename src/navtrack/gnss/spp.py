@@ -1097,10 +1097,12 @@ def estimate_position(
     n_p = meas.n_params
     x0 = np.zeros((idx.size, n_p))
     start = meas.approx_xyz_m if x0_m is None else np.asarray(x0_m, dtype=float)
-    if start.shape[-1] == n_p and start.ndim == 2:
+    if start.shape == (idx.size, n_p):
         x0[:] = start
-    else:
+    elif start.shape in ((3,), (idx.size, 3)):
         x0[:, :3] = start
+    else:
+        raise ValueError(f"x0_m: expected shape (3,), {(idx.size, 3)} or {x0.shape}")
     model = _PseudorangeModel(meas, cfg, usable, idx)
     lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=cfg.xtol_m)
 
