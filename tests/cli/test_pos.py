@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import csv
+import re
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -10,32 +12,105 @@ import pytest
 
 from navtrack.cli import main
 from navtrack.data import sample_path
+from navtrack.geodesy import ecef_to_geodetic
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.spp import SppConfig, SppResult, solve_spp
+from navtrack.io.solution import SOLUTION_COLUMNS
+
+EXAMPLE_REF = np.array([-3962108.673, 3381309.574, 3668678.638])
+
+
+@lru_cache(maxsize=1)
+def _library_result() -> SppResult:
+    """What ``navtrack pos --example`` must write: the library's solution of the same input
+    with the command's defaults (systems GREJC, 15 deg mask, RTKLIB weighting, Klobuchar)."""
+    obs = read_obs(sample_path("SEPT078M_120.21O"))
+    nav = read_nav(sample_path("SEPT078M.21P"))
+    return solve_spp(obs, [nav], config=SppConfig())
 
 
 def test_example_prints_summary_and_writes_csv(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    """The CSV holds the library's solution: columns in the documented order, positions in
+    ECEF metres and degrees to the written precision, times, satellites, DOPs and statuses."""
     out = tmp_path / "sept.csv"
     assert main(["pos", "--example", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "epochs         120" in text
     assert "solved         120" in text
     assert "error vs ref" in text
-    assert "3D" in text
-    rows = list(csv.DictReader(out.open()))
+    res = _library_result()
+    lines = out.read_text().splitlines()
+    assert lines[0].split(",") == [*SOLUTION_COLUMNS, "gdop", "hdop", "vdop", "isb_E_m"]
+    rows = list(csv.DictReader(lines))
     assert len(rows) == 120
-    assert rows[0]["time_gps"] == "2021-03-19T12:00:00.000"
+
+    def col(name: str) -> np.ndarray:
+        return np.array([float(r[name]) for r in rows])
+
+    assert [r["time_gps"] for r in rows[:2]] == [
+        "2021-03-19T12:00:00.000",
+        "2021-03-19T12:00:01.000",
+    ]
+    np.testing.assert_array_equal(col("week"), 2149)
+    np.testing.assert_allclose(col("tow_s"), res.t_gps_s - 2149 * 604800.0, atol=5e-7)
+    for k, name in enumerate(("x_m", "y_m", "z_m")):
+        np.testing.assert_allclose(col(name), res.pos_m[:, k], rtol=0, atol=5e-5)
+    llh = ecef_to_geodetic(res.pos_m)
+    np.testing.assert_allclose(col("lat_deg"), np.degrees(llh[:, 0]), rtol=0, atol=5e-10)
+    np.testing.assert_allclose(col("lon_deg"), np.degrees(llh[:, 1]), rtol=0, atol=5e-10)
+    np.testing.assert_allclose(col("h_m"), llh[:, 2], rtol=0, atol=5e-5)
+    np.testing.assert_allclose(col("clock_m"), res.clock_m, rtol=0, atol=5e-5)
+    sd = np.sqrt(np.einsum("eii->ei", res.cov_enu_m2))
+    for k, name in enumerate(("sd_e_m", "sd_n_m", "sd_u_m")):
+        np.testing.assert_allclose(col(name), sd[:, k], rtol=0, atol=5e-5)
+    np.testing.assert_array_equal(col("n_sats"), res.n_sats)
+    np.testing.assert_allclose(col("pdop"), res.dop[:, 1], rtol=0, atol=5e-4)
+    np.testing.assert_allclose(col("hdop"), res.dop[:, 2], rtol=1e-12)
+    np.testing.assert_allclose(col("isb_E_m"), res.isb_m[:, 0], rtol=1e-12)
     assert {r["status"] for r in rows} == {"ok"}
-    xyz = np.array([[float(r[k]) for k in ("x_m", "y_m", "z_m")] for r in rows])
-    ref = np.array([-3962108.673, 3381309.574, 3668678.638])
-    assert np.median(np.linalg.norm(xyz - ref, axis=1)) < 3.0
+    assert {r["excluded"] for r in rows} == {""}
+    assert np.median(np.linalg.norm(res.pos_m - EXAMPLE_REF, axis=1)) < 3.0
 
 
-@pytest.mark.parametrize("suffix", [".nmea", ".kml", ".gpx"])
-def test_track_formats(tmp_path: Path, suffix: str) -> None:
-    out = tmp_path / f"track{suffix}"
-    assert main(["pos", "--example", "--out", str(out)]) == 0
-    assert out.stat().st_size > 1000
+def _ddmm(value: str, hemisphere: str, deg_digits: int) -> float:
+    deg = float(value[:deg_digits]) + float(value[deg_digits:]) / 60.0
+    return -deg if hemisphere in "SW" else deg
+
+
+def test_track_formats(tmp_path: Path) -> None:
+    """NMEA GGA, KML and GPX carry the library's 120 positions (to the written precision)."""
+    res = _library_result()
+    llh = ecef_to_geodetic(res.pos_m)
+    lat, lon = np.degrees(llh[:, 0]), np.degrees(llh[:, 1])
+    paths = {s: tmp_path / f"track{s}" for s in (".nmea", ".kml", ".gpx")}
+    for path in paths.values():
+        assert main(["pos", "--example", "--out", str(path)]) == 0
+
+    gga = [ln for ln in paths[".nmea"].read_text().splitlines() if ln[3:6] == "GGA"]
+    assert len(gga) == 120
+    fields = [ln.split("*")[0].split(",") for ln in gga]
+    assert fields[0][1] == "115942.00"  # 12:00:00 GPST = 11:59:42 UTC (18 leap seconds)
+    nmea_lat = np.array([_ddmm(f[2], f[3], 2) for f in fields])
+    nmea_lon = np.array([_ddmm(f[4], f[5], 3) for f in fields])
+    np.testing.assert_allclose(nmea_lat, lat, rtol=0, atol=1e-8)  # 1e-6 arc minutes
+    np.testing.assert_allclose(nmea_lon, lon, rtol=0, atol=1e-8)
+    assert [int(f[7]) for f in fields] == res.n_sats.tolist()
+    np.testing.assert_allclose([float(f[9]) for f in fields], llh[:, 2], rtol=0, atol=5e-4)
+    assert {f[6] for f in fields} == {"1"}
+
+    coords = re.search(r"<coordinates>(.*?)</coordinates>", paths[".kml"].read_text(), re.S)
+    assert coords is not None
+    kml = np.array([[float(v) for v in c.split(",")[:2]] for c in coords.group(1).split()])
+    np.testing.assert_allclose(kml, np.stack([lon, lat], axis=1), rtol=0, atol=5e-10)
+
+    pts = re.findall(
+        r'<trkpt lat="([-\d.]+)" lon="([-\d.]+)"><ele>([-\d.]+)</ele>', paths[".gpx"].read_text()
+    )
+    gpx = np.array(pts, dtype=float)
+    np.testing.assert_allclose(gpx, np.stack([lat, lon, llh[:, 2]], axis=1), rtol=0, atol=5e-5)
 
 
 def test_plots(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -119,13 +194,13 @@ def test_android_log(capsys: pytest.CaptureFixture[str]) -> None:
     assert float(line.split()[2]) <= 15.0  # 3D RMS
 
 
-def test_long_files_are_solved_in_chunks(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """Files longer than CHUNK_EPOCHS are solved block by block (with a progress bar); the
-    written solution equals the one-block solution."""
-    import navtrack.cli.pos as pos
+def test_long_files_are_solved_in_blocks(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Files longer than a block are solved block by block with a progress bar; the written
+    solution equals the one-block solution."""
+    import navtrack.gnss.spp as spp
 
-    whole, chunked = tmp_path / "whole.csv", tmp_path / "chunked.csv"
+    whole, blocks = tmp_path / "whole.csv", tmp_path / "blocks.csv"
     assert main(["pos", "--example", "--out", str(whole)]) == 0
-    monkeypatch.setattr(pos, "CHUNK_EPOCHS", 25)
-    assert main(["pos", "--example", "--out", str(chunked)]) == 0
-    assert whole.read_text() == chunked.read_text()
+    monkeypatch.setattr(spp, "CHUNK_EPOCHS", 25)
+    assert main(["pos", "--example", "--out", str(blocks)]) == 0
+    assert whole.read_text() == blocks.read_text()

@@ -21,10 +21,11 @@ from navtrack.gnss.spp import (
     SppStatus,
     chi2_quantile,
     concatenate_results,
-    solution_columns,
+    solution_frame,
     solve_spp,
     subset_epochs,
 )
+from navtrack.io.solution import solution_columns
 
 REFERENCE = json.loads(
     (Path(__file__).resolve().parents[1] / "data" / "rtklib_spp_reference.json").read_text()
@@ -220,7 +221,7 @@ def test_sample_solution_columns_and_statuses() -> None:
     res = solve_spp(obs, [nav], config=SppConfig(systems="GEJ"))
     assert res.status_counts()["ok"] == 120
     assert set(res.status_counts()) == set(STATUS_NAMES)
-    cols = solution_columns(res)
+    cols = solution_columns(solution_frame(res))
     for name in (
         "time_gps",
         "week",

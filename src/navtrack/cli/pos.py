@@ -15,13 +15,20 @@ import argparse
 import math
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from navtrack._typing import FloatArray
+    from navtrack.gnss.accuracy import ErrorStats
+    from navtrack.gnss.observations import Observations
+    from navtrack.gnss.rinex.nav import NavData
+    from navtrack.gnss.sp3 import Sp3
+    from navtrack.gnss.spp import SppConfig, SppResult
 
 EXAMPLE_OBS = "SEPT078M_120.21O"
 EXAMPLE_NAV = "SEPT078M.21P"
 # cssrlib's xyz_ref of station SEPT (src/navtrack/data/README.md)
 EXAMPLE_REF_XYZ_M = (-3962108.673, 3381309.574, 3668678.638)
-CHUNK_EPOCHS = 3600
 WEIGHTINGS = ("rtklib", "elevation", "cn0", "equal")
 
 
@@ -122,7 +129,7 @@ def _is_android(path: Path) -> bool:
     return False
 
 
-def _read_inputs(args: argparse.Namespace) -> tuple[Any, list[Any], Any]:
+def _read_inputs(args: argparse.Namespace) -> tuple[Observations, list[NavData], Sp3 | None]:
     if args.android:
         from navtrack.gnss.android import read_gnsslogger
 
@@ -162,7 +169,7 @@ def _check_output(path: Path | None) -> str | None:
     return None
 
 
-def _error_stats(pos_m: Any, ref: tuple[float, float, float]) -> dict[str, Any]:
+def _error_stats(pos_m: FloatArray, ref: tuple[float, float, float]) -> dict[str, ErrorStats]:
     import numpy as np
 
     from navtrack.geodesy import ecef_to_enu
@@ -174,7 +181,7 @@ def _error_stats(pos_m: Any, ref: tuple[float, float, float]) -> dict[str, Any]:
 def run_pos(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from navtrack.gnss.spp import STATUS_NAMES, SppConfig, solution_columns
+    from navtrack.gnss.spp import STATUS_NAMES, SppConfig, solution_frame
 
     if args.example:
         if args.obs is not None:
@@ -236,9 +243,7 @@ def run_pos(args: argparse.Namespace) -> int:
     for name in STATUS_NAMES:
         if counts[name]:
             print(f"  {name:<18} {counts[name]}")
-    no_eph = sorted(
-        {s for s, m in zip(result.sats, result.no_ephemeris.any(axis=0), strict=True) if m}
-    )
+    no_eph = sorted(result.sats[j] for j in np.flatnonzero(result.no_ephemeris.any(axis=0)))
     if no_eph:
         print(
             f"no ephemeris   {len(no_eph)} satellites ({' '.join(no_eph)}); their measurements "
@@ -269,7 +274,7 @@ def run_pos(args: argparse.Namespace) -> int:
             f"navtrack pos: no epoch could be solved; most epochs: {cause}{hint}", file=sys.stderr
         )
 
-    table = solution_columns(result)
+    table = solution_frame(result)
     status_code = 0 if solved else 1
     if args.out is not None:
         if out_problem:
@@ -296,31 +301,23 @@ def run_pos(args: argparse.Namespace) -> int:
     return status_code
 
 
-def _solve(obs: Any, navs: list[Any], sp3: Any, config: Any, *, progress: bool) -> Any:
-    """Solve in chunks of epochs (with a progress bar on long files) and concatenate."""
-    from navtrack.gnss.ephemeris import ephemeris_tables, merge_tables
-    from navtrack.gnss.spp import concatenate_results, solve_spp, subset_epochs
+def _solve(
+    obs: Observations, navs: list[NavData], sp3: Sp3 | None, config: SppConfig, *, progress: bool
+) -> SppResult:
+    """Solve all epochs, with a progress bar on files of more than one block."""
+    from navtrack.gnss.spp import CHUNK_EPOCHS, solve_spp
 
     n = len(obs.t_gps_s)
-    tables = merge_tables([ephemeris_tables(n_) for n_ in navs]) if navs else {}
-    if n <= CHUNK_EPOCHS:
-        return solve_spp(obs, navs, sp3=sp3, config=config, ephemeris=tables)
-    starts = range(0, n, CHUNK_EPOCHS)
-    it: Any = starts
-    if progress:
-        from tqdm import tqdm
+    if not progress or n <= CHUNK_EPOCHS:
+        return solve_spp(obs, navs, sp3=sp3, config=config, chunk_epochs=CHUNK_EPOCHS)
+    from tqdm import tqdm
 
-        it = tqdm(
-            starts, total=len(starts), unit="chunk", desc="solving", file=sys.stderr, disable=None
-        )
-    parts = [
-        solve_spp(
-            subset_epochs(obs, slice(s, s + CHUNK_EPOCHS)),
+    with tqdm(total=n, unit="epoch", desc="solving", file=sys.stderr, disable=None) as bar:
+        return solve_spp(
+            obs,
             navs,
             sp3=sp3,
             config=config,
-            ephemeris=tables,
+            chunk_epochs=CHUNK_EPOCHS,
+            progress=lambda done, _: bar.update(done - bar.n),
         )
-        for s in it
-    ]
-    return concatenate_results(parts)

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,6 +32,9 @@ from navtrack.geodesy import C_MPS
 
 if TYPE_CHECKING:
     import pandas as pd
+
+    from navtrack.gnss.rinex.nav import NavData
+    from navtrack.gnss.sp3 import Sp3
 
 # Gravitational constants (m^3/s^2) and earth rotation rates (rad/s) per system.
 MU_M3S2 = {
@@ -641,17 +644,16 @@ def broadcast_states(
     return SatStates(pos, vel, clk, var, svh, index, valid)
 
 
-def ephemeris_tables(nav: Any) -> dict[str, EphemerisTable]:
+def ephemeris_tables(nav: NavData | Mapping[str, pd.DataFrame]) -> dict[str, EphemerisTable]:
     """:class:`EphemerisTable` per system of a ``NavData`` (or a mapping of DataFrames)."""
-    columns = getattr(nav, "tables", None)
-    if columns is not None:
-        return {
-            sys: EphemerisTable(
-                sys, cols["sat"].astype(str), {c: v for c, v in cols.items() if c != "sat"}
-            )
-            for sys, cols in columns.items()
-        }
-    return {sys: EphemerisTable.from_frame(sys, df) for sys, df in nav.items()}
+    if isinstance(nav, Mapping):
+        return {sys: EphemerisTable.from_frame(sys, df) for sys, df in nav.items()}
+    return {
+        sys: EphemerisTable(
+            sys, cols["sat"].astype(str), {c: v for c, v in cols.items() if c != "sat"}
+        )
+        for sys, cols in nav.tables.items()
+    }
 
 
 def merge_tables(tables: list[dict[str, EphemerisTable]]) -> dict[str, EphemerisTable]:
@@ -685,7 +687,7 @@ def _lagrange_weights(t_nodes: FloatArray, t: FloatArray) -> FloatArray:
 
 
 def sp3_states(
-    sp3: Any,
+    sp3: Sp3,
     sats: tuple[str, ...] | list[str],
     t_tx_gps_s: FloatArray,
     *,

@@ -62,6 +62,9 @@ class LsqResult:
         NaN where singular. Rows/columns of unobserved parameters are zero.
     residuals : ndarray, shape (B, M)
         Residuals ``y - h(x)`` at the estimate, NaN where not valid.
+    jacobian : ndarray, shape (B, M, P)
+        Design (geometry) matrix ``J = dh/dx`` at the estimate, zero rows where not valid: a
+        small change ``dx`` of the estimate changes the residuals by ``-J dx``.
     valid : ndarray of bool, shape (B, M)
         Measurements used at the estimate.
     weights : ndarray, shape (B, M)
@@ -80,6 +83,7 @@ class LsqResult:
     x: FloatArray
     cov: FloatArray
     residuals: FloatArray
+    jacobian: FloatArray
     valid: BoolArray
     weights: FloatArray
     cost: FloatArray
@@ -163,6 +167,7 @@ def _finish(
         x=x,
         cov=cov,
         residuals=res,
+        jacobian=np.where(valid[..., None], J, 0.0),
         valid=valid,
         weights=w0,
         cost=cost,

@@ -1,12 +1,28 @@
 """Single point positioning (SPP): weighted least squares on code pseudoranges, all epochs at once.
 
-The batch driver :func:`solve_spp` builds ``(epochs, satellites)`` arrays — pseudoranges,
-satellite states at transmission, group delays — and runs one batched Gauss–Newton
-(:func:`navtrack.gnss.solve.gauss_newton`) over all epochs. The per-epoch model
-(:func:`_Model.__call__`, the kernel) re-evaluates elevation mask, ionosphere, troposphere and
-weights at every iterate, as RTKLIB's ``rescode`` does. Unknowns per epoch: ECEF position, the
-receiver clock of the first clock group and one inter-system bias (ISB) per further group
-(QZSS shares GPS's clock by default, as in RTKLIB 2.4.3). Each epoch ends with a ``status``:
+:func:`solve_spp` is a chain of named stages over ``(epochs, satellites)`` arrays with boolean
+masks, in the order of RTKLIB's ``pntpos``:
+
+1. :func:`code_pseudoranges` -> :class:`Pseudoranges`: the signals of the configuration;
+2. :func:`satellite_states` -> :class:`SatelliteStates`: orbits, clocks, URA, health and group
+   delays at transmission (``satposs``);
+3. :func:`corrected_measurements` -> :class:`Measurements`: pseudoranges corrected for satellite
+   clock and group delay (ionosphere-free if asked), usability masks, clock groups (``prange``);
+4. :func:`estimate_position` -> :class:`Estimate`: one batched Gauss–Newton
+   (:func:`navtrack.gnss.solve.gauss_newton`) whose per-epoch model (the kernel) re-evaluates
+   elevation mask, ionosphere, troposphere and weights at every iterate, as RTKLIB's
+   ``rescode`` does (``estpos``). It takes a per-(epoch, satellite) exclusion mask and a subset
+   of epochs and returns residuals, design matrix, weights, state, covariance, redundancy,
+   iterations and status: what fault detection and exclusion need (:func:`merge_estimates`
+   puts the re-estimates of some epochs back into the estimate of all);
+5. :func:`validate`: chi-square test of the weighted residuals and GDOP limit (``valsol``; the
+   stage integrity monitoring replaces);
+6. :func:`spp_result` -> :class:`SppResult`.
+
+Blocks of :data:`CHUNK_EPOCHS` epochs bound the memory of long files. Unknowns per epoch: ECEF
+position, the receiver clock of the first clock group and one inter-system bias (ISB) per
+further group (QZSS shares GPS's clock by default, as in RTKLIB 2.4.3). Each epoch ends with a
+``status``:
 
 =================== =====================================================================
 ``ok``              solved, passed the validity tests
@@ -30,24 +46,24 @@ DOPs); J. Sanz Subirana et al., *GNSS Data Processing* vol. I, ESA TM-23, 2013, 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import IntEnum
 from functools import lru_cache
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
-from navtrack._typing import BoolArray, FloatArray, IntArray
+from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
 from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
 
 if TYPE_CHECKING:
-    import pandas as pd
-
     from navtrack.gnss.ephemeris import EphemerisTable
     from navtrack.gnss.observations import Observations
+    from navtrack.gnss.rinex.nav import NavData
+    from navtrack.gnss.sp3 import Sp3
 
 
 class SppStatus(IntEnum):
@@ -99,6 +115,12 @@ IONOFREE_BANDS = MappingProxyType(
 )
 DEFAULT_CLOCK_GROUP = MappingProxyType({"J": "G"})
 """Systems sharing another system's receiver clock (QZSS on GPS time, RTKLIB 2.4.3)."""
+
+CHUNK_EPOCHS = 3600
+"""Epochs per block of :func:`solve_spp` (one hour at 1 Hz)."""
+
+ProgressFn = Callable[[int, int], None]
+"""``progress(epochs_done, epochs_total)``, called by :func:`solve_spp` after each block."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -377,30 +399,470 @@ def select_pseudoranges(
     return pr, cn0, used
 
 
-# --------------------------------------------------------------------------- kernel
-@dataclass(eq=False)
-class _Model:
-    """The per-epoch pseudorange model evaluated for a batch of epochs (the SPP kernel)."""
+# --------------------------------------------------------------------------- stage 1: signals
+@dataclass(frozen=True, slots=True, eq=False)
+class Pseudoranges:
+    """Code pseudoranges of the configured signals (the selection part of RTKLIB's ``prange``).
 
-    t_rx: FloatArray  # (E,)
-    y: FloatArray  # (E, S) pseudorange corrected for satellite clock and group delay
-    sat_pos: FloatArray  # (E, S, 3)
-    base_valid: BoolArray  # (E, S)
-    group: IntArray  # (S,) clock group index
-    n_groups: int
-    iono_scale: FloatArray  # (E, S) (f_L1/f)^2, 0 for iono-free
-    var_sat: FloatArray  # (E, S) ephemeris variance + code bias variance
-    var_fact: FloatArray  # (S,) system factor squared
-    cn0: FloatArray  # (E, S)
-    klob: FloatArray | None
-    config: SppConfig
+    Attributes
+    ----------
+    t_gps_s : ndarray, shape (E,)
+        Epoch time tags (receiver time, GPS s).
+    sats : tuple of str, length S
+        Satellites of the selected systems present in the observations (the satellite axis of
+        every later stage).
+    systems : tuple of str
+        Selected systems present in the observations, in ``GRECJI`` order.
+    pr_m : ndarray, shape (E, S)
+        Pseudorange (m) of the primary band (:data:`PRIMARY_BAND`), or of the first band of the
+        ionosphere-free pair (:data:`IONOFREE_BANDS`); NaN where not observed.
+    pr2_m : ndarray, shape (E, S), or None
+        Pseudorange (m) of the second band of the ionosphere-free pair; None for single
+        frequency.
+    cn0_dbhz : ndarray, shape (E, S)
+        C/N0 (dB-Hz) of the signal of ``pr_m``; NaN where not recorded.
+    observed : ndarray of bool, shape (E, S)
+        All pseudoranges the configuration needs are present.
+    approx_xyz_m : ndarray, shape (3,)
+        Start position of the estimation (ECEF, m): the header's approximate position when it is
+        near the earth's surface, else the earth's centre.
+    """
+
+    t_gps_s: FloatArray
+    sats: tuple[str, ...]
+    systems: tuple[str, ...]
+    pr_m: FloatArray
+    pr2_m: FloatArray | None
+    cn0_dbhz: FloatArray
+    observed: BoolArray
+    approx_xyz_m: FloatArray
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+
+def code_pseudoranges(obs: Observations, config: SppConfig | None = None) -> Pseudoranges:
+    """Select the pseudoranges the configuration uses (stage 1 of :func:`solve_spp`).
+
+    Parameters
+    ----------
+    obs : Observations
+        RINEX or Android observations.
+    config : SppConfig, optional
+        ``systems`` and ``iono`` (``ionofree`` selects two bands) are read.
+
+    Returns
+    -------
+    Pseudoranges
+    """
+    cfg = config or SppConfig()
+    systems = tuple(s for s in "GRECJI" if s in cfg.systems and s in obs.systems)
+    sats = [s for s in obs.sats if s[0] in systems]
+    p2: FloatArray | None = None
+    if cfg.iono == "ionofree":
+        b1 = {s: IONOFREE_BANDS[s][0] for s in systems if s in IONOFREE_BANDS}
+        b2 = {s: IONOFREE_BANDS[s][1] for s in systems if s in IONOFREE_BANDS}
+        p1, cn0, _ = select_pseudoranges(obs, sats, b1)
+        p2, _, _ = select_pseudoranges(obs, sats, b2)
+        observed = np.isfinite(p1) & np.isfinite(p2)
+    else:
+        p1, cn0, _ = select_pseudoranges(obs, sats, {s: PRIMARY_BAND[s] for s in systems})
+        observed = np.isfinite(p1)
+    return Pseudoranges(
+        t_gps_s=np.array(obs.t_gps_s, dtype=float),
+        sats=tuple(sats),
+        systems=systems,
+        pr_m=p1,
+        pr2_m=p2,
+        cn0_dbhz=cn0,
+        observed=observed,
+        approx_xyz_m=_start_position(obs),
+    )
+
+
+# --------------------------------------------------------------------------- stage 2: satellites
+@dataclass(frozen=True, slots=True, eq=False)
+class SatelliteStates:
+    """Satellite states at signal transmission and the broadcast signal parameters (RTKLIB
+    ``satposs`` with the group delays of ``prange``).
+
+    Attributes
+    ----------
+    sats : tuple of str, length S
+    pos_m : ndarray, shape (E, S, 3)
+        ECEF position at transmission, in the earth-fixed frame of that time (m).
+    clock_s : ndarray, shape (E, S)
+        Satellite clock offset (s) with the relativistic term, without group delay.
+    var_m2 : ndarray, shape (E, S)
+        Signal-in-space range error variance (m^2): broadcast URA/SISA or SP3 accuracy.
+    svh : ndarray of int, shape (E, S)
+        Broadcast health (0 healthy, -1 no ephemeris).
+    group_delay_s : ndarray, shape (E, S)
+        Group delay (s) of the measured signal, subtracted from the satellite clock: TGD/BGD of
+        the band for systems in ``tgd_systems``, the ionosphere-free combination of the two
+        bands' delays with ``iono="ionofree"``, 0 otherwise.
+    freq_hz : ndarray, shape (E, S)
+        Carrier frequency (Hz) of ``Pseudoranges.pr_m`` (GLONASS channel from the ephemeris).
+    freq2_hz : ndarray, shape (E, S), or None
+        Carrier frequency (Hz) of ``Pseudoranges.pr2_m`` (ionosphere-free only).
+    iono_scale : ndarray, shape (E, S)
+        ``(f_L1 / f)^2`` that scales the L1 Klobuchar delay to the measured band; 0 for the
+        ionosphere-free combination.
+    var_factor : ndarray, shape (S,)
+        Square of RTKLIB's system error factor (1.5 for GLONASS, 1 otherwise).
+    valid : ndarray of bool, shape (E, S)
+        An ephemeris (of an orbit source that covers the system, and broadcast as well when
+        ``sp3_needs_broadcast``) was found and evaluated; health is in ``svh``.
+    klobuchar : ndarray, shape (8,), or None
+        Broadcast Klobuchar alpha0-3, beta0-3 of the first navigation file that has them.
+    """
+
+    sats: tuple[str, ...]
+    pos_m: FloatArray
+    clock_s: FloatArray
+    var_m2: FloatArray
+    svh: IntArray
+    group_delay_s: FloatArray
+    freq_hz: FloatArray
+    freq2_hz: FloatArray | None
+    iono_scale: FloatArray
+    var_factor: FloatArray
+    valid: BoolArray
+    klobuchar: FloatArray | None
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+
+def _nav_list(nav: NavData | Sequence[NavData] | None) -> list[NavData]:
+    if nav is None:
+        return []
+    if isinstance(nav, Sequence):
+        return list(nav)
+    return [nav]
+
+
+def navigation_tables(
+    nav: NavData | Sequence[NavData] | None,
+    ephemeris: Mapping[str, EphemerisTable] | None = None,
+) -> dict[str, EphemerisTable]:
+    """Broadcast ephemeris tables per system: ``ephemeris`` when given, else merged from
+    ``nav`` (build them once and pass them to every block of a long file)."""
+    from navtrack.gnss import ephemeris as eph
+
+    if ephemeris is not None:
+        return dict(ephemeris)
+    navs = _nav_list(nav)
+    return eph.merge_tables([eph.ephemeris_tables(n) for n in navs]) if navs else {}
+
+
+def satellite_states(
+    pr: Pseudoranges,
+    nav: NavData | Sequence[NavData] | None = None,
+    *,
+    sp3: Sp3 | None = None,
+    config: SppConfig | None = None,
+    ephemeris: Mapping[str, EphemerisTable] | None = None,
+) -> SatelliteStates:
+    """Satellite positions, clocks and group delays at transmission (stage 2 of
+    :func:`solve_spp`).
+
+    Parameters
+    ----------
+    pr : Pseudoranges
+        The transmission time is ``t_rx - P / c`` (:func:`corrections.transmit_time`).
+    nav : NavData or sequence of NavData, optional
+        Broadcast navigation data: orbits and clocks unless ``sp3`` is given; group delays and
+        Klobuchar parameters in any case.
+    sp3 : Sp3, optional
+        Precise orbits and clocks.
+    config : SppConfig, optional
+    ephemeris : mapping of str to EphemerisTable, optional
+        Pre-built tables (:func:`navigation_tables`), otherwise built from ``nav``.
+
+    Returns
+    -------
+    SatelliteStates
+
+    Raises
+    ------
+    ValueError
+        Neither broadcast ephemerides nor SP3 given.
+    """
+    from navtrack.gnss import ephemeris as eph
+    from navtrack.gnss.corrections import FREQ_L1_HZ, frequency_hz, transmit_time
+
+    cfg = config or SppConfig()
+    tables = navigation_tables(nav, ephemeris)
+    if sp3 is None and not tables:
+        raise ValueError("nav: no broadcast ephemerides and no SP3 given")
+    klob = None
+    for n in _nav_list(nav):
+        klob = _klobuchar_params(n.iono)
+        if klob is not None:
+            break
+    sats = list(pr.sats)
+    t_rx = pr.t_gps_s
+    n_e, n_s = t_rx.size, len(sats)
+    t_sv = np.where(pr.observed, transmit_time(t_rx, pr.pr_m), np.nan)
+    if sp3 is not None:
+        states = eph.sp3_states(sp3, sats, t_sv)
+    else:
+        states = eph.broadcast_states(
+            tables,
+            sats,
+            t_rx,
+            t_sv,
+            max_age_s=cfg.max_age_s,
+            healthy_only=cfg.healthy_only,
+            galileo_nav=cfg.galileo_nav,
+        )
+    ionofree_mode = cfg.iono == "ionofree"
+    sats_arr = np.array(sats, dtype=str)
+    gd = np.zeros((n_e, n_s))
+    scale = np.zeros((n_e, n_s))
+    freq = np.full((n_e, n_s), np.nan)
+    freq2 = np.full((n_e, n_s), np.nan) if ionofree_mode else None
+    fact = np.ones(n_s)
+    for sys in pr.systems:
+        cols = np.flatnonzero(np.char.startswith(sats_arr, sys)) if n_s else np.array([], int)
+        if cols.size == 0:
+            continue
+        table = tables.get(sys)
+        if table is None:
+            idx = np.full((n_e, cols.size), -1, dtype=np.int64)
+        elif sp3 is None:
+            idx = states.eph_index[:, cols]
+        else:  # group delays and GLONASS channels from the nearest broadcast record
+            idx = eph.select_ephemeris(
+                table,
+                [sats[c] for c in cols],
+                t_rx,
+                max_age_s=1e9,
+                healthy_only=False,
+                galileo_nav=cfg.galileo_nav,
+            )
+        fnum = None
+        if sys == "R" and table is not None:
+            fnum = np.where(idx >= 0, table.get("freq_num")[np.maximum(idx, 0)], np.nan)
+        fact[cols] = 1.5**2 if sys == "R" else 1.0
+        if freq2 is not None:
+            ba, bb = IONOFREE_BANDS[sys]
+            fa = frequency_hz(sys, ba, fnum)
+            fb = frequency_hz(sys, bb, fnum)
+            ga = eph.group_delay_s(table, idx, ba) if table is not None else 0.0
+            gb = eph.group_delay_s(table, idx, bb) if table is not None else 0.0
+            gd[:, cols] = (fa**2 * ga - fb**2 * gb) / (fa**2 - fb**2)
+            freq[:, cols] = fa
+            freq2[:, cols] = fb
+        else:
+            band = PRIMARY_BAND[sys]
+            f = frequency_hz(sys, band, fnum)
+            scale[:, cols] = (FREQ_L1_HZ / f) ** 2
+            freq[:, cols] = f
+            if table is not None and sys in cfg.tgd_systems:
+                gd[:, cols] = eph.group_delay_s(table, idx, band)
+    orbit_systems = set(tables) if sp3 is None else {s[0] for s in sp3.sats}
+    valid = states.valid & np.array([s[0] in orbit_systems for s in sats], dtype=bool)
+    if sp3 is not None and cfg.sp3_needs_broadcast:
+        valid &= eph.broadcast_states(
+            tables,
+            sats,
+            t_rx,
+            t_sv,
+            max_age_s=cfg.max_age_s,
+            healthy_only=False,
+            galileo_nav=cfg.galileo_nav,
+        ).valid
+    return SatelliteStates(
+        sats=pr.sats,
+        pos_m=states.pos_m,
+        clock_s=states.clock_s,
+        var_m2=states.var_m2,
+        svh=states.svh,
+        group_delay_s=gd,
+        freq_hz=freq,
+        freq2_hz=freq2,
+        iono_scale=scale,
+        var_factor=fact,
+        valid=valid,
+        klobuchar=klob,
+    )
+
+
+# --------------------------------------------------------------------------- stage 3: measurements
+@dataclass(frozen=True, slots=True, eq=False)
+class Measurements:
+    """Pseudoranges corrected for everything that does not depend on the receiver position, the
+    inputs of the position-dependent model, and the masks (RTKLIB ``prange`` and the
+    satellite-side terms of ``rescode``).
+
+    Attributes
+    ----------
+    t_gps_s : ndarray, shape (E,)
+        Epoch time tags (receiver time, GPS s).
+    sats : tuple of str, length S
+    y_m : ndarray, shape (E, S)
+        ``P + c (dt_sat - group delay)`` (m): pseudorange (ionosphere-free combination with
+        ``iono="ionofree"``) corrected for satellite clock and group delay; NaN where missing.
+    sat_pos_m : ndarray, shape (E, S, 3)
+        Satellite position at transmission (ECEF, m).
+    var_sat_m2 : ndarray, shape (E, S)
+        Satellite-side variance (m^2): URA^2 plus RTKLIB's 0.3 m code bias error squared.
+    var_factor : ndarray, shape (S,)
+        Square of the system error factor of the ``rtklib`` weighting.
+    iono_scale : ndarray, shape (E, S)
+        ``(f_L1 / f)^2`` for the Klobuchar delay; 0 for the ionosphere-free combination.
+    cn0_dbhz : ndarray, shape (E, S)
+        C/N0 (dB-Hz) for the ``cn0`` weighting.
+    klobuchar : ndarray, shape (8,), or None
+        Broadcast Klobuchar parameters (None: the default set of
+        :func:`corrections.klobuchar_delay_m`).
+    ionofree : bool
+        ``y_m`` is the ionosphere-free combination.
+    observed : ndarray of bool, shape (E, S)
+        The needed pseudoranges are present.
+    has_ephemeris : ndarray of bool, shape (E, S)
+        A usable ephemeris was evaluated (health not considered).
+    no_ephemeris : ndarray of bool, shape (E, S)
+        Observed, but without a usable (and, with ``healthy_only``, healthy) ephemeris.
+    usable : ndarray of bool, shape (E, S)
+        Candidates of the estimation: observed, finite ``y_m``, ephemeris usable (healthy with
+        ``healthy_only``), URA within ``max_ura_m``; the elevation mask is applied at each
+        iterate of :func:`estimate_position`.
+    clock_groups : tuple of str, length G
+        Receiver clock parameters: the first group's clock, then one ISB per further group.
+    group : ndarray of int, shape (S,)
+        Clock group index of each satellite.
+    approx_xyz_m : ndarray, shape (3,)
+        Default start position (ECEF, m).
+    """
+
+    t_gps_s: FloatArray
+    sats: tuple[str, ...]
+    y_m: FloatArray
+    sat_pos_m: FloatArray
+    var_sat_m2: FloatArray
+    var_factor: FloatArray
+    iono_scale: FloatArray
+    cn0_dbhz: FloatArray
+    klobuchar: FloatArray | None
     ionofree: bool
+    observed: BoolArray
+    has_ephemeris: BoolArray
+    no_ephemeris: BoolArray
+    usable: BoolArray
+    clock_groups: tuple[str, ...]
+    group: IntArray
+    approx_xyz_m: FloatArray
 
-    def geometry(self, x: FloatArray, idx: IntArray) -> dict[str, Any]:
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+    @property
+    def n_params(self) -> int:
+        """Unknowns per epoch: position (3) and one clock per clock group."""
+        return 3 + len(self.clock_groups)
+
+
+def corrected_measurements(
+    pr: Pseudoranges, sv: SatelliteStates, config: SppConfig | None = None
+) -> Measurements:
+    """Apply satellite clock and group delay, form the ionosphere-free combination, set the
+    usability masks and the clock groups (stage 3 of :func:`solve_spp`).
+
+    Parameters
+    ----------
+    pr : Pseudoranges
+    sv : SatelliteStates
+        Of the same epochs and satellites as ``pr``.
+    config : SppConfig, optional
+
+    Returns
+    -------
+    Measurements
+    """
+    from navtrack.gnss.corrections import ionofree
+
+    cfg = config or SppConfig()
+    if sv.sats != pr.sats or sv.clock_s.shape != pr.pr_m.shape:
+        raise ValueError("sv: satellite states of other epochs or satellites than pr")
+    if pr.pr2_m is not None and sv.freq2_hz is not None:
+        y = ionofree(pr.pr_m, pr.pr2_m, sv.freq_hz, sv.freq2_hz)
+    elif pr.pr2_m is None and sv.freq2_hz is None:
+        y = pr.pr_m
+    else:
+        raise ValueError("sv: computed for another ionosphere mode than pr")
+    y = y + C_MPS * (sv.clock_s - sv.group_delay_s)
+    healthy = sv.svh == 0 if cfg.healthy_only else np.ones_like(sv.valid)
+    observed = pr.observed
+    usable = observed & sv.valid & np.isfinite(y) & healthy & (sv.var_m2 <= cfg.max_ura_m**2)
+    # clock groups: the systems with a usable satellite somewhere, QZSS on GPS's clock
+    sats, systems = pr.sats, pr.systems
+    group_sys: list[str] = []
+    for s in systems:
+        grp = cfg.clock_groups.get(s, s)
+        grp = grp if grp in systems else s
+        present = usable[:, [i for i, sat in enumerate(sats) if sat[0] == s]].any()
+        if present and grp not in group_sys:
+            group_sys.append(grp)
+    group_sys.sort(key="GRECJI".index)
+    if not group_sys:
+        group_sys = [systems[0]] if systems else ["G"]
+    gidx = {g: i for i, g in enumerate(group_sys)}
+    group = np.array(
+        [gidx.get(cfg.clock_groups.get(s[0], s[0]), gidx.get(s[0], 0)) for s in sats],
+        dtype=np.int64,
+    )
+    return Measurements(
+        t_gps_s=pr.t_gps_s,
+        sats=pr.sats,
+        y_m=y,
+        sat_pos_m=sv.pos_m,
+        var_sat_m2=sv.var_m2 + 0.3**2,
+        var_factor=sv.var_factor,
+        iono_scale=sv.iono_scale,
+        cn0_dbhz=pr.cn0_dbhz,
+        klobuchar=sv.klobuchar,
+        ionofree=pr.pr2_m is not None,
+        observed=observed,
+        has_ephemeris=sv.valid,
+        no_ephemeris=observed & ~(sv.valid & healthy),
+        usable=usable,
+        clock_groups=tuple(group_sys),
+        group=group,
+        approx_xyz_m=pr.approx_xyz_m,
+    )
+
+
+# --------------------------------------------------------------------------- kernel
+class _Geometry(NamedTuple):
+    """Receiver-satellite geometry of a batch ``(b, S)`` at the receiver positions ``(b, 3)``."""
+
+    rho: FloatArray  # (b, S) geometric range with Sagnac term, m
+    los: FloatArray  # (b, S, 3) unit line of sight, ECEF
+    llh: FloatArray  # (b, 3) receiver latitude, longitude (rad), height (m)
+    rot: FloatArray  # (b, 3, 3) ECEF -> ENU
+    az: FloatArray  # (b, S) rad
+    el: FloatArray  # (b, S) rad; 90 deg for receivers inside the earth
+    deep: BoolArray  # (b,) receiver inside the earth (start at the centre)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _PseudorangeModel:
+    """The per-epoch pseudorange model of a batch of epochs (the SPP kernel, RTKLIB ``rescode``):
+    batch row ``b`` is measurement epoch ``epochs[b]``, candidates ``usable[b]``."""
+
+    meas: Measurements
+    config: SppConfig
+    usable: BoolArray  # (B, S)
+    epochs: IntArray  # (B,)
+
+    def geometry(self, x: FloatArray, b: IntArray) -> _Geometry:
         from navtrack.gnss.corrections import geometric_range
 
         rcv = x[:, :3]
-        rs = self.sat_pos[idx]
+        rs = self.meas.sat_pos_m[self.epochs[b]]
         rho, los = geometric_range(rs, rcv[:, None, :])
         llh = ecef_to_geodetic(rcv)
         rot = enu_rotation(llh[:, 0], llh[:, 1])  # (b, 3, 3)
@@ -410,25 +872,26 @@ class _Model:
         # inside the earth (start from the centre): no mask, no atmosphere (el = 90 deg)
         deep = np.linalg.norm(rcv, axis=1) < 1e6
         el = np.where(deep[:, None], np.pi / 2.0, el)
-        return {"rho": rho, "los": los, "llh": llh, "az": az, "el": el, "deep": deep}
+        return _Geometry(rho, los, llh, rot, az, el, deep)
 
     def __call__(
-        self, x: FloatArray, idx: IntArray
+        self, x: FloatArray, b: IntArray
     ) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray]:
         from navtrack.gnss.corrections import klobuchar_delay_m, saastamoinen_delay_m
 
-        cfg = self.config
-        g = self.geometry(x, idx)
-        el, az, llh, deep = g["el"], g["az"], g["llh"], g["deep"]
-        valid = self.base_valid[idx] & (el >= math.radians(cfg.elmask_deg))
+        cfg, m = self.config, self.meas
+        e = self.epochs[b]
+        g = self.geometry(x, b)
+        el, az, llh, deep = g.el, g.az, g.llh, g.deep
+        valid = self.usable[b] & (el >= math.radians(cfg.elmask_deg))
         lat = llh[:, 0:1]
         lon = llh[:, 1:2]
         h = llh[:, 2:3]
         atm = ~deep[:, None]
         if cfg.iono == "klobuchar":
-            iono_l1 = klobuchar_delay_m(self.t_rx[idx, None], lat, lon, az, el, self.klob)
+            iono_l1 = klobuchar_delay_m(m.t_gps_s[e, None], lat, lon, az, el, m.klobuchar)
             iono_l1 = np.where(atm, iono_l1, 0.0)
-            iono = iono_l1 * self.iono_scale[idx]
+            iono = iono_l1 * m.iono_scale[e]
             var_iono = (0.5 * iono_l1) ** 2
         elif cfg.iono == "ionofree":
             iono = np.zeros_like(el)
@@ -442,42 +905,410 @@ class _Model:
         else:
             trop = np.zeros_like(el)
             var_trop = np.full_like(el, 3.0**2)
-        b = idx.size
-        n_s = self.group.size
-        clk = x[:, 3 : 3 + self.n_groups]
-        clock = clk[:, 0:1] + np.where(self.group > 0, clk[:, np.maximum(self.group, 0)], 0.0)
-        v = self.y[idx] - (g["rho"] + clock + iono + trop)
-        J = np.zeros((b, n_s, 3 + self.n_groups))
-        J[..., :3] = -g["los"]
+        n_groups = len(m.clock_groups)
+        clk = x[:, 3 : 3 + n_groups]
+        clock = clk[:, 0:1] + np.where(m.group > 0, clk[:, np.maximum(m.group, 0)], 0.0)
+        v = m.y_m[e] - (g.rho + clock + iono + trop)
+        J = np.zeros((b.size, m.group.size, 3 + n_groups))
+        J[..., :3] = -g.los
         J[..., 3] = 1.0
-        if self.n_groups > 1:
-            for k in range(1, self.n_groups):
-                J[..., 3 + k] = (self.group == k).astype(float)
-        sin_el = np.sin(el)
-        if cfg.weighting == "rtklib":
-            base = 100.0**2 * (0.003**2 + 0.003**2 / sin_el)
-            if self.ionofree:
-                base = base * 9.0
-            var = self.var_fact * base + self.var_sat[idx] + var_iono + var_trop
-        elif cfg.weighting == "elevation":
-            var = cfg.sigma0_m**2 * (1.0 + 1.0 / sin_el**2)
-        elif cfg.weighting == "cn0":
-            c_n0 = self.cn0[idx]
-            var = np.where(
-                np.isfinite(c_n0),
-                cfg.sigma0_m**2 + 1.61e4 * 10.0 ** (-np.nan_to_num(c_n0) / 10.0),
-                cfg.sigma0_m**2 * (1.0 + 1.0 / sin_el**2),
-            )
-        else:
-            var = np.full_like(el, cfg.sigma0_m**2)
+        for k in range(1, n_groups):
+            J[..., 3 + k] = (m.group == k).astype(float)
+        var = measurement_variance(
+            el, m.var_sat_m2[e], m.var_factor, var_iono, var_trop, m.cn0_dbhz[e], cfg, m.ionofree
+        )
         valid &= np.isfinite(v) & np.isfinite(var) & (var > 0)
         w = np.where(valid, 1.0 / np.where(valid, var, 1.0), 0.0)
         J = np.where(valid[..., None], J, 0.0)
         return np.where(valid, v, 0.0), J, w, valid
 
 
-# --------------------------------------------------------------------------- driver
-def _klobuchar_params(nav_iono: Mapping[str, Any] | None) -> FloatArray | None:
+def measurement_variance(
+    el_rad: FloatArray,
+    var_sat_m2: FloatArray,
+    var_factor: FloatArray,
+    var_iono_m2: FloatArray,
+    var_trop_m2: FloatArray,
+    cn0_dbhz: FloatArray,
+    config: SppConfig,
+    ionofree: bool = False,
+) -> FloatArray:
+    """Pseudorange error variance (m^2) of the configured weighting model
+    (:attr:`SppConfig.weighting`).
+
+    Parameters
+    ----------
+    el_rad : ndarray, shape (B, S)
+        Elevation (rad).
+    var_sat_m2 : ndarray, shape (B, S)
+        Satellite-side variance (URA^2 + code bias), ``rtklib`` only.
+    var_factor : ndarray, shape (S,)
+        System factor squared, ``rtklib`` only.
+    var_iono_m2, var_trop_m2 : ndarray, shape (B, S)
+        Variances of the ionosphere and troposphere corrections, ``rtklib`` only.
+    cn0_dbhz : ndarray, shape (B, S)
+        C/N0, ``cn0`` only (NaN: the ``elevation`` model).
+    config : SppConfig
+    ionofree : bool
+        The ionosphere-free combination (``rtklib``: receiver term times 3^2).
+
+    Returns
+    -------
+    ndarray, shape (B, S)
+
+    References
+    ----------
+    RTKLIB 2.4.3 ``pntpos.c`` ``varerr`` and ``rescode``; Hartinger & Brunner 1999 (SIGMA-epsilon).
+    """
+    sin_el = np.sin(el_rad)
+    if config.weighting == "rtklib":
+        base = 100.0**2 * (0.003**2 + 0.003**2 / sin_el)
+        if ionofree:
+            base = base * 9.0
+        return var_factor * base + var_sat_m2 + var_iono_m2 + var_trop_m2
+    if config.weighting == "elevation":
+        return config.sigma0_m**2 * (1.0 + 1.0 / sin_el**2)
+    if config.weighting == "cn0":
+        return np.where(
+            np.isfinite(cn0_dbhz),
+            config.sigma0_m**2 + 1.61e4 * 10.0 ** (-np.nan_to_num(cn0_dbhz) / 10.0),
+            config.sigma0_m**2 * (1.0 + 1.0 / sin_el**2),
+        )
+    return np.full_like(el_rad, config.sigma0_m**2)
+
+
+# --------------------------------------------------------------------------- stage 4: estimation
+@dataclass(frozen=True, slots=True, eq=False)
+class Estimate:
+    """Weighted least-squares estimate of a batch of epochs with everything fault detection
+    needs (RTKLIB ``estpos``).
+
+    State per epoch: ``(x, y, z, clock, isb...)`` — ECEF position (m), receiver clock of the
+    first clock group times c (m), one inter-system bias (m) per further clock group
+    (``Measurements.clock_groups``); ``P = 3 + G``.
+
+    Attributes
+    ----------
+    epochs : ndarray of int, shape (B,)
+        Measurement epochs estimated (indices into ``Measurements.t_gps_s``).
+    x : ndarray, shape (B, P)
+        State at the last iterate (the start value where nothing could be solved).
+    cov : ndarray, shape (B, P, P)
+        Formal covariance ``(B^T W B)^-1`` (m^2), NaN where singular; zero rows/columns for
+        clock groups without a used satellite.
+    residuals_m : ndarray, shape (B, S)
+        Observed minus computed pseudoranges at ``x`` (m), NaN where not used.
+    design : ndarray, shape (B, S, P)
+        Geometry (design) matrix ``B = dh/dx`` at ``x``: rows ``(-los, 1, isb indicators)``,
+        zero where not used. A small state change ``dx`` changes the residuals by ``-B dx``.
+    weights : ndarray, shape (B, S)
+        ``1 / sigma^2`` (1/m^2) of :func:`measurement_variance` at ``x``, 0 where not used.
+    used : ndarray of bool, shape (B, S)
+        Satellites in the estimate (usable, above the elevation mask, not excluded).
+    azel_rad : ndarray, shape (B, S, 2)
+        Azimuth and elevation at ``x`` (rad).
+    enu_rotation : ndarray, shape (B, 3, 3)
+        ECEF to local east/north/up rotation at ``x``.
+    dop : ndarray, shape (B, 4)
+        GDOP, PDOP, HDOP, VDOP of the used satellites (:func:`dops`).
+    chi2 : ndarray, shape (B,)
+        Weighted sum of squared residuals ``v^T W v``.
+    dof : ndarray of int, shape (B,)
+        Redundancy: used satellites minus estimated parameters.
+    iterations : ndarray of int, shape (B,)
+        Gauss–Newton steps.
+    status : ndarray of int8, shape (B,)
+        :class:`SppStatus` of the estimation: ``ok``, ``no_ephemeris``, ``too_few_sats``,
+        ``singular_geometry`` or ``no_convergence`` (the validity tests are
+        :func:`validate`'s).
+    """
+
+    epochs: IntArray
+    x: FloatArray
+    cov: FloatArray
+    residuals_m: FloatArray
+    design: FloatArray
+    weights: FloatArray
+    used: BoolArray
+    azel_rad: FloatArray
+    enu_rotation: FloatArray
+    dop: FloatArray
+    chi2: FloatArray
+    dof: IntArray
+    iterations: IntArray
+    status: Int8Array
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+
+def estimate_position(
+    meas: Measurements,
+    config: SppConfig | None = None,
+    *,
+    epochs: IntArray | None = None,
+    exclude: BoolArray | None = None,
+    x0_m: FloatArray | None = None,
+) -> Estimate:
+    """Iterated weighted least squares of position and clocks (stage 4 of :func:`solve_spp`).
+
+    Elevation mask, ionosphere, troposphere and weights are re-evaluated at every iterate, as
+    RTKLIB's ``rescode`` does; all epochs iterate in one batched Gauss–Newton
+    (:func:`navtrack.gnss.solve.gauss_newton`, step-norm threshold ``xtol_m``).
+
+    Parameters
+    ----------
+    meas : Measurements
+    config : SppConfig, optional
+    epochs : ndarray of int, shape (B,), optional
+        Measurement epochs to estimate (default: all ``E``); integrity monitoring re-estimates a
+        subset with a new ``exclude``.
+    exclude : ndarray of bool, shape (B, S), optional
+        Satellites left out per estimated epoch (fault exclusion); excluding a satellite is the
+        same as not having observed it.
+    x0_m : ndarray, shape (3,), (B, 3) or (B, P), optional
+        Start position (ECEF, m), or full start state; default ``meas.approx_xyz_m`` with zero
+        clocks.
+
+    Returns
+    -------
+    Estimate
+    """
+    from navtrack.gnss.solve import LsqStatus, gauss_newton
+
+    cfg = config or SppConfig()
+    n_e, n_s = meas.usable.shape
+    if epochs is None:
+        idx = np.arange(n_e)
+        usable = meas.usable
+    else:
+        idx = np.asarray(epochs)
+        if idx.ndim != 1 or idx.dtype.kind not in "iu":
+            raise ValueError(f"epochs: expected a 1-D integer array, got {idx.dtype} {idx.shape}")
+        if idx.size and (idx.min() < -n_e or idx.max() >= n_e):
+            raise ValueError(f"epochs: indices outside the {n_e} measurement epochs")
+        idx = np.where(idx < 0, idx + n_e, idx).astype(np.int64)
+        usable = meas.usable[idx]
+    if exclude is not None:
+        ex = np.asarray(exclude)
+        if ex.shape != (idx.size, n_s) or ex.dtype != bool:
+            raise ValueError(f"exclude: expected a bool array of shape {(idx.size, n_s)}")
+        usable = usable & ~ex
+    n_p = meas.n_params
+    x0 = np.zeros((idx.size, n_p))
+    start = meas.approx_xyz_m if x0_m is None else np.asarray(x0_m, dtype=float)
+    if start.shape == (idx.size, n_p):
+        x0[:] = start
+    elif start.shape in ((3,), (idx.size, 3)):
+        x0[:, :3] = start
+    else:
+        raise ValueError(f"x0_m: expected shape (3,), {(idx.size, 3)} or {x0.shape}")
+    model = _PseudorangeModel(meas, cfg, usable, idx)
+    lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=cfg.xtol_m)
+
+    observed = meas.observed[idx].any(axis=1)
+    status = np.full(idx.size, SppStatus.OK, dtype=np.int8)
+    status[lsq.status == LsqStatus.NO_CONVERGENCE] = SppStatus.NO_CONVERGENCE
+    status[lsq.status == LsqStatus.SINGULAR] = SppStatus.SINGULAR_GEOMETRY
+    status[lsq.status == LsqStatus.TOO_FEW_MEASUREMENTS] = SppStatus.TOO_FEW_SATS
+    status[~usable.any(axis=1) & observed] = SppStatus.TOO_FEW_SATS
+    with_eph = (meas.has_ephemeris[idx] & meas.observed[idx]).any(axis=1)
+    status[observed & ~with_eph] = SppStatus.NO_EPHEMERIS
+    status[~observed] = SppStatus.TOO_FEW_SATS
+
+    geo = model.geometry(lsq.x, np.arange(idx.size))
+    los_enu = np.einsum("eij,esj->esi", geo.rot, geo.los)
+    return Estimate(
+        epochs=idx,
+        x=lsq.x,
+        cov=lsq.cov,
+        residuals_m=lsq.residuals,
+        design=lsq.jacobian,
+        weights=lsq.weights,
+        used=lsq.valid,
+        azel_rad=np.stack([geo.az, geo.el], axis=-1),
+        enu_rotation=geo.rot,
+        dop=dops(los_enu, lsq.valid),
+        chi2=lsq.cost,
+        dof=lsq.dof,
+        iterations=lsq.iterations,
+        status=status,
+    )
+
+
+def merge_estimates(estimate: Estimate, update: Estimate) -> Estimate:
+    """``estimate`` with the epochs of ``update`` replaced by ``update``'s rows (e.g. the
+    re-estimates of fault exclusion on the failed epochs); ``update.epochs`` must be among
+    ``estimate.epochs``.
+
+    Parameters
+    ----------
+    estimate : Estimate
+        Of epochs ``(B,)``.
+    update : Estimate
+        Of epochs ``(b,)`` of the same measurements (same satellites and parameters).
+
+    Returns
+    -------
+    Estimate
+        Of epochs ``(B,)``.
+    """
+    if (
+        update.x.shape[1:] != estimate.x.shape[1:]
+        or update.used.shape[1:] != estimate.used.shape[1:]
+    ):
+        raise ValueError("update: estimate of other satellites or parameters")
+    pos = {int(e): i for i, e in enumerate(estimate.epochs)}
+    if any(int(e) not in pos for e in update.epochs):
+        raise ValueError("update: epochs that estimate does not have")
+    rows = np.array([pos[int(e)] for e in update.epochs], dtype=np.int64)
+    fields = {}
+    for name in Estimate.__dataclass_fields__:
+        value = np.array(getattr(estimate, name))
+        if name != "epochs":
+            value[rows] = getattr(update, name)
+        fields[name] = value
+    return Estimate(**fields)
+
+
+# --------------------------------------------------------------------------- stage 5: validation
+def validate(estimate: Estimate, config: SppConfig | None = None) -> Int8Array:
+    """Validity tests of the estimated epochs (stage 5 of :func:`solve_spp`, RTKLIB ``valsol``;
+    the stage integrity monitoring replaces).
+
+    An ``ok`` epoch becomes ``rejected_validity`` when its weighted residuals fail the
+    chi-square test, ``v^T W v > chi2_{1 - alpha}(dof)`` (skipped for ``chi2_alpha = 0`` or
+    ``dof = 0``), else ``high_dop`` when ``GDOP > max_gdop`` or GDOP is undefined.
+
+    Parameters
+    ----------
+    estimate : Estimate
+    config : SppConfig, optional
+        ``chi2_alpha`` and ``max_gdop``.
+
+    Returns
+    -------
+    ndarray of int8, shape (B,)
+        :class:`SppStatus` per estimated epoch.
+
+    References
+    ----------
+    RTKLIB 2.4.2 manual, appendix E.6 (E.6.33, E.6.34).
+    """
+    cfg = config or SppConfig()
+    status = estimate.status.copy()
+    conv = status == SppStatus.OK
+    dof = estimate.dof
+    if cfg.chi2_alpha > 0:
+        thr = np.array(
+            [chi2_quantile(1.0 - cfg.chi2_alpha, int(k)) if k > 0 else np.inf for k in dof]
+        )
+        status[conv & (dof > 0) & (estimate.chi2 > thr)] = SppStatus.REJECTED_VALIDITY
+    gdop = estimate.dop[:, 0]
+    status[conv & (status == SppStatus.OK) & ~(gdop <= cfg.max_gdop)] = SppStatus.HIGH_DOP
+    return status
+
+
+# --------------------------------------------------------------------------- result, driver
+def spp_result(meas: Measurements, estimate: Estimate, status: Int8Array) -> SppResult:
+    """Assemble the :class:`SppResult` of an estimate of all measurement epochs and the
+    statuses of its validation: positions, clocks and covariances of the epochs whose status is
+    ``ok``, ``rejected_validity`` or ``high_dop``, NaN elsewhere."""
+    n_e = meas.t_gps_s.size
+    if not np.array_equal(estimate.epochs, np.arange(n_e)) or np.shape(status) != (n_e,):
+        raise ValueError("estimate, status: need all measurement epochs in order")
+    x, rot, n_groups = estimate.x, estimate.enu_rotation, len(meas.clock_groups)
+    solved = np.isin(status, (SppStatus.OK, SppStatus.REJECTED_VALIDITY, SppStatus.HIGH_DOP))
+    valid = estimate.used
+    group_seen = np.stack([(valid & (meas.group == k)).any(axis=1) for k in range(n_groups)], 1)
+    cov_enu = np.einsum("eij,ejk,elk->eil", rot, estimate.cov[:, :3, :3], rot)
+    w = estimate.weights
+    return SppResult(
+        t_gps_s=meas.t_gps_s.copy(),
+        sats=meas.sats,
+        clock_groups=meas.clock_groups,
+        pos_m=np.where(solved[:, None], x[:, :3], np.nan),
+        clock_m=np.where(solved, x[:, 3], np.nan),
+        isb_m=np.where(solved[:, None] & group_seen[:, 1:], x[:, 4:], np.nan),
+        cov=estimate.cov,
+        cov_enu_m2=np.where(solved[:, None, None], cov_enu, np.nan),
+        status=np.array(status, dtype=np.int8),
+        used=valid & solved[:, None],
+        observed=meas.observed,
+        no_ephemeris=meas.no_ephemeris,
+        residuals_m=estimate.residuals_m,
+        sigma_m=np.where(valid, 1.0 / np.sqrt(np.where(valid, w, 1.0)), np.nan),
+        azel_rad=estimate.azel_rad,
+        dop=estimate.dop,
+        chi2=estimate.chi2,
+        dof=estimate.dof,
+        iterations=estimate.iterations,
+    )
+
+
+def solve_spp(
+    obs: Observations,
+    nav: NavData | Sequence[NavData] | None = None,
+    *,
+    sp3: Sp3 | None = None,
+    config: SppConfig | None = None,
+    x0_m: FloatArray | None = None,
+    ephemeris: Mapping[str, EphemerisTable] | None = None,
+    chunk_epochs: int = CHUNK_EPOCHS,
+    progress: ProgressFn | None = None,
+) -> SppResult:
+    """Single point positions of every epoch of an observation set.
+
+    Runs the stages :func:`code_pseudoranges` -> :func:`satellite_states` ->
+    :func:`corrected_measurements` -> :func:`estimate_position` -> :func:`validate` ->
+    :func:`spp_result` on blocks of ``chunk_epochs`` epochs (joined by
+    :func:`concatenate_results`).
+
+    Parameters
+    ----------
+    obs : Observations
+        RINEX or Android observations.
+    nav : NavData or sequence of NavData, optional
+        Broadcast navigation data (orbits and clocks unless ``sp3`` is given; group delays and
+        Klobuchar parameters in any case).
+    sp3 : Sp3, optional
+        Precise orbits and clocks; then broadcast records only provide group delays.
+    config : SppConfig, optional
+    x0_m : ndarray, shape (3,), optional
+        Start position (ECEF, m; default: the header's approximate position when plausible,
+        else the earth's centre).
+    ephemeris : mapping of str to EphemerisTable, optional
+        Pre-built tables (otherwise built from ``nav``).
+    chunk_epochs : int
+        Epochs per block: bounds the memory of the ``(epochs, satellites, unknowns)`` arrays.
+        Clock groups are chosen per block (a system seen in one block only has a NaN ISB
+        elsewhere).
+    progress : callable, optional
+        ``progress(epochs_done, epochs_total)``, called after each block.
+
+    Returns
+    -------
+    SppResult
+    """
+    if chunk_epochs < 1:
+        raise ValueError(f"chunk_epochs: expected a positive number of epochs, got {chunk_epochs}")
+    cfg = config or SppConfig()
+    tables = navigation_tables(nav, ephemeris)
+    n = obs.t_gps_s.size
+    parts = []
+    for a in range(0, max(n, 1), chunk_epochs):
+        block = obs if n <= chunk_epochs else subset_epochs(obs, slice(a, a + chunk_epochs))
+        pr = code_pseudoranges(block, cfg)
+        sv = satellite_states(pr, nav, sp3=sp3, config=cfg, ephemeris=tables)
+        meas = corrected_measurements(pr, sv, cfg)
+        est = estimate_position(meas, cfg, x0_m=x0_m)
+        parts.append(spp_result(meas, est, validate(est, cfg)))
+        if progress is not None:
+            progress(min(a + chunk_epochs, n), n)
+    return parts[0] if len(parts) == 1 else concatenate_results(parts)
+
+
+def _klobuchar_params(nav_iono: Mapping[str, FloatArray]) -> FloatArray | None:
     if not nav_iono:
         return None
     for a, b in (("GPSA", "GPSB"), ("QZSA", "QZSB"), ("BDSA", "BDSB")):
@@ -528,256 +1359,6 @@ def dops(los_enu: FloatArray, used: BoolArray) -> FloatArray:
         out[ok, 2] = np.sqrt(d[:, :2].sum(axis=1))
         out[ok, 3] = np.sqrt(d[:, 2])
     return out
-
-
-def solve_spp(
-    obs: Observations,
-    nav: Any | None = None,
-    *,
-    sp3: Any | None = None,
-    config: SppConfig | None = None,
-    x0_m: FloatArray | None = None,
-    ephemeris: Mapping[str, EphemerisTable] | None = None,
-) -> SppResult:
-    """Single point positions of every epoch of an observation set.
-
-    Parameters
-    ----------
-    obs : Observations
-        RINEX or Android observations.
-    nav : NavData or sequence of NavData, optional
-        Broadcast navigation data (orbits and clocks unless ``sp3`` is given; group delays and
-        Klobuchar parameters in any case).
-    sp3 : Sp3, optional
-        Precise orbits and clocks; then broadcast records only provide group delays.
-    config : SppConfig, optional
-    x0_m : ndarray, shape (3,), optional
-        Start position (default: the header's approximate position when plausible, else the
-        earth's centre).
-    ephemeris : mapping of str to EphemerisTable, optional
-        Pre-built tables (otherwise built from ``nav``).
-
-    Returns
-    -------
-    SppResult
-    """
-    from navtrack.gnss import ephemeris as eph
-    from navtrack.gnss.corrections import FREQ_L1_HZ, frequency_hz, ionofree, transmit_time
-    from navtrack.gnss.solve import LsqStatus, gauss_newton
-
-    cfg = config or SppConfig()
-    navs: list[Any] = [] if nav is None else list(nav) if isinstance(nav, list | tuple) else [nav]
-    if ephemeris is None:
-        tables = eph.merge_tables([eph.ephemeris_tables(n) for n in navs]) if navs else {}
-    else:
-        tables = dict(ephemeris)
-    if sp3 is None and not tables:
-        raise ValueError("nav: no broadcast ephemerides and no SP3 given")
-    klob = None
-    for n in navs:
-        klob = _klobuchar_params(getattr(n, "iono", None))
-        if klob is not None:
-            break
-
-    orbit_systems = set(tables) if sp3 is None else {s[0] for s in sp3.sats}
-    systems = [s for s in "GRECJI" if s in cfg.systems and s in obs.systems]
-    sats = [s for s in obs.sats if s[0] in systems]
-    t_rx = np.asarray(obs.t_gps_s, dtype=float)
-    n_e, n_s = t_rx.size, len(sats)
-
-    # measurements
-    ionofree_mode = cfg.iono == "ionofree"
-    if ionofree_mode:
-        b1 = {s: IONOFREE_BANDS[s][0] for s in systems if s in IONOFREE_BANDS}
-        b2 = {s: IONOFREE_BANDS[s][1] for s in systems if s in IONOFREE_BANDS}
-        p1, cn0, _ = select_pseudoranges(obs, sats, b1)
-        p2, _, _ = select_pseudoranges(obs, sats, b2)
-    else:
-        b1 = {s: PRIMARY_BAND[s] for s in systems}
-        p1, cn0, _ = select_pseudoranges(obs, sats, b1)
-        p2 = None
-    observed = np.isfinite(p1) if p2 is None else np.isfinite(p1) & np.isfinite(p2)
-    t_sv = np.where(observed, transmit_time(t_rx, p1), np.nan)
-
-    # satellite states
-    if sp3 is not None:
-        states = eph.sp3_states(sp3, sats, t_sv)
-    else:
-        states = eph.broadcast_states(
-            tables,
-            sats,
-            t_rx,
-            t_sv,
-            max_age_s=cfg.max_age_s,
-            healthy_only=cfg.healthy_only,
-            galileo_nav=cfg.galileo_nav,
-        )
-    # group delays, frequencies (from broadcast records; for SP3 the nearest record)
-    sats_arr = np.array(sats, dtype=str)
-    gd = np.zeros((n_e, n_s))
-    scale = np.zeros((n_e, n_s))
-    fact = np.ones(n_s)
-    y = np.full((n_e, n_s), np.nan)
-    for sys in systems:
-        cols = np.flatnonzero(np.char.startswith(sats_arr, sys)) if n_s else np.array([], int)
-        if cols.size == 0:
-            continue
-        table = tables.get(sys)
-        if table is not None:
-            if sp3 is None:
-                idx = states.eph_index[:, cols]
-            else:
-                idx = eph.select_ephemeris(
-                    table,
-                    [sats[c] for c in cols],
-                    t_rx,
-                    max_age_s=1e9,
-                    healthy_only=False,
-                    galileo_nav=cfg.galileo_nav,
-                )
-        else:
-            idx = np.full((n_e, cols.size), -1, dtype=np.int64)
-        fnum = None
-        if sys == "R" and table is not None:
-            fn = table.get("freq_num")
-            fnum = np.where(idx >= 0, fn[np.maximum(idx, 0)], np.nan)
-        fact[cols] = 1.5**2 if sys == "R" else 1.0
-        if ionofree_mode:
-            ba, bb = IONOFREE_BANDS[sys]
-            fa = frequency_hz(sys, ba, fnum)
-            fb = frequency_hz(sys, bb, fnum)
-            ga = eph.group_delay_s(table, idx, ba) if table is not None else 0.0
-            gb = eph.group_delay_s(table, idx, bb) if table is not None else 0.0
-            if p2 is None:  # pragma: no cover - set above in ionofree mode
-                raise RuntimeError("ionofree: second-frequency pseudoranges missing")
-            pc = ionofree(p1[:, cols], p2[:, cols], fa, fb)
-            gdc = (fa**2 * ga - fb**2 * gb) / (fa**2 - fb**2)
-            gd[:, cols] = gdc
-            y[:, cols] = pc
-        else:
-            band = b1[sys]
-            f = frequency_hz(sys, band, fnum)
-            scale[:, cols] = (FREQ_L1_HZ / f) ** 2
-            if table is not None and sys in cfg.tgd_systems:
-                gd[:, cols] = eph.group_delay_s(table, idx, band)
-            y[:, cols] = p1[:, cols]
-    y = y + C_MPS * (states.clock_s - gd)
-    if sp3 is not None and cfg.sp3_needs_broadcast:
-        bc = eph.broadcast_states(
-            tables,
-            sats,
-            t_rx,
-            t_sv,
-            max_age_s=cfg.max_age_s,
-            healthy_only=False,
-            galileo_nav=cfg.galileo_nav,
-        )
-        has_eph_bc = bc.valid
-    else:
-        has_eph_bc = np.ones((n_e, n_s), dtype=bool)
-    var_sat = states.var_m2 + 0.3**2
-    has_eph = states.valid & np.array([s[0] in orbit_systems for s in sats], dtype=bool)
-    has_eph &= has_eph_bc
-    base_valid = observed & has_eph & np.isfinite(y)
-    if cfg.healthy_only:
-        base_valid &= states.svh == 0
-    base_valid &= states.var_m2 <= cfg.max_ura_m**2
-    no_eph = observed & ~(has_eph & (states.svh == 0 if cfg.healthy_only else True))
-
-    # clock groups
-    group_sys: list[str] = []
-    for s in systems:
-        grp = cfg.clock_groups.get(s, s)
-        grp = grp if grp in systems else s
-        present = base_valid[:, [i for i, sat in enumerate(sats) if sat[0] == s]].any()
-        if present and grp not in group_sys:
-            group_sys.append(grp)
-    group_sys.sort(key="GRECJI".index)
-    if not group_sys:
-        group_sys = [systems[0]] if systems else ["G"]
-    gidx = {g: i for i, g in enumerate(group_sys)}
-    group = np.array(
-        [gidx.get(cfg.clock_groups.get(s[0], s[0]), gidx.get(s[0], 0)) for s in sats],
-        dtype=np.int64,
-    )
-    n_groups = len(group_sys)
-
-    model = _Model(
-        t_rx=t_rx,
-        y=y,
-        sat_pos=states.pos_m,
-        base_valid=base_valid,
-        group=group,
-        n_groups=n_groups,
-        iono_scale=scale,
-        var_sat=var_sat,
-        var_fact=fact,
-        cn0=cn0,
-        klob=klob,
-        config=cfg,
-        ionofree=ionofree_mode,
-    )
-    x0 = np.zeros((n_e, 3 + n_groups))
-    x0[:, :3] = _start_position(obs) if x0_m is None else np.asarray(x0_m, dtype=float)
-    if n_s == 0:
-        model.base_valid = np.zeros((n_e, 0), dtype=bool)
-    lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=cfg.xtol_m)
-
-    # statuses
-    status = np.full(n_e, SppStatus.OK, dtype=np.int8)
-    status[lsq.status == LsqStatus.NO_CONVERGENCE] = SppStatus.NO_CONVERGENCE
-    status[lsq.status == LsqStatus.SINGULAR] = SppStatus.SINGULAR_GEOMETRY
-    status[lsq.status == LsqStatus.TOO_FEW_MEASUREMENTS] = SppStatus.TOO_FEW_SATS
-    status[~base_valid.any(axis=1) & observed.any(axis=1)] = SppStatus.TOO_FEW_SATS
-    status[observed.any(axis=1) & ~(has_eph & observed).any(axis=1)] = SppStatus.NO_EPHEMERIS
-    status[~observed.any(axis=1)] = SppStatus.TOO_FEW_SATS
-
-    x = lsq.x
-    geo = model.geometry(x, np.arange(n_e))
-    llh = geo["llh"]
-    rot = enu_rotation(llh[:, 0], llh[:, 1])
-    los_enu = np.einsum("eij,esj->esi", rot, geo["los"])
-    dop = dops(los_enu, lsq.valid)
-    conv = status == SppStatus.OK
-    if cfg.chi2_alpha > 0:
-        thr = np.array(
-            [chi2_quantile(1.0 - cfg.chi2_alpha, int(k)) if k > 0 else np.inf for k in lsq.dof]
-        )
-        status[conv & (lsq.dof > 0) & (lsq.cost > thr)] = SppStatus.REJECTED_VALIDITY
-    gdop = dop[:, 0]
-    status[conv & (status == SppStatus.OK) & ~(gdop <= cfg.max_gdop)] = SppStatus.HIGH_DOP
-    solved = np.isin(status, (SppStatus.OK, SppStatus.REJECTED_VALIDITY, SppStatus.HIGH_DOP))
-    used = lsq.valid & solved[:, None]
-    pos = np.where(solved[:, None], x[:, :3], np.nan)
-    clock_m = np.where(solved, x[:, 3], np.nan)
-    group_seen = np.stack([(lsq.valid & (group == k)).any(axis=1) for k in range(n_groups)], 1)
-    isb = np.where(solved[:, None] & group_seen[:, 1:], x[:, 4:], np.nan)
-    cov = lsq.cov
-    cov_enu = np.einsum("eij,ejk,elk->eil", rot, cov[:, :3, :3], rot)
-    cov_enu = np.where(solved[:, None, None], cov_enu, np.nan)
-    azel = np.stack([geo["az"], geo["el"]], axis=-1)
-    sigma = np.where(lsq.valid, 1.0 / np.sqrt(np.where(lsq.valid, lsq.weights, 1.0)), np.nan)
-    return SppResult(
-        t_gps_s=t_rx.copy(),
-        sats=tuple(sats),
-        clock_groups=tuple(group_sys),
-        pos_m=pos,
-        clock_m=clock_m,
-        isb_m=isb,
-        cov=cov,
-        cov_enu_m2=cov_enu,
-        status=status,
-        used=used,
-        observed=observed,
-        no_ephemeris=no_eph,
-        residuals_m=np.where(lsq.valid, lsq.residuals, np.nan),
-        sigma_m=sigma,
-        azel_rad=azel,
-        dop=dop,
-        chi2=lsq.cost.copy(),
-        dof=lsq.dof.copy(),
-        iterations=lsq.iterations.copy(),
-    )
 
 
 def subset_epochs(obs: Observations, epochs: slice | IntArray) -> Observations:
@@ -854,33 +1435,25 @@ def concatenate_results(parts: list[SppResult]) -> SppResult:
     )
 
 
-def solution_columns(result: SppResult) -> dict[str, np.ndarray]:
-    """The solution as columns (plain arrays, no pandas), one row per epoch, all statuses.
+def solution_frame(result: SppResult) -> dict[str, np.ndarray]:
+    """The solution as a solution frame (plain arrays, no pandas), one row per epoch, all
+    statuses: the input of :func:`navtrack.io.solution.write_solution`,
+    :func:`navtrack.io.solution.solution_columns` (which derives ``time_gps``, ``week``,
+    ``tow_s`` and the geodetic position) and :func:`navtrack.plots.gnss.plot_solution`.
 
-    Columns: ``time_gps`` (ISO 8601 GPST, ms), ``week``, ``tow_s``, ``x_m``, ``y_m``, ``z_m``,
-    ``lat_deg``, ``lon_deg``, ``h_m`` (ellipsoidal), ``clock_m``, ``sd_e_m``, ``sd_n_m``,
-    ``sd_u_m`` (formal standard deviations), ``n_sats`` (used), ``pdop``, ``status`` (name),
-    ``excluded`` (space-separated ids; empty until RAIM lands), then ``t_gps_s``, ``gdop``,
-    ``hdop``, ``vdop`` and one ``isb_<sys>_m`` per further clock group. Positions are NaN
-    where no estimate exists.
+    Columns: ``t_gps_s`` (GPS s), ``x_m``, ``y_m``, ``z_m`` (ECEF, m; NaN where no estimate
+    exists), ``clock_m``, ``sd_e_m``, ``sd_n_m``, ``sd_u_m`` (formal standard deviations, m),
+    ``n_sats`` (used), ``pdop``, ``status`` (name), ``excluded`` (space-separated ids; empty
+    until RAIM lands), ``gdop``, ``hdop``, ``vdop`` and one ``isb_<sys>_m`` per further clock
+    group.
     """
-    from navtrack.timescale import to_datetime64, week_tow
-
-    week, tow = week_tow(result.t_gps_s)
-    llh = ecef_to_geodetic(result.pos_m)
     sd = np.sqrt(np.einsum("eii->ei", result.cov_enu_m2))
-    times = np.datetime_as_string(to_datetime64(result.t_gps_s), unit="ms")
     n = result.t_gps_s.size
     cols: dict[str, np.ndarray] = {
-        "time_gps": times,
-        "week": week,
-        "tow_s": tow,
+        "t_gps_s": result.t_gps_s,
         "x_m": result.pos_m[:, 0],
         "y_m": result.pos_m[:, 1],
         "z_m": result.pos_m[:, 2],
-        "lat_deg": np.degrees(llh[:, 0]),
-        "lon_deg": np.degrees(llh[:, 1]),
-        "h_m": llh[:, 2],
         "clock_m": result.clock_m,
         "sd_e_m": sd[:, 0],
         "sd_n_m": sd[:, 1],
@@ -889,7 +1462,6 @@ def solution_columns(result: SppResult) -> dict[str, np.ndarray]:
         "pdop": result.dop[:, 1],
         "status": np.array(STATUS_NAMES, dtype=object)[result.status.astype(np.int64)],
         "excluded": np.full(n, "", dtype=object),
-        "t_gps_s": result.t_gps_s,
         "gdop": result.dop[:, 0],
         "hdop": result.dop[:, 2],
         "vdop": result.dop[:, 3],
@@ -897,11 +1469,3 @@ def solution_columns(result: SppResult) -> dict[str, np.ndarray]:
     for k, g in enumerate(result.clock_groups[1:]):
         cols[f"isb_{g}_m"] = result.isb_m[:, k]
     return cols
-
-
-def solution_table(result: SppResult) -> pd.DataFrame:
-    """The solution as a pandas DataFrame with the columns of :func:`solution_columns` (the
-    input of ``navtrack.io.solution.write_solution`` and ``navtrack.plots.gnss``)."""
-    import pandas as pd
-
-    return pd.DataFrame(solution_columns(result))

@@ -147,7 +147,9 @@ def solution_columns(df: SolutionLike) -> dict[str, np.ndarray]:
         height), and ``status``. Optional (written empty when absent): ``clock_m``, ``sd_e_m``,
         ``sd_n_m``, ``sd_u_m``, ``n_sats``, ``pdop``, ``excluded`` (space-separated satellite ids
         or a sequence of ids per row). ``time_gps``, ``week``, ``tow_s`` are always derived from
-        ``t_gps_s``; the missing one of ECEF/geodetic position is derived from the other.
+        ``t_gps_s`` (``time_gps`` rounded to the nearest millisecond: t = ...40.0006 s gives
+        ``...40.001``); the missing one of ECEF/geodetic position is derived from the other.
+        :func:`navtrack.gnss.spp.solution_frame` gives this frame for an SPP result.
 
     Returns
     -------
