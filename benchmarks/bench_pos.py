@@ -10,7 +10,8 @@ naming program and input paths aside), so the timed peer is the one the accuracy
 
 Printed, all from timings of this run (median of ``--repeat`` runs after one warm-up of each):
 
-* per case: navtrack s, RTKLIB s, ratio navtrack / RTKLIB;
+* per case: navtrack s, RTKLIB s, ratio navtrack / RTKLIB, for the wall time and, beside it, the
+  CPU time (user + system) of the processes, which a busy machine disturbs less;
 * fixed cost + per-epoch cost of both, the intercept and slope of a least-squares line through
   the medians at cuts of the 900-epoch SEPT file (``--cuts``);
 * the import floor: ``python -c "import numpy"`` and ``python -c "import navtrack.gnss.spp"``.
@@ -32,6 +33,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
 import statistics
 import subprocess
@@ -115,17 +117,38 @@ CASES = (
 )
 
 
-def _time_once(cmd: Sequence[str], env: dict[str, str]) -> float:
-    """Wall time of one whole process, s (raises if it fails)."""
+@dataclass(frozen=True)
+class Timing:
+    """Medians of the runs of one command.
+
+    Attributes
+    ----------
+    wall_s : float
+        Wall time of the whole process, s.
+    cpu_s : float
+        User + system CPU time of the process, s (less sensitive than the wall time to other
+        processes competing for the cores).
+    """
+
+    wall_s: float
+    cpu_s: float
+
+
+def _time_once(cmd: Sequence[str], env: dict[str, str]) -> tuple[float, float]:
+    """Wall and CPU (user + system) time of one whole process, s (raises if it fails)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - t0
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
+    return wall, cpu
 
 
 def time_pair(
     a: Sequence[str], b: Sequence[str], env: dict[str, str], repeat: int
-) -> tuple[float, float]:
-    """Median wall times of two commands run alternately, s.
+) -> tuple[Timing, Timing]:
+    """Median times of two commands run alternately.
 
     One untimed warm-up run of each (disk cache), then ``repeat`` rounds; the order inside a
     round swaps every round so that neither command always runs right after the other.
@@ -140,7 +163,12 @@ def time_pair(
         else:
             ta.append(_time_once(a, env))
             tb.append(_time_once(b, env))
-    return statistics.median(ta), statistics.median(tb)
+    return _median(ta), _median(tb)
+
+
+def _median(runs: Sequence[tuple[float, float]]) -> Timing:
+    """Medians of (wall, cpu) pairs."""
+    return Timing(statistics.median(w for w, _ in runs), statistics.median(c for _, c in runs))
 
 
 def _records(path: Path) -> list[str]:
@@ -183,22 +211,34 @@ def fit_line(n: Sequence[int], t: Sequence[float]) -> tuple[float, float]:
     return mt - slope * mn, slope
 
 
+HEAD = "navtrack s  RTKLIB s  ratio   cpu: navtrack  RTKLIB  ratio"
+
+
+def _row(a: Timing, b: Timing) -> str:
+    """Wall times, their ratio a / b, CPU times and their ratio."""
+    return (
+        f"{a.wall_s:10.3f} {b.wall_s:9.3f} {a.wall_s / b.wall_s:6.2f}        "
+        f"{a.cpu_s:8.3f} {b.cpu_s:7.3f} {a.cpu_s / b.cpu_s:6.2f}"
+    )
+
+
 def bench_cases(cases: Sequence[Case], env: dict[str, str], repeat: int, tmp: Path) -> None:
-    print(f"{'case':<14} {'epochs':>6} {'navtrack s':>10} {'RTKLIB s':>9} {'ratio':>6}  pos = ref")
+    print(f"{'case':<14} {'epochs':>6} {HEAD}  pos = ref")
     for case in cases:
         nt_out, rtk_out = tmp / f"{case.name}.csv", tmp / f"{case.name}.pos"
         t_nt, t_rtk = time_pair(case.navtrack(nt_out), case.rtklib(rtk_out), env, repeat)
         epochs = REFERENCE["runs"][case.name]["epochs"]
         print(
-            f"{case.name:<14} {epochs:>6} {t_nt:10.3f} {t_rtk:9.3f} {t_nt / t_rtk:6.2f}  "
-            f"{matches_reference(case, rtk_out)}",
+            f"{case.name:<14} {epochs:>6} {_row(t_nt, t_rtk)}  {matches_reference(case, rtk_out)}",
             flush=True,
         )
 
 
-def bench_cuts(case: Case, cuts: Sequence[int], env: dict[str, str], repeat: int, tmp: Path):
+def bench_cuts(
+    case: Case, cuts: Sequence[int], env: dict[str, str], repeat: int, tmp: Path
+) -> None:
     print(f"\nfixed cost + per epoch: {case.name} cut to the first N epochs")
-    print(f"{'N':>6} {'navtrack s':>10} {'RTKLIB s':>9} {'ratio':>6}")
+    print(f"{'N':>6} {HEAD}")
     t_nt, t_rtk = [], []
     for n in cuts:
         obs = tmp / f"cut_{n}.21O"
@@ -208,19 +248,23 @@ def bench_cuts(case: Case, cuts: Sequence[int], env: dict[str, str], repeat: int
         )
         t_nt.append(a)
         t_rtk.append(b)
-        print(f"{n:>6} {a:10.3f} {b:9.3f} {a / b:6.2f}", flush=True)
+        print(f"{n:>6} {_row(a, b)}", flush=True)
     for label, t in (("navtrack", t_nt), ("RTKLIB", t_rtk)):
-        c0, c1 = fit_line(cuts, t)
-        print(f"{label:<9} fixed {c0 * 1e3:7.1f} ms + {c1 * 1e6:6.1f} us per epoch")
+        w0, w1 = fit_line(cuts, [v.wall_s for v in t])
+        c0, c1 = fit_line(cuts, [v.cpu_s for v in t])
+        print(
+            f"{label:<9} wall: fixed {w0 * 1e3:7.1f} ms + {w1 * 1e6:6.1f} us per epoch; "
+            f"cpu: fixed {c0 * 1e3:7.1f} ms + {c1 * 1e6:6.1f} us per epoch"
+        )
 
 
 def bench_import_floor(env: dict[str, str], repeat: int) -> None:
-    print("\nimport floor (whole process)")
+    print("\nimport floor (whole process)      wall s   cpu s")
     numpy = [sys.executable, "-c", "import numpy"]
     spp = [sys.executable, "-c", "import navtrack.gnss.spp"]
     t_np, t_spp = time_pair(numpy, spp, env, repeat)
-    print(f'python -c "import numpy"             {t_np:6.3f} s')
-    print(f'python -c "import navtrack.gnss.spp" {t_spp:6.3f} s')
+    print(f'python -c "import numpy"             {t_np.wall_s:6.3f}  {t_np.cpu_s:6.3f}')
+    print(f'python -c "import navtrack.gnss.spp" {t_spp.wall_s:6.3f}  {t_spp.cpu_s:6.3f}')
 
 
 def accuracy(names: list[str]) -> None:
