@@ -202,15 +202,6 @@ def cut_rinex3(src: Path, n_epochs: int, dst: Path) -> None:
     dst.write_text("".join(out))
 
 
-def fit_line(n: Sequence[int], t: Sequence[float]) -> tuple[float, float]:
-    """Least-squares intercept (s) and slope (s per epoch) of ``t`` against ``n``."""
-    mn, mt = statistics.fmean(n), statistics.fmean(t)
-    slope = sum((a - mn) * (b - mt) for a, b in zip(n, t, strict=True)) / sum(
-        (a - mn) ** 2 for a in n
-    )
-    return mt - slope * mn, slope
-
-
 HEAD = "navtrack s  RTKLIB s  ratio   cpu: navtrack  RTKLIB  ratio"
 
 
@@ -250,8 +241,9 @@ def bench_cuts(
         t_rtk.append(b)
         print(f"{n:>6} {_row(a, b)}", flush=True)
     for label, t in (("navtrack", t_nt), ("RTKLIB", t_rtk)):
-        w0, w1 = fit_line(cuts, [v.wall_s for v in t])
-        c0, c1 = fit_line(cuts, [v.cpu_s for v in t])
+        # least-squares line: intercept = fixed cost, slope = cost per epoch
+        w1, w0 = statistics.linear_regression(cuts, [v.wall_s for v in t])
+        c1, c0 = statistics.linear_regression(cuts, [v.cpu_s for v in t])
         print(
             f"{label:<9} wall: fixed {w0 * 1e3:7.1f} ms + {w1 * 1e6:6.1f} us per epoch; "
             f"cpu: fixed {c0 * 1e3:7.1f} ms + {c1 * 1e6:6.1f} us per epoch"
