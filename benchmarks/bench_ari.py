@@ -12,9 +12,10 @@ both parameter sets.
 Usage::
 
     PYTHONPATH=src python benchmarks/bench_ari.py [--n 100000] [--repeat 3] [--big 1000000]
-        [--order 5,2] [--skip-sarimax] [--threads 1]
+        [--big-repeat 1] [--order 5,2] [--skip-sarimax] [--threads 1]
 
-Prints medians of ``--repeat`` runs and the ratio; memory is measured with ``tracemalloc`` (peak
+Prints medians of ``--repeat`` runs and the ratio SARIMAX / navtrack from the timings of this run
+(``--big-repeat`` runs of the big Danish fit); memory is measured with ``tracemalloc`` (peak
 of Python-allocated NumPy memory) at n/10 and n to show it is linear in n.
 """
 
@@ -32,6 +33,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, _threads)
 
 import argparse  # noqa: E402
+import importlib.util  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
 import tracemalloc  # noqa: E402
@@ -86,6 +88,7 @@ def main() -> None:
     parser.add_argument("--n", type=int, default=100_000)
     parser.add_argument("--big", type=int, default=1_000_000)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--big-repeat", type=int, default=1, help="runs of the big Danish fit")
     parser.add_argument("--order", default="5,2")
     parser.add_argument("--skip-sarimax", action="store_true")
     parser.add_argument("--threads", default="1", help="BLAS threads (default 1)")
@@ -94,9 +97,13 @@ def main() -> None:
     assert len(order) == 2
     order2: tuple[int, int] = (order[0], order[1])
     y = _series(args.n, order2)
+    extras = ", ".join(
+        f"{m} {'yes' if importlib.util.find_spec(m) else 'no'}" for m in ("numba", "threadpoolctl")
+    )
     print(
         f"series: ARI{order2}, n = {args.n}, sigma_n = 0.02, sigma_e = 0.01; "
-        f"BLAS threads {os.environ.get('OMP_NUM_THREADS')}"
+        f"BLAS threads {os.environ.get('OMP_NUM_THREADS')}; {extras}; "
+        f"load average {os.getloadavg()[0]:.1f}"
     )
     times = []
     res = None
@@ -149,8 +156,11 @@ def main() -> None:
             f"navtrack n={args.big} (robust off): {t_big:.1f} s; status {res_big.status}, "  # type: ignore[attr-defined]
             f"sigma_n {res_big.sigma_n:.5f}, sigma_e {res_big.sigma_e:.5f}"  # type: ignore[attr-defined]
         )
-        t_big_r, _res_big_r = _time_navtrack(yb, order2, "danish")
-        print(f"navtrack n={args.big} (danish):     {t_big_r:.1f} s")
+        t_big_r = [_time_navtrack(yb, order2, "danish")[0] for _ in range(args.big_repeat)]
+        print(
+            f"navtrack n={args.big} (danish):     median {statistics.median(t_big_r):.1f} s of "
+            f"{args.big_repeat} [{', '.join(f'{v:.1f}' for v in t_big_r)}]"
+        )
         peak = _peak_memory(yb, order2)
         print(f"peak traced memory n={args.big}: {peak:.1f} MiB")
 

@@ -1,14 +1,28 @@
-"""Whole-process timing of ``navtrack pos`` on the shared data vs RTKLIB 2.4.3's ``rnx2rtkp``.
+"""Whole-process timing of ``navtrack pos`` against RTKLIB 2.4.3 b34's ``rnx2rtkp``, run live.
 
-Each run starts a fresh Python process (start-up, imports, read, solve, write a CSV), like the
-stored RTKLIB wall times (mean of 20 hyperfine runs on this machine, from
-``shared/data/gnss/rtklib_spp/README.md``; RTKLIB is not installed here, so the ratio is against
-those stored numbers). Prints the median of ``--repeat`` runs, the ratio navtrack / RTKLIB, and
-an in-process breakdown (imports, read obs, read nav, solve, write) from one extra run.
+Both programs run in the same benchmark run, on the same inputs, as whole processes (start-up,
+reading, solving, writing a solution file: navtrack a CSV, RTKLIB its ``.pos``), alternating one
+run of each (the order swaps every repeat) with ``OPENBLAS_NUM_THREADS``, ``OMP_NUM_THREADS`` and
+``MKL_NUM_THREADS`` set to ``--threads`` (default 1) for both processes. RTKLIB uses the option
+files of the stored references (``shared/data/gnss/rtklib_spp/conf``), and each of its outputs is
+checked against the stored reference ``.pos`` (same records, line endings and the header lines
+naming program and input paths aside), so the timed peer is the one the accuracy comparisons use.
+
+Printed, all from timings of this run (median of ``--repeat`` runs after one warm-up of each):
+
+* per case: navtrack s, RTKLIB s, ratio navtrack / RTKLIB, for the wall time and, beside it, the
+  CPU time (user + system) of the processes, which a busy machine disturbs less;
+* fixed cost + per-epoch cost of both, the intercept and slope of a least-squares line through
+  the medians at cuts of the 900-epoch SEPT file (``--cuts``);
+* the import floor: ``python -c "import numpy"`` and ``python -c "import navtrack.gnss.spp"``.
+
+Needs ``rnx2rtkp`` on the PATH (``apt-get install rtklib``) and the shared data
+(``NAVTRACK_SHARED_DATA`` or ``../shared/data``); cases whose inputs are missing are skipped.
 
 Usage::
 
-    PYTHONPATH=src python benchmarks/bench_pos.py [--repeat 5] [--only sept078_gej] [--accuracy]
+    PYTHONPATH=src python benchmarks/bench_pos.py [--repeat 7] [--only sept078_gej ...]
+        [--cuts 50 100 200 450 900] [--threads 1] [--accuracy]
 
 ``--accuracy`` also prints, per run, the epochs solved and 3D RMS against the reference next to
 RTKLIB's, and the median / max per-epoch distance to RTKLIB's own solution (in-process).
@@ -19,43 +33,230 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
+import shutil
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("NAVTRACK_SHARED_DATA", REPO.parent / "shared" / "data")) / "gnss"
 REFERENCE = json.loads((REPO / "tests" / "data" / "rtklib_spp_reference.json").read_text())
-
-PHASES = r"""
-import sys, time
-t0 = time.perf_counter()
-import numpy
-t1 = time.perf_counter()
-from navtrack.gnss.rinex.obs import read_obs
-from navtrack.gnss.rinex.nav import read_nav
-from navtrack.gnss.spp import SppConfig, solution_columns, solve_spp
-from navtrack.io.solution import write_solution
-t2 = time.perf_counter()
-obs = read_obs(sys.argv[1]); t3 = time.perf_counter()
-navs = [read_nav(p) for p in sys.argv[3:]]; t4 = time.perf_counter()
-res = solve_spp(obs, navs, config=SppConfig(systems=sys.argv[2])); t5 = time.perf_counter()
-write_solution(solution_columns(res), sys.argv[0] + ".csv"); t6 = time.perf_counter()
-print(f"numpy {t1-t0:.3f}  imports {t2-t1:.3f}  read obs {t3-t2:.3f}  read nav {t4-t3:.3f}  "
-      f"solve {t5-t4:.3f}  write {t6-t5:.3f}")
-"""
+CONF = SHARED / "rtklib_spp" / "conf"
+BUNDLED = REPO / "src" / "navtrack" / "data"
+SEPT_OBS = SHARED / "cssrlib_sept" / "SEPT078M.21O"
+SEPT_NAV = SHARED / "cssrlib_sept" / "SEPT078M.21P"
+THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+HEADER_NAMING_RUN = ("% program", "% inp file")
 
 
-def _command(run: dict, out: Path) -> list[str]:
-    cmd = [sys.executable, "-m", "navtrack", "pos", str(SHARED / run["obs"])]
-    cmd += [str(SHARED / p) for p in run["nav"]]
-    if run.get("sp3"):
-        cmd += ["--sp3", str(SHARED / run["sp3"])]
-    cmd += ["--systems", run["systems"], "--out", str(out), "--no-progress"]
-    return cmd
+@dataclass(frozen=True)
+class Case:
+    """One input set solved by both programs.
+
+    Attributes
+    ----------
+    name : str
+        Name of the stored RTKLIB reference, ``rtklib_spp/<name>.pos``.
+    obs, nav : Path
+        RINEX observation and navigation files.
+    systems : str
+        navtrack ``--systems`` (the RTKLIB option file selects the same systems).
+    conf : str
+        RTKLIB option file ``rtklib_spp/conf/<conf>.conf``.
+    """
+
+    name: str
+    obs: Path
+    nav: Path
+    systems: str
+    conf: str
+
+    def navtrack(self, out: Path, obs: Path | None = None) -> list[str]:
+        """Command line of ``navtrack pos`` writing ``out`` (on ``obs`` instead of the case's)."""
+        return [
+            sys.executable,
+            "-m",
+            "navtrack",
+            "pos",
+            str(obs or self.obs),
+            str(self.nav),
+            "--systems",
+            self.systems,
+            "--out",
+            str(out),
+            "--no-progress",
+        ]
+
+    def rtklib(self, out: Path, obs: Path | None = None) -> list[str]:
+        """Command line of ``rnx2rtkp`` writing ``out`` (on ``obs`` instead of the case's)."""
+        conf = CONF / f"{self.conf}.conf"
+        return ["rnx2rtkp", "-k", str(conf), str(obs or self.obs), str(self.nav), "-o", str(out)]
+
+    def available(self) -> bool:
+        """True when the inputs and the RTKLIB option file exist."""
+        return self.obs.is_file() and self.nav.is_file() and (CONF / f"{self.conf}.conf").is_file()
+
+
+CASES = (
+    Case("sept078_gej", SEPT_OBS, SEPT_NAV, "GEJ", "spp_gej"),
+    Case("sept078_gps", SEPT_OBS, SEPT_NAV, "G", "spp_gps"),
+    Case("gsi0759_gps", BUNDLED / "07590920.05o", BUNDLED / "07590920.05n", "G", "spp_gps"),
+    Case(
+        "arl1_gps",
+        SHARED / "gpstk_arl1" / "arlm200a.15o",
+        SHARED / "gpstk_arl1" / "arlm2000.15n",
+        "G",
+        "spp_gps",
+    ),
+)
+
+
+@dataclass(frozen=True)
+class Timing:
+    """Medians of the runs of one command.
+
+    Attributes
+    ----------
+    wall_s : float
+        Wall time of the whole process, s.
+    cpu_s : float
+        User + system CPU time of the process, s (less sensitive than the wall time to other
+        processes competing for the cores).
+    """
+
+    wall_s: float
+    cpu_s: float
+
+
+def _time_once(cmd: Sequence[str], env: dict[str, str]) -> tuple[float, float]:
+    """Wall and CPU (user + system) time of one whole process, s (raises if it fails)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
+    return wall, cpu
+
+
+def time_pair(
+    a: Sequence[str], b: Sequence[str], env: dict[str, str], repeat: int
+) -> tuple[Timing, Timing]:
+    """Median times of two commands run alternately.
+
+    One untimed warm-up run of each (disk cache), then ``repeat`` rounds; the order inside a
+    round swaps every round so that neither command always runs right after the other.
+    """
+    _time_once(a, env)
+    _time_once(b, env)
+    ta, tb = [], []
+    for k in range(repeat):
+        if k % 2:
+            tb.append(_time_once(b, env))
+            ta.append(_time_once(a, env))
+        else:
+            ta.append(_time_once(a, env))
+            tb.append(_time_once(b, env))
+    return _median(ta), _median(tb)
+
+
+def _median(runs: Sequence[tuple[float, float]]) -> Timing:
+    """Medians of (wall, cpu) pairs."""
+    return Timing(statistics.median(w for w, _ in runs), statistics.median(c for _, c in runs))
+
+
+def _records(path: Path) -> list[str]:
+    """Lines of a ``.pos`` file without line-ending differences or the run-naming header lines."""
+    lines = path.read_text().replace("\r", "").splitlines()
+    return [line for line in lines if not line.startswith(HEADER_NAMING_RUN)]
+
+
+def matches_reference(case: Case, out: Path) -> str:
+    """``"yes"``/``"NO"`` whether RTKLIB's output equals the stored reference, ``"-"`` if none."""
+    ref = SHARED / "rtklib_spp" / f"{case.name}.pos"
+    if not ref.is_file():
+        return "-"
+    return "yes" if _records(out) == _records(ref) else "NO"
+
+
+def cut_rinex3(src: Path, n_epochs: int, dst: Path) -> None:
+    """Write the header and the first ``n_epochs`` epoch records of a RINEX 3 observation file."""
+    out: list[str] = []
+    seen = 0
+    in_header = True
+    with src.open() as f:
+        for line in f:
+            if in_header:
+                in_header = "END OF HEADER" not in line
+            elif line.startswith(">"):
+                seen += 1
+                if seen > n_epochs:
+                    break
+            out.append(line)
+    dst.write_text("".join(out))
+
+
+HEAD = "navtrack s  RTKLIB s  ratio   cpu: navtrack  RTKLIB  ratio"
+
+
+def _row(a: Timing, b: Timing) -> str:
+    """Wall times, their ratio a / b, CPU times and their ratio."""
+    return (
+        f"{a.wall_s:10.3f} {b.wall_s:9.3f} {a.wall_s / b.wall_s:6.2f}        "
+        f"{a.cpu_s:8.3f} {b.cpu_s:7.3f} {a.cpu_s / b.cpu_s:6.2f}"
+    )
+
+
+def bench_cases(cases: Sequence[Case], env: dict[str, str], repeat: int, tmp: Path) -> None:
+    print(f"{'case':<14} {'epochs':>6} {HEAD}  pos = ref")
+    for case in cases:
+        nt_out, rtk_out = tmp / f"{case.name}.csv", tmp / f"{case.name}.pos"
+        t_nt, t_rtk = time_pair(case.navtrack(nt_out), case.rtklib(rtk_out), env, repeat)
+        epochs = REFERENCE["runs"][case.name]["epochs"]
+        print(
+            f"{case.name:<14} {epochs:>6} {_row(t_nt, t_rtk)}  {matches_reference(case, rtk_out)}",
+            flush=True,
+        )
+
+
+def bench_cuts(
+    case: Case, cuts: Sequence[int], env: dict[str, str], repeat: int, tmp: Path
+) -> None:
+    print(f"\nfixed cost + per epoch: {case.name} cut to the first N epochs")
+    print(f"{'N':>6} {HEAD}")
+    t_nt, t_rtk = [], []
+    for n in cuts:
+        obs = tmp / f"cut_{n}.21O"
+        cut_rinex3(case.obs, n, obs)
+        a, b = time_pair(
+            case.navtrack(tmp / "cut.csv", obs), case.rtklib(tmp / "cut.pos", obs), env, repeat
+        )
+        t_nt.append(a)
+        t_rtk.append(b)
+        print(f"{n:>6} {_row(a, b)}", flush=True)
+    for label, t in (("navtrack", t_nt), ("RTKLIB", t_rtk)):
+        # least-squares line: intercept = fixed cost, slope = cost per epoch
+        w1, w0 = statistics.linear_regression(cuts, [v.wall_s for v in t])
+        c1, c0 = statistics.linear_regression(cuts, [v.cpu_s for v in t])
+        print(
+            f"{label:<9} wall: fixed {w0 * 1e3:7.1f} ms + {w1 * 1e6:6.1f} us per epoch; "
+            f"cpu: fixed {c0 * 1e3:7.1f} ms + {c1 * 1e6:6.1f} us per epoch"
+        )
+
+
+def bench_import_floor(env: dict[str, str], repeat: int) -> None:
+    print("\nimport floor (whole process)      wall s   cpu s")
+    numpy = [sys.executable, "-c", "import numpy"]
+    spp = [sys.executable, "-c", "import navtrack.gnss.spp"]
+    t_np, t_spp = time_pair(numpy, spp, env, repeat)
+    print(f'python -c "import numpy"             {t_np.wall_s:6.3f}  {t_np.cpu_s:6.3f}')
+    print(f'python -c "import navtrack.gnss.spp" {t_spp.wall_s:6.3f}  {t_spp.cpu_s:6.3f}')
 
 
 def accuracy(names: list[str]) -> None:
@@ -105,49 +306,38 @@ def accuracy(names: list[str]) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--only", nargs="*", help="run names (default: all with an RTKLIB time)")
+    ap.add_argument("--repeat", type=int, default=7, help="timed runs of each program per case")
+    ap.add_argument("--only", nargs="*", help="case names (default: all whose inputs exist)")
+    ap.add_argument(
+        "--cuts", nargs="*", type=int, default=[50, 100, 200, 450, 900], help="SEPT epoch counts"
+    )
+    ap.add_argument("--threads", default="1", help="BLAS/OpenMP threads of both processes")
     ap.add_argument("--accuracy", action="store_true", help="also print the accuracy table")
     args = ap.parse_args()
     if args.accuracy:
         accuracy(args.only or list(REFERENCE["runs"]))
         print()
+    if shutil.which("rnx2rtkp") is None:
+        sys.exit("rnx2rtkp not found: apt-get install rtklib (see benchmarks/README.md)")
     env = dict(os.environ, PYTHONPATH=str(REPO / "src"))
-    names = args.only or [n for n, r in REFERENCE["runs"].items() if r.get("wall_s")]
-    print(f"{'run':<24} {'navtrack s':>10} {'RTKLIB s':>9} {'ratio':>6}   breakdown (s)")
+    env.update(dict.fromkeys(THREAD_VARS, args.threads))
+    version = subprocess.run(
+        ["dpkg-query", "-W", "-f", "${Version}", "rtklib"], capture_output=True, text=True
+    ).stdout
+    print(
+        f"RTKLIB {version or '(version unknown)'} ({shutil.which('rnx2rtkp')}); "
+        f"{', '.join(THREAD_VARS)} = {args.threads} for both; "
+        f"median of {args.repeat} alternating runs each; load average {os.getloadavg()[0]:.1f}"
+    )
+    cases = [c for c in CASES if not args.only or c.name in args.only]
+    missing = [c.name for c in cases if not c.available()]
+    if missing:
+        print(f"skipped (inputs not found): {', '.join(missing)}")
     with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "sol.csv"
-        for name in names:
-            run = REFERENCE["runs"][name]
-            cmd = _command(run, out)
-            subprocess.run(cmd, env=env, check=True, capture_output=True)  # warm the disk cache
-            times = []
-            for _ in range(args.repeat):
-                t0 = time.perf_counter()
-                subprocess.run(cmd, env=env, check=True, capture_output=True)
-                times.append(time.perf_counter() - t0)
-            med = statistics.median(times)
-            rtk = run.get("wall_s")
-            ratio = f"{med / rtk:6.2f}" if rtk else "     -"
-            script = Path(tmp) / "phases.py"
-            script.write_text(PHASES)
-            phases = ""
-            if not run.get("sp3"):
-                phases = subprocess.run(
-                    [
-                        sys.executable,
-                        str(script),
-                        str(SHARED / run["obs"]),
-                        run["systems"],
-                        *[str(SHARED / p) for p in run["nav"]],
-                    ],
-                    env=env,
-                    check=True,
-                    capture_output=True,
-                    text=True,
-                ).stdout.strip()
-            rtk_s = f"{rtk:9.3f}" if rtk else "        -"
-            print(f"{name:<24} {med:10.3f} {rtk_s} {ratio}   {phases}")
+        bench_cases([c for c in cases if c.available()], env, args.repeat, Path(tmp))
+        if args.cuts and CASES[0].available():
+            bench_cuts(CASES[0], args.cuts, env, args.repeat, Path(tmp))
+        bench_import_floor(env, args.repeat)
 
 
 if __name__ == "__main__":
