@@ -15,8 +15,8 @@ from navtrack.experiments.runner import run_generator
 SMALL = exp.SyntheticCase("small", "small ARI(1,2)", (-0.8,), 2, 0.02, 0.005, 400, 1.0, "m")
 
 
-def _small_params(**kw: object) -> exp.AriExperimentParams:
-    return exp.AriExperimentParams(cases=(SMALL,), select_order=False, **kw)  # type: ignore[arg-type]
+def _small_params() -> exp.AriExperimentParams:
+    return exp.AriExperimentParams(cases=(SMALL,), select_order=False)
 
 
 def test_registered_experiment_is_ari() -> None:
