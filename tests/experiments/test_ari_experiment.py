@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from navtrack.experiments import ReproduceOptions, reproduce
+from navtrack.experiments import ReproduceOptions, get_experiment, reproduce
 from navtrack.experiments import ari as exp
-from navtrack.experiments.runner import run_monte_carlo
+from navtrack.experiments.runner import run_generator
 
 SMALL = exp.SyntheticCase("small", "small ARI(1,2)", (-0.8,), 2, 0.02, 0.005, 400, 1.0, "m")
 
@@ -19,11 +19,20 @@ def _small_params() -> exp.AriExperimentParams:
     return exp.AriExperimentParams(cases=(SMALL,), select_order=False)
 
 
+def test_registered_experiment_is_ari() -> None:
+    assert get_experiment("ari") is exp.EXPERIMENT
+    assert exp.EXPERIMENT.default_params() == exp.AriExperimentParams()
+    assert exp.EXPERIMENT.default_runs == 50
+    with pytest.raises(ValueError, match="outlier_sigma"):
+        exp.AriExperimentParams(outlier_sigma=(15.0, 5.0))
+    with pytest.raises(ValueError, match="robust"):
+        exp.AriExperimentParams(robust="l1")  # type: ignore[arg-type]
+
+
 def test_synthetic_runs_recover_truth_and_gross_errors() -> None:
     params = _small_params()
-    mc = run_monte_carlo(exp.synthetic_run, 4, 11, params, backend="loop", progress=False)
-    assert mc.n_ok == 4
-    s = exp.summarize_synthetic(mc, params)["small"]
+    runs = [exp.EXPERIMENT.run_one(params, run_generator(11, i)) for i in range(4)]
+    s = exp.summarize_synthetic(params, runs)["small"]
     assert s["truth"]["sigma_n"] == 0.02
     assert s["runs"] == 4
     assert s["injected"] == 16  # 1 % of 400 epochs, 4 runs
@@ -96,39 +105,77 @@ def test_sarimax_comparison_same_or_better_likelihood() -> None:
     )
 
 
-def test_reproduce_end_to_end_reduced(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(exp, "default_params", _small_params)
+def _solution_csv(path: Path) -> None:
+    """A 150-epoch static solution table with a 3-epoch gap and one failed epoch."""
     rng = np.random.default_rng(1)
     from navtrack.smoothing.ari import simulate_ari
 
-    y, _ = simulate_ari(rng, 300, (-0.5,), 1, 0.05, 0.02)
-    y[40:43] = np.nan
-    meta = {"solver": "navtrack", "run": "fake", "solved": 297, "kinematic": False}
-    fake = exp.RealSeries("fake", np.arange(300.0), {"a_m": y}, "m", 1.0, 0, meta)
-    monkeypatch.setattr(exp, "default_real_sources", lambda shared: ([fake], []))
-    monkeypatch.setattr(exp, "SYNTHETIC_CASES", (SMALL,))
-    opts = ReproduceOptions(out_dir=tmp_path, runs=2, seed=3, progress=False)
+    t = np.arange(150.0)
+    enu = np.column_stack([simulate_ari(rng, 150, (-0.5,), 1, 0.05, 0.02)[0] for _ in range(3)])
+    xyz = np.array([-3947762.0, 3364399.0, 3699428.0]) + enu  # near GSI 0759, axes as ENU
+    status = np.full(150, "ok", dtype=object)
+    status[100] = "high_dop"
+    keep = np.ones(150, dtype=bool)
+    keep[40:43] = False
+    table = {"t_gps_s": t, "x_m": xyz[:, 0], "y_m": xyz[:, 1], "z_m": xyz[:, 2], "status": status}
+    import pandas as pd
+
+    pd.DataFrame({k: v[keep] for k, v in table.items()}).to_csv(path, index=False)
+
+
+def test_reproduce_end_to_end_reduced(tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib")
+    table = tmp_path / "rover.csv"
+    _solution_csv(table)
+    out = tmp_path / "out"
+    tiny = exp.SyntheticCase("tiny", "tiny ARI(1,1)", (-0.5,), 1, 0.02, 0.01, 150, 1.0, "m")
+    params = exp.AriExperimentParams(cases=(tiny,), select_order=False, real_data=False)
+    opts = ReproduceOptions(
+        out_dir=out, runs=2, seed=3, params=params, progress=False, inputs=(table,)
+    )
     results = reproduce("ari", opts)
-    data = json.loads((tmp_path / "results.json").read_text())
+    data = json.loads((out / "results.json").read_text())
+    assert data["experiment"] == "ari"
     assert data["runs"] == 2
-    assert data["run_counts"]["ok"] == 2
-    assert set(data["synthetic"]) == {"small"}
-    assert data["real"][0]["source"] == "fake"
-    assert data["real"][0]["n_missing"] == 3
-    tables = (tmp_path / "tables.md").read_text()
+    assert data["run_counts"] == {"ok": 2, "error": 0, "resumed": 0}
+    assert data["parameters"]["cases"][0]["name"] == "tiny"
+    assert data["parameters"]["real_data"] is False
+    assert set(data["synthetic"]) == {"tiny"}
+    assert data["synthetic"]["tiny"]["runs"] == 2
+    assert data["synthetic"]["tiny"]["injected"] == 4  # 1 % of 150 epochs rounds to 2 per run
+    # the input table: its gap inserted as missing epochs, the failed epoch missing too
+    assert [row["source"] for row in data["real"]] == ["rover.csv"] * 3
+    assert [row["column"] for row in data["real"]] == ["e_m", "n_m", "u_m"]
+    assert all(row["n"] == 150 and row["n_inserted"] == 3 for row in data["real"])
+    assert all(row["n_missing"] == 4 for row in data["real"])
+    assert data["real_skipped"] == []
+    # the SARIMAX cross-check ran on the synthetic case (statsmodels is a test extra)
+    assert [c["series"] for c in data["sarimax"]] == ["synthetic tiny"]
+    tables = (out / "tables.md").read_text()
+    assert "Runs: 2 (seed 3, backend " in tables
     assert "## Synthetic series" in tables
+    assert "| tiny ARI(1,1) | 150 | (1,1) |" in tables
     assert "## Real data" in tables
-    assert "## GNSS SPP: navtrack's own solutions vs RTKLIB's" in tables
-    assert "| fake | a_m | 297 / – |" in tables
-    assert len(list((tmp_path / "runs").glob("run_*.pkl"))) == 2
-    if "figures" in results:
-        assert all(Path(f).exists() for f in results["figures"])
+    assert "| rover.csv | e_m | 150 | 4 |" in tables
+    assert "## SARIMAX cross-check" in tables
+    # figures: the synthetic estimates and recall, one series figure of the input table
+    names = sorted(Path(f).name for f in data["figures"])
+    assert names == [
+        "gross_error_recall.png",
+        "real_rover.csv_e_m.png",
+        "synthetic_sigma_ratios.png",
+    ]
+    assert all((out / name).stat().st_size > 0 for name in names)
+    assert len(list((out / "runs").glob("run_*.pkl"))) == 2
     # rerun resumes both runs from the checkpoints and reproduces the same numbers
     again = reproduce("ari", opts)
     assert again["run_counts"]["resumed"] == 2
     assert again["synthetic"] == results["synthetic"]
+    assert again["real"][0]["sigma_n"] == results["real"][0]["sigma_n"]
 
 
-def test_unknown_experiment_is_refused(tmp_path: Path) -> None:
-    with pytest.raises(ValueError, match="unknown experiment"):
-        reproduce("nope", ReproduceOptions(out_dir=tmp_path))
+def test_solution_table_without_positions_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "angles.csv"
+    path.write_text("t_s,yaw_deg\n0,1\n1,2\n")
+    with pytest.raises(ValueError, match=r"angles.csv: not a solution table: no column t_gps_s"):
+        exp.solution_series(path)

@@ -114,7 +114,8 @@ def test_checkpoints_of_another_experiment_are_refused(tmp_path: Path) -> None:
 def test_errors_are_captured_per_run(tmp_path: Path) -> None:
     params = {"fail": (2,), "size": 3}
     mc = run_monte_carlo(toy_run, 5, 3, params, checkpoint_dir=tmp_path, progress=False)
-    assert [r.status for r in mc.records] == ["ok", "ok", "error", "ok", "ok"]
+    ok, error = runner.RunStatus.OK, runner.RunStatus.ERROR
+    assert [r.status for r in mc.records] == [ok, ok, error, ok, ok]
     assert "failed on purpose" in mc.records[2].error
     assert mc.counts == {"ok": 4, "error": 1, "resumed": 0}
     assert len(mc.results) == 4

@@ -67,44 +67,15 @@ def _unit(column: str) -> str:
     return "(input units)"
 
 
-def _read_table(path: Path) -> Any:
-    import pandas as pd
-
-    from navtrack.errors import FileFormatError, MissingDependencyError
-
-    suffix = path.suffix.lower()
-    if suffix == ".pos":
-        from navtrack.io.rtklib import read_pos
-
-        return read_pos(path)
-    if suffix == ".parquet":
-        try:
-            import pyarrow  # noqa: F401
-        except ImportError:
-            raise MissingDependencyError("pyarrow", "parquet", "Parquet input") from None
-        df = pd.read_parquet(path)
-    elif suffix in (".csv", ".txt"):
-        try:
-            df = pd.read_csv(path, comment="#")
-        except (pd.errors.ParserError, UnicodeDecodeError, pd.errors.EmptyDataError) as exc:
-            raise FileFormatError(path, None, f"not a CSV table: {exc}") from None
-    else:
-        raise SystemExit(f"navtrack smooth: unknown file type {suffix!r} (.csv, .parquet, .pos)")
-    if {"time_gps", "week", "tow_s"} <= set(df.columns):
-        from navtrack.io.solution import read_solution
-
-        return read_solution(path)
-    return df
-
-
 def run_smooth(args: argparse.Namespace) -> int:
     import numpy as np
     import pandas as pd
 
     from navtrack.experiments import write_json
+    from navtrack.io.tables import read_table
     from navtrack.smoothing.ari import AriConfig, fit_ari, regularize_time
 
-    df = _read_table(args.file)
+    df = read_table(args.file)
     if args.order == "auto":
         order = None
     else:

@@ -1,28 +1,59 @@
 """Reproductions of the seed papers' experiments (``navtrack reproduce NAME``).
 
-Each experiment is a module registered in :data:`EXPERIMENTS` that provides
-
-* ``DESCRIPTION`` (str) and ``DEFAULT_RUNS`` (int), and
-* ``reproduce(options: ReproduceOptions) -> dict`` — runs the Monte Carlo part through
-  :func:`navtrack.experiments.runner.run_monte_carlo` (seeded, resumable, Dask), writes
-  ``options.out_dir / "results.json"``, ``tables.md`` and PNG figures, and returns the results.
-
-Modules are imported only when their experiment is run.
+Each reproduction is one :class:`~navtrack.experiments.contract.Experiment` (typed parameters,
+``run_one``, ``summarize``, optional ``extra``, ``tables``, ``figures``, ``summary_lines``),
+registered by name in :data:`EXPERIMENTS`; its module exposes the instance as ``EXPERIMENT`` and is
+imported only when asked for. :func:`reproduce` does everything else, the same way for all of
+them: the seeded, resumable Monte Carlo runs (:mod:`navtrack.experiments.runner`, in-process,
+local Dask cluster or remote scheduler), the ``extra`` step with its own generator and the shared
+data (:func:`~navtrack.experiments.contract.shared_data_dir`), the common header of
+``results.json`` (:data:`~navtrack.experiments.contract.HEADER_FIELDS`), and the files
+``results.json``, ``tables.md`` and the figures.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import json
 import math
+import subprocess
+import time
 from dataclasses import dataclass
+from enum import Enum
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
-__all__ = ["EXPERIMENTS", "ReproduceOptions", "get_experiment", "reproduce", "write_json"]
+import numpy as np
 
-#: Experiment name -> module. Later reproductions add one line each.
+from navtrack.experiments.contract import (
+    EXTRA_SPAWN_KEY,
+    HEADER_FIELDS,
+    Experiment,
+    ExperimentContext,
+    ExtraResult,
+    MissingDataError,
+    Outcome,
+    shared_data_dir,
+)
+
+__all__ = [
+    "EXPERIMENTS",
+    "HEADER_FIELDS",
+    "Experiment",
+    "ExperimentContext",
+    "ExtraResult",
+    "MissingDataError",
+    "Outcome",
+    "ReproduceOptions",
+    "get_experiment",
+    "header_lines",
+    "reproduce",
+    "shared_data_dir",
+    "write_json",
+]
+
+#: Experiment name -> module holding its ``EXPERIMENT``. Later reproductions add one line each.
 EXPERIMENTS: dict[str, str] = {
     "ari": "navtrack.experiments.ari",
 }
@@ -37,13 +68,17 @@ class ReproduceOptions:
     out_dir : Path
         Output directory (``results.json``, ``tables.md``, figures, ``runs/`` checkpoints).
     runs : int or None
-        Monte Carlo runs; ``None`` takes the experiment's ``DEFAULT_RUNS``.
+        Monte Carlo runs; ``None`` takes the experiment's ``default_runs``.
     seed : int
         Root seed of all runs.
+    params : object or None
+        Instance of the experiment's ``params_type``; ``None`` takes its defaults.
     workers : int or None
         Local Dask cluster with this many worker processes.
     scheduler : str or None
         Address of an existing Dask scheduler.
+    backend : {"auto", "loop"}
+        ``"loop"`` forces the plain in-process loop (see :func:`~.runner.run_monte_carlo`).
     progress : bool
         Progress bars.
     inputs : tuple of Path
@@ -55,38 +90,148 @@ class ReproduceOptions:
     out_dir: Path
     runs: int | None = None
     seed: int = 0
+    params: Any = None
     workers: int | None = None
     scheduler: str | None = None
+    backend: str = "auto"
     progress: bool = True
     inputs: tuple[Path, ...] = ()
     figures: bool = True
 
 
-def get_experiment(name: str) -> ModuleType:
-    """The module of a registered experiment; ``ValueError`` naming the known ones."""
+def get_experiment(name: str) -> Experiment[Any, Any]:
+    """The registered experiment ``name``; ``ValueError`` naming the known ones."""
     if name not in EXPERIMENTS:
         raise ValueError(f"unknown experiment {name!r}; known: {', '.join(sorted(EXPERIMENTS))}")
-    return importlib.import_module(EXPERIMENTS[name])
+    experiment = importlib.import_module(EXPERIMENTS[name]).EXPERIMENT
+    if not isinstance(experiment, Experiment) or experiment.name != name:
+        raise TypeError(f"{EXPERIMENTS[name]}.EXPERIMENT is not the Experiment {name!r}")
+    return experiment
 
 
-def reproduce(name: str, options: ReproduceOptions) -> dict[str, Any]:
-    """Run the reproduction ``name`` with ``options``; returns its results dictionary."""
-    module = get_experiment(name)
-    options.out_dir.mkdir(parents=True, exist_ok=True)
-    result: dict[str, Any] = module.reproduce(options)
-    return result
+class _RunOne:
+    """The runner's ``fn(index, rng, params)`` of an experiment (picklable with it)."""
+
+    def __init__(self, experiment: Experiment[Any, Any]) -> None:
+        self.experiment = experiment
+
+    def __call__(self, index: int, rng: np.random.Generator, params: Any) -> Any:
+        return self.experiment.run_one(params, rng)
+
+
+def _git_revision() -> str | None:
+    """Commit of the checkout the package runs from, or None (installed package, no git)."""
+    try:
+        out = subprocess.run(
+            ["git", "-C", str(Path(__file__).resolve().parent), "rev-parse", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=True,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout.strip() or None
+
+
+def reproduce(experiment: Experiment[Any, Any] | str, options: ReproduceOptions) -> dict[str, Any]:
+    """Run a reproduction and write ``results.json``, ``tables.md`` and its figures.
+
+    Parameters
+    ----------
+    experiment : Experiment or str
+        The experiment, or its registered name.
+    options : ReproduceOptions
+
+    Returns
+    -------
+    dict
+        The ``results.json`` content: the header of :data:`HEADER_FIELDS`, then the entries of
+        ``summarize`` and ``extra``, then ``figures`` (paths) or ``figures_error``.
+    """
+    from navtrack import __version__
+    from navtrack.experiments.runner import run_monte_carlo
+
+    exp = get_experiment(experiment) if isinstance(experiment, str) else experiment
+    params = exp.default_params() if options.params is None else options.params
+    if not isinstance(params, exp.params_type):
+        raise TypeError(
+            f"options.params: expected {exp.params_type.__name__} for experiment {exp.name!r}, "
+            f"got {type(params).__name__}"
+        )
+    runs = exp.default_runs if options.runs is None else options.runs
+    out = options.out_dir
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    mc = run_monte_carlo(
+        _RunOne(exp),
+        runs,
+        options.seed,
+        params,
+        name=exp.name,
+        checkpoint_dir=out,
+        workers=options.workers,
+        scheduler=options.scheduler,
+        backend=options.backend,
+        progress=options.progress,
+    )
+    summary = exp.summarize(params, mc.results)
+    rng = np.random.default_rng(np.random.SeedSequence(options.seed, spawn_key=(EXTRA_SPAWN_KEY,)))
+    extra = exp.extra(params, ExperimentContext(options.seed, rng, tuple(options.inputs), out))
+    header: dict[str, Any] = {
+        "experiment": exp.name,
+        "description": exp.description,
+        "parameters": dataclasses.asdict(params),
+        "seed": options.seed,
+        "runs": runs,
+        "package_version": __version__,
+        "git_revision": _git_revision(),
+        "backend": mc.backend,
+        "backend_note": mc.note,
+        "wall_time_s": math.nan,
+        "run_counts": mc.counts,
+        "run_errors": [r.error.splitlines()[0] for r in mc.records if r.error],
+    }
+    clash = (set(header) & set(summary)) | (set(header) & set(extra.results))
+    clash |= set(summary) & set(extra.results)
+    if clash:
+        raise ValueError(f"experiment {exp.name!r} returned keys twice: {sorted(clash)}")
+    results = header | summary | extra.results
+    if options.figures:
+        try:
+            outcome = Outcome(params, tuple(mc.results), results, extra.artifacts)
+            results["figures"] = [str(f) for f in exp.figures(outcome, out)]
+        except ImportError as exc:
+            results["figures_error"] = str(exc)
+    results["wall_time_s"] = time.perf_counter() - t0
+    (out / "tables.md").write_text(exp.tables(results))
+    write_json(out / "results.json", results)
+    return results
+
+
+def header_lines(results: dict[str, Any]) -> list[str]:
+    """Console lines of the common header of a results dictionary (``navtrack reproduce``)."""
+    counts = results["run_counts"]
+    return [
+        f"experiment {results['experiment']}: {results['runs']} runs, seed {results['seed']}",
+        f"backend    {results['backend']} — {results['backend_note']}",
+        "runs       "
+        + ", ".join(f"{k} {v}" for k, v in counts.items() if k != "resumed")
+        + f", resumed from checkpoints {counts.get('resumed', 0)}",
+        f"wall time  {results['wall_time_s']:.1f} s",
+    ]
 
 
 def _clean(value: Any) -> Any:
-    """JSON-safe copy: NumPy scalars/arrays to Python, NaN/inf to None."""
-    import numpy as np
-
+    """JSON-safe copy: NumPy scalars/arrays to Python, enums by name, NaN/inf to None."""
     if isinstance(value, dict):
-        return {str(k): _clean(v) for k, v in value.items()}
+        return {_key(k): _clean(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
         return [_clean(v) for v in value]
     if isinstance(value, np.ndarray):
         return [_clean(v) for v in value.tolist()]
+    if isinstance(value, Enum):
+        return value.name.lower()
     if isinstance(value, np.bool_ | bool):
         return bool(value)
     if isinstance(value, np.integer):
@@ -99,6 +244,10 @@ def _clean(value: Any) -> Any:
     return value
 
 
+def _key(key: Any) -> str:
+    return key.name.lower() if isinstance(key, Enum) else str(key)
+
+
 def write_json(path: Path, data: dict[str, Any]) -> None:
-    """Write ``data`` as indented JSON (NaN written as null)."""
+    """Write ``data`` as indented JSON (NaN written as null, enums by lower-cased name)."""
     path.write_text(json.dumps(_clean(data), indent=2) + "\n")

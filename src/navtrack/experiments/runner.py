@@ -15,9 +15,10 @@ Without Dask the runs execute in a plain in-process loop with identical results;
 ``backend`` says which path ran. Each finished run is checkpointed under ``DIR/runs/`` (one
 pickle per run, written atomically) when ``checkpoint_dir`` is given, and skipped on a rerun, so
 an interrupted reproduction resumes with results identical to an uninterrupted one. An exception
-in one run is captured as that run's ``status == "error"`` (with the traceback) and does not stop
-the others. A ``manifest.json`` next to the checkpoints records the experiment name, seed and
-parameters; resuming with different ones raises ``ValueError`` instead of mixing results.
+in one run is captured as that run's ``status == RunStatus.ERROR`` (with the traceback) and does
+not stop the others. A ``manifest.json`` next to the checkpoints records the experiment name,
+seed and parameters; resuming with different ones raises ``ValueError`` instead of mixing
+results.
 
 The run function has the signature ``fn(index, rng, params) -> result`` and must be a module-level
 (picklable) function; ``params`` is any picklable value (typically a frozen config) and ``result``
@@ -34,6 +35,7 @@ import tempfile
 import traceback
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from enum import IntEnum
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +46,7 @@ from navtrack._typing import StrPath
 __all__ = [
     "MonteCarloResult",
     "RunRecord",
+    "RunStatus",
     "dask_available",
     "replay_run",
     "run_generator",
@@ -51,6 +54,15 @@ __all__ = [
 ]
 
 RunFunction = Callable[[int, np.random.Generator, Any], Any]
+
+
+class RunStatus(IntEnum):
+    """Outcome of one Monte Carlo run (``RunRecord.status``); names are lower-cased in counts."""
+
+    OK = 0
+    """The run function returned; its value is the record's ``result``."""
+    ERROR = 1
+    """The run function raised (or its worker died); the record's ``error`` holds why."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -61,17 +73,17 @@ class RunRecord:
     ----------
     index : int
         Run number ``0..n-1`` (its generator is the ``index``-th child of the seed).
-    status : {"ok", "error"}
+    status : RunStatus
     result : object
         The run function's return value (``None`` on error).
     error : str
-        Exception type, message and traceback when ``status == "error"``.
+        Exception type, message and traceback when ``status == RunStatus.ERROR``.
     resumed : bool
         True when the record was loaded from a checkpoint instead of computed.
     """
 
     index: int
-    status: str
+    status: RunStatus
     result: Any
     error: str = ""
     resumed: bool = False
@@ -89,6 +101,9 @@ class MonteCarloResult:
         ``"dask-threads"``, ``"dask-local-cluster"``, ``"dask-scheduler"`` or ``"loop"``.
     note : str
         Why that backend ran (e.g. "dask is not installed").
+    counts : dict of str to int
+        Runs per status (``"ok"``, ``"error"``: :class:`RunStatus` names lower-cased) and
+        ``"resumed"``, the runs loaded from checkpoints.
     """
 
     records: tuple[RunRecord, ...]
@@ -100,15 +115,15 @@ class MonteCarloResult:
     @property
     def results(self) -> list[Any]:
         """Results of the successful runs, in run order."""
-        return [r.result for r in self.records if r.status == "ok"]
+        return [r.result for r in self.records if r.status == RunStatus.OK]
 
     @property
     def n_ok(self) -> int:
-        return sum(r.status == "ok" for r in self.records)
+        return sum(r.status == RunStatus.OK for r in self.records)
 
     @property
     def n_error(self) -> int:
-        return sum(r.status == "error" for r in self.records)
+        return sum(r.status == RunStatus.ERROR for r in self.records)
 
     @property
     def n_resumed(self) -> int:
@@ -144,8 +159,8 @@ def _execute(fn: RunFunction, seed: int, index: int, params: Any) -> RunRecord:
         result = fn(index, run_generator(seed, index), params)
     except Exception as exc:  # one failing run must not lose the others
         text = f"{type(exc).__name__}: {exc}\n{traceback.format_exc()}"
-        return RunRecord(index, "error", None, text)
-    return RunRecord(index, "ok", result)
+        return RunRecord(index, RunStatus.ERROR, None, text)
+    return RunRecord(index, RunStatus.OK, result)
 
 
 class _Checkpoints:
@@ -248,7 +263,7 @@ def run_monte_carlo(
     if store is not None:
         for i in range(n_runs):
             rec = store.load(i)
-            if rec is not None and (rec.status == "ok" or not retry_errors):
+            if rec is not None and (rec.status == RunStatus.OK or not retry_errors):
                 records[i] = rec
     pending = [i for i in range(n_runs) if i not in records]
 
@@ -299,11 +314,8 @@ def run_monte_carlo(
     finally:
         bar.close()
     ordered = tuple(records[i] for i in range(n_runs))
-    counts = {
-        "ok": sum(r.status == "ok" for r in ordered),
-        "error": sum(r.status == "error" for r in ordered),
-        "resumed": sum(r.resumed for r in ordered),
-    }
+    counts = {status.name.lower(): sum(r.status == status for r in ordered) for status in RunStatus}
+    counts["resumed"] = sum(r.resumed for r in ordered)
     return MonteCarloResult(ordered, int(seed), chosen, note, counts)
 
 
@@ -363,7 +375,7 @@ def _run_distributed(
             try:
                 record = future.result()
             except Exception as exc:  # a worker died, a task could not be deserialised, ...
-                record = RunRecord(index, "error", None, f"{type(exc).__name__}: {exc}")
+                record = RunRecord(index, RunStatus.ERROR, None, f"{type(exc).__name__}: {exc}")
             finished(record)
     finally:
         client.close()

@@ -126,17 +126,28 @@ def recall_figure(detections: Mapping[str, tuple[Sequence[float], Sequence[bool]
 
 def write_reproduction_figures(
     out_dir: Path,
-    mc: Any,
-    params: Any,
+    runs: Sequence[Mapping[str, Any]],
+    cases: Sequence[Any],
     sources: Sequence[Any],
     fits: Mapping[tuple[str, str], AriResult],
 ) -> list[Path]:
-    """Figures of ``navtrack reproduce ari``: estimates, recall, one series per real source."""
+    """Figures of ``navtrack reproduce ari``: estimates, recall, one series per real source.
+
+    Parameters
+    ----------
+    out_dir : Path
+    runs : sequence of mapping
+        Results of the successful synthetic runs (case name -> run record), in run order.
+    cases : sequence of SyntheticCase
+    sources : sequence of RealSeries
+    fits : mapping
+        ``(source, column) -> AriResult`` of the real series.
+    """
     written: list[Path] = []
     ratios: dict[str, tuple[list[float], list[float]]] = {}
     detections: dict[str, tuple[list[float], list[bool]]] = {}
-    for case in params.cases:
-        recs = [r[case.name] for r in mc.results if case.name in r]
+    for case in cases:
+        recs = [r[case.name] for r in runs if case.name in r]
         if not recs:
             continue
         ratios[case.name] = ([r["sigma_n_ratio"] for r in recs], [r["sigma_e_ratio"] for r in recs])

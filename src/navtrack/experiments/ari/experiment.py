@@ -1,0 +1,95 @@
+"""``navtrack reproduce ari``: paper 5 (Lindenberger) on the experiment contract.
+
+1. Monte Carlo runs of :func:`~navtrack.experiments.ari.synthetic.synthetic_run`, summarized by
+   :func:`~navtrack.experiments.ari.synthetic.summarize_synthetic`;
+2. the ``extra`` step: the real data catalogue (:mod:`navtrack.experiments.ari.real`) plus the
+   user's ``--input`` solution tables, then the SARIMAX cross-check
+   (:mod:`navtrack.experiments.ari.sarimax`) with the step's own generator;
+3. tables and console lines (:mod:`navtrack.experiments.ari.tables`), figures
+   (:func:`navtrack.plots.ari.write_reproduction_figures`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from navtrack.experiments.ari.real import (
+    RealSeries,
+    default_real_sources,
+    real_data_rows,
+    solution_series,
+    spp_comparison,
+)
+from navtrack.experiments.ari.sarimax import sarimax_comparisons
+from navtrack.experiments.ari.synthetic import (
+    AriExperimentParams,
+    summarize_synthetic,
+    synthetic_run,
+)
+from navtrack.experiments.ari.tables import PAPER_TABLES, summary_lines, tables_markdown
+from navtrack.experiments.contract import Experiment, ExperimentContext, ExtraResult, Outcome
+
+__all__ = ["EXPERIMENT", "AriExperiment"]
+
+_RunResult = dict[str, Any]
+
+
+class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
+    """ARI(p,d) filtering, variance components and gross errors: synthetic truths, real series,
+    statsmodels cross-check."""
+
+    name = "ari"
+    description = "Paper 5: ARI(p,d) filtering, variance components and gross errors (Lindenberger)"
+    params_type = AriExperimentParams
+    default_runs = 50
+
+    def run_one(self, params: AriExperimentParams, rng: np.random.Generator) -> _RunResult:
+        return synthetic_run(params, rng)
+
+    def summarize(self, params: AriExperimentParams, runs: Sequence[_RunResult]) -> dict[str, Any]:
+        return {
+            "paper": "Lindenberger, Modelling orientation parameters of sensor platforms (paper 5)",
+            "synthetic": summarize_synthetic(params, runs),
+            "paper_tables": PAPER_TABLES,
+        }
+
+    def extra(self, params: AriExperimentParams, context: ExperimentContext) -> ExtraResult:
+        """Fit the real series (shared data when ``params.real_data``, then ``context.inputs``)
+        and cross-check against SARIMAX; artifacts: ``(sources, fits)`` for the figures."""
+        sources: list[RealSeries] = []
+        skipped: list[str] = []
+        if params.real_data:
+            sources, skipped = default_real_sources(context.shared_data())
+        sources += [solution_series(Path(path)) for path in context.inputs]
+        rows, fits = real_data_rows(sources)
+        results = {
+            "real": rows,
+            "real_skipped": skipped,
+            "spp_comparison": spp_comparison(rows),
+            "sarimax": sarimax_comparisons(context.rng, params.cases, sources, fits),
+        }
+        return ExtraResult(results, (sources, fits))
+
+    def tables(self, results: dict[str, Any]) -> str:
+        return tables_markdown(results)
+
+    def figures(
+        self, outcome: Outcome[AriExperimentParams, _RunResult], out_dir: Path
+    ) -> list[Path]:
+        from navtrack.plots import ari as ari_plots
+
+        sources, fits = outcome.artifacts
+        return ari_plots.write_reproduction_figures(
+            out_dir, outcome.runs, outcome.params.cases, sources, fits
+        )
+
+    def summary_lines(self, results: dict[str, Any]) -> list[str]:
+        return summary_lines(results)
+
+
+#: The registered instance (``navtrack.experiments.EXPERIMENTS["ari"]``).
+EXPERIMENT = AriExperiment()

@@ -1,0 +1,372 @@
+"""Real data of the ARI reproduction: the paper's Tables 1–5 quantities for real series.
+
+The series (:func:`default_real_sources`): BROAD optical orientation as roll/pitch/yaw
+(decimated 285.7 Hz -> 28.6 Hz, near the paper's 10 Hz INS rate, which also keeps the run
+short), the pyins receiver track (ENU), RTKLIB SPP solutions of the shared GNSS stations and the
+walking rover next to navtrack's own SPP solutions of the same files with the same options
+(:data:`SPP_RUNS`, :func:`spp_series`; ENU about their mean), and any further solution tables
+(:func:`solution_series`: navtrack CSV/Parquet or RTKLIB ``.pos``). :func:`real_data_rows` fits
+every column; :func:`spp_comparison` puts navtrack's and RTKLIB's rows of a run side by side.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from navtrack._frozen import freeze_arrays
+from navtrack._typing import FloatArray
+from navtrack.errors import FileFormatError
+from navtrack.smoothing.ari import AriConfig, AriResult, fit_ari, regularize_time
+
+__all__ = [
+    "SPP_RUNS",
+    "RealSeries",
+    "SppRun",
+    "broad_series",
+    "default_real_sources",
+    "pyins_series",
+    "real_data_rows",
+    "solution_series",
+    "spp_comparison",
+    "spp_series",
+]
+
+
+@dataclass(frozen=True, slots=True)
+class RealSeries:
+    """Columns of one real data set on a uniform time grid (NaN = missing epoch).
+
+    Attributes
+    ----------
+    source : str
+    t_s : ndarray, shape (n,)
+    columns : dict of str to ndarray (n,)
+    unit : str
+    dt_s : float
+    n_inserted : int
+        Epochs inserted into gaps by :func:`regularize_time`.
+    meta : dict
+        Provenance of the series (for GNSS solutions: solver, run, epochs, solved, statuses).
+    """
+
+    source: str
+    t_s: FloatArray
+    columns: dict[str, FloatArray]
+    unit: str
+    dt_s: float
+    n_inserted: int = 0
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+        for values in self.columns.values():
+            values.flags.writeable = False
+
+
+def broad_series(path: Path, *, decimate: int = 1) -> RealSeries:
+    """BROAD optical orientation as yaw/pitch/roll (deg, intrinsic z-y'-x'', unwrapped).
+
+    Parameters
+    ----------
+    path : Path
+        BROAD trial ``.mat`` file (``opt_quat`` scalar-first, NaN where tracking was lost).
+    decimate : int
+        Keep every ``decimate``-th sample.
+    """
+    import scipy.io
+    from scipy.spatial.transform import Rotation
+
+    mat = scipy.io.loadmat(path, squeeze_me=True)
+    quat = np.asarray(mat["opt_quat"], dtype=float)[::decimate]
+    rate = float(mat["sampling_rate"])
+    n = quat.shape[0]
+    ok = np.all(np.isfinite(quat), axis=1)
+    angles = np.full((n, 3), np.nan)
+    rot = Rotation.from_quat(quat[ok][:, [1, 2, 3, 0]])  # scipy is scalar-last
+    angles[ok] = rot.as_euler("ZYX")
+    cols = {}
+    for k, name in enumerate(("yaw_deg", "pitch_deg", "roll_deg")):
+        a = angles[:, k].copy()
+        a[ok] = np.unwrap(a[ok])
+        cols[name] = np.degrees(a)
+    dt = decimate / rate
+    t_s = np.arange(n, dtype=np.float64) * dt
+    return RealSeries(f"BROAD {path.stem}", t_s, cols, "deg", dt)
+
+
+def pyins_series(path: Path) -> RealSeries:
+    """pyins receiver track (``gnss.csv``) as ENU (m) about its first epoch."""
+    import pandas as pd
+
+    from navtrack import geodesy
+
+    df = pd.read_csv(path)
+    llh = np.column_stack(
+        [np.radians(df["lat"].to_numpy()), np.radians(df["lon"].to_numpy()), df["alt"].to_numpy()]
+    )
+    xyz = geodesy.geodetic_to_ecef(llh)
+    enu = geodesy.ecef_to_enu(xyz, xyz[0])
+    t = df["time"].to_numpy(dtype=float)
+    t_grid, enu_grid, inserted = regularize_time(t, enu)
+    cols = {name: enu_grid[:, k] for k, name in enumerate(("e_m", "n_m", "u_m"))}
+    return RealSeries("pyins gnss.csv", t_grid, cols, "m", float(np.median(np.diff(t))), inserted)
+
+
+def solution_series(path: Path) -> RealSeries:
+    """A positioning solution (RTKLIB ``.pos`` or navtrack CSV/Parquet) as ENU about its mean.
+
+    The file is read by :func:`navtrack.io.tables.read_table` (format by suffix). Epochs missing
+    from the file are inserted as missing (NaN) on the median time step.
+    """
+    from navtrack.io.tables import read_table
+
+    return _table_series(path.name, read_table(path), path=path)
+
+
+def _table_series(
+    source: str, df: Any, meta: dict[str, Any] | None = None, path: Path | None = None
+) -> RealSeries:
+    """ENU (m) about the mean of the usable epochs of a solution table (``t_gps_s``, ``x_m``,
+    ``y_m``, ``z_m``, optional ``status``); unusable epochs and gaps are missing (NaN).
+    ``path``: the file the table was read from, named in the error when columns are missing."""
+    from navtrack import geodesy
+
+    missing = [c for c in ("t_gps_s", "x_m", "y_m", "z_m") if c not in df.columns]
+    if missing:
+        message = f"not a solution table: no column {', '.join(missing)}"
+        if path is None:
+            raise ValueError(f"{source}: {message}")
+        raise FileFormatError(path, None, message)
+
+    xyz = df[["x_m", "y_m", "z_m"]].to_numpy(dtype=float)
+    t = df["t_gps_s"].to_numpy(dtype=float)
+    ok = np.all(np.isfinite(xyz), axis=1)
+    if "status" in df.columns:
+        ok &= df["status"].astype(str).str.lower().isin(["ok", "0", "fix", "single"]).to_numpy()
+    if not np.any(ok):
+        raise ValueError(f"{source}: no usable epoch in the solution")
+    ref = np.mean(xyz[ok], axis=0)
+    enu = np.full_like(xyz, np.nan)
+    enu[ok] = geodesy.ecef_to_enu(xyz[ok], ref)
+    t_grid, enu_grid, inserted = regularize_time(t, enu)
+    cols = {name: enu_grid[:, k] for k, name in enumerate(("e_m", "n_m", "u_m"))}
+    return RealSeries(
+        source, t_grid, cols, "m", float(np.median(np.diff(t))), inserted, dict(meta or {})
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class SppRun:
+    """One shared GNSS data set solved by navtrack's SPP like RTKLIB's reference run ``name``.
+
+    Attributes
+    ----------
+    name : str
+        Name of the RTKLIB run (``shared/data/gnss/rtklib_spp/<name>.pos``).
+    obs : str
+        Observation file, relative to ``shared/data/gnss``.
+    nav : tuple of str
+        Navigation files, relative to ``shared/data/gnss``.
+    systems : str
+        Systems used (RTKLIB ``pos1-navsys``: ``G`` = 1, ``GEJ`` = 25).
+    kinematic : bool
+        The receiver moves (the walking rover); static stations otherwise.
+    """
+
+    name: str
+    obs: str
+    nav: tuple[str, ...]
+    systems: str
+    kinematic: bool = False
+
+
+#: The RTKLIB SPP runs of ``shared/data/gnss/rtklib_spp/README.md`` (single point, L1, mask
+#: 15 deg, Klobuchar, Saastamoinen, broadcast ephemeris, GDOP > 30 rejected): navtrack solves the
+#: same files with :class:`navtrack.gnss.spp.SppConfig` defaults, which reproduce those options.
+SPP_RUNS: tuple[SppRun, ...] = (
+    SppRun("gsi0759_gps", "rtklib_gsi0759/07590920.05o", ("rtklib_gsi0759/07590920.05n",), "G"),
+    SppRun("arl1_gps", "gpstk_arl1/arlm200a.15o", ("gpstk_arl1/arlm2000.15n",), "G"),
+    SppRun("sept078_gps", "cssrlib_sept/SEPT078M.21O", ("cssrlib_sept/SEPT078M.21P",), "G"),
+    SppRun("sept078_gej", "cssrlib_sept/SEPT078M.21O", ("cssrlib_sept/SEPT078M.21P",), "GEJ"),
+    SppRun(
+        "yamatogawa_master_gps",
+        "gogps_yamatogawa/yamatogawa_master.obs",
+        ("gogps_yamatogawa/brdc0060.10n",),
+        "G",
+    ),
+    SppRun(
+        "yamatogawa_rover_gps",
+        "gogps_yamatogawa/yamatogawa_rover.obs",
+        ("gogps_yamatogawa/brdc0060.10n",),
+        "G",
+        kinematic=True,
+    ),
+)
+
+
+def spp_series(gnss: Path, run: SppRun) -> RealSeries:
+    """navtrack's own single point solution of ``run`` as ENU (m) about its mean position.
+
+    Parameters
+    ----------
+    gnss : Path
+        ``shared/data/gnss``.
+    run : SppRun
+
+    Returns
+    -------
+    RealSeries
+        Source ``navtrack <name>``; epochs without a solution (any status but ``ok``) are
+        missing (NaN). ``meta`` holds the SPP epoch count, status counts and solve time.
+    """
+    import pandas as pd
+
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.spp import SppConfig, solution_columns, solve_spp
+
+    obs = read_obs(gnss / run.obs)
+    navs = [read_nav(gnss / p) for p in run.nav]
+    t0 = time.perf_counter()
+    result = solve_spp(obs, navs, config=SppConfig(systems=run.systems))
+    elapsed = time.perf_counter() - t0
+    counts = {k: v for k, v in result.status_counts().items() if v}
+    meta = {
+        "solver": "navtrack",
+        "run": run.name,
+        "kinematic": run.kinematic,
+        "epochs": int(result.t_gps_s.size),
+        "solved": int(counts.get("ok", 0)),
+        "spp_status": counts,
+        "spp_seconds": elapsed,
+    }
+    cols = solution_columns(result)
+    df = pd.DataFrame({k: cols[k] for k in ("t_gps_s", "x_m", "y_m", "z_m", "status")})
+    return _table_series(f"navtrack {run.name}", df, meta)
+
+
+def real_data_rows(
+    sources: Sequence[RealSeries], config: AriConfig | None = None
+) -> tuple[list[dict[str, Any]], dict[tuple[str, str], AriResult]]:
+    """Fit every column of every source; one table row per column (paper Tables 1–5)."""
+    cfg = AriConfig(min_d=1, select_n=10000) if config is None else config
+    rows: list[dict[str, Any]] = []
+    fits: dict[tuple[str, str], AriResult] = {}
+    for src in sources:
+        for col, values in src.columns.items():
+            t0 = time.perf_counter()
+            res = fit_ari(values, cfg)
+            elapsed = time.perf_counter() - t0
+            fits[(src.source, col)] = res
+            rows.append(
+                {
+                    "source": src.source,
+                    "column": col,
+                    "unit": src.unit,
+                    "dt_s": src.dt_s,
+                    "n": int(values.size),
+                    "n_missing": res.n_missing,
+                    "n_inserted": src.n_inserted,
+                    "status": res.status,
+                    "order": [res.p, res.d],
+                    "sigma_n": res.sigma_n,
+                    "sigma_e": res.sigma_e,
+                    "sigma_x": res.sigma_x_rms,
+                    "r": [float(v) for v in res.autocorr],
+                    "n_flagged": res.n_flagged,
+                    "seconds": elapsed,
+                    "meta": src.meta,
+                }
+            )
+    return rows, fits
+
+
+def default_real_sources(
+    shared: Path, spp_runs: Sequence[SppRun] = SPP_RUNS
+) -> tuple[list[RealSeries], list[str]]:
+    """The shared real data sets that are present; also a list of what was skipped and why.
+
+    For every run of ``spp_runs``: RTKLIB's stored solution and navtrack's own SPP solution of
+    the same observation and navigation files (:func:`spp_series`), each as ENU about its mean.
+    """
+    sources: list[RealSeries] = []
+    skipped: list[str] = []
+    broad = shared / "trajectory" / "broad"
+    for name in ("02_undisturbed_slow_rotation_B.mat", "07_undisturbed_fast_rotation_B.mat"):
+        path = broad / name
+        if path.exists():
+            sources.append(broad_series(path, decimate=10))
+        else:
+            skipped.append(str(path))
+    path = shared / "trajectory" / "pyins_gnss" / "gnss.csv"
+    if path.exists():
+        sources.append(pyins_series(path))
+    else:
+        skipped.append(str(path))
+    gnss = shared / "gnss"
+    for run in spp_runs:
+        path = gnss / "rtklib_spp" / f"{run.name}.pos"
+        if path.exists():
+            src = solution_series(path)
+            meta = {
+                "solver": "RTKLIB 2.4.3 b34",
+                "run": run.name,
+                "kinematic": run.kinematic,
+                "solved": int(np.count_nonzero(np.isfinite(src.columns["e_m"]))),
+            }
+            sources.append(
+                RealSeries(
+                    f"RTKLIB {run.name}",
+                    src.t_s,
+                    src.columns,
+                    src.unit,
+                    src.dt_s,
+                    src.n_inserted,
+                    meta,
+                )
+            )
+        else:
+            skipped.append(f"{path}: RTKLIB solution absent")
+        missing = [str(gnss / p) for p in (run.obs, *run.nav) if not (gnss / p).exists()]
+        if missing:
+            skipped.append(f"navtrack SPP {run.name}: input absent ({', '.join(missing)})")
+        else:
+            try:
+                sources.append(spp_series(gnss, run))
+            except (ValueError, FileFormatError) as exc:  # unreadable file, nothing solved
+                skipped.append(f"navtrack SPP {run.name}: {exc}")
+    return sources, skipped
+
+
+_COMPARED = ("n", "n_missing", "order", "sigma_n", "sigma_e", "sigma_x", "r", "n_flagged", "status")
+
+
+def spp_comparison(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """navtrack's and RTKLIB's SPP rows of the same run and column side by side."""
+    by_key: dict[tuple[str, str], dict[str, dict[str, Any]]] = {}
+    for row in rows:
+        meta = row.get("meta") or {}
+        if "run" not in meta:
+            continue
+        solver = "navtrack" if meta.get("solver") == "navtrack" else "rtklib"
+        by_key.setdefault((meta["run"], row["column"]), {})[solver] = row
+    out = []
+    for (run, col), pair in by_key.items():
+        rec: dict[str, Any] = {"run": run, "column": col}
+        for solver in ("navtrack", "rtklib"):
+            found = pair.get(solver)
+            if found is None:
+                rec[solver] = None
+                continue
+            rec[solver] = {k: found[k] for k in _COMPARED} | {
+                "solved": found["meta"].get("solved"),
+                "kinematic": found["meta"].get("kinematic"),
+            }
+        out.append(rec)
+    return out
