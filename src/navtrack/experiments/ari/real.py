@@ -229,7 +229,7 @@ def spp_series(gnss: Path, run: SppRun) -> RealSeries:
 
     from navtrack.gnss.rinex.nav import read_nav
     from navtrack.gnss.rinex.obs import read_obs
-    from navtrack.gnss.spp import SppConfig, solution_columns, solve_spp
+    from navtrack.gnss.spp import SppConfig, solution_frame, solve_spp
 
     obs = read_obs(gnss / run.obs)
     navs = [read_nav(gnss / p) for p in run.nav]
@@ -246,7 +246,7 @@ def spp_series(gnss: Path, run: SppRun) -> RealSeries:
         "spp_status": counts,
         "spp_seconds": elapsed,
     }
-    cols = solution_columns(result)
+    cols = solution_frame(result)
     df = pd.DataFrame({k: cols[k] for k in ("t_gps_s", "x_m", "y_m", "z_m", "status")})
     return _table_series(f"navtrack {run.name}", df, meta)
 
