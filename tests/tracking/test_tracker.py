@@ -76,7 +76,7 @@ def test_tracker_follows_separated_targets(associator: str) -> None:
     assert m.id_switches == 0
     assert m.mota > 0.85  # misses only while tracks are being confirmed
     assert m.purity == 1.0
-    assert res.counts["tracks_confirmed"] == n
+    assert res.counts.tracks_confirmed == n
     # detections that updated confirmed tracks came from one target per track
     sel = (res.det_status == 0) & (origin >= 0)
     for tid_ in np.unique(res.det_track[sel]):
@@ -92,7 +92,7 @@ def test_tracker_rejects_bad_input() -> None:
         TrackerConfig(associator="mht")  # type: ignore[arg-type]
     empty = run_tracker(np.zeros(0), np.zeros((0, 2)))
     assert empty.det_track.size == 0
-    assert empty.counts["scans"] == 0
+    assert empty.counts.scans == 0
 
 
 def test_imm_with_identical_models_equals_single_model() -> None:
@@ -150,7 +150,7 @@ def test_one_point_initiation_with_reported_velocity() -> None:
     )
     two = run_tracker(t, z, cfg)
     one = run_tracker(t, z, cfg, velocity=vel)
-    assert one.counts["tracks_confirmed"] == 4
+    assert one.counts.tracks_confirmed == 4
     # every target's first detection starts its own track (no seed waiting for a partner)
     first = (t == 0) & (origin >= 0)
     assert np.all(one.det_status[first] == 2)
