@@ -56,6 +56,7 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
+from navtrack.tracking.kalman import gain_update, innovation_gain, kf_predict
 from navtrack.tracking.models import MeasurementModel
 
 __all__ = [
@@ -435,7 +436,8 @@ def pda_update(
     """PDA state update from marginal association probabilities (Bar-Shalom & Fortmann 6.4).
 
     ``x⁺ = x + K ν̄`` with ``ν̄ = Σ_j β_j ν_j``;
-    ``P⁺ = β_0 P + (1 - β_0)(P - K S Kᵀ) + K (Σ_j β_j ν_j ν_jᵀ - ν̄ ν̄ᵀ) Kᵀ``.
+    ``P⁺ = β_0 P + (1 - β_0)(P - K S Kᵀ) + K (Σ_j β_j ν_j ν_jᵀ - ν̄ ν̄ᵀ) Kᵀ``; the Kalman terms
+    ``x + K ν̄`` and ``P - K S Kᵀ`` come from :func:`navtrack.tracking.kalman.gain_update`.
     Equals the moment-matched mixture of the per-hypothesis Kalman posteriors (all sharing one
     gain).
 
@@ -459,9 +461,8 @@ def pda_update(
     bj = b[..., 1:]
     nu = np.einsum("...j,...ji->...i", bj, y)
     spread = np.einsum("...j,...ji,...jk->...ik", bj, y, y) - nu[..., :, None] * nu[..., None, :]
+    xn, Pc = gain_update(x, P, nu, K, S, symmetrize=False)
     Kt = np.swapaxes(K, -1, -2)
-    xn = x + np.einsum("...ij,...j->...i", K, nu)
-    Pc = P - K @ S @ Kt
     b0 = b[..., 0, None, None]
     Pn = b0 * P + (1 - b0) * Pc + K @ spread @ Kt
     return xn, 0.5 * (Pn + np.swapaxes(Pn, -1, -2))
@@ -537,7 +538,6 @@ def _jpda_pipeline(
     ``marginals(W) -> (beta, JpdaMarginals)``, :func:`pda_update`.
     """
     from navtrack.tracking.gating import chi2_threshold, gate
-    from navtrack.tracking.kalman import innovation_gain, kf_predict
 
     xp, Pp = kf_predict(x, P, F, Q)
     S, K = innovation_gain(Pp, model.jacobian(xp), model.R)

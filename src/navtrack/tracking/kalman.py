@@ -207,7 +207,13 @@ def innovation_gain(P: ArrayLike, H: ArrayLike, R: ArrayLike) -> tuple[FloatArra
 
 
 def gain_update(
-    x: ArrayLike, P: ArrayLike, y: ArrayLike, K: ArrayLike, S: ArrayLike
+    x: ArrayLike,
+    P: ArrayLike,
+    y: ArrayLike,
+    K: ArrayLike,
+    S: ArrayLike,
+    *,
+    symmetrize: bool = True,
 ) -> tuple[FloatArray, FloatArray]:
     """Posterior for a given gain: ``x + K y``, ``P - K S Kᵀ`` (Bar-Shalom eq. 5.2.3-12, -15).
 
@@ -216,14 +222,18 @@ def gain_update(
     x : (..., n), P : (..., n, n) prediction
     y : (..., m) innovation
     K : (..., n, m) gain, S : (..., m, m) innovation covariance (from :func:`innovation_gain`)
+    symmetrize : bool
+        Return ``(P + Pᵀ) / 2``; False for a term that enters a further sum (the PDA update
+        symmetrises its total).
 
     Returns
     -------
-    x : (..., n), P : (..., n, n) (symmetrised)
+    x : (..., n), P : (..., n, n)
     """
     K = np.asarray(K, dtype=float)
     Pn = np.asarray(P, dtype=float) - K @ np.asarray(S, dtype=float) @ _T(K)
-    return _state_update(np.asarray(x, dtype=float), K, np.asarray(y, dtype=float)), _sym(Pn)
+    xn = _state_update(np.asarray(x, dtype=float), K, np.asarray(y, dtype=float))
+    return xn, _sym(Pn) if symmetrize else Pn
 
 
 def _state_update(x: FloatArray, K: FloatArray, y: FloatArray) -> FloatArray:

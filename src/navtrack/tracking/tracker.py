@@ -394,6 +394,8 @@ class TrackStore:
     def keep(self, mask: BoolArray) -> None:
         """Keep the tracks where ``mask (T,)`` is True, in their order."""
         k = int(np.count_nonzero(mask))
+        if k == self.size:
+            return
         for b in self._buf.values():
             b[:k] = b[: self.size][mask]
         self.size = k
@@ -951,6 +953,8 @@ def run_tracker(
             counts["deleted_unconfirmed"] += m.deleted_unconfirmed
             claimed = a.associated if cfg.init_from == "unassociated" else g.gated
         free = np.flatnonzero(~claimed)
+        if not free.size:  # (seeds are pruned by age when next used: same result)
+            continue
         ini = initiate(store, seeds, tk, Zk[free], V[s0 + free], s0 + free, cfg)
         det_track[s0 + free] = ini.track
         det_status[s0 + free] = ini.status
