@@ -10,7 +10,7 @@ import pytest
 from navtrack.tracking.metrics import clear_mot
 from navtrack.tracking.models import constant_velocity, linear_position
 from navtrack.tracking.simulate import simulate_detections, simulate_truth
-from navtrack.tracking.tracker import TrackerConfig, run_tracker
+from navtrack.tracking.tracker import DetStatus, TrackerConfig, run_tracker
 
 
 def test_simulators_are_seeded_and_statistically_right() -> None:
@@ -78,7 +78,7 @@ def test_tracker_follows_separated_targets(associator: str) -> None:
     assert m.purity == 1.0
     assert res.counts.tracks_confirmed == n
     # detections that updated confirmed tracks came from one target per track
-    sel = (res.det_status == 0) & (origin >= 0)
+    sel = (res.det_status == DetStatus.CONFIRMED) & (origin >= 0)
     for tid_ in np.unique(res.det_track[sel]):
         assert np.unique(origin[sel & (res.det_track == tid_)]).size == 1
 
@@ -153,7 +153,7 @@ def test_one_point_initiation_with_reported_velocity() -> None:
     assert one.counts.tracks_confirmed == 4
     # every target's first detection starts its own track (no seed waiting for a partner)
     first = (t == 0) & (origin >= 0)
-    assert np.all(one.det_status[first] == 2)
+    assert np.all(one.det_status[first] == DetStatus.STARTED)
 
     def first_velocity_error(res) -> float:
         errs = []
