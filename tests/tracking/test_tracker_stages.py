@@ -74,11 +74,13 @@ def test_store_grows_by_doubling_and_keeps_earlier_tracks() -> None:
     assert not store.confirmed.any()
     keep = np.arange(100) % 3 == 0
     store.keep(keep)
-    assert store.size == keep.sum() and store.capacity == 128
+    assert store.size == keep.sum()
+    assert store.capacity == 128
     np.testing.assert_array_equal(store.id, np.flatnonzero(keep))  # order kept
     np.testing.assert_array_equal(store.P[:, 0, 0, 0], np.flatnonzero(keep) + 1.0)
     assert store.add(np.zeros(4), np.eye(4), 100.0, hits=1) == 100  # ids are never reused
-    assert store.id[-1] == 100 and store.size == keep.sum() + 1
+    assert store.id[-1] == 100
+    assert store.size == keep.sum() + 1
 
 
 def test_predict_stage_equals_kalman_and_imm_kernels() -> None:
@@ -147,7 +149,8 @@ def test_jpda_update_stage_equals_pda_update_with_imm_probabilities() -> None:
     x0, P0, mu0 = store.x.copy(), store.P.copy(), store.mu.copy()
     g = gate_scan(store, z, model)
     a = associate_jpda(g, model.jpda)
-    assert a.marginals is not None and (a.marginals.method == JpdaMethod.EXACT).sum() == 2
+    assert a.marginals is not None
+    assert (a.marginals.method == JpdaMethod.EXACT).sum() == 2
     beta = a.beta
     update(store, g, a)
     b_r = np.broadcast_to(beta[:, None, :], (3, 2, beta.shape[1]))
@@ -168,7 +171,8 @@ def test_manage_confirms_m_of_n_and_deletes() -> None:
         store.add(np.zeros(4), np.eye(4), t_s=0.0, hits=1)
     hit = np.array([True, True, False])
     m = manage(store, hit, 10.0, cfg)  # hits 2, 2, 1: nobody confirmed yet
-    assert m.confirmed_now == 0 and store.size == 3
+    assert m.confirmed_now == 0
+    assert store.size == 3
     np.testing.assert_array_equal(store.hits, [2, 2, 1])
     np.testing.assert_array_equal(store.last_s, [10.0, 10.0, 0.0])
     m = manage(store, np.array([True, False, False]), 20.0, cfg)  # 3 hits within 100 s
@@ -184,7 +188,8 @@ def test_manage_confirms_m_of_n_and_deletes() -> None:
     store.add(np.zeros(4), np.eye(4), 0.0, hits=3)
     store.add(np.zeros(4), np.eye(4) * 1e8, 0.0, hits=3)
     m = manage(store, np.array([True, True]), 1.0, cfg)
-    assert m.confirmed_now == 2 and m.deleted_covariance == 1
+    assert m.confirmed_now == 2
+    assert m.deleted_covariance == 1
     np.testing.assert_array_equal(store.id, [3])
 
 
@@ -196,7 +201,8 @@ def test_initiate_grows_store_and_keeps_earlier_tracks() -> None:
     nan2 = np.full((2, 2), np.nan)
     ini = initiate(store, seeds, 0.0, np.array([[0.0, 0.0], [5000.0, 0.0]]), nan2, [0, 1], cfg)
     np.testing.assert_array_equal(ini.status, [DetStatus.SEED, DetStatus.SEED])
-    assert store.size == 1 and len(seeds) == 2
+    assert store.size == 1
+    assert len(seeds) == 2
     # 10 s later: one detection 150 m from seed 0 (reachable at 20 m/s), one with a velocity
     z = np.array([[150.0, 0.0], [-3000.0, 0.0]])
     v = np.array([[np.nan, np.nan], [3.0, -4.0]])
@@ -205,7 +211,9 @@ def test_initiate_grows_store_and_keeps_earlier_tracks() -> None:
     np.testing.assert_array_equal(ini.track, [1, 2])
     np.testing.assert_array_equal(ini.seed_det, [0])
     np.testing.assert_array_equal(ini.seed_track, [1])
-    assert store.size == 3 and store.capacity == 4 and len(seeds) == 1
+    assert store.size == 3
+    assert store.capacity == 4
+    assert len(seeds) == 1
     np.testing.assert_array_equal(store.x[0, 0], [5.0, 1.0, 5.0, 1.0])  # earlier track kept
     np.testing.assert_allclose(store.x[1, 0], [150.0, 15.0, 0.0, 0.0])  # two-point velocity
     np.testing.assert_allclose(np.diag(store.P[1, 0]), [100.0, 2.0, 100.0, 2.0])  # 2σ²/dt²
@@ -216,7 +224,8 @@ def test_initiate_grows_store_and_keeps_earlier_tracks() -> None:
     np.testing.assert_array_equal(store.hits, [2, 2, 1])
     # the remaining seed (5 km away) ages out after init_max_dt_s
     ini = initiate(store, seeds, 40.0, np.array([[5000.0, 100.0]]), nan2[:1], [4], cfg)
-    assert ini.status[0] == DetStatus.SEED and seeds.det == [4]
+    assert ini.status[0] == DetStatus.SEED
+    assert seeds.det == [4]
 
 
 def _jpda_problem(bearing: bool):

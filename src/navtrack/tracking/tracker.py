@@ -9,7 +9,7 @@ per scan (detections sharing one time stamp), a chain of named stages over a
    :mod:`navtrack.tracking.kalman`);
 2. :func:`gate_scan`: innovation covariance and gain from the Kalman kernels, chi-square gate
    (with a k-d tree pre-gate when there are many pairs), per-model and mixture likelihoods;
-3. association: :func:`associate_gnn` (optimal 2-D assignment with missed-detection costs,
+3. :func:`associate`: :func:`associate_gnn` (optimal 2-D assignment with missed-detection costs,
    :func:`~navtrack.tracking.assignment.assign2d`) or :func:`associate_jpda`
    (:func:`~navtrack.tracking.jpda.jpda_marginals`);
 4. :func:`update`: Kalman update of the assigned tracks (GNN) or PDA update (JPDA), and IMM
@@ -69,14 +69,17 @@ __all__ = [
     "TrackerCounts",
     "TrackerModel",
     "TrackerResult",
+    "associate",
     "associate_gnn",
     "associate_jpda",
     "gate_scan",
     "initiate",
     "manage",
+    "one_point_state",
     "predict",
     "report",
     "run_tracker",
+    "two_point_state",
     "update",
 ]
 
@@ -625,6 +628,14 @@ def associate_jpda(gated: ScanGate, config: JpdaConfig) -> ScanAssociation:
     return ScanAssociation(jm.beta, False, jm)
 
 
+def associate(gated: ScanGate, model: TrackerModel) -> ScanAssociation:
+    """Stage 3: :func:`associate_gnn` or :func:`associate_jpda`, as ``config.associator`` says."""
+    cfg = model.config
+    if cfg.associator == "gnn":
+        return associate_gnn(gated, cfg.pd, cfg.gate_probability, cfg.clutter_density)
+    return associate_jpda(gated, model.jpda)
+
+
 def update(store: TrackStore, gated: ScanGate, assoc: ScanAssociation) -> None:
     """Stage 4: measurement update of the tracks of ``store`` (in place).
 
@@ -931,12 +942,9 @@ def run_tracker(
         claimed = np.zeros(Zk.shape[0], dtype=bool)  # detections not available for initiation
         if store.size:
             g = gate_scan(store, Zk, model)
-            if cfg.associator == "gnn":
-                a = associate_gnn(g, cfg.pd, cfg.gate_probability, cfg.clutter_density)
-            else:
-                a = associate_jpda(g, model.jpda)
-                _count_clusters(counts, a.marginals)
+            a = associate(g, model)
             update(store, g, a)
+            # fates of the associated detections, by the status of their track before manage
             k = a.detection_track
             used = np.flatnonzero(k >= 0)
             det_track[s0 + used] = store.id[k[used]]
@@ -944,13 +952,9 @@ def run_tracker(
                 store.confirmed[k[used]], DetStatus.CONFIRMED, DetStatus.TENTATIVE
             )
             det_status[s0 + np.flatnonzero(g.gated & (k < 0))] = DetStatus.UNUSED
-            hit = a.hit
-            m = manage(store, hit, tk, cfg)
-            log.updates(tk, m, hit)
-            counts["tracks_confirmed"] += m.confirmed_now
-            counts["deleted_coast"] += m.deleted_coast
-            counts["deleted_covariance"] += m.deleted_covariance
-            counts["deleted_unconfirmed"] += m.deleted_unconfirmed
+            m = manage(store, a.hit, tk, cfg)
+            log.updates(tk, m, a.hit)
+            _add_counts(counts, a, m)
             claimed = a.associated if cfg.init_from == "unassociated" else g.gated
         free = np.flatnonzero(~claimed)
         if not free.size:  # (seeds are pruned by age when next used: same result)
@@ -965,16 +969,20 @@ def run_tracker(
     return log.result(det_track, det_status, cfg.motion.dim_x, TrackerCounts(**counts))
 
 
-def _count_clusters(counts: dict[str, int], jm: JpdaMarginals | None) -> None:
+def _add_counts(counts: dict[str, int], a: ScanAssociation, m: Management) -> None:
     from navtrack.tracking.jpda import JpdaMethod
 
-    if jm is None:
-        return
-    for key, code in (
-        ("jpda_exact_clusters", JpdaMethod.EXACT),
-        ("jpda_kbest_clusters", JpdaMethod.KBEST),
-    ):
-        counts[key] += len(np.unique(jm.cluster[jm.method == code]))
+    counts["tracks_confirmed"] += m.confirmed_now
+    counts["deleted_coast"] += m.deleted_coast
+    counts["deleted_covariance"] += m.deleted_covariance
+    counts["deleted_unconfirmed"] += m.deleted_unconfirmed
+    jm = a.marginals
+    if jm is not None:
+        for key, code in (
+            ("jpda_exact_clusters", JpdaMethod.EXACT),
+            ("jpda_kbest_clusters", JpdaMethod.KBEST),
+        ):
+            counts[key] += len(np.unique(jm.cluster[jm.method == code]))
 
 
 class _Log:
