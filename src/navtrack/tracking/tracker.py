@@ -313,10 +313,24 @@ class TrackStore:
     The attributes are views of the first ``size`` rows of buffers whose capacity doubles when
     a birth finds them full, so ``T`` births cost ``O(T)`` copies in all (amortised growth)
     instead of a copy of every track at every birth. Writing into an attribute's rows writes
-    into the store; :meth:`add` and :meth:`keep` change the set of tracks.
+    into the store; :meth:`add` and :meth:`keep` change the set of tracks and re-slice the
+    attributes (read them afresh after either: an older view may no longer be the store).
 
-    Attributes (``T = size`` tracks, ``r`` motion models, ``n`` state dimension)
-    ----------------------------------------------------------------------------
+    Parameters
+    ----------
+    dim_x : int
+        State dimension ``n``.
+    n_models : int
+        Motion models ``r`` per track (1, or the IMM's).
+    capacity : int
+        Rows allocated at the start.
+
+    Attributes
+    ----------
+    size : int
+        Live tracks ``T``.
+    next_id : int
+        Id the next birth gets.
     x : (T, r, n) model-conditioned states
     P : (T, r, n, n) model-conditioned covariances
     mu : (T, r) model probabilities
@@ -364,6 +378,7 @@ class TrackStore:
 
     @property
     def n_models(self) -> int:
+        """Motion models ``r`` per track."""
         return int(self._buf["mu"].shape[1])
 
     def _views(self) -> None:
