@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from navtrack.tracking.assignment import assign2d, murty
 from navtrack.tracking.gating import chi2_threshold, gate, kdtree_pregate
-from navtrack.tracking.jpda import JpdaConfig, clusters, jpda_marginals, pda_update
+from navtrack.tracking.jpda import JpdaConfig, JpdaMethod, clusters, jpda_marginals, pda_update
 
 
 def _events(T: int, M: int, allowed: np.ndarray) -> list[tuple[int, ...]]:
@@ -127,7 +127,7 @@ def test_kbest_error_bound_holds(seed: int, k: int) -> None:
     ref = _brute_marginals(W)
     jm = jpda_marginals(W, JpdaConfig(max_exact_bits=1, k_best=k))
     err = np.abs(jm.beta - ref).max(axis=1)
-    shared = jm.method == 2
+    shared = jm.method == JpdaMethod.KBEST
     assert np.all(err[shared] <= jm.error_bound[shared] + 1e-12)
     np.testing.assert_allclose(jm.beta.sum(axis=1), 1.0, atol=1e-12)
 
@@ -155,7 +155,7 @@ def test_exact_is_fast_structure_for_twelve_mutual_targets() -> None:
     W = np.ones((12, 15))
     W[:, 1:] = rng.uniform(0.1, 1.0, (12, 14))
     jm = jpda_marginals(W)
-    assert np.all(jm.method == 1)
+    assert np.all(jm.method == JpdaMethod.EXACT)
     np.testing.assert_allclose(jm.beta.sum(axis=1), 1.0, atol=1e-12)
     assert np.all(jm.beta[:, 1:].sum(axis=0) <= 1 + 1e-12)
 
@@ -240,7 +240,7 @@ def test_tensor_elimination_path_equals_brute_force(seed: int) -> None:
     W = _random_weights(seed, 4 + seed % 3, 7, 0.6 + 0.1 * (seed % 4))
     jm = jpda_marginals(W)
     assert np.bincount(jm.cluster).max() > 3
-    assert (jm.method == 1).all()
+    assert (jm.method == JpdaMethod.EXACT).all()
     np.testing.assert_allclose(jm.beta, _brute_marginals(W), rtol=0, atol=1e-12)
 
 

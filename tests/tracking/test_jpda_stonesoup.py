@@ -49,15 +49,18 @@ def test_jpda_equals_stonesoup_on_crossing_targets(seed: int) -> None:
     for k in range(n):
         st = jpda_step(x, Pk, scans[k], mot.F(1.0), mot.Q(1.0), rb, cfg)
         x, Pk = st.x, st.P
-        np.testing.assert_allclose(st.marginals.beta, B[k], atol=1e-9)
-        np.testing.assert_allclose(x, X[k], rtol=1e-9, atol=1e-6)
-        np.testing.assert_allclose(Pk, P[k], rtol=1e-8, atol=1e-6)
+        # measured (seeds 1, 2): |d beta| <= 1.6e-13, |d x| <= 1.0e-10 m, |d P| <= 1.3e-8 m²
+        # (P up to 2.5e5 m²); the tolerances leave a factor of ~100 for other platforms
+        np.testing.assert_allclose(st.marginals.beta, B[k], rtol=0, atol=1e-11)
+        np.testing.assert_allclose(x, X[k], rtol=0, atol=1e-8)
+        np.testing.assert_allclose(Pk, P[k], rtol=0, atol=1e-6)
         shared_steps += int(((B[k][:, 1:] > 0).sum(axis=0) >= 2).any())
     assert shared_steps > 0  # the comparison did exercise joint (not per-track) association
 
 
 def test_jpda_tracks_both_crossing_targets() -> None:
-    # no Stone Soup needed: both tracks stay on their targets through the crossing
+    # no Stone Soup needed: both tracks stay on their own targets through the crossing
+    # (t = 31.25 s) and end consistent with their covariance
     n = 80
     sc, mot, rb, scans, lam = _scenario(n, 3)
     rng = np.random.default_rng(3)
@@ -68,8 +71,18 @@ def test_jpda_tracks_both_crossing_targets() -> None:
     for k in range(n):
         st = jpda_step(x, P, scans[k], mot.F(1.0), mot.Q(1.0), rb, cfg)
         x, P = st.x, st.P
-    err = np.hypot(x[:, 0] - truth[n, :, 0], x[:, 2] - truth[n, :, 2])
-    assert np.all(err < 2000.0), err
+        pos = truth[k + 1][:, [0, 2]]
+        own = np.hypot(*(x[:, [0, 2]] - pos).T)
+        other = np.hypot(*(x[:, [0, 2]] - pos[::-1]).T)
+        if k >= 40:  # targets > 1 km apart again: no swap, no track on the other target
+            assert np.all(own < other), (k, own, other)
+    # final error within the 99.9 % ellipse of the track's own position covariance (chi²₂)
+    e = x[:, [0, 2]] - truth[n][:, [0, 2]]
+    Ppos = P[:, [0, 2]][:, :, [0, 2]]
+    nees = np.einsum("ti,tij,tj->t", e, np.linalg.inv(Ppos), e)
+    assert np.all(nees < 13.8), nees
+    # and well below one range-bearing measurement's error at ~45 km (sigma_theta r ~ 1.4 km)
+    assert np.all(np.hypot(*e.T) < 300.0), np.hypot(*e.T)
 
 
 @pytest.mark.parametrize("max_events", [20_000, 1])

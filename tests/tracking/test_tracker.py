@@ -10,7 +10,7 @@ import pytest
 from navtrack.tracking.metrics import clear_mot
 from navtrack.tracking.models import constant_velocity, linear_position
 from navtrack.tracking.simulate import simulate_detections, simulate_truth
-from navtrack.tracking.tracker import TrackerConfig, run_tracker
+from navtrack.tracking.tracker import DetStatus, TrackerConfig, run_tracker
 
 
 def test_simulators_are_seeded_and_statistically_right() -> None:
@@ -76,9 +76,9 @@ def test_tracker_follows_separated_targets(associator: str) -> None:
     assert m.id_switches == 0
     assert m.mota > 0.85  # misses only while tracks are being confirmed
     assert m.purity == 1.0
-    assert res.counts["tracks_confirmed"] == n
+    assert res.counts.tracks_confirmed == n
     # detections that updated confirmed tracks came from one target per track
-    sel = (res.det_status == 0) & (origin >= 0)
+    sel = (res.det_status == DetStatus.CONFIRMED) & (origin >= 0)
     for tid_ in np.unique(res.det_track[sel]):
         assert np.unique(origin[sel & (res.det_track == tid_)]).size == 1
 
@@ -92,7 +92,7 @@ def test_tracker_rejects_bad_input() -> None:
         TrackerConfig(associator="mht")  # type: ignore[arg-type]
     empty = run_tracker(np.zeros(0), np.zeros((0, 2)))
     assert empty.det_track.size == 0
-    assert empty.counts["scans"] == 0
+    assert empty.counts.scans == 0
 
 
 def test_imm_with_identical_models_equals_single_model() -> None:
@@ -150,10 +150,10 @@ def test_one_point_initiation_with_reported_velocity() -> None:
     )
     two = run_tracker(t, z, cfg)
     one = run_tracker(t, z, cfg, velocity=vel)
-    assert one.counts["tracks_confirmed"] == 4
+    assert one.counts.tracks_confirmed == 4
     # every target's first detection starts its own track (no seed waiting for a partner)
     first = (t == 0) & (origin >= 0)
-    assert np.all(one.det_status[first] == 2)
+    assert np.all(one.det_status[first] == DetStatus.STARTED)
 
     def first_velocity_error(res) -> float:
         errs = []

@@ -95,27 +95,29 @@ def run_track(args: argparse.Namespace) -> int:
     vel = None if args.no_velocity else velocity_local_enu(det, *ref) if det.geodetic else None
     if vel is not None and not np.isfinite(vel).any():
         vel = None
+    clock = time.perf_counter()
     res = run_tracker(det.t_gps_s, en, cfg, report_times=grid, velocity=vel)
+    t_track = time.perf_counter() - clock
     status = np.bincount(res.det_status, minlength=len(DET_STATUS_NAMES))
     summary["reference (lat, lon deg)"] = f"{ref[0]:.6f} {ref[1]:.6f}"
     summary["associator"] = args.associator
     summary["reported velocity used for initiation"] = (
         "no" if vel is None else f"yes ({int(np.isfinite(vel).all(axis=1).sum())} rows)"
     )
-    summary["scans"] = int(res.counts["scans"])
+    summary["scans"] = res.counts.scans
     summary["detections by fate"] = {
         n: int(c) for n, c in zip(DET_STATUS_NAMES, status, strict=True)
     }
     summary["tracks started / confirmed"] = (
-        f"{int(res.counts['tracks_started'])} / {int(res.counts['tracks_confirmed'])}"
+        f"{res.counts.tracks_started} / {res.counts.tracks_confirmed}"
     )
     summary["tracks deleted (coast, covariance, unconfirmed)"] = (
-        f"{int(res.counts['deleted_coast'])} {int(res.counts['deleted_covariance'])} "
-        f"{int(res.counts['deleted_unconfirmed'])}"
+        f"{res.counts.deleted_coast} {res.counts.deleted_covariance} "
+        f"{res.counts.deleted_unconfirmed}"
     )
     if args.associator == "jpda":
         summary["jpda clusters (exact, k-best)"] = (
-            f"{int(res.counts['jpda_exact_clusters'])} {int(res.counts['jpda_kbest_clusters'])}"
+            f"{res.counts.jpda_exact_clusters} {res.counts.jpda_kbest_clusters}"
         )
     has_ids = bool(np.any(det.id != ""))
     if has_ids:
@@ -134,9 +136,9 @@ def run_track(args: argparse.Namespace) -> int:
         summary["fragmentations"] = mot.fragmentations
         summary["track purity"] = round(mot.purity, 4)
         summary["ids / confirmed tracks"] = (
-            f"{np.unique(det.id).size} / {int(res.counts['tracks_confirmed'])}"
+            f"{np.unique(det.id).size} / {res.counts.tracks_confirmed}"
         )
-    summary["time read / track (s)"] = f"{t_read:.2f} {res.counts['seconds']:.2f}"
+    summary["time read / track (s)"] = f"{t_read:.2f} {t_track:.2f}"
     _print(summary)
     if args.out:
         _write(args.out, res, ref)

@@ -46,18 +46,23 @@ References
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from enum import IntEnum
 from functools import lru_cache
-from typing import Any
+from math import comb, perm
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
+from navtrack.tracking.kalman import gain_update, innovation_gain, kf_predict
+from navtrack.tracking.models import MeasurementModel
 
 __all__ = [
     "JpdaConfig",
     "JpdaMarginals",
+    "JpdaMethod",
     "JpdaStep",
     "association_weights",
     "clusters",
@@ -69,9 +74,13 @@ __all__ = [
     "pda_update",
 ]
 
-METHOD_SINGLE = 0
-METHOD_EXACT = 1
-METHOD_KBEST = 2
+
+class JpdaMethod(IntEnum):
+    """How a track's marginals were computed (``JpdaMarginals.method``)."""
+
+    PDA = 0  # track alone in its cluster: single-track PDA in closed form (exact)
+    EXACT = 1  # exact joint association (enumeration or variable elimination)
+    KBEST = 2  # the k most probable joint events (Murty), with an error bound
 
 
 @dataclass(frozen=True, slots=True)
@@ -126,7 +135,8 @@ class JpdaMarginals:
         Cluster label of each track (tracks sharing no measurement, directly or through others,
         are in different clusters).
     method : (T,) int8
-        0 = track alone in its cluster (PDA, exact), 1 = exact joint enumeration, 2 = k-best.
+        :class:`JpdaMethod`: 0 track alone in its cluster (PDA, exact), 1 exact joint
+        association, 2 k-best.
     error_bound : (T,)
         Bound on ``|beta - beta_exact|`` for every entry of the row (0 where exact).
     n_events : (T,) int
@@ -211,7 +221,7 @@ def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMargin
         raise ValueError("W must be finite and >= 0")
     T = W.shape[0]
     beta = np.zeros_like(W)
-    method = np.zeros(T, dtype=np.int8)
+    method = np.full(T, JpdaMethod.PDA, dtype=np.int8)
     err = np.zeros(T)
     n_events = np.full(T, -1, dtype=np.int64)
     gated = W[:, 1:] > 0
@@ -238,17 +248,17 @@ def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMargin
         if tr.size <= 3 and cols.size <= 8:
             # tiny cluster: dense enumeration of its joint events is cheapest
             bc = jpda_marginals_batch(Wc, joint_events(tr.size, cols.size))
-            method[tr] = METHOD_EXACT
+            method[tr] = JpdaMethod.EXACT
             beta[tr, 0] = bc[:, 0]
             beta[np.ix_(tr, cols + 1)] = bc[:, 1:]
             continue
         plan = _order_and_sets(Wc[:, 1:] > 0)
         if _max_active(plan[2]) <= cfg.max_exact_bits:
             bc = _exact(Wc, plan)
-            method[tr] = METHOD_EXACT
+            method[tr] = JpdaMethod.EXACT
         else:
             bc, bound, nev = _kbest(Wc, cfg.k_best)
-            method[tr] = METHOD_KBEST
+            method[tr] = JpdaMethod.KBEST
             err[tr] = bound
             n_events[tr] = nev
         beta[tr, 0] = bc[:, 0]
@@ -426,7 +436,8 @@ def pda_update(
     """PDA state update from marginal association probabilities (Bar-Shalom & Fortmann 6.4).
 
     ``x⁺ = x + K ν̄`` with ``ν̄ = Σ_j β_j ν_j``;
-    ``P⁺ = β_0 P + (1 - β_0)(P - K S Kᵀ) + K (Σ_j β_j ν_j ν_jᵀ - ν̄ ν̄ᵀ) Kᵀ``.
+    ``P⁺ = β_0 P + (1 - β_0)(P - K S Kᵀ) + K (Σ_j β_j ν_j ν_jᵀ - ν̄ ν̄ᵀ) Kᵀ``; the Kalman terms
+    ``x + K ν̄`` and ``P - K S Kᵀ`` come from :func:`navtrack.tracking.kalman.gain_update`.
     Equals the moment-matched mixture of the per-hypothesis Kalman posteriors (all sharing one
     gain).
 
@@ -450,9 +461,8 @@ def pda_update(
     bj = b[..., 1:]
     nu = np.einsum("...j,...ji->...i", bj, y)
     spread = np.einsum("...j,...ji,...jk->...ik", bj, y, y) - nu[..., :, None] * nu[..., None, :]
+    xn, Pc = gain_update(x, P, nu, K, S, symmetrize=False)
     Kt = np.swapaxes(K, -1, -2)
-    xn = x + np.einsum("...ij,...j->...i", K, nu)
-    Pc = P - K @ S @ Kt
     b0 = b[..., 0, None, None]
     Pn = b0 * P + (1 - b0) * Pc + K @ spread @ Kt
     return xn, 0.5 * (Pn + np.swapaxes(Pn, -1, -2))
@@ -479,54 +489,66 @@ class JpdaStep:
         freeze_arrays(self)
 
 
-def _innovation_cov_gain(
-    xp: FloatArray, Pp: FloatArray, model: Any
-) -> tuple[FloatArray, FloatArray]:
-    """``S = H P Hᵀ + R`` (symmetrised) and ``K = P Hᵀ S⁻¹``, ``H`` the model's Jacobian at the
-    prediction: the gain of :func:`navtrack.tracking.kalman.ekf_update`, shared by the PDA
-    update of every track."""
-    H = model.jacobian(xp)
-    PHt = Pp @ np.swapaxes(H, -1, -2)
-    S = H @ PHt + model.R
-    S = 0.5 * (S + np.swapaxes(S, -1, -2))
-    K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)
-    return S, K
-
-
 def jpda_step(
     x: ArrayLike,
     P: ArrayLike,
     z: ArrayLike,
     F: ArrayLike,
     Q: ArrayLike,
-    model: Any,
+    model: MeasurementModel,
     config: JpdaConfig,
 ) -> JpdaStep:
     """Predict, gate, associate (JPDA) and update ``T`` tracks with one scan.
 
     Linear prediction ``(F, Q)``; the measurement model may be nonlinear (EKF linearisation at
     the prediction, angle innovations wrapped). This is the JPDAF of Bar-Shalom & Fortmann
-    (1988, ch. 9) with the weights of :func:`association_weights`.
+    (1988, ch. 9) with the weights of :func:`association_weights`; the same pipeline as
+    :func:`jpda_step_batch`, with the marginals of :func:`jpda_marginals`.
 
     Parameters
     ----------
     x : (T, n), P : (T, n, n), z : (M, m) measurements of the scan
     F, Q : (n, n) motion model over the step
-    model : measurement model (``h``, ``jacobian``, ``R``, ``angle_mask``)
+    model : measurement model (``h``, ``jacobian``, ``R``, ``angle_mask``, ``dim_z``)
     config : JpdaConfig
     """
+
+    def marginals(W: FloatArray) -> tuple[FloatArray, JpdaMarginals]:
+        jm = jpda_marginals(W, config)
+        return jm.beta, jm
+
+    return _jpda_pipeline(x, P, z, None, F, Q, model, config, marginals)
+
+
+def _jpda_pipeline(
+    x: ArrayLike,
+    P: ArrayLike,
+    z: ArrayLike,
+    valid: BoolArray | None,
+    F: ArrayLike,
+    Q: ArrayLike,
+    model: MeasurementModel,
+    config: JpdaConfig,
+    marginals: Callable[[FloatArray], tuple[FloatArray, JpdaMarginals]],
+) -> JpdaStep:
+    """The JPDA filter step over any leading batch axes of ``x (..., T, n)``, ``z (..., M, m)``.
+
+    Kalman prediction, EKF innovation covariance and gain (:mod:`navtrack.tracking.kalman`),
+    chi-square gate, :func:`association_weights` (pairs with ``valid`` False get weight 0),
+    ``marginals(W) -> (beta, JpdaMarginals)``, :func:`pda_update`.
+    """
     from navtrack.tracking.gating import chi2_threshold, gate
-    from navtrack.tracking.kalman import kf_predict
 
     xp, Pp = kf_predict(x, P, F, Q)
-    S, K = _innovation_cov_gain(xp, Pp, model)
+    S, K = innovation_gain(Pp, model.jacobian(xp), model.R)
     gamma = chi2_threshold(config.gate_probability, model.dim_z)
     g = gate(model.h(xp), S, z, gamma, angle_mask=model.angle_mask)
+    ok = g.valid if valid is None else g.valid & valid[..., None, :]
     W = association_weights(
-        g.log_likelihood(), g.valid, config.pd, config.gate_probability, config.clutter_density
+        g.log_likelihood(), ok, config.pd, config.gate_probability, config.clutter_density
     )
-    jm = jpda_marginals(W, config)
-    xn, Pn = pda_update(xp, Pp, g.innovation, S, K, jm.beta)
+    beta, jm = marginals(W)
+    xn, Pn = pda_update(xp, Pp, g.innovation, S, K, beta)
     return JpdaStep(xn, Pn, xp, Pp, jm)
 
 
@@ -588,7 +610,7 @@ def jpda_step_batch(
     valid: ArrayLike,
     F: ArrayLike,
     Q: ArrayLike,
-    model: Any,
+    model: MeasurementModel,
     config: JpdaConfig,
     max_events: int = 20_000,
 ) -> JpdaStep:
@@ -609,49 +631,33 @@ def jpda_step_batch(
     JpdaStep with batched arrays; ``marginals.beta`` is (R, T, M+1) and the other marginal
     fields describe the flattened ``R·T`` tracks.
     """
-    from navtrack.tracking.gating import chi2_threshold, gate
-    from navtrack.tracking.kalman import kf_predict
-
     Z = np.asarray(z, dtype=float)
     ok = np.asarray(valid, dtype=bool)
-    xp, Pp = kf_predict(x, P, F, Q)
-    R_, T = xp.shape[:2]
+    R_, T = np.shape(x)[:2]
     M = Z.shape[1]
-    S, K = _innovation_cov_gain(xp, Pp, model)
     Zf = np.where(ok[..., None], Z, 0.0)
     if not np.all(np.isfinite(Zf)):
         raise ValueError("z: valid measurements must be finite")
-    gamma = chi2_threshold(config.gate_probability, model.dim_z)
-    g = gate(model.h(xp), S, Zf, gamma, angle_mask=model.angle_mask)  # (R, T, M) pairs
-    y = g.innovation
-    W = association_weights(
-        g.log_likelihood(),
-        g.valid & ok[:, None, :],
-        config.pd,
-        config.gate_probability,
-        config.clutter_density,
-    )
-    from math import comb, perm
-
     n_ev = sum(comb(T, k) * perm(M, k) for k in range(min(T, M) + 1))
-    if n_ev <= max_events:
-        beta = jpda_marginals_batch(W, joint_events(T, M))
-        flat = JpdaMarginals(
-            beta.reshape(R_ * T, M + 1),
-            np.repeat(np.arange(R_), T).astype(np.int64),
-            np.ones(R_ * T, dtype=np.int8),
-            np.zeros(R_ * T),
-            np.full(R_ * T, n_ev),
-        )
-    else:
+
+    def marginals(W: FloatArray) -> tuple[FloatArray, JpdaMarginals]:
+        if n_ev <= max_events:
+            beta = jpda_marginals_batch(W, joint_events(T, M))
+            return beta, JpdaMarginals(
+                beta.reshape(R_ * T, M + 1),
+                np.repeat(np.arange(R_), T).astype(np.int64),
+                np.full(R_ * T, JpdaMethod.EXACT, dtype=np.int8),
+                np.zeros(R_ * T),
+                np.full(R_ * T, n_ev),
+            )
         parts = [jpda_marginals(W[r], config) for r in range(R_)]
         beta = np.stack([p.beta for p in parts])
-        flat = JpdaMarginals(
+        return beta, JpdaMarginals(
             beta.reshape(R_ * T, M + 1),
             np.concatenate([p.cluster + r * T for r, p in enumerate(parts)]),
             np.concatenate([p.method for p in parts]),
             np.concatenate([p.error_bound for p in parts]),
             np.concatenate([p.n_events for p in parts]),
         )
-    xn, Pn = pda_update(xp, Pp, y, S, K, beta)
-    return JpdaStep(xn, Pn, xp, Pp, flat)
+
+    return _jpda_pipeline(x, P, Zf, ok, F, Q, model, config, marginals)

@@ -28,8 +28,12 @@ __all__ = [
     "KalmanUpdate",
     "ekf_predict",
     "ekf_update",
+    "gain_update",
+    "innovation_gain",
+    "kalman_gain",
     "kf_predict",
     "kf_update",
+    "mahalanobis2",
     "sigma_points",
     "ukf_predict",
     "ukf_update",
@@ -161,27 +165,99 @@ def _wrap(y: FloatArray, angle_mask: BoolArray | None) -> FloatArray:
     return np.where(angle_mask, wrap_angle(y), y)
 
 
-def _gain_update(
+def kalman_gain(PHt: ArrayLike, S: ArrayLike) -> FloatArray:
+    """Gain ``K = P Hᵀ S⁻¹`` (Bar-Shalom eq. 5.2.3-11) by a solve on the symmetric ``S``.
+
+    Parameters
+    ----------
+    PHt : (..., n, m)
+        Cross covariance of state and measurement: ``P Hᵀ`` (KF/EKF) or ``P_xz`` (UKF).
+    S : (..., m, m)
+        Innovation covariance.
+
+    Returns
+    -------
+    K : (..., n, m)
+    """
+    # K = (S⁻¹ (P Hᵀ)ᵀ)ᵀ
+    S = np.asarray(S, dtype=float)
+    PHt = np.asarray(PHt, dtype=float)
+    return _T(np.asarray(np.linalg.solve(S, _T(PHt)), dtype=float))
+
+
+def innovation_gain(P: ArrayLike, H: ArrayLike, R: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Innovation covariance and gain of a linear(ised) measurement (Bar-Shalom eq. 5.2.3-9, -11).
+
+    Parameters
+    ----------
+    P : (..., n, n) predicted covariance
+    H : (m, n) or (..., m, n) measurement matrix (EKF: Jacobian at the prediction)
+    R : (m, m) or (..., m, m) measurement noise covariance
+
+    Returns
+    -------
+    S : (..., m, m) ``H P Hᵀ + R``, symmetrised
+    K : (..., n, m) ``P Hᵀ S⁻¹``
+    """
+    P = np.asarray(P, dtype=float)
+    H = np.asarray(H, dtype=float)
+    PHt = P @ _T(H)
+    S = _sym(H @ PHt + np.asarray(R, dtype=float))
+    return S, kalman_gain(PHt, S)
+
+
+def gain_update(
+    x: ArrayLike,
+    P: ArrayLike,
+    y: ArrayLike,
+    K: ArrayLike,
+    S: ArrayLike,
+    *,
+    symmetrize: bool = True,
+) -> tuple[FloatArray, FloatArray]:
+    """Posterior for a given gain: ``x + K y``, ``P - K S Kᵀ`` (Bar-Shalom eq. 5.2.3-12, -15).
+
+    Parameters
+    ----------
+    x : (..., n), P : (..., n, n) prediction
+    y : (..., m) innovation
+    K : (..., n, m) gain, S : (..., m, m) innovation covariance (from :func:`innovation_gain`)
+    symmetrize : bool
+        Return ``(P + Pᵀ) / 2``; False for a term that enters a further sum (the PDA update
+        symmetrises its total).
+
+    Returns
+    -------
+    x : (..., n), P : (..., n, n)
+    """
+    K = np.asarray(K, dtype=float)
+    Pn = np.asarray(P, dtype=float) - K @ np.asarray(S, dtype=float) @ _T(K)
+    xn = _state_update(np.asarray(x, dtype=float), K, np.asarray(y, dtype=float))
+    return xn, _sym(Pn) if symmetrize else Pn
+
+
+def _state_update(x: FloatArray, K: FloatArray, y: FloatArray) -> FloatArray:
+    return x + np.einsum("...ij,...j->...i", K, y)
+
+
+def _update(
     x: FloatArray,
     P: FloatArray,
     y: FloatArray,
-    PHt: FloatArray,
+    K: FloatArray,
     S: FloatArray,
     H: FloatArray | None,
     R: FloatArray,
     joseph: bool,
 ) -> KalmanUpdate:
-    # K = P Hᵀ S⁻¹ by a solve on S (symmetric): K = (S⁻¹ (P Hᵀ)ᵀ)ᵀ
-    K = _T(np.asarray(np.linalg.solve(S, _T(PHt)), dtype=float))
-    xn = x + np.einsum("...ij,...j->...i", K, y)
-    if joseph:
-        if H is None:
-            raise ValueError("the Joseph form needs a measurement matrix (KF/EKF only)")
-        n = x.shape[-1]
-        IKH = np.eye(n) - K @ H
-        Pn = IKH @ P @ _T(IKH) + K @ R @ _T(K)
-    else:
-        Pn = P - K @ S @ _T(K)
+    if not joseph:
+        xn, Pn = gain_update(x, P, y, K, S)
+        return KalmanUpdate(xn, Pn, y, S, K)
+    if H is None:
+        raise ValueError("the Joseph form needs a measurement matrix (KF/EKF only)")
+    xn = _state_update(x, K, y)
+    IKH = np.eye(x.shape[-1]) - K @ H
+    Pn = IKH @ P @ _T(IKH) + K @ R @ _T(K)
     return KalmanUpdate(xn, _sym(Pn), y, S, K)
 
 
@@ -212,9 +288,8 @@ def kf_update(
     R = np.asarray(R, dtype=float)
     mask = None if angle_mask is None else np.asarray(angle_mask, dtype=bool)
     y = _wrap(np.asarray(z, dtype=float) - np.einsum("...ij,...j->...i", H, x), mask)
-    PHt = P @ _T(H)
-    S = _sym(H @ PHt + R)
-    return _gain_update(x, P, y, PHt, S, H, R, joseph)
+    S, K = innovation_gain(P, H, R)
+    return _update(x, P, y, K, S, H, R, joseph)
 
 
 def ekf_update(
@@ -225,9 +300,8 @@ def ekf_update(
     P = np.asarray(P, dtype=float)
     H = model.jacobian(x)
     y = _wrap(np.asarray(z, dtype=float) - model.h(x), model.angle_mask)
-    PHt = P @ _T(H)
-    S = _sym(H @ PHt + model.R)
-    return _gain_update(x, P, y, PHt, S, H, model.R, joseph)
+    S, K = innovation_gain(P, H, model.R)
+    return _update(x, P, y, K, S, H, model.R, joseph)
 
 
 def ukf_update(
@@ -257,4 +331,4 @@ def ukf_update(
     S = _sym(np.einsum("k,...ki,...kj->...ij", wc, dZ, dZ) + model.R)
     Pxz = np.einsum("k,...ki,...kj->...ij", wc, dX, dZ)
     y = _wrap(np.asarray(z, dtype=float) - zp, mask)
-    return _gain_update(x, P, y, Pxz, S, None, model.R, False)
+    return _update(x, P, y, kalman_gain(Pxz, S), S, None, model.R, False)

@@ -1,60 +1,100 @@
 """Multi-target tracker for real data: GNN or JPDA association with track management.
 
-The driver :func:`run_tracker` takes time-ordered 2-D position detections (local east/north, m)
-and runs, per scan (detections sharing one time stamp):
+:func:`run_tracker` takes time-ordered 2-D position detections (local east/north, m) and runs,
+per scan (detections sharing one time stamp), a chain of named stages over a
+:class:`TrackStore` (the live tracks); each stage is importable on its own, so other trackers
+(multisensor fusion, particle filters) can reuse them:
 
-1. prediction of every track to the scan time (linear motion model, batched KF);
-2. gating (chi-square, with a k-d tree pre-gate when there are many pairs);
-3. association: GNN (optimal 2-D assignment with missed-detection costs, :func:`assign2d`) or
-   JPDA (:func:`jpda_marginals`, then the PDA update);
-4. management: tentative tracks are confirmed after ``confirm_hits`` updates within
+1. :func:`predict` every track to the scan time (IMM mixing, then the batched KF prediction of
+   :mod:`navtrack.tracking.kalman`);
+2. :func:`gate_scan`: innovation covariance and gain from the Kalman kernels, chi-square gate
+   (with a k-d tree pre-gate when there are many pairs), per-model and mixture likelihoods;
+3. :func:`associate`: :func:`associate_gnn` (optimal 2-D assignment with missed-detection costs,
+   :func:`~navtrack.tracking.assignment.assign2d`) or :func:`associate_jpda`
+   (:func:`~navtrack.tracking.jpda.jpda_marginals`);
+4. :func:`update`: Kalman update of the assigned tracks (GNN) or PDA update (JPDA), and IMM
+   model probabilities;
+5. :func:`manage`: tentative tracks are confirmed after ``confirm_hits`` updates within
    ``confirm_window_s`` of their birth (the M-of-N rule written in time, so it applies to
    irregular report times as well as to regular scans) and dropped otherwise; tracks are
    deleted after ``max_coast_s`` without update or when their position standard deviation
    exceeds ``max_position_std_m``;
-5. initiation: a detection inside no track's gate is paired with an earlier such detection
-   ("seed") reachable at ``init_max_speed_mps`` within ``init_max_dt_s`` (two-point
-   initiation: position and velocity from the two points); otherwise it becomes a seed.
+6. :func:`initiate`: a detection not claimed by a track starts a tentative track on its own
+   when it carries a reported velocity (one-point initiation), or is paired with an earlier
+   unclaimed detection ("seed") reachable at ``init_max_speed_mps`` within ``init_max_dt_s``
+   (two-point initiation: position and velocity from the two points); otherwise it becomes a
+   seed.
 
 Track ids are integers given at birth and never reused. Every detection's fate is recorded
-(``det_status``) so nothing is dropped silently.
+(``det_status``, :class:`DetStatus`) so nothing is dropped silently.
 
 References
 ----------
 .. [1] S. S. Blackman, R. Popoli, *Design and Analysis of Modern Tracking Systems*, Artech
    House 1999, chapter 6 (GNN), 3.3 (M-of-N confirmation) and 4 (two-point initiation).
+.. [2] Y. Bar-Shalom, T. E. Fortmann, *Tracking and Data Association*, Academic Press 1988,
+   chapter 6 (PDA update) and 9 (JPDA).
+.. [3] H. A. P. Blom, E. A. Bloem, "Probabilistic data association avoiding track coalescence",
+   IEEE T-AC 45(2), 2000 (IMM-JPDA model likelihoods).
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
+from enum import IntEnum
 from typing import Literal
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
-from navtrack._typing import ArrayLike, FloatArray, IntArray
-from navtrack.tracking.models import LinearMotion, constant_velocity
+from navtrack._typing import ArrayLike, BoolArray, FloatArray, Int8Array, IntArray
+from navtrack.tracking.jpda import JpdaConfig, JpdaMarginals
+from navtrack.tracking.models import (
+    LinearMotion,
+    MeasurementModel,
+    constant_velocity,
+    linear_position,
+)
 
 __all__ = [
-    "DET_CONFIRMED",
-    "DET_SEED",
-    "DET_STARTED",
-    "DET_TENTATIVE",
-    "DET_UNUSED",
+    "DET_STATUS_NAMES",
+    "DetStatus",
+    "Initiation",
+    "Management",
+    "ScanAssociation",
+    "ScanGate",
+    "Seeds",
+    "TrackStore",
     "TrackerConfig",
+    "TrackerCounts",
+    "TrackerModel",
     "TrackerResult",
+    "associate",
+    "associate_gnn",
+    "associate_jpda",
+    "gate_scan",
+    "initiate",
+    "manage",
+    "one_point_state",
+    "predict",
+    "report",
     "run_tracker",
+    "two_point_state",
+    "update",
 ]
 
-# det_status values
-DET_CONFIRMED = 0  # updated a confirmed track
-DET_TENTATIVE = 1  # updated a tentative track
-DET_STARTED = 2  # second point of a two-point initiation (started a tentative track)
-DET_SEED = 3  # kept as a seed for initiation (never paired)
-DET_UNUSED = 4  # inside a gate but not associated (GNN loser / JPDA low probability)
-DET_STATUS_NAMES = ("confirmed", "tentative", "started", "seed", "unused")
+
+class DetStatus(IntEnum):
+    """Fate of a detection (``TrackerResult.det_status``; names as the CLI prints them)."""
+
+    CONFIRMED = 0  # updated a confirmed track
+    TENTATIVE = 1  # updated a tentative track
+    STARTED = 2  # started a track (one-point, or either point of a two-point initiation)
+    SEED = 3  # kept as a seed for initiation (never paired)
+    UNUSED = 4  # inside a gate but not associated (GNN loser / JPDA low probability)
+
+
+DET_STATUS_NAMES = tuple(s.name.lower() for s in DetStatus)
 
 
 @dataclass(frozen=True, slots=True)
@@ -159,6 +199,79 @@ class TrackerConfig:
 
 
 @dataclass(frozen=True, slots=True, eq=False)
+class TrackerModel:
+    """What the stages need, derived once from a :class:`TrackerConfig`.
+
+    Attributes
+    ----------
+    config : TrackerConfig
+    motions : tuple of LinearMotion
+        The ``r`` motion models (one, or the IMM's, sharing ``config.motion``'s form).
+    measurement : MeasurementModel
+        Measurement of the scans (the tracker: east/north position, ``sigma_m`` per axis).
+    gamma : float
+        Chi-square gate size for ``config.gate_probability`` and the measurement dimension.
+    jpda : JpdaConfig
+        JPDA parameters (``pd``, ``clutter_density``, ``gate_probability``, ``max_exact_bits``,
+        ``k_best`` of the config).
+    """
+
+    config: TrackerConfig
+    motions: tuple[LinearMotion, ...]
+    measurement: MeasurementModel
+    gamma: float
+    jpda: JpdaConfig
+
+    @staticmethod
+    def from_config(config: TrackerConfig) -> TrackerModel:
+        """Motion models, position measurement, gate size and JPDA parameters of ``config``."""
+        from navtrack.tracking.gating import chi2_threshold
+
+        mot = config.motion
+        qs = (mot.q,) if config.imm_q is None else tuple(config.imm_q)
+        meas = linear_position(mot.dim_x, mot.position_index, config.sigma_m)
+        return TrackerModel(
+            config,
+            tuple(LinearMotion(mot.ndim, mot.order, q, mot.noise) for q in qs),
+            meas,
+            chi2_threshold(config.gate_probability, meas.dim_z),
+            JpdaConfig(
+                config.pd,
+                config.clutter_density,
+                config.gate_probability,
+                config.max_exact_bits,
+                config.k_best,
+            ),
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class TrackerCounts:
+    """What happened in a run (counts, printed by the CLI summary).
+
+    Attributes
+    ----------
+    scans : distinct detection times processed
+    tracks_started, tracks_confirmed : births and confirmations
+    deleted_coast, deleted_covariance : confirmed tracks deleted for coasting longer than
+        ``max_coast_s`` / for a position standard deviation above ``max_position_std_m``
+    deleted_unconfirmed : tentative tracks dropped (not confirmed within ``confirm_window_s``,
+        or coasting, or diverged)
+    jpda_exact_clusters, jpda_kbest_clusters : JPDA clusters (summed over scans) solved exactly
+        / by k-best (:class:`~navtrack.tracking.jpda.JpdaMethod`)
+    """
+
+    scans: int = 0
+    tracks_started: int = 0
+    tracks_confirmed: int = 0
+    deleted_coast: int = 0
+    deleted_covariance: int = 0
+    deleted_unconfirmed: int = 0
+    jpda_exact_clusters: int = 0
+    jpda_kbest_clusters: int = 0
+
+
+@dataclass(frozen=True, slots=True, eq=False)
 class TrackerResult:
     """Tracker output (arrays read-only).
 
@@ -167,70 +280,614 @@ class TrackerResult:
     det_track : (N,) int
         Id of the track each detection updated or started (``-1`` none).
     det_status : (N,) int8
-        Fate of each detection: 0 confirmed-track update, 1 tentative-track update, 2 started a
-        track, 3 seed never paired, 4 gated but not associated.
+        Fate of each detection, a :class:`DetStatus`: 0 confirmed-track update, 1 tentative-track
+        update, 2 started a track, 3 seed never paired, 4 gated but not associated.
     track_time_s, track_id, track_x, track_std_m, track_confirmed :
         One row per track update: time (s), id, state ``[x, vx, y, vy]`` (m, m/s), position
         standard deviation ``sqrt(trace(P_pos)/2)`` (m), confirmed flag.
     report_frame, report_id, report_xy :
         Confirmed tracks predicted to each requested report time (index into
         ``report_times``), for scoring.
-    counts : dict
-        ``scans``, ``tracks_started``, ``tracks_confirmed``, ``deleted_coast``,
-        ``deleted_covariance``, ``deleted_unconfirmed``, ``jpda_exact_clusters``,
-        ``jpda_kbest_clusters``, ``seconds``.
+    counts : TrackerCounts
     """
 
     det_track: IntArray
-    det_status: np.ndarray
+    det_status: Int8Array
     track_time_s: FloatArray
     track_id: IntArray
     track_x: FloatArray
     track_std_m: FloatArray
-    track_confirmed: np.ndarray
+    track_confirmed: BoolArray
     report_frame: IntArray
     report_id: IntArray
     report_xy: FloatArray
-    counts: dict[str, float]
+    counts: TrackerCounts
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
 
 
-class _Tracks:
-    """Mutable per-run track store (private to the driver); model axis ``r`` for the IMM."""
+class TrackStore:
+    """The live tracks of one run, in birth order: the mutable state the stages work on.
 
-    def __init__(self, n: int, r: int) -> None:
-        self.x = np.zeros((0, r, n))
-        self.P = np.zeros((0, r, n, n))
-        self.mu = np.zeros((0, r))
-        self.id = np.zeros(0, dtype=np.int64)
-        self.confirmed = np.zeros(0, dtype=bool)
-        self.hits = np.zeros(0, dtype=np.int64)
-        self.born = np.zeros(0)
-        self.last = np.zeros(0)
+    The attributes are views of the first ``size`` rows of buffers whose capacity doubles when
+    a birth finds them full, so ``T`` births cost ``O(T)`` copies in all (amortised growth)
+    instead of a copy of every track at every birth. Writing into an attribute's rows writes
+    into the store; :meth:`add` and :meth:`keep` change the set of tracks and re-slice the
+    attributes (read them afresh after either: an older view may no longer be the store).
 
-    def keep(self, k: np.ndarray) -> None:
-        for name in ("x", "P", "mu", "id", "confirmed", "hits", "born", "last"):
-            setattr(self, name, getattr(self, name)[k])
+    Parameters
+    ----------
+    dim_x : int
+        State dimension ``n``.
+    n_models : int
+        Motion models ``r`` per track (1, or the IMM's).
+    capacity : int
+        Rows allocated at the start.
 
-    def add(self, x: FloatArray, P: FloatArray, tid: int, t: float, hits: int = 2) -> None:
-        r = self.mu.shape[1]
-        self.x = np.concatenate([self.x, np.broadcast_to(x, (1, r, x.size))])
-        self.P = np.concatenate([self.P, np.broadcast_to(P, (1, r, *P.shape))])
-        self.mu = np.concatenate([self.mu, np.full((1, r), 1.0 / r)])
-        self.id = np.append(self.id, tid)
-        self.confirmed = np.append(self.confirmed, False)
-        self.hits = np.append(self.hits, hits)
-        self.born = np.append(self.born, t)
-        self.last = np.append(self.last, t)
+    Attributes
+    ----------
+    size : int
+        Live tracks ``T``.
+    next_id : int
+        Id the next birth gets.
+    x : (T, r, n) model-conditioned states
+    P : (T, r, n, n) model-conditioned covariances
+    mu : (T, r) model probabilities
+    id : (T,) int track ids, given at birth from ``next_id`` and never reused
+    confirmed : (T,) bool
+    hits : (T,) int updates counted for confirmation (the initiating points included)
+    born_s, last_s : (T,) birth time and time of the last update, s
+    """
+
+    _FIELDS = ("x", "P", "mu", "id", "confirmed", "hits", "born_s", "last_s")
+
+    x: FloatArray
+    P: FloatArray
+    mu: FloatArray
+    id: IntArray
+    confirmed: BoolArray
+    hits: IntArray
+    born_s: FloatArray
+    last_s: FloatArray
+
+    def __init__(self, dim_x: int, n_models: int = 1, capacity: int = 16) -> None:
+        if dim_x < 1 or n_models < 1 or capacity < 1:
+            raise ValueError(
+                f"dim_x, n_models and capacity must be >= 1, got {dim_x}, {n_models}, {capacity}"
+            )
+        n, r = dim_x, n_models
+        self.size = 0
+        self.next_id = 0
+        self._buf: dict[str, np.ndarray] = {
+            "x": np.zeros((capacity, r, n)),
+            "P": np.zeros((capacity, r, n, n)),
+            "mu": np.zeros((capacity, r)),
+            "id": np.zeros(capacity, dtype=np.int64),
+            "confirmed": np.zeros(capacity, dtype=bool),
+            "hits": np.zeros(capacity, dtype=np.int64),
+            "born_s": np.zeros(capacity),
+            "last_s": np.zeros(capacity),
+        }
+        self._views()
+
+    @property
+    def capacity(self) -> int:
+        """Rows allocated (``>= size``)."""
+        return int(self._buf["id"].shape[0])
+
+    @property
+    def n_models(self) -> int:
+        """Motion models ``r`` per track."""
+        return int(self._buf["mu"].shape[1])
+
+    def _views(self) -> None:
+        for name in self._FIELDS:
+            setattr(self, name, self._buf[name][: self.size])
+
+    def add(self, x: FloatArray, P: FloatArray, t_s: float, hits: int) -> int:
+        """Append a tentative track with state ``x (n,)``, covariance ``P (n, n)`` in every model
+        (equal model probabilities), born at ``t_s``; returns its id."""
+        if self.size == self.capacity:
+            for name, b in self._buf.items():
+                grown = np.zeros((2 * b.shape[0], *b.shape[1:]), dtype=b.dtype)
+                grown[: self.size] = b[: self.size]
+                self._buf[name] = grown
+        i = self.size
+        tid = self.next_id
+        buf = self._buf
+        buf["x"][i] = x
+        buf["P"][i] = P
+        buf["mu"][i] = 1.0 / self.n_models
+        buf["id"][i] = tid
+        buf["confirmed"][i] = False
+        buf["hits"][i] = hits
+        buf["born_s"][i] = t_s
+        buf["last_s"][i] = t_s
+        self.size += 1
+        self.next_id += 1
+        self._views()
+        return tid
+
+    def keep(self, mask: BoolArray) -> None:
+        """Keep the tracks where ``mask (T,)`` is True, in their order."""
+        k = int(np.count_nonzero(mask))
+        if k == self.size:
+            return
+        for b in self._buf.values():
+            b[:k] = b[: self.size][mask]
+        self.size = k
+        self._views()
 
     def combined(self) -> tuple[FloatArray, FloatArray]:
+        """Moment-matched state ``(T, n)`` and covariance ``(T, n, n)`` over the models."""
         from navtrack.tracking.imm import imm_combine
 
-        if self.mu.shape[1] == 1:
+        if self.n_models == 1:
             return self.x[:, 0], self.P[:, 0]
         return imm_combine(self.x, self.P, self.mu)
+
+
+class Seeds:
+    """Unclaimed detections waiting for a partner (two-point initiation), oldest first."""
+
+    def __init__(self) -> None:
+        self.t_s: list[float] = []
+        self.z: list[FloatArray] = []
+        self.det: list[int] = []
+
+    def __len__(self) -> int:
+        return len(self.t_s)
+
+    def prune(self, t_s: float, max_age_s: float) -> None:
+        """Forget the seeds older than ``max_age_s`` at ``t_s``."""
+        keep = [i for i, ts in enumerate(self.t_s) if t_s - ts <= max_age_s]
+        self.t_s = [self.t_s[i] for i in keep]
+        self.z = [self.z[i] for i in keep]
+        self.det = [self.det[i] for i in keep]
+
+    def nearest(self, t_s: float, z: FloatArray, max_speed_mps: float, slack_m: float) -> int:
+        """Index of the nearest earlier seed within ``max_speed_mps · dt + slack_m``, or -1."""
+        best = -1
+        best_d = np.inf
+        for si, (ts, zs) in enumerate(zip(self.t_s, self.z, strict=True)):
+            dts = t_s - ts
+            if dts <= 0:
+                continue
+            d = float(np.hypot(*(z - zs)))
+            if d <= max_speed_mps * dts + slack_m and d < best_d:
+                best, best_d = si, d
+        return best
+
+    def add(self, t_s: float, z: FloatArray, det: int) -> None:
+        self.t_s.append(t_s)
+        self.z.append(z)
+        self.det.append(det)
+
+    def pop(self, i: int) -> tuple[float, FloatArray, int]:
+        return self.t_s.pop(i), self.z.pop(i), self.det.pop(i)
+
+
+# ---------------------------------------------------------------------------------- stages
+
+
+def predict(store: TrackStore, dt: float, model: TrackerModel) -> None:
+    """Stage 1: predict every track of ``store`` (in place) over ``dt`` seconds.
+
+    With several motion models the IMM interaction comes first, with the switching probability
+    ``1 - exp(-dt / imm_sojourn_s)`` of a continuous-time Markov chain; then the KF prediction
+    of every model (:func:`~navtrack.tracking.kalman.kf_predict`), and ``mu`` becomes the
+    predicted model probabilities. Nothing happens for ``dt <= 0`` or an empty store.
+    """
+    from navtrack.tracking.imm import imm_mix, markov_matrix
+    from navtrack.tracking.kalman import kf_predict
+
+    if not (dt > 0 and store.size):
+        return
+    r = len(model.motions)
+    if r > 1:
+        Pi = markov_matrix(r, -np.expm1(-dt / model.config.imm_sojourn_s))
+        x0, P0, c_pred = imm_mix(store.x, store.P, store.mu, Pi)
+        store.mu[:] = c_pred
+    else:
+        x0, P0 = store.x, store.P
+    Qm = np.stack([m.Q(dt) for m in model.motions])
+    store.x[:], store.P[:] = kf_predict(x0, P0, model.config.motion.F(dt), Qm)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class ScanGate:
+    """Gating of the ``T`` tracks (``r`` models) against the ``M`` detections of one scan.
+
+    Attributes
+    ----------
+    innovation : (T, r, M, m) ``z_j - h(x_t)``
+    S : (T, r, m, m) innovation covariance; K : (T, r, n, m) gain
+        (:func:`~navtrack.tracking.kalman.innovation_gain`)
+    valid : (T, M) bool, the pair is inside the gate of some model
+    log_likelihood : (T, r, M) ``log N(z_j; h(x_t), S_t)`` per model (``-1e300`` where the
+        pre-gate did not compute it)
+    log_likelihood_mix : (T, M) log of the model mixture with the predicted probabilities
+    """
+
+    innovation: FloatArray
+    S: FloatArray
+    K: FloatArray
+    valid: BoolArray
+    log_likelihood: FloatArray
+    log_likelihood_mix: FloatArray
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+    @property
+    def gated(self) -> BoolArray:
+        """(M,) detections inside some track's gate."""
+        return np.asarray(self.valid.any(axis=0), dtype=bool)
+
+
+def gate_scan(store: TrackStore, z: FloatArray, model: TrackerModel) -> ScanGate:
+    """Stage 2: innovation covariances and gains, chi-square gate and likelihoods.
+
+    Every model of every track is gated against ``z (M, m)`` with ``model.measurement``
+    (linearised at the prediction: its Jacobian is ``H`` for a linear model) and
+    ``model.gamma``; a k-d tree pre-gate cuts the pairs when there are more than
+    ``config.pregate_pairs`` and the measurement has no angle.
+    """
+    from navtrack.tracking.gating import gate, kdtree_pregate
+    from navtrack.tracking.kalman import innovation_gain
+
+    meas = model.measurement
+    T, r, n = store.x.shape
+    M, m = z.shape[0], meas.dim_z
+    xf = store.x.reshape(T * r, n)
+    S, K = innovation_gain(store.P.reshape(T * r, n, n), meas.jacobian(xf), meas.R)
+    zp = meas.h(xf)
+    pregate = model.config.pregate_pairs < T * r * M and not np.any(meas.angle_mask)
+    cand = kdtree_pregate(zp, S, z, model.gamma) if pregate else None
+    g = gate(zp, S, z, model.gamma, angle_mask=meas.angle_mask, candidates=cand)
+    valid = np.asarray(g.valid.reshape(T, r, M).any(axis=1), dtype=bool)
+    ll_rm = g.log_likelihood().reshape(T, r, M)
+    ll_rm = np.where(np.isfinite(ll_rm), ll_rm, -1e300)
+    # mixture likelihood over models with the predicted model probabilities
+    c_pred = store.mu
+    logc = np.log(np.where(c_pred > 0, c_pred, 1e-300))[:, :, None]
+    a = logc + ll_rm
+    amax = a.max(axis=1, keepdims=True)
+    ll_mix = (amax + np.log(np.exp(a - amax).sum(axis=1, keepdims=True)))[:, 0]
+    return ScanGate(
+        g.innovation.reshape(T, r, M, m),
+        S.reshape(T, r, m, m),
+        K.reshape(T, r, n, m),
+        valid,
+        ll_rm,
+        ll_mix,
+    )
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class ScanAssociation:
+    """Association of one scan.
+
+    Attributes
+    ----------
+    beta : (T, M+1)
+        Association probabilities, column 0 = no detection: JPDA marginals, or the 0/1
+        assignment of GNN.
+    hard : bool
+        True for an assignment (GNN): each track takes its column of 1 by a Kalman update.
+    marginals : JpdaMarginals or None
+        The JPDA marginals with their clusters and methods (None for GNN).
+    """
+
+    beta: FloatArray
+    hard: bool
+    marginals: JpdaMarginals | None = None
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+    @property
+    def hit(self) -> BoolArray:
+        """(T,) tracks counted as updated (probability of a detection above 1/2)."""
+        return np.asarray(self.beta[:, 0] < 0.5)
+
+    @property
+    def detection_track(self) -> IntArray:
+        """(M,) index of the track a detection is associated with (probability >= 1/2), -1."""
+        M = self.beta.shape[1] - 1
+        if self.beta.shape[0] == 0:
+            return np.full(M, -1, dtype=np.int64)
+        best = np.argmax(self.beta[:, 1:], axis=0)
+        ok = self.beta[best, 1 + np.arange(M)] >= 0.5
+        return np.where(ok, best, -1).astype(np.int64)
+
+    @property
+    def associated(self) -> BoolArray:
+        """(M,) detections whose summed association probability is >= 1/2."""
+        return np.asarray(self.beta[:, 1:].sum(axis=0) >= 0.5)
+
+
+def associate_gnn(
+    gated: ScanGate, pd: float, gate_probability: float, clutter_density: float
+) -> ScanAssociation:
+    """Stage 3 (GNN): optimal 2-D assignment maximising the likelihood ratio.
+
+    Cost of a gated pair ``-(log L_mix + log P_D - log λ)``, of a missed track
+    ``-log(1 - P_D P_G)`` (Blackman & Popoli 1999, 6.2).
+    """
+    from navtrack.tracking.assignment import assign2d
+
+    log_miss = np.log1p(-pd * gate_probability)
+    log_det_gain = np.log(pd) - np.log(clutter_density)
+    cost = np.where(gated.valid, -(gated.log_likelihood_mix + log_det_gain), np.inf)
+    a_t = assign2d(cost, -log_miss).track_to_meas
+    T, M = gated.valid.shape
+    beta = np.zeros((T, M + 1))
+    beta[np.arange(T), a_t + 1] = 1.0
+    return ScanAssociation(beta, True)
+
+
+def associate_jpda(gated: ScanGate, config: JpdaConfig) -> ScanAssociation:
+    """Stage 3 (JPDA): marginal association probabilities of the mixture likelihoods."""
+    from navtrack.tracking.jpda import association_weights, jpda_marginals
+
+    W = association_weights(
+        gated.log_likelihood_mix,
+        gated.valid,
+        config.pd,
+        config.gate_probability,
+        config.clutter_density,
+    )
+    jm = jpda_marginals(W, config)
+    return ScanAssociation(jm.beta, False, jm)
+
+
+def associate(gated: ScanGate, model: TrackerModel) -> ScanAssociation:
+    """Stage 3: :func:`associate_gnn` or :func:`associate_jpda`, as ``config.associator`` says."""
+    cfg = model.config
+    if cfg.associator == "gnn":
+        return associate_gnn(gated, cfg.pd, cfg.gate_probability, cfg.clutter_density)
+    return associate_jpda(gated, model.jpda)
+
+
+def update(store: TrackStore, gated: ScanGate, assoc: ScanAssociation) -> None:
+    """Stage 4: measurement update of the tracks of ``store`` (in place).
+
+    Hard association: the Kalman update :func:`~navtrack.tracking.kalman.gain_update` of each
+    assigned track. Soft: the PDA update :func:`~navtrack.tracking.jpda.pda_update` of each
+    track with a detection probability > 0. With several models, the model probabilities
+    follow (IMM; for JPDA the model likelihood is the missed term plus each detection's
+    likelihood ratio against the mixture, Blom & Bloem 2000).
+    """
+    from navtrack.tracking.imm import imm_model_probabilities
+    from navtrack.tracking.jpda import pda_update
+    from navtrack.tracking.kalman import gain_update
+
+    beta = assoc.beta
+    r = store.n_models
+    c_pred = store.mu
+    if assoc.hard:
+        ti = np.flatnonzero(assoc.hit)
+        if not ti.size:
+            return
+        a_t = np.argmax(beta[ti, 1:], axis=1)
+        y = gated.innovation[ti, :, a_t]  # (h, r, m)
+        store.x[ti], store.P[ti] = gain_update(
+            store.x[ti], store.P[ti], y, gated.K[ti], gated.S[ti]
+        )
+        if r > 1:
+            store.mu[ti] = imm_model_probabilities(c_pred[ti], gated.log_likelihood[ti, :, a_t])
+        return
+    active = np.flatnonzero(beta[:, 0] < 1.0)
+    if not active.size:
+        return
+    M = beta.shape[1] - 1
+    b_r = np.broadcast_to(beta[active, None, :], (active.size, r, M + 1))
+    store.x[active], store.P[active] = pda_update(
+        store.x[active],
+        store.P[active],
+        gated.innovation[active],
+        gated.S[active],
+        gated.K[active],
+        b_r,
+    )
+    if r > 1:
+        ratio = np.exp(gated.log_likelihood[active] - gated.log_likelihood_mix[active][:, None, :])
+        lam_r = beta[active, None, 0] + np.einsum("tj,trj->tr", beta[active, 1:], ratio)
+        store.mu[active] = imm_model_probabilities(
+            c_pred[active], np.log(np.maximum(lam_r, 1e-300))
+        )
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Management:
+    """Outcome of :func:`manage` for the ``T`` tracks before deletion.
+
+    Attributes
+    ----------
+    id : (T,) track ids; x : (T, n) combined state; std_m : (T,) position standard deviation
+        ``sqrt(trace(P_pos) / 2)``, m; confirmed : (T,) after this scan's confirmations
+    kept : (T,) bool, still in the store
+    confirmed_now, deleted_coast, deleted_covariance, deleted_unconfirmed : int
+        Counts as in :class:`TrackerCounts`.
+    """
+
+    id: IntArray
+    x: FloatArray
+    std_m: FloatArray
+    confirmed: BoolArray
+    kept: BoolArray
+    confirmed_now: int
+    deleted_coast: int
+    deleted_covariance: int
+    deleted_unconfirmed: int
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+
+def manage(store: TrackStore, hit: BoolArray, t_s: float, config: TrackerConfig) -> Management:
+    """Stage 5: count the hits, confirm (M-of-N in time), delete (coast, covariance, age).
+
+    ``hit (T,)`` marks the tracks updated at ``t_s``. A tentative track is confirmed once it
+    has ``confirm_hits`` hits within ``confirm_window_s`` of its birth and dropped when that
+    window has passed; any track is deleted after ``max_coast_s`` without a hit or when its
+    position standard deviation exceeds ``max_position_std_m``. ``store`` changes in place.
+    """
+    store.hits[hit] += 1
+    store.last_s[hit] = t_s
+    new_conf = (
+        ~store.confirmed
+        & (store.hits >= config.confirm_hits)
+        & (t_s - store.born_s <= config.confirm_window_s)
+    )
+    store.confirmed |= new_conf
+    xc, Pc = store.combined()
+    pos = list(config.motion.position_index)
+    std = np.sqrt(0.5 * np.trace(Pc[:, pos][:, :, pos], axis1=-2, axis2=-1))
+    coast = t_s - store.last_s > config.max_coast_s
+    cov = std > config.max_position_std_m
+    conf = store.confirmed.copy()
+    unconf = ~conf & (t_s - store.born_s > config.confirm_window_s)
+    kept = ~(coast | cov | unconf)
+    out = Management(
+        store.id.copy(),
+        np.array(xc),
+        std,
+        conf,
+        kept,
+        int(new_conf.sum()),
+        int((coast & conf).sum()),
+        int((cov & ~coast & conf).sum()),
+        int((~conf & (coast | cov | unconf)).sum()),
+    )
+    store.keep(kept)
+    return out
+
+
+def _initial_covariance(
+    motion: LinearMotion, var_p: float, var_v: float, cov_pv: float
+) -> FloatArray:
+    """``P0``: per axis position variance, velocity variance and their covariance; 1 m²/s⁴ for
+    the accelerations of a CA model."""
+    n = motion.dim_x
+    P0 = np.zeros((n, n))
+    for ip, iv in zip(motion.position_index, motion.velocity_index, strict=True):
+        P0[ip, ip] = var_p
+        P0[iv, iv] = var_v
+        P0[ip, iv] = P0[iv, ip] = cov_pv
+    if motion.order == 2:
+        for ia in range(2, n, 3):
+            P0[ia, ia] = 1.0
+    return P0
+
+
+def one_point_state(
+    z: FloatArray, v: FloatArray, config: TrackerConfig
+) -> tuple[FloatArray, FloatArray]:
+    """Initial state from one position ``z (2,)`` (m) and a reported velocity ``v (2,)`` (m/s):
+    variances ``sigma_m²`` and ``init_velocity_std_mps²``."""
+    mot = config.motion
+    x0 = np.zeros(mot.dim_x)
+    x0[list(mot.position_index)] = z
+    x0[list(mot.velocity_index)] = v
+    return x0, _initial_covariance(mot, config.sigma_m**2, config.init_velocity_std_mps**2, 0.0)
+
+
+def two_point_state(
+    z: FloatArray, z_seed: FloatArray, dt: float, config: TrackerConfig
+) -> tuple[FloatArray, FloatArray]:
+    """Initial state from two positions ``dt`` seconds apart (Blackman & Popoli 1999, 4):
+    velocity ``(z - z_seed) / dt``, variance ``2σ²/dt²`` and position-velocity covariance
+    ``σ²/dt``, each capped for short ``dt`` (``init_max_speed_mps²``; correlation <= 1)."""
+    mot = config.motion
+    sig2 = config.sigma_m**2
+    x0 = np.zeros(mot.dim_x)
+    x0[list(mot.position_index)] = z
+    x0[mot.velocity_index[0]], x0[mot.velocity_index[1]] = (z - z_seed) / dt
+    var_v = min(2 * sig2 / dt**2, config.init_max_speed_mps**2)
+    cov_pv = min(sig2 / dt, np.sqrt(var_v) * config.sigma_m)
+    return x0, _initial_covariance(mot, sig2, var_v, cov_pv)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Initiation:
+    """Outcome of :func:`initiate` for the ``k`` candidate detections.
+
+    Attributes
+    ----------
+    track : (k,) id of the track each detection started (``-1``: it became a seed)
+    status : (k,) int8 :class:`DetStatus` (``STARTED`` or ``SEED``)
+    seed_det, seed_track : (p,) detection index of each seed used as a first point, and the id
+        of the track it started
+    """
+
+    track: IntArray
+    status: Int8Array
+    seed_det: IntArray
+    seed_track: IntArray
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+
+def initiate(
+    store: TrackStore,
+    seeds: Seeds,
+    t_s: float,
+    z: FloatArray,
+    velocity: FloatArray,
+    det: IntArray,
+    config: TrackerConfig,
+) -> Initiation:
+    """Stage 6: start tracks from the detections ``z (k, 2)`` that no track claimed.
+
+    A detection with a finite reported ``velocity`` starts a track alone (one hit); otherwise
+    it is paired with the nearest seed reachable at ``init_max_speed_mps`` (plus 3σ) and both
+    start a track (two hits), or it becomes a seed. Seeds older than ``init_max_dt_s`` are
+    forgotten first. ``det (k,)`` are the detections' indices, kept with the seeds. ``store``
+    and ``seeds`` change in place.
+    """
+    seeds.prune(t_s, config.init_max_dt_s)
+    k = z.shape[0]
+    track = np.full(k, -1, dtype=np.int64)
+    status = np.full(k, DetStatus.SEED, dtype=np.int8)
+    seed_det: list[int] = []
+    seed_track: list[int] = []
+    for j in range(k):
+        if np.all(np.isfinite(velocity[j])):
+            x0, P0 = one_point_state(z[j], velocity[j], config)
+            track[j] = store.add(x0, P0, t_s, hits=1)
+            status[j] = DetStatus.STARTED
+            continue
+        best = seeds.nearest(t_s, z[j], config.init_max_speed_mps, 3 * config.sigma_m)
+        if best < 0:
+            seeds.add(t_s, z[j], int(det[j]))
+            continue
+        ts, zs, dj = seeds.pop(best)
+        x0, P0 = two_point_state(z[j], zs, t_s - ts, config)
+        track[j] = store.add(x0, P0, t_s, hits=2)
+        status[j] = DetStatus.STARTED
+        seed_det.append(dj)
+        seed_track.append(int(track[j]))
+    return Initiation(
+        track, status, np.array(seed_det, dtype=np.int64), np.array(seed_track, dtype=np.int64)
+    )
+
+
+def report(
+    store: TrackStore, now_s: float, t_s: float, motion: LinearMotion
+) -> tuple[IntArray, FloatArray]:
+    """Ids ``(k,)`` and positions ``(k, 2)`` (m) of the confirmed tracks, predicted from their
+    last scan at ``now_s`` to ``t_s >= now_s`` without noise."""
+    c = store.confirmed
+    xc, _ = store.combined()
+    xg = xc[c] @ motion.F(t_s - now_s).T
+    return store.id[c], xg[:, list(motion.position_index)]
+
+
+# ---------------------------------------------------------------------------------- driver
 
 
 def run_tracker(
@@ -240,7 +897,7 @@ def run_tracker(
     report_times: ArrayLike | None = None,
     velocity: ArrayLike | None = None,
 ) -> TrackerResult:
-    """Track 2-D position detections.
+    """Track 2-D position detections: the stages of the module notes, scan by scan.
 
     Parameters
     ----------
@@ -261,19 +918,6 @@ def run_tracker(
     ValueError
         Times not non-decreasing (the first offending index is named), non-finite values.
     """
-    from navtrack.tracking.assignment import assign2d
-    from navtrack.tracking.gating import chi2_threshold, gate, kdtree_pregate
-    from navtrack.tracking.imm import imm_mix, imm_model_probabilities, markov_matrix
-    from navtrack.tracking.jpda import (
-        METHOD_EXACT,
-        METHOD_KBEST,
-        JpdaConfig,
-        association_weights,
-        jpda_marginals,
-        pda_update,
-    )
-    from navtrack.tracking.kalman import kf_predict
-
     cfg = config or TrackerConfig()
     t = np.asarray(t_s, dtype=float)
     Z = np.asarray(z, dtype=float)
@@ -292,280 +936,124 @@ def run_tracker(
     V = np.full((t.size, 2), np.nan) if velocity is None else np.asarray(velocity, dtype=float)
     if V.shape != (t.size, 2):
         raise ValueError(f"velocity must be (N, 2) like z, got {V.shape}")
-    clock = time.perf_counter()
-    mot = cfg.motion
-    n = mot.dim_x
-    pos = list(mot.position_index)
-    qs = (mot.q,) if cfg.imm_q is None else tuple(cfg.imm_q)
-    models = [LinearMotion(mot.ndim, mot.order, q, mot.noise) for q in qs]
-    r = len(models)
-    R = np.eye(2) * cfg.sigma_m**2
-    gamma = chi2_threshold(cfg.gate_probability, 2)
-    jcfg = JpdaConfig(
-        cfg.pd, cfg.clutter_density, cfg.gate_probability, cfg.max_exact_bits, cfg.k_best
-    )
-    log_miss = np.log1p(-cfg.pd * cfg.gate_probability)
-    log_det_gain = np.log(cfg.pd) - np.log(cfg.clutter_density)
-
+    model = TrackerModel.from_config(cfg)
+    store = TrackStore(cfg.motion.dim_x, len(model.motions))
+    seeds = Seeds()
+    log = _Log(rep)
     N = t.size
     det_track = np.full(N, -1, dtype=np.int64)
-    det_status = np.full(N, DET_SEED, dtype=np.int8)
-    tr = _Tracks(n, r)
-    seeds_t: list[float] = []
-    seeds_z: list[FloatArray] = []
-    seeds_i: list[int] = []
-    next_id = 0
-    counts = dict.fromkeys(
-        (
-            "scans",
-            "tracks_started",
-            "tracks_confirmed",
-            "deleted_coast",
-            "deleted_covariance",
-            "deleted_unconfirmed",
-            "jpda_exact_clusters",
-            "jpda_kbest_clusters",
-        ),
-        0.0,
-    )
-    log_t: list[FloatArray] = []
-    log_id: list[IntArray] = []
-    log_x: list[FloatArray] = []
-    log_std: list[FloatArray] = []
-    log_conf: list[np.ndarray] = []
-    rep_f: list[IntArray] = []
-    rep_id: list[IntArray] = []
-    rep_xy: list[FloatArray] = []
-    r_next = 0
+    det_status = np.full(N, DetStatus.SEED, dtype=np.int8)
+    counts = dict.fromkeys(TrackerCounts.__dataclass_fields__, 0)
     now = t[0] if N else 0.0
-
-    def report_until(limit: float, inclusive: bool) -> None:
-        nonlocal r_next
-        while r_next < rep.size and (rep[r_next] < limit or (inclusive and rep[r_next] <= limit)):
-            g = rep[r_next]
-            if g >= now:
-                c = tr.confirmed
-                xc, _ = tr.combined()
-                xg = xc[c] @ mot.F(g - now).T
-                rep_f.append(np.full(int(c.sum()), r_next, dtype=np.int64))
-                rep_id.append(tr.id[c])
-                rep_xy.append(xg[:, pos])
-            r_next += 1
-
     starts = np.flatnonzero(np.r_[True, np.diff(t) > 0]) if N else np.zeros(0, dtype=np.int64)
     ends = np.r_[starts[1:], N].astype(np.int64) if N else np.zeros(0, dtype=np.int64)
     for s0, s1 in zip(starts, ends, strict=True):
         tk = t[s0]
-        report_until(tk, inclusive=False)
+        log.report_until(store, now, tk, cfg.motion, inclusive=False)
         counts["scans"] += 1
         Zk = Z[s0:s1]
-        M = Zk.shape[0]
-        # 1. predict (IMM: mix, then predict every model)
-        dt = tk - now
-        T = tr.id.size
-        c_pred = tr.mu
-        if dt > 0 and T:
-            if r > 1:
-                Pi = markov_matrix(r, -np.expm1(-dt / cfg.imm_sojourn_s))
-                x0, P0, c_pred = imm_mix(tr.x, tr.P, tr.mu, Pi)
-            else:
-                x0, P0 = tr.x, tr.P
-            Fm = mot.F(dt)
-            Qm = np.stack([m.Q(dt) for m in models])
-            tr.x, tr.P = kf_predict(x0, P0, Fm, Qm)
-            tr.mu = c_pred
+        predict(store, tk - now, model)
         now = tk
-        gated_any = np.zeros(M, dtype=bool)
-        used = np.zeros(M, dtype=bool)
-        claimed = np.zeros(M, dtype=bool)  # detections not available for initiation
-        if T:
-            # 2. gate every model; a pair is valid if inside some model's gate
-            zp = tr.x[..., pos].reshape(T * r, 2)
-            Pzz = tr.P[..., pos, :][..., pos].reshape(T * r, 2, 2)
-            S = Pzz + R
-            cand = kdtree_pregate(zp, S, Zk, gamma) if cfg.pregate_pairs < T * r * M else None
-            g = gate(zp, S, Zk, gamma, candidates=cand)
-            valid = g.valid.reshape(T, r, M).any(axis=1)
-            ll_rm = g.log_likelihood().reshape(T, r, M)
-            ll_rm = np.where(np.isfinite(ll_rm), ll_rm, -1e300)
-            # mixture likelihood over models with the predicted model probabilities
-            logc = np.log(np.where(c_pred > 0, c_pred, 1e-300))[:, :, None]
-            a = logc + ll_rm
-            amax = a.max(axis=1, keepdims=True)
-            ll_mix = (amax + np.log(np.exp(a - amax).sum(axis=1, keepdims=True)))[:, 0]
-            gated_any = np.asarray(valid.any(axis=0), dtype=bool)
-            PHt = tr.P[..., :, pos].reshape(T * r, n, 2)
-            K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)
-            S4 = S.reshape(T, r, 2, 2)
-            K4 = K.reshape(T, r, n, 2)
-            y4 = g.innovation.reshape(T, r, M, 2)
-            hit = np.zeros(T, dtype=bool)
-            # 3. associate
-            if cfg.associator == "gnn":
-                cost = np.where(valid, -(ll_mix + log_det_gain), np.inf)
-                a_t = assign2d(cost, -log_miss).track_to_meas
-                hit = a_t >= 0
-                if hit.any():
-                    ti = np.flatnonzero(hit)
-                    y = y4[ti, :, a_t[ti]]  # (h, r, 2)
-                    Kt = K4[ti]
-                    tr.x[ti] = tr.x[ti] + np.einsum("hrij,hrj->hri", Kt, y)
-                    Pn = tr.P[ti] - Kt @ S4[ti] @ np.swapaxes(Kt, -1, -2)
-                    tr.P[ti] = 0.5 * (Pn + np.swapaxes(Pn, -1, -2))
-                    if r > 1:
-                        tr.mu[ti] = imm_model_probabilities(c_pred[ti], ll_rm[ti, :, a_t[ti]])
-                    det_track[s0 + a_t[ti]] = tr.id[ti]
-                    used[a_t[ti]] = True
-                claimed = used.copy() if cfg.init_from == "unassociated" else gated_any
-            else:
-                W = association_weights(
-                    ll_mix, valid, cfg.pd, cfg.gate_probability, cfg.clutter_density
-                )
-                jm = jpda_marginals(W, jcfg)
-                beta = jm.beta
-                active = np.flatnonzero(beta[:, 0] < 1.0)
-                if active.size:
-                    b_r = np.broadcast_to(beta[active, None, :], (active.size, r, M + 1))
-                    xa, Pa = pda_update(
-                        tr.x[active], tr.P[active], y4[active], S4[active], K4[active], b_r
-                    )
-                    tr.x[active], tr.P[active] = xa, Pa
-                    if r > 1:
-                        # model likelihood: missed term plus each measurement's likelihood
-                        # ratio against the mixture (Blom & Bloem 2000, IMM-JPDA)
-                        ratio = np.exp(ll_rm[active] - ll_mix[active][:, None, :])
-                        lam_r = beta[active, None, 0] + np.einsum(
-                            "tj,trj->tr", beta[active, 1:], ratio
-                        )
-                        tr.mu[active] = imm_model_probabilities(
-                            c_pred[active], np.log(np.maximum(lam_r, 1e-300))
-                        )
-                hit = beta[:, 0] < 0.5
-                for key, code in (
-                    ("jpda_exact_clusters", METHOD_EXACT),
-                    ("jpda_kbest_clusters", METHOD_KBEST),
-                ):
-                    counts[key] += len(np.unique(jm.cluster[jm.method == code]))
-                if M:
-                    best_t = np.argmax(beta[:, 1:], axis=0)
-                    best_b = beta[best_t, 1 + np.arange(M)]
-                    ok = best_b >= 0.5
-                    det_track[s0 + np.flatnonzero(ok)] = tr.id[best_t[ok]]
-                    used[ok] = True
-                claimed = (
-                    beta[:, 1:].sum(axis=0) >= 0.5 if cfg.init_from == "unassociated" else gated_any
-                )
-            # 4. manage
-            tr.hits[hit] += 1
-            tr.last[hit] = tk
-            upd = np.flatnonzero(hit)
-            for j in np.flatnonzero(used):
-                k = np.flatnonzero(tr.id == det_track[s0 + j])[0]
-                det_status[s0 + j] = DET_CONFIRMED if tr.confirmed[k] else DET_TENTATIVE
-            new_conf = (
-                ~tr.confirmed
-                & (tr.hits >= cfg.confirm_hits)
-                & (tk - tr.born <= cfg.confirm_window_s)
+        claimed = np.zeros(Zk.shape[0], dtype=bool)  # detections not available for initiation
+        if store.size:
+            g = gate_scan(store, Zk, model)
+            a = associate(g, model)
+            update(store, g, a)
+            # fates of the associated detections, by the status of their track before manage
+            k = a.detection_track
+            used = np.flatnonzero(k >= 0)
+            det_track[s0 + used] = store.id[k[used]]
+            det_status[s0 + used] = np.where(
+                store.confirmed[k[used]], DetStatus.CONFIRMED, DetStatus.TENTATIVE
             )
-            counts["tracks_confirmed"] += int(new_conf.sum())
-            tr.confirmed |= new_conf
-            xc, Pc = tr.combined()
-            if upd.size:
-                log_t.append(np.full(upd.size, tk))
-                log_id.append(tr.id[upd])
-                log_x.append(xc[upd])
-                Pp = Pc[upd][:, pos][:, :, pos]
-                log_std.append(np.sqrt(0.5 * np.trace(Pp, axis1=-2, axis2=-1)))
-                log_conf.append(tr.confirmed[upd])
-            det_status[s0 + np.flatnonzero(gated_any & ~used)] = DET_UNUSED
-            std = np.sqrt(0.5 * np.trace(Pc[:, pos][:, :, pos], axis1=-2, axis2=-1))
-            coast = tk - tr.last > cfg.max_coast_s
-            cov = std > cfg.max_position_std_m
-            unconf = ~tr.confirmed & (tk - tr.born > cfg.confirm_window_s)
-            counts["deleted_coast"] += int((coast & tr.confirmed).sum())
-            counts["deleted_covariance"] += int((cov & ~coast & tr.confirmed).sum())
-            counts["deleted_unconfirmed"] += int((~tr.confirmed & (coast | cov | unconf)).sum())
-            tr.keep(~(coast | cov | unconf))
-        # 5. initiate from detections inside no gate
-        if seeds_t:
-            keep = [i for i, ts in enumerate(seeds_t) if tk - ts <= cfg.init_max_dt_s]
-            seeds_t = [seeds_t[i] for i in keep]
-            seeds_z = [seeds_z[i] for i in keep]
-            seeds_i = [seeds_i[i] for i in keep]
-        for j in np.flatnonzero(~claimed):
-            vj = V[s0 + j]
-            if np.all(np.isfinite(vj)):
-                x0 = np.zeros(n)
-                x0[pos] = Zk[j]
-                x0[list(mot.velocity_index)] = vj
-                P0 = np.zeros((n, n))
-                P0[pos, pos] = cfg.sigma_m**2
-                vix = list(mot.velocity_index)
-                P0[vix, vix] = cfg.init_velocity_std_mps**2
-                if mot.order == 2:
-                    for ia in range(2, n, 3):
-                        P0[ia, ia] = 1.0
-                tr.add(x0, P0, next_id, tk, hits=1)
-                det_track[s0 + j] = next_id
-                det_status[s0 + j] = DET_STARTED
-                next_id += 1
-                counts["tracks_started"] += 1
-                continue
-            best = -1
-            best_d = np.inf
-            for si, (ts, zs) in enumerate(zip(seeds_t, seeds_z, strict=True)):
-                dts = tk - ts
-                if dts <= 0:
-                    continue
-                d = float(np.hypot(*(Zk[j] - zs)))
-                if d <= cfg.init_max_speed_mps * dts + 3 * cfg.sigma_m and d < best_d:
-                    best, best_d = si, d
-            if best < 0:
-                det_status[s0 + j] = DET_SEED
-                seeds_t.append(tk)
-                seeds_z.append(Zk[j])
-                seeds_i.append(int(s0 + j))
-                continue
-            dts = tk - seeds_t[best]
-            v = (Zk[j] - seeds_z[best]) / dts
-            x0 = np.zeros(n)
-            x0[pos] = Zk[j]
-            x0[mot.velocity_index[0]], x0[mot.velocity_index[1]] = v
-            P0 = np.zeros((n, n))
-            var_v = min(2 * cfg.sigma_m**2 / dts**2, cfg.init_max_speed_mps**2)
-            cov_pv = min(cfg.sigma_m**2 / dts, np.sqrt(var_v) * cfg.sigma_m)
-            for ax in range(2):
-                ip, iv = pos[ax], mot.velocity_index[ax]
-                P0[ip, ip] = cfg.sigma_m**2
-                P0[iv, iv] = var_v
-                P0[ip, iv] = P0[iv, ip] = cov_pv
-            if mot.order == 2:
-                for ia in range(2, n, 3):
-                    P0[ia, ia] = 1.0
-            tr.add(x0, P0, next_id, tk)
-            det_track[s0 + j] = next_id
-            det_track[seeds_i[best]] = next_id
-            det_status[s0 + j] = DET_STARTED
-            det_status[seeds_i[best]] = DET_STARTED
-            next_id += 1
-            counts["tracks_started"] += 1
-            del seeds_t[best], seeds_z[best], seeds_i[best]
-    report_until(now, inclusive=True)
-    counts["seconds"] = time.perf_counter() - clock
+            det_status[s0 + np.flatnonzero(g.gated & (k < 0))] = DetStatus.UNUSED
+            m = manage(store, a.hit, tk, cfg)
+            log.updates(tk, m, a.hit)
+            _add_counts(counts, a, m)
+            claimed = a.associated if cfg.init_from == "unassociated" else g.gated
+        free = np.flatnonzero(~claimed)
+        if not free.size:  # (seeds are pruned by age when next used: same result)
+            continue
+        ini = initiate(store, seeds, tk, Zk[free], V[s0 + free], s0 + free, cfg)
+        det_track[s0 + free] = ini.track
+        det_status[s0 + free] = ini.status
+        det_track[ini.seed_det] = ini.seed_track
+        det_status[ini.seed_det] = DetStatus.STARTED
+        counts["tracks_started"] += int(np.count_nonzero(ini.track >= 0))
+    log.report_until(store, now, now, cfg.motion, inclusive=True)
+    return log.result(det_track, det_status, cfg.motion.dim_x, TrackerCounts(**counts))
 
-    def cat(parts: list, shape: tuple[int, ...], dtype: type) -> np.ndarray:
-        return np.concatenate(parts) if parts else np.zeros(shape, dtype=dtype)
 
-    return TrackerResult(
-        det_track,
-        det_status,
-        cat(log_t, (0,), float),
-        cat(log_id, (0,), np.int64),
-        cat(log_x, (0, n), float),
-        cat(log_std, (0,), float),
-        cat(log_conf, (0,), bool),
-        cat(rep_f, (0,), np.int64),
-        cat(rep_id, (0,), np.int64),
-        cat(rep_xy, (0, 2), float),
-        counts,
-    )
+def _add_counts(counts: dict[str, int], a: ScanAssociation, m: Management) -> None:
+    from navtrack.tracking.jpda import JpdaMethod
+
+    counts["tracks_confirmed"] += m.confirmed_now
+    counts["deleted_coast"] += m.deleted_coast
+    counts["deleted_covariance"] += m.deleted_covariance
+    counts["deleted_unconfirmed"] += m.deleted_unconfirmed
+    jm = a.marginals
+    if jm is not None:
+        for key, code in (
+            ("jpda_exact_clusters", JpdaMethod.EXACT),
+            ("jpda_kbest_clusters", JpdaMethod.KBEST),
+        ):
+            counts[key] += len(np.unique(jm.cluster[jm.method == code]))
+
+
+class _Log:
+    """Rows of the result: track updates, and confirmed tracks at the report times."""
+
+    def __init__(self, report_times: FloatArray) -> None:
+        self.rep = report_times
+        self.r_next = 0
+        self.t: list[FloatArray] = []
+        self.id: list[IntArray] = []
+        self.x: list[FloatArray] = []
+        self.std: list[FloatArray] = []
+        self.conf: list[BoolArray] = []
+        self.rep_f: list[IntArray] = []
+        self.rep_id: list[IntArray] = []
+        self.rep_xy: list[FloatArray] = []
+
+    def updates(self, t_s: float, m: Management, hit: BoolArray) -> None:
+        upd = np.flatnonzero(hit)
+        if upd.size:
+            self.t.append(np.full(upd.size, t_s))
+            self.id.append(m.id[upd])
+            self.x.append(m.x[upd])
+            self.std.append(m.std_m[upd])
+            self.conf.append(m.confirmed[upd])
+
+    def report_until(
+        self, store: TrackStore, now_s: float, limit_s: float, motion: LinearMotion, inclusive: bool
+    ) -> None:
+        rep = self.rep
+        while self.r_next < rep.size and (
+            rep[self.r_next] < limit_s or (inclusive and rep[self.r_next] <= limit_s)
+        ):
+            if rep[self.r_next] >= now_s:
+                ids, xy = report(store, now_s, rep[self.r_next], motion)
+                self.rep_f.append(np.full(ids.size, self.r_next, dtype=np.int64))
+                self.rep_id.append(ids)
+                self.rep_xy.append(xy)
+            self.r_next += 1
+
+    def result(
+        self, det_track: IntArray, det_status: Int8Array, n: int, counts: TrackerCounts
+    ) -> TrackerResult:
+        def cat(parts: list, shape: tuple[int, ...], dtype: type) -> np.ndarray:
+            return np.concatenate(parts) if parts else np.zeros(shape, dtype=dtype)
+
+        return TrackerResult(
+            det_track,
+            det_status,
+            cat(self.t, (0,), float),
+            cat(self.id, (0,), np.int64),
+            cat(self.x, (0, n), float),
+            cat(self.std, (0,), float),
+            cat(self.conf, (0,), bool),
+            cat(self.rep_f, (0,), np.int64),
+            cat(self.rep_id, (0,), np.int64),
+            cat(self.rep_xy, (0, 2), float),
+            counts,
+        )

@@ -1,0 +1,286 @@
+"""The tracker's stages one by one: store growth, predict/update against the Kalman kernels,
+M-of-N management, initiation, and single vs batched JPDA through one pipeline."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from navtrack.tracking.imm import imm_mix, imm_model_probabilities, markov_matrix
+from navtrack.tracking.jpda import JpdaConfig, JpdaMethod, jpda_step, jpda_step_batch, pda_update
+from navtrack.tracking.kalman import (
+    gain_update,
+    innovation_gain,
+    kalman_gain,
+    kf_predict,
+    kf_update,
+)
+from navtrack.tracking.models import RangeBearing, constant_velocity, linear_position
+from navtrack.tracking.tracker import (
+    DET_STATUS_NAMES,
+    DetStatus,
+    Seeds,
+    TrackerConfig,
+    TrackerModel,
+    TrackStore,
+    associate_gnn,
+    associate_jpda,
+    gate_scan,
+    initiate,
+    manage,
+    predict,
+    update,
+)
+
+
+def _spd(rng: np.random.Generator, n: int) -> np.ndarray:
+    A = rng.normal(size=(n, n))
+    return A @ A.T + n * np.eye(n)
+
+
+def _store(rng: np.random.Generator, T: int, r: int = 1) -> TrackStore:
+    store = TrackStore(4, r, capacity=1)
+    for k in range(T):
+        x = np.array([1000.0 * k, 5.0, -500.0 * k, -2.0]) + rng.normal(0, 10, 4)
+        store.add(x, _spd(rng, 4) * 100, t_s=0.0, hits=2)
+    return store
+
+
+def test_status_enums_keep_printed_names() -> None:
+    assert DET_STATUS_NAMES == ("confirmed", "tentative", "started", "seed", "unused")
+    assert [int(s) for s in DetStatus] == [0, 1, 2, 3, 4]
+    assert [m.name for m in JpdaMethod] == ["PDA", "EXACT", "KBEST"]
+    assert [int(m) for m in JpdaMethod] == [0, 1, 2]
+
+
+def test_store_grows_by_doubling_and_keeps_earlier_tracks() -> None:
+    rng = np.random.default_rng(0)
+    store = TrackStore(4, 2, capacity=1)
+    caps, xs = [], []
+    for k in range(100):
+        x = rng.normal(size=4)
+        assert store.add(x, np.eye(4) * (k + 1), t_s=float(k), hits=1) == k
+        caps.append(store.capacity)
+        xs.append(x)
+        # every earlier track unchanged by the growth
+        np.testing.assert_array_equal(store.x[:, 0], np.array(xs))
+        np.testing.assert_array_equal(store.x[:, 1], np.array(xs))
+    assert sorted(set(caps)) == [1, 2, 4, 8, 16, 32, 64, 128]  # 7 reallocations for 100 births
+    np.testing.assert_array_equal(store.id, np.arange(100))
+    np.testing.assert_array_equal(store.born_s, np.arange(100.0))
+    np.testing.assert_array_equal(store.mu, np.full((100, 2), 0.5))
+    assert not store.confirmed.any()
+    keep = np.arange(100) % 3 == 0
+    store.keep(keep)
+    assert store.size == keep.sum()
+    assert store.capacity == 128
+    np.testing.assert_array_equal(store.id, np.flatnonzero(keep))  # order kept
+    np.testing.assert_array_equal(store.P[:, 0, 0, 0], np.flatnonzero(keep) + 1.0)
+    assert store.add(np.zeros(4), np.eye(4), 100.0, hits=1) == 100  # ids are never reused
+    assert store.id[-1] == 100
+    assert store.size == keep.sum() + 1
+
+
+def test_predict_stage_equals_kalman_and_imm_kernels() -> None:
+    rng = np.random.default_rng(1)
+    cfg = TrackerConfig(sigma_m=10.0)
+    model = TrackerModel.from_config(cfg)
+    store = _store(rng, 5)
+    x0, P0 = store.x.copy(), store.P.copy()
+    predict(store, 7.5, model)
+    xk, Pk = kf_predict(x0[:, 0], P0[:, 0], cfg.motion.F(7.5), cfg.motion.Q(7.5))
+    np.testing.assert_array_equal(store.x[:, 0], xk)
+    np.testing.assert_array_equal(store.P[:, 0], Pk)
+    predict(store, 0.0, model)  # no time step: nothing moves
+    np.testing.assert_array_equal(store.x[:, 0], xk)
+    # IMM: mixing with the continuous-time switching probability, then each model's KF
+    icfg = replace(cfg, imm_q=(1e-4, 1.0), imm_sojourn_s=50.0)
+    imodel = TrackerModel.from_config(icfg)
+    store = _store(rng, 4, r=2)
+    store.mu[:] = rng.dirichlet([1, 1], size=4)
+    store.x[:, 1] += 30.0
+    x0, P0, mu0 = store.x.copy(), store.P.copy(), store.mu.copy()
+    predict(store, 10.0, imodel)
+    xm, Pm, c = imm_mix(x0, P0, mu0, markov_matrix(2, -np.expm1(-10.0 / 50.0)))
+    Q = np.stack([m.Q(10.0) for m in imodel.motions])
+    xk, Pk = kf_predict(xm, Pm, icfg.motion.F(10.0), Q)
+    np.testing.assert_array_equal(store.x, xk)
+    np.testing.assert_array_equal(store.P, Pk)
+    np.testing.assert_array_equal(store.mu, c)
+    assert not np.allclose(Q[0], Q[1])
+
+
+def test_gnn_update_stage_equals_kf_update() -> None:
+    rng = np.random.default_rng(2)
+    cfg = TrackerConfig(sigma_m=20.0, clutter_density=1e-8)
+    model = TrackerModel.from_config(cfg)
+    store = _store(rng, 4)
+    H, R = model.measurement.jacobian(store.x[0, 0]), model.measurement.R
+    # detections near tracks 0, 2 and 3 (track 1 has none), in shuffled order
+    z = store.x[[3, 0, 2], 0][:, [0, 2]] + rng.normal(0, 20.0, (3, 2))
+    x0, P0 = store.x[:, 0].copy(), store.P[:, 0].copy()
+    g = gate_scan(store, z, model)
+    S, K = innovation_gain(P0, H, R)
+    np.testing.assert_array_equal(g.S[:, 0], S)
+    np.testing.assert_array_equal(g.K[:, 0], K)
+    a = associate_gnn(g, cfg.pd, cfg.gate_probability, cfg.clutter_density)
+    np.testing.assert_array_equal(a.detection_track, [3, 0, 2])
+    np.testing.assert_array_equal(a.hit, [True, False, True, True])
+    update(store, g, a)
+    for t, j in ((0, 1), (2, 2), (3, 0)):
+        u = kf_update(x0[t], P0[t], z[j], H, R)
+        np.testing.assert_allclose(store.x[t, 0], u.x, rtol=1e-14, atol=1e-10)
+        np.testing.assert_allclose(store.P[t, 0], u.P, rtol=1e-14, atol=1e-10)
+    np.testing.assert_array_equal(store.x[1, 0], x0[1])  # missed track: prediction kept
+    np.testing.assert_array_equal(store.P[1, 0], P0[1])
+
+
+def test_jpda_update_stage_equals_pda_update_with_imm_probabilities() -> None:
+    rng = np.random.default_rng(3)
+    cfg = TrackerConfig(sigma_m=50.0, associator="jpda", clutter_density=1e-8, imm_q=(0.01, 1.0))
+    model = TrackerModel.from_config(cfg)
+    store = _store(rng, 3, r=2)
+    store.x[1] = store.x[0] + [80.0, 0, 40.0, 0]  # tracks 0 and 1 share detections
+    store.mu[:] = [[0.3, 0.7], [0.5, 0.5], [0.9, 0.1]]
+    store.P[:, 1] *= 9.0  # the models disagree, so the detections move the probabilities
+    z = np.vstack([store.x[:3, 0][:, [0, 2]] + rng.normal(0, 50.0, (3, 2)), [[20.0, 10.0]]])
+    x0, P0, mu0 = store.x.copy(), store.P.copy(), store.mu.copy()
+    g = gate_scan(store, z, model)
+    a = associate_jpda(g, model.jpda)
+    assert a.marginals is not None
+    assert (a.marginals.method == JpdaMethod.EXACT).sum() == 2
+    beta = a.beta
+    update(store, g, a)
+    b_r = np.broadcast_to(beta[:, None, :], (3, 2, beta.shape[1]))
+    xp, Pp = pda_update(x0, P0, g.innovation, g.S, g.K, b_r)
+    np.testing.assert_array_equal(store.x, xp)
+    np.testing.assert_array_equal(store.P, Pp)
+    lam = beta[:, None, 0] + np.einsum(
+        "tj,trj->tr", beta[:, 1:], np.exp(g.log_likelihood - g.log_likelihood_mix[:, None, :])
+    )
+    np.testing.assert_allclose(store.mu, imm_model_probabilities(mu0, np.log(lam)), rtol=1e-12)
+    assert not np.allclose(store.mu, mu0)
+
+
+def test_manage_confirms_m_of_n_and_deletes() -> None:
+    cfg = TrackerConfig(confirm_hits=3, confirm_window_s=100.0, max_coast_s=50.0)
+    store = TrackStore(4, 1)
+    for _ in range(3):
+        store.add(np.zeros(4), np.eye(4), t_s=0.0, hits=1)
+    hit = np.array([True, True, False])
+    m = manage(store, hit, 10.0, cfg)  # hits 2, 2, 1: nobody confirmed yet
+    assert m.confirmed_now == 0
+    assert store.size == 3
+    np.testing.assert_array_equal(store.hits, [2, 2, 1])
+    np.testing.assert_array_equal(store.last_s, [10.0, 10.0, 0.0])
+    m = manage(store, np.array([True, False, False]), 20.0, cfg)  # 3 hits within 100 s
+    np.testing.assert_array_equal(m.confirmed, [True, False, False])
+    assert m.confirmed_now == 1
+    # at 101 s: track 1 (2 hits) has missed its window, track 2 also coasted; track 0 coasts
+    # 81 s > 50 s since its last hit: deleted as a confirmed coasting track
+    m = manage(store, np.array([False, False, False]), 101.0, cfg)
+    np.testing.assert_array_equal(m.kept, [False, False, False])
+    assert (m.deleted_coast, m.deleted_covariance, m.deleted_unconfirmed) == (1, 0, 2)
+    assert store.size == 0
+    # a confirmed track with a hit stays; a diverged one is deleted for its covariance
+    store.add(np.zeros(4), np.eye(4), 0.0, hits=3)
+    store.add(np.zeros(4), np.eye(4) * 1e8, 0.0, hits=3)
+    m = manage(store, np.array([True, True]), 1.0, cfg)
+    assert m.confirmed_now == 2
+    assert m.deleted_covariance == 1
+    np.testing.assert_array_equal(store.id, [3])
+
+
+def test_initiate_grows_store_and_keeps_earlier_tracks() -> None:
+    cfg = TrackerConfig(sigma_m=10.0, init_max_speed_mps=20.0, init_max_dt_s=30.0)
+    store = TrackStore(4, 1, capacity=1)
+    seeds = Seeds()
+    store.add(np.array([5.0, 1.0, 5.0, 1.0]), np.eye(4), 0.0, hits=2)
+    nan2 = np.full((2, 2), np.nan)
+    ini = initiate(store, seeds, 0.0, np.array([[0.0, 0.0], [5000.0, 0.0]]), nan2, [0, 1], cfg)
+    np.testing.assert_array_equal(ini.status, [DetStatus.SEED, DetStatus.SEED])
+    assert store.size == 1
+    assert len(seeds) == 2
+    # 10 s later: one detection 150 m from seed 0 (reachable at 20 m/s), one with a velocity
+    z = np.array([[150.0, 0.0], [-3000.0, 0.0]])
+    v = np.array([[np.nan, np.nan], [3.0, -4.0]])
+    ini = initiate(store, seeds, 10.0, z, v, [2, 3], cfg)
+    np.testing.assert_array_equal(ini.status, [DetStatus.STARTED, DetStatus.STARTED])
+    np.testing.assert_array_equal(ini.track, [1, 2])
+    np.testing.assert_array_equal(ini.seed_det, [0])
+    np.testing.assert_array_equal(ini.seed_track, [1])
+    assert store.size == 3
+    assert store.capacity == 4
+    assert len(seeds) == 1
+    np.testing.assert_array_equal(store.x[0, 0], [5.0, 1.0, 5.0, 1.0])  # earlier track kept
+    np.testing.assert_allclose(store.x[1, 0], [150.0, 15.0, 0.0, 0.0])  # two-point velocity
+    np.testing.assert_allclose(np.diag(store.P[1, 0]), [100.0, 2.0, 100.0, 2.0])  # 2σ²/dt²
+    assert store.P[1, 0, 0, 1] == pytest.approx(10.0)  # σ²/dt
+    np.testing.assert_array_equal(store.x[2, 0], [-3000.0, 3.0, 0.0, -4.0])
+    np.testing.assert_allclose(np.diag(store.P[2, 0]), [100.0, 1.0, 100.0, 1.0])
+    assert store.P[2, 0, 0, 1] == 0.0
+    np.testing.assert_array_equal(store.hits, [2, 2, 1])
+    # the remaining seed (5 km away) ages out after init_max_dt_s
+    ini = initiate(store, seeds, 40.0, np.array([[5000.0, 100.0]]), nan2[:1], [4], cfg)
+    assert ini.status[0] == DetStatus.SEED
+    assert seeds.det == [4]
+
+
+def _jpda_problem(bearing: bool):
+    rng = np.random.default_rng(7)
+    T, M = 4, 7
+    mot = constant_velocity(2, 1.0)
+    if bearing:
+        model = RangeBearing(np.diag([50.0**2, 0.01**2]), sensor_xy=np.array([5000.0, 0.0]))
+    else:
+        model = linear_position(4, (0, 2), 30.0)
+    x = rng.normal(0, 1, (T, 4)) * [60.0, 5.0, 60.0, 5.0]
+    P = np.broadcast_to(np.diag([400.0, 25.0, 400.0, 25.0]), (T, 4, 4)).copy()
+    xp = x @ mot.F(1.0).T
+    z = np.vstack(
+        [
+            model.h(xp) + rng.normal(0, 1, (T, 2)) @ np.linalg.cholesky(model.R).T,
+            model.h(xp[: M - T] + rng.normal(0, 60.0, (M - T, 4))),
+        ]
+    )
+    return x, P, z, mot.F(1.0), mot.Q(1.0), model
+
+
+@pytest.mark.parametrize("bearing", [False, True])
+def test_single_and_batched_jpda_are_one_pipeline(bearing: bool) -> None:
+    # one problem through jpda_step and through jpda_step_batch (per-problem marginals):
+    # the same code path gives identical bits, marginal bookkeeping included
+    x, P, z, F, Q, model = _jpda_problem(bearing)
+    cfg = JpdaConfig(pd=0.9, clutter_density=1e-6, gate_probability=0.999)
+    one = jpda_step(x, P, z, F, Q, model, cfg)
+    assert ((one.marginals.beta[:, 1:] > 0).sum(axis=0) >= 2).any()  # joint association
+    ok = np.ones((1, len(z)), dtype=bool)
+    b = jpda_step_batch(x[None], P[None], z[None], ok, F, Q, model, cfg, max_events=0)
+    for name in ("x", "P", "x_pred", "P_pred"):
+        np.testing.assert_array_equal(getattr(b, name)[0], getattr(one, name))
+    np.testing.assert_array_equal(b.marginals.beta, one.marginals.beta)  # (R·T, M+1)
+    for name in ("cluster", "method", "error_bound", "n_events"):
+        np.testing.assert_array_equal(getattr(b.marginals, name), getattr(one.marginals, name))
+    # the dense enumeration of the batch agrees to rounding
+    d = jpda_step_batch(x[None], P[None], z[None], ok, F, Q, model, cfg)
+    np.testing.assert_allclose(d.marginals.beta, one.marginals.beta, rtol=0, atol=1e-13)
+    np.testing.assert_array_equal(d.marginals.method, JpdaMethod.EXACT)
+
+
+def test_kalman_gain_kernels() -> None:
+    rng = np.random.default_rng(4)
+    P = np.stack([_spd(rng, 4) for _ in range(3)])
+    H = rng.normal(size=(2, 4))
+    R = _spd(rng, 2)
+    S, K = innovation_gain(P, H, R)
+    np.testing.assert_allclose(S, H @ P @ H.T + R, rtol=1e-13)
+    np.testing.assert_allclose(K, P @ H.T @ np.linalg.inv(S), rtol=1e-11)
+    np.testing.assert_array_equal(kalman_gain(P @ H.T, S), K)
+    x, z = rng.normal(size=(3, 4)), rng.normal(size=(3, 2))
+    u = kf_update(x, P, z, H, R)
+    xg, Pg = gain_update(x, P, z - np.einsum("ij,tj->ti", H, x), K, S)
+    np.testing.assert_array_equal(xg, u.x)
+    np.testing.assert_array_equal(Pg, u.P)
+    np.testing.assert_array_equal(Pg, np.swapaxes(Pg, -1, -2))
