@@ -191,7 +191,7 @@ def synthetic_run(index: int, rng: np.random.Generator, params: AriExperimentPar
         mag = rng.uniform(lo, hi, size=k) * rng.choice([-1.0, 1.0], size=k)
         rec: dict[str, Any] = {}
         clean = fit_ari(y, AriConfig(order=(p, case.d), robust="off"))
-        rec["clean_status"] = clean.status
+        rec["clean_status"] = str(clean.status)
         rec["sigma_n_ratio"] = clean.sigma_n / case.sigma_n
         rec["sigma_e_ratio"] = clean.sigma_e / case.sigma_e
         rec["sigma_x_over_sigma_n"] = clean.sigma_x_rms / clean.sigma_n
@@ -212,7 +212,7 @@ def synthetic_run(index: int, rng: np.random.Generator, params: AriExperimentPar
         robust = fit_ari(dirty, AriConfig(order=(p, case.d), robust=params.robust))  # type: ignore[arg-type]
         truth = np.zeros(case.n, dtype=bool)
         truth[idx] = True
-        rec["robust_status"] = robust.status
+        rec["robust_status"] = str(robust.status)
         rec["robust_sigma_n_ratio"] = robust.sigma_n / case.sigma_n
         rec["robust_sigma_e_ratio"] = robust.sigma_e / case.sigma_e
         rec["n_injected"] = int(k)
@@ -550,7 +550,7 @@ def real_data_rows(
                     "n": int(values.size),
                     "n_missing": res.n_missing,
                     "n_inserted": src.n_inserted,
-                    "status": res.status,
+                    "status": str(res.status),
                     "order": [res.p, res.d],
                     "sigma_n": res.sigma_n,
                     "sigma_e": res.sigma_e,
@@ -670,7 +670,7 @@ def sarimax_compare(y: FloatArray, p: int, d: int, label: str) -> dict[str, Any]
         "navtrack_seconds": t_ours,
         "sarimax_seconds": t_sm,
         "speedup": t_sm / t_ours if t_ours > 0 else math.nan,
-        "navtrack_status": ours.status,
+        "navtrack_status": str(ours.status),
         "sarimax_converged": bool(res.mle_retvals.get("converged", False)),
         "navtrack_sigma_n": ours.sigma_n,
         "navtrack_sigma_e": ours.sigma_e,
@@ -981,7 +981,7 @@ def reproduce(options: ReproduceOptions) -> dict[str, Any]:
         if src.source.startswith("pyins") or src.source in SARIMAX_SPP_SOURCES:
             for col, values in src.columns.items():
                 res = fits[(src.source, col)]
-                if res.status in ("ok", "boundary", "not_converged"):
+                if res.estimated:
                     comp = sarimax_compare(values, res.p, res.d, f"{src.source} {col}")
                     if comp is not None:
                         comparisons.append(comp)
