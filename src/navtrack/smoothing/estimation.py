@@ -61,6 +61,7 @@ __all__ = [
     "choose_estimate",
     "estimate_exact_likelihood",
     "evaluate",
+    "make_estimate",
     "min_observations",
     "numerical_hessian",
     "observed_information",
@@ -90,6 +91,9 @@ class Evaluation:
     r_n: float
     r_e: float
     grad: FloatArray
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
 
 
 @dataclass(frozen=True, slots=True, eq=False)

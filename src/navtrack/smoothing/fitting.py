@@ -133,6 +133,7 @@ def _fit_fixed(
     )
     if starts is None:
         starts = starting_values(yc, p, d, cfg.n_starts)
+    # the estimator stage: any ``navtrack.smoothing.estimation.Estimator`` fits here
     outcome = estimate_exact_likelihood(problem, cfg, starts, robust=robust)
     if outcome.estimate is None:
         return bad_result(y, AriStatus.SINGULAR, outcome.message, p, d)
@@ -154,8 +155,7 @@ def _finish(
     sn2 = math.exp(est.log_sn2)
     se2 = math.exp(est.log_se2)
     c = ari_polynomial(est.phi, d)
-    prior = stationary_prior(est.phi, d) if cfg.initial == "stationary" and p else None
-    fit = solve_gauss_markov(problem.y0, w, v, c, sn2, se2, max(p + d, 4), prior)
+    fit = solve_gauss_markov(problem.y0, w, v, c, sn2, se2, max(p + d, 4), problem.prior(est.phi))
     if fit is None or fit.zb is None:
         return bad_result(y, AriStatus.SINGULAR, "normal matrix singular at the estimate", p, d)
     zb = fit.zb

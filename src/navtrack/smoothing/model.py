@@ -162,6 +162,9 @@ class GaussMarkovSolution:
     factor: FloatArray | None = None
     ab: FloatArray | None = None
 
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
 
 @dataclass(frozen=True, slots=True, eq=False)
 class StationaryPrior:
@@ -189,6 +192,9 @@ class StationaryPrior:
     logdet_gamma: float
     dlogdet: FloatArray
     dgamma_inv: FloatArray
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
 
 
 def stationary_prior(phi: FloatArray, d: int) -> StationaryPrior | None:
