@@ -13,117 +13,24 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from navtrack.smoothing import _banded
-from navtrack.smoothing._banded import (
-    band_to_dense,
-    cholesky_solve_banded,
-    inverse_band,
-    inverse_band_from_factor,
-    solve_spd_banded,
-    weighted_band_sums,
-)
 from navtrack.smoothing.ari import (
     AriConfig,
-    ari_polynomial,
+    AriEpochStatus,
+    AriStatus,
     fit_ari,
     gauss_markov_filter,
     regularize_time,
-    robust_weight,
     simulate_ari,
 )
 
 
-def _random_band(rng: np.random.Generator, n: int, m: int) -> tuple[np.ndarray, np.ndarray]:
-    a = np.zeros((n, n))
-    for lag in range(m + 1):
-        idx = np.arange(n - lag)
-        a[idx, idx + lag] = rng.normal(size=n - lag)
-    dense = a @ a.T + 0.1 * np.eye(n)  # SPD, half-bandwidth m
-    ab = np.zeros((m + 1, n))
-    for lag in range(m + 1):
-        ab[m - lag, lag:] = np.diag(dense, lag)
-    return ab, dense
-
-
-@pytest.mark.parametrize(
-    ("n", "m", "width"),
-    [
-        (1, 1, 1),
-        (2, 1, 1),
-        (7, 2, 4),
-        (17, 3, 3),
-        (64, 2, 2),
-        (101, 4, 4),
-        (257, 7, 7),
-        (300, 1, 4),
-    ],
-)
-def test_banded_solve_and_selected_inverse_match_dense(n: int, m: int, width: int) -> None:
-    rng = np.random.default_rng(n * 10 + m)
-    ab, dense = _random_band(rng, n, m)
-    np.testing.assert_allclose(band_to_dense(ab), dense)
-    rhs = rng.normal(size=n)
-    x, logdet = solve_spd_banded(ab, rhs)
-    np.testing.assert_allclose(x, np.linalg.solve(dense, rhs), rtol=1e-9, atol=1e-10)
-    assert logdet == pytest.approx(np.linalg.slogdet(dense)[1], rel=1e-10, abs=1e-9)
-    inv = np.linalg.inv(dense)
-    _, _, factor = cholesky_solve_banded(ab, rhs)
-    # both selected inversions: odd-even block recursion, and Takahashi's recursion on the
-    # Cholesky factor (compiled when numba is installed, plain Python otherwise)
-    for zb in (
-        inverse_band(ab, width),
-        inverse_band_from_factor(factor, width, method="takahashi"),
-        _banded._takahashi_py(factor, max(width, m))[: width + 1],  # uncompiled recursion
-    ):
-        for lag in range(min(width, n - 1) + 1):
-            np.testing.assert_allclose(zb[lag, : n - lag], np.diag(inv, lag), rtol=1e-8, atol=1e-10)
-            assert np.all(np.isnan(zb[lag, n - lag :]))
-
-
-@pytest.mark.parametrize(("n", "m"), [(9, 2), (40, 3), (120, 7)])
-def test_weighted_band_sums_match_dense(n: int, m: int, monkeypatch: pytest.MonkeyPatch) -> None:
-    rng = np.random.default_rng(n + m)
-    ab, dense = _random_band(rng, n, m)
-    inv = np.linalg.inv(dense)
-    v = rng.uniform(0.0, 1.0, size=n - m)
-    expected = np.array(
-        [
-            [sum(v[s - m] * inv[s - a, s - b] for s in range(m, n)) for b in range(m + 1)]
-            for a in range(m + 1)
-        ]
-    )
-    zb = inverse_band(ab, m)
-    np.testing.assert_allclose(weighted_band_sums(zb, v, m), expected, rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(_banded._band_sums_py(zb, v, m), expected, rtol=1e-9, atol=1e-12)
-    monkeypatch.setattr(_banded, "_band_sums", None)  # NumPy path (numba not installed)
-    np.testing.assert_allclose(weighted_band_sums(zb, v, m), expected, rtol=1e-9, atol=1e-12)
-    with pytest.raises(ValueError, match="offsets"):
-        weighted_band_sums(zb[:m], v, m)
-
-
-def test_convolution_band_matches_dense(monkeypatch: pytest.MonkeyPatch) -> None:
-    rng = np.random.default_rng(8)
-    n, c = 30, np.array([1.0, -1.7, 0.9, -0.15])
-    m = c.size - 1
-    vs = rng.uniform(0.2, 2.0, size=n - m)
-    a = np.zeros((n - m, n))
-    for s in range(m, n):
-        a[s - m, s - np.arange(m + 1)] = c
-    dense = a.T @ (vs[:, None] * a)
-    compiled = np.zeros((m + 1, n))
-    _banded.add_convolution_band(compiled, c, vs)
-    np.testing.assert_allclose(band_to_dense(compiled), dense, rtol=1e-13, atol=1e-13)
-    monkeypatch.setattr(_banded, "_add_convolution_band", None)  # NumPy path
-    plain = np.zeros((m + 1, n))
-    _banded.add_convolution_band(plain, c, vs)
-    np.testing.assert_array_equal(plain, compiled)  # same sums in the same order
-    with pytest.raises(ValueError, match="do not match"):
-        _banded.add_convolution_band(plain, c, vs[1:])
-
-
-def _dense_gauss_markov(y, phi, d, sigma_n, sigma_e):
-    """Eqs. (2)-(3) as a dense weighted least-squares problem (independent construction)."""
-    c = ari_polynomial(phi, d)
+def _dense_normal(y, phi, d, sigma_n, sigma_e, *, stationary=False):
+    """Normal matrix and right-hand side of eqs. (2)-(3) as a dense weighted least-squares
+    problem, built independently of the library: the process coefficients by NumPy's
+    polynomial product, and for the stationary start the AR covariance ``Gamma_p`` from the
+    discrete Lyapunov equation of the companion form (not the library's Yule-Walker solve)."""
+    poly = np.polynomial.polynomial
+    c = poly.polymul(np.concatenate([[1.0], phi]), poly.polypow([1.0, -1.0], d))
     m = c.size - 1
     n = y.size
     obs = np.flatnonzero(np.isfinite(y))
@@ -134,7 +41,30 @@ def _dense_gauss_markov(y, phi, d, sigma_n, sigma_e):
         for i in range(m + 1):
             a_proc[s - m, s - i] = c[i]
     normal = a_obs.T @ a_obs / sigma_n**2 + a_proc.T @ a_proc / sigma_e**2
+    p = len(phi)
+    if stationary and p:
+        from scipy.linalg import solve_discrete_lyapunov
+
+        # u_t = -sum phi_i u_{t-i} + e_t; state (u_t, ..., u_{t-p+1}), unit innovation
+        comp = np.zeros((p, p))
+        comp[0] = -np.asarray(phi)
+        comp[1:, :-1] = np.eye(p - 1)
+        q = np.zeros((p, p))
+        q[0, 0] = 1.0
+        gamma = solve_discrete_lyapunov(comp, q)
+        # u_{d+k} = sum_j (-1)^j C(d, j) x_{d+k-j}, k = 0..p-1: the first p differences
+        diff = np.zeros((p, n))
+        for k in range(p):
+            for j in range(d + 1):
+                diff[k, d + k - j] = (-1) ** j * math.comb(d, j)
+        normal = normal + diff.T @ np.linalg.inv(gamma) @ diff / sigma_e**2
     rhs = a_obs.T @ y[obs] / sigma_n**2
+    return normal, rhs
+
+
+def _dense_gauss_markov(y, phi, d, sigma_n, sigma_e):
+    """Filtered series and covariance of the conditional model from the dense normal matrix."""
+    normal, rhs = _dense_normal(y, phi, d, sigma_n, sigma_e)
     return np.linalg.solve(normal, rhs), np.linalg.inv(normal)
 
 
@@ -169,7 +99,7 @@ def test_estimator_recovers_known_truth_aircraft_like() -> None:
     phi = (-1.2, 0.5)
     y, x_true = simulate_ari(rng, 4000, phi, 2, 0.003, 0.0013)
     res = fit_ari(y, AriConfig(order=(2, 2), robust="off"))
-    assert res.status == "ok"
+    assert res.status == AriStatus.OK
     assert res.sigma_n == pytest.approx(0.003, rel=0.06)
     assert res.sigma_e == pytest.approx(0.0013, rel=0.10)
     np.testing.assert_allclose(res.phi, phi, atol=0.08)
@@ -230,22 +160,34 @@ def test_order_selection_picks_true_order_on_long_series() -> None:
     assert len(res.candidates) == 10  # p = 0..4, d = 1..2: every candidate was fitted
 
 
-def test_autocorrelation_of_filtered_data_from_inverse() -> None:
+def test_covariance_and_autocorrelation_match_dense_inverse() -> None:
+    # sigma_x, r(h) and the band of N^-1 against numpy.linalg.inv of the dense normal matrix,
+    # at every epoch and lag where the band is defined (stationary start: the model fit_ari
+    # estimates; conditional: the plain Gauss-Markov model).
     rng = np.random.default_rng(8)
     y, _ = simulate_ari(rng, 300, (-0.5,), 2, 0.02, 0.01)
+    y[[40, 41, 150]] = np.nan
+    n = y.size
     res = fit_ari(y, AriConfig(order=(1, 2), robust="off"))
-    _, cov = _dense_gauss_markov(y - np.mean(y), res.phi, 2, res.sigma_n, res.sigma_e)
-    # the estimate uses the stationary start: rebuild with the same model via the library
-    _, zb, _ = gauss_markov_filter(
-        y, res.phi, 2, res.sigma_n, res.sigma_e, width=4, initial="stationary"
-    )
-    sd = np.sqrt(zb[0])
+    assert res.status == AriStatus.OK
+    normal, _ = _dense_normal(y, res.phi, 2, res.sigma_n, res.sigma_e, stationary=True)
+    cov = np.linalg.inv(normal)
+    sd = np.sqrt(np.diag(cov))
+    np.testing.assert_allclose(res.sigma_x, sd, rtol=1e-8)
     for h in range(1, 5):
-        r = np.mean(zb[h, : y.size - h] / (sd[: y.size - h] * sd[h:]))
-        assert res.autocorr[h - 1] == pytest.approx(r, abs=1e-9)
-    assert 0 < res.autocorr[0] < 1
-    np.testing.assert_allclose(res.sigma_x, sd, rtol=1e-9)
-    assert np.all(np.diag(cov) > 0)
+        r = np.mean(np.diag(cov, h) / (sd[: n - h] * sd[h:]))
+        assert res.autocorr[h - 1] == pytest.approx(r, abs=1e-8)
+    assert res.sigma_x_rms == pytest.approx(np.sqrt(np.mean(np.diag(cov)[np.isfinite(y)])))
+    for initial in ("stationary", "conditional"):
+        stationary = initial == "stationary"
+        normal, _ = _dense_normal(y, res.phi, 2, res.sigma_n, res.sigma_e, stationary=stationary)
+        cov = np.linalg.inv(normal)
+        _, zb, _ = gauss_markov_filter(
+            y, res.phi, 2, res.sigma_n, res.sigma_e, width=6, initial=initial
+        )
+        for lag in range(7):
+            np.testing.assert_allclose(zb[lag, : n - lag], np.diag(cov, lag), rtol=1e-8)
+            assert np.all(np.isnan(zb[lag, n - lag :]))
 
 
 def test_missing_epochs_are_kept_and_interpolated() -> None:
@@ -254,24 +196,28 @@ def test_missing_epochs_are_kept_and_interpolated() -> None:
     y[100:110] = np.nan
     res = fit_ari(y, AriConfig(order=(1, 2)))
     assert res.n_missing == 10
-    assert np.all(res.epoch_status[100:110] == 1)
+    assert np.all(res.epoch_status[100:110] == AriEpochStatus.MISSING)
     assert np.all(np.isfinite(res.x[100:110]))
     assert np.all(res.sigma_x[100:110] > res.sigma_x[50])  # less certain inside the gap
     assert not res.gross_error[100:110].any()
 
 
 def test_bad_input_statuses() -> None:
-    assert fit_ari(np.arange(6.0), AriConfig(order=(2, 2))).status == "too_short"
-    assert fit_ari(np.full(100, 3.0), AriConfig(order=(1, 1))).status == "constant"
+    short = fit_ari(np.arange(6.0), AriConfig(order=(2, 2)))
+    assert short.status == AriStatus.TOO_SHORT
+    assert np.all(short.epoch_status == AriEpochStatus.NOT_ESTIMATED)
+    assert fit_ari(np.full(100, 3.0), AriConfig(order=(1, 1))).status == AriStatus.CONSTANT
     t = np.arange(100.0)
     t[50] = t[49]
     y = np.sin(np.arange(100) / 5.0)
-    assert fit_ari(y, AriConfig(order=(1, 1)), t=t).status == "non_monotonic_time"
+    assert fit_ari(y, AriConfig(order=(1, 1)), t=t).status == AriStatus.NON_MONOTONIC_TIME
     t2 = np.arange(100.0)
     t2[60:] += 0.5
-    assert fit_ari(y, AriConfig(order=(1, 1)), t=t2).status == "irregular_time"
+    assert fit_ari(y, AriConfig(order=(1, 1)), t=t2).status == AriStatus.IRREGULAR_TIME
     bad = fit_ari(np.full(3, np.nan), AriConfig(order=(1, 1)))
-    assert bad.status == "too_short"
+    assert bad.status == AriStatus.TOO_SHORT
+    assert not bad.estimated
+    assert np.all(bad.epoch_status == AriEpochStatus.MISSING)
     assert np.all(np.isnan(bad.x))
     with pytest.raises(ValueError, match="infinite"):
         fit_ari(np.array([1.0, np.inf, 2.0]))
@@ -294,22 +240,6 @@ def test_regularize_time_inserts_missing_epochs() -> None:
         regularize_time(np.array([0.0, 1.0, 2.5, 3.0]), np.zeros(4))
     with pytest.raises(ValueError, match="strictly increasing"):
         regularize_time(np.array([0.0, 1.0, 1.0]), np.zeros(3))
-
-
-def test_robust_weight_functions() -> None:
-    t = np.array([0.0, 1.0, 2.5, 3.0, 5.0, np.nan])
-    w = robust_weight(t, "huber", (1.5,))
-    np.testing.assert_allclose(w[:5], [1, 1, 1.5 / 2.5, 0.5, 0.3])
-    assert w[5] == 0.0
-    w = robust_weight(t, "igg3", (1.5, 4.0))
-    assert w[1] == 1.0
-    assert w[4] == 0.0
-    assert w[3] == pytest.approx(1.5 / 3.0 * ((4.0 - 3.0) / 2.5) ** 2)
-    w = robust_weight(np.array([2.5 - 1e-9, 2.5 + 1e-9, 5.0]), "danish", (2.5,))
-    assert w[0] == 1.0
-    assert w[1] == pytest.approx(1.0, abs=1e-6)
-    assert w[2] == pytest.approx(math.exp(1 - 4))
-    np.testing.assert_array_equal(robust_weight(t, "off")[:5], 1.0)
 
 
 def test_robust_process_equations_downweight_an_edge() -> None:
@@ -358,7 +288,7 @@ def test_order_selection_does_not_depend_on_the_warm_start(
     # perturbed warm start (phi halved, sigma_n x e, sigma_e / e) must give the same scores and
     # order: the selection may not depend on the path that led to a candidate.
     from navtrack.experiments.ari import broad_series
-    from navtrack.smoothing import ari
+    from navtrack.smoothing import fitting
 
     path = shared_data / "trajectory" / "broad" / "07_undisturbed_fast_rotation_B.mat"
     if not path.exists():
@@ -366,7 +296,7 @@ def test_order_selection_does_not_depend_on_the_warm_start(
     y = broad_series(path, decimate=10).columns["yaw_deg"][:2000]
     cfg = AriConfig(robust="off", min_d=1)
     plain = fit_ari(y, cfg)
-    original = ari._fit_fixed
+    original = fitting._fit_fixed
 
     def perturbed_warm(yy, p, d, c, *, robust, starts=None):  # type: ignore[no-untyped-def]
         if starts is not None and len(starts) > 1:  # [warm from ARI(p-1, d), default start]
@@ -377,7 +307,7 @@ def test_order_selection_does_not_depend_on_the_warm_start(
             starts = [warm, *starts[1:]]
         return original(yy, p, d, c, robust=robust, starts=starts)
 
-    monkeypatch.setattr(ari, "_fit_fixed", perturbed_warm)
+    monkeypatch.setattr(fitting, "_fit_fixed", perturbed_warm)
     other = fit_ari(y, cfg)
     assert (other.p, other.d) == (plain.p, plain.d)
     a = {(p, d): s for p, d, s in plain.candidates}

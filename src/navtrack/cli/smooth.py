@@ -145,7 +145,7 @@ def run_smooth(args: argparse.Namespace) -> int:
     for k, col in enumerate(columns):
         res = fit_ari(grid[:, k], cfg)
         unit = _unit(col)
-        if res.status in ("ok", "boundary", "not_converged"):
+        if res.estimated:
             r = " ".join(f"{v:.2f}" for v in res.autocorr)
             print(
                 f"{col}: status {res.status}, order ({res.p},{res.d}), "
@@ -162,7 +162,7 @@ def run_smooth(args: argparse.Namespace) -> int:
         out_cols[f"{col}_sigma_x"] = res.sigma_x
         out_cols[f"{col}_gross_error"] = res.gross_error
         any_gross |= res.gross_error
-        if args.plot is not None and res.status in ("ok", "boundary", "not_converged"):
+        if args.plot is not None and res.estimated:
             from navtrack.plots.ari import plot_series
             from navtrack.plots.canvas import figure_dir
 

@@ -163,7 +163,7 @@ def write_reproduction_figures(
     for src in sources:
         col = next(iter(src.columns))
         res = fits.get((src.source, col))
-        if res is None or res.status in ("too_short", "constant", "singular"):
+        if res is None or not res.estimated:
             continue
         name = _slug(f"real_{src.source}_{col}") + ".png"
         written.append(

@@ -1,11 +1,14 @@
 """Banded symmetric positive definite algebra for the ARI Gauss–Markov model.
 
-Three kernels, each O(n) in time and memory for a fixed half-bandwidth ``m``:
+Kernels, each O(n) in time and memory for a fixed half-bandwidth ``m``:
 
-* :func:`solve_spd_banded` — banded Cholesky (LAPACK ``pbtrf``/``pbtrs`` via
+* :func:`cholesky_solve_banded` — banded Cholesky (LAPACK ``pbtrf``/``pbtrs`` via
   :func:`scipy.linalg.cholesky_banded` / :func:`scipy.linalg.cho_solve_banded`) with the
-  log-determinant of the matrix.
-* :func:`inverse_band` — the band of the inverse ("selected inversion") without forming it.
+  log-determinant of the matrix and the factor.
+* :func:`inverse_band_from_factor` — the band of the inverse ("selected inversion") without
+  forming it: Takahashi's recursion on the factor, or :func:`inverse_band` (odd–even block
+  recursion on the matrix).
+* :func:`add_convolution_band` — the normal matrix of convolution (process) equations.
 * :func:`weighted_band_sums` — weighted sums along shifted diagonals of that band (the
   expected process moments of the estimation).
 * :func:`band_to_dense` — the dense matrix, for tests and small problems only.
@@ -43,7 +46,6 @@ __all__ = [
     "inverse_band",
     "inverse_band_from_factor",
     "single_threaded_blas",
-    "solve_spd_banded",
     "weighted_band_sums",
 ]
 
@@ -93,10 +95,10 @@ def band_matvec(ab: FloatArray, x: FloatArray) -> FloatArray:
     return out
 
 
-def solve_spd_banded(
+def cholesky_solve_banded(
     ab: FloatArray, rhs: FloatArray, *, refine: int = 1
-) -> tuple[FloatArray, float]:
-    """Solve ``N x = rhs`` for banded SPD ``N``; also return ``log det N``.
+) -> tuple[FloatArray, float, FloatArray]:
+    """Solve ``N x = rhs`` for banded SPD ``N``; also return ``log det N`` and the factor.
 
     ``refine`` steps of iterative refinement (residual ``rhs - N x`` re-solved with the same
     factor) follow the Cholesky solve: the normal matrices of integrated (ARI) processes are
@@ -114,27 +116,14 @@ def solve_spd_banded(
     x : ndarray, shape (n,)
     logdet : float
         ``log det N = 2 sum(log diag(U))`` with ``N = U^T U``.
+    factor : ndarray, shape (m + 1, n)
+        ``U`` in upper banded storage, for :func:`inverse_band_from_factor`.
 
     Raises
     ------
     numpy.linalg.LinAlgError
         When ``N`` is not numerically positive definite.
     """
-    cb = scipy.linalg.cholesky_banded(ab, lower=False, check_finite=False)
-    x = scipy.linalg.cho_solve_banded((cb, False), rhs, check_finite=False)
-    for _ in range(refine):
-        x = x + scipy.linalg.cho_solve_banded(
-            (cb, False), rhs - band_matvec(ab, x), check_finite=False
-        )
-    logdet = 2.0 * float(np.sum(np.log(cb[-1])))
-    return x, logdet
-
-
-def cholesky_solve_banded(
-    ab: FloatArray, rhs: FloatArray, *, refine: int = 1
-) -> tuple[FloatArray, float, FloatArray]:
-    """As :func:`solve_spd_banded`, also returning the factor ``U`` (``N = U^T U``, upper
-    banded storage) for :func:`inverse_band_from_factor`."""
     cb = scipy.linalg.cholesky_banded(ab, lower=False, check_finite=False)
     x = scipy.linalg.cho_solve_banded((cb, False), rhs, check_finite=False)
     for _ in range(refine):

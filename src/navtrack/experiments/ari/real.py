@@ -273,7 +273,7 @@ def real_data_rows(
                     "n": int(values.size),
                     "n_missing": res.n_missing,
                     "n_inserted": src.n_inserted,
-                    "status": res.status,
+                    "status": str(res.status),
                     "order": [res.p, res.d],
                     "sigma_n": res.sigma_n,
                     "sigma_e": res.sigma_e,

@@ -71,7 +71,7 @@ def sarimax_compare(y: FloatArray, p: int, d: int, label: str) -> dict[str, Any]
         "navtrack_seconds": t_ours,
         "sarimax_seconds": t_sm,
         "speedup": t_sm / t_ours if t_ours > 0 else math.nan,
-        "navtrack_status": ours.status,
+        "navtrack_status": str(ours.status),
         "sarimax_converged": bool(res.mle_retvals.get("converged", False)),
         "navtrack_sigma_n": ours.sigma_n,
         "navtrack_sigma_e": ours.sigma_e,
@@ -120,7 +120,7 @@ def sarimax_comparisons(
         if src.source.startswith("pyins") or src.source in SARIMAX_SPP_SOURCES:
             for col, values in src.columns.items():
                 res = fits[(src.source, col)]
-                if res.status in ("ok", "boundary", "not_converged"):
+                if res.estimated:
                     comp = sarimax_compare(values, res.p, res.d, f"{src.source} {col}")
                     if comp is not None:
                         comparisons.append(comp)

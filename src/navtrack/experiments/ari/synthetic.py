@@ -193,7 +193,7 @@ def synthetic_run(params: AriExperimentParams, rng: np.random.Generator) -> dict
         mag = rng.uniform(lo, hi, size=k) * rng.choice([-1.0, 1.0], size=k)
         rec: dict[str, Any] = {}
         clean = fit_ari(y, AriConfig(order=(p, case.d), robust="off"))
-        rec["clean_status"] = clean.status
+        rec["clean_status"] = str(clean.status)
         rec["sigma_n_ratio"] = clean.sigma_n / case.sigma_n
         rec["sigma_e_ratio"] = clean.sigma_e / case.sigma_e
         rec["sigma_x_over_sigma_n"] = clean.sigma_x_rms / clean.sigma_n
@@ -214,7 +214,7 @@ def synthetic_run(params: AriExperimentParams, rng: np.random.Generator) -> dict
         robust = fit_ari(dirty, AriConfig(order=(p, case.d), robust=params.robust))
         truth = np.zeros(case.n, dtype=bool)
         truth[idx] = True
-        rec["robust_status"] = robust.status
+        rec["robust_status"] = str(robust.status)
         rec["robust_sigma_n_ratio"] = robust.sigma_n / case.sigma_n
         rec["robust_sigma_e_ratio"] = robust.sigma_e / case.sigma_e
         rec["n_injected"] = int(k)
