@@ -1,6 +1,7 @@
 """Read-only arrays for the frozen value classes (results, configurations, models)."""
 
 import dataclasses
+import functools
 from typing import Any
 
 import numpy as np
@@ -14,10 +15,16 @@ def freeze_arrays(value: Any) -> None:
     changed through its arrays after it was made. Fields holding something other than an
     array (numbers, tuples, ``None``) are left as they are.
     """
-    for f in dataclasses.fields(value):
-        arr = getattr(value, f.name)
+    for name in _field_names(type(value)):
+        arr = getattr(value, name)
         if isinstance(arr, np.ndarray):
             arr.flags.writeable = False
+
+
+@functools.cache
+def _field_names(cls: type) -> tuple[str, ...]:
+    # dataclasses.fields costs microseconds per call; the trackers make several results per scan
+    return tuple(f.name for f in dataclasses.fields(cls))
 
 
 def readonly_copy(a: npt.ArrayLike, dtype: npt.DTypeLike | None = None) -> np.ndarray:
