@@ -1,7 +1,6 @@
 """Read-only arrays for the frozen value classes (results, configurations, models)."""
 
 import dataclasses
-import functools
 from typing import Any
 
 import numpy as np
@@ -21,10 +20,15 @@ def freeze_arrays(value: Any) -> None:
             arr.flags.writeable = False
 
 
-@functools.cache
+_FIELD_NAMES: dict[type, tuple[str, ...]] = {}
+
+
 def _field_names(cls: type) -> tuple[str, ...]:
     # dataclasses.fields costs microseconds per call; the trackers make several results per scan
-    return tuple(f.name for f in dataclasses.fields(cls))
+    names = _FIELD_NAMES.get(cls)
+    if names is None:
+        names = _FIELD_NAMES[cls] = tuple(f.name for f in dataclasses.fields(cls))
+    return names
 
 
 def readonly_copy(a: npt.ArrayLike, dtype: npt.DTypeLike | None = None) -> np.ndarray:
