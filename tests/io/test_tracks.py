@@ -148,3 +148,97 @@ def test_local_enu_round_trip(tmp_path: Path) -> None:
     np.testing.assert_allclose(latlon[:, 1], det.lon_deg, atol=1e-9)
     with pytest.raises(ValueError, match="en_m"):
         local_enu_to_geodetic(np.zeros((3, 3)), *ref)
+
+
+def _solent_cut(tracking_data: Path, n_rows: int = 2000) -> list[str]:
+    """Header and the first ``n_rows`` rows of the Solent AIS file."""
+    with (tracking_data / "SolentAIS_20160112_130211.csv").open() as fh:
+        return [next(fh).rstrip("\n") for _ in range(n_rows + 1)]
+
+
+def test_time_outlier_row_is_skipped_before_any_grid(tracking_data: Path, tmp_path: Path) -> None:
+    # issue 9, failure 1: one AIS row dated 1916 among 2016 rows stretched the report grid over
+    # a century; it is now a skipped row with a counted reason
+    lines = _solent_cut(tracking_data)
+    lines[1000] = "1916" + lines[1000][4:]
+    p = tmp_path / "ais_1916.csv"
+    p.write_text("\n".join(lines) + "\n")
+    det = read_ais_csv(p)
+    assert len(det) == 2000 - 1
+    assert det.bad_lines.tolist() == [1001]
+    assert det.summary()["bad row reasons"] == {"time more than 30 days from the median time": 1}
+    assert det.t_gps_s[-1] - det.t_gps_s[0] < 3600
+    assert len(read_ais_csv(p, max_time_days=None)) == 2000  # the check can be switched off
+    g = tmp_path / "csv_1920.csv"
+    g.write_text(
+        "time,lat,lon\n"
+        "2020-01-01T00:00:00Z,50.0,-1.0\n"
+        "1920-01-01T00:00:10Z,50.0,-1.0\n"
+        "2020-01-01T00:00:20Z,50.0,-1.0\n"
+    )
+    det = read_track_csv(g)
+    assert det.bad_lines.tolist() == [3]
+    assert det.line.tolist() == [2, 4]
+
+
+def test_opensky_absurd_time_is_skipped(tracking_data: Path, tmp_path: Path) -> None:
+    # issue 9, failure 10: an OpenSky time of 1e40 gave "Maximum allowed size exceeded"
+    with (tracking_data / "OpenSky_Plane_States.csv").open() as fh:
+        lines = [next(fh) for _ in range(51)]
+    lines[20] = "1e40" + lines[20][lines[20].index(",") :]
+    p = tmp_path / "os.csv"
+    p.write_text("".join(lines))
+    det = read_opensky_csv(p)
+    assert len(det) == 49
+    assert det.bad_lines.tolist() == [21]
+    assert "median time" in det.bad_reasons[0]
+
+
+@pytest.mark.parametrize(
+    ("content", "line", "what"),
+    [
+        (b"\x1f\x8b\x08\x00" + bytes(range(256)), None, "gzip-compressed"),
+        (b"time,lat,lon\n2020-01-01T00:00:00Z,50\x00,-1\n", 2, "binary content"),
+        (b'  [{"time": "2020-01-01T00:00:00Z", "lat": 50.0}]\n', 1, "JSON content"),
+        (
+            b"time,lat,lon,id\n2020-01-01T00:00:00Z,50,-1,a\n2020-01-01T00:00:01Z,50,-1,\xe9\n",
+            3,
+            "byte 0xe9 is not UTF-8",
+        ),
+    ],
+)
+def test_content_that_is_not_a_utf8_csv_is_refused(
+    tmp_path: Path, content: bytes, line: int | None, what: str
+) -> None:
+    # issue 9, failures 2 and 4: a gzipped JSON file hung in pandas' header parsing, a byte
+    # that is not UTF-8 raised UnicodeDecodeError; both now name the file (and line)
+    p = tmp_path / "input.csv"
+    p.write_bytes(content)
+    with pytest.raises(FileFormatError, match=what) as info:
+        read_track_csv(p)
+    assert info.value.path == str(p)
+    assert info.value.line == line
+
+
+def test_utf8_bom_is_read(tmp_path: Path) -> None:
+    p = tmp_path / "bom.csv"
+    p.write_bytes(b"\xef\xbb\xbftime,lat,lon\n2020-01-01T00:00:00Z,50,-1\n")
+    assert len(read_track_csv(p)) == 1
+    p.write_bytes(b"\xef\xbb\xbftime,lat,lon\n2020-01-01T00:00:00Z,50,\xff\n")
+    with pytest.raises(FileFormatError, match="0xff") as info:
+        read_track_csv(p)
+    assert info.value.line == 2
+
+
+def test_last_row_cut_mid_line_is_not_data(tracking_data: Path, tmp_path: Path) -> None:
+    # issue 9, failure 10: a file cut after the longitude's "-1" gave a detection at -1 deg
+    lines = _solent_cut(tracking_data, 100)
+    cut = lines[-1][: lines[-1].index(",-1.") + 3]
+    p = tmp_path / "cut.csv"
+    p.write_text("\n".join([*lines[:-1], cut]))
+    det = read_ais_csv(p)
+    assert len(det) == 99
+    assert det.bad_lines.tolist() == [101]
+    assert "cut mid-line" in det.bad_reasons[0]
+    p.write_text("\n".join(lines))  # a complete last row without a line end is data
+    assert len(read_ais_csv(p)) == 100

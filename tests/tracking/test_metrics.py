@@ -100,3 +100,16 @@ def test_rmse_and_interpolation() -> None:
     )
     got = {(int(a), str(b)): tuple(c) for a, b, c in zip(f, i, p, strict=True)}
     assert got == {(0, "a"): (0, 0), (1, "a"): (5, 10), (2, "a"): (10, 20), (2, "b"): (0, 0)}
+
+
+def test_clear_mot_without_hypotheses() -> None:
+    # issue 9, failure 3: a one-minute file gave no reported tracks and the scorer raised
+    # "cannot reshape array of size 0"; every truth object is now a miss
+    mot = clear_mot([0, 1], ["a", "a"], [[0.0, 0.0], [1.0, 0.0]], [], [], [], threshold=5.0)
+    assert (mot.n_truth, mot.n_matches, mot.n_misses, mot.n_false) == (2, 0, 2, 0)
+    assert mot.mota == 0.0
+    assert np.isnan(mot.motp)
+    assert mot.n_tracks == 0
+    empty = clear_mot([], [], [], [0], [7], [[0.0, 0.0]], threshold=5.0)
+    assert (empty.n_truth, empty.n_false) == (0, 1)
+    assert np.isnan(empty.mota)

@@ -6,10 +6,14 @@ a tracker, never by it). Rows that cannot be used are *reported and skipped*: th
 and reasons are in ``bad_lines`` / ``bad_reasons``; a file whose required columns are missing
 raises :class:`navtrack.errors.FileFormatError`.
 
-Row checks: unparsable or non-finite time or position, latitude outside [-90, 90], longitude
-outside [-180, 180], and positions farther than ``max_range_km`` (default 1000 km) from the
-median position of the file (the Solent AIS file has one report at longitude +54.8° among
-longitudes near -1.2°: a valid number, an impossible position for a Solent vessel).
+Row checks: a last row with fewer fields than the header (a file cut mid-line), unparsable or
+non-finite time or position, times farther than ``max_time_days`` (default 30 days) from the
+median time of the file (one row dated 1916 among 2016 rows would otherwise stretch the
+tracker's report grid over a century), latitude outside [-90, 90], longitude outside
+[-180, 180], and positions farther than ``max_range_km`` (default 1000 km) from the median
+position of the file (the Solent AIS file has one report at longitude +54.8° among longitudes
+near -1.2°: a valid number, an impossible position for a Solent vessel). Content that is not a
+UTF-8 CSV (gzip, binary, JSON, bytes that are not UTF-8) raises :class:`FileFormatError`.
 """
 
 from __future__ import annotations
@@ -100,15 +104,63 @@ class TrackDetections:
         }
 
 
-def _read_frame(path: StrPath) -> Any:
+def _read_text(path: StrPath) -> str:
+    """The file's text, refused with :class:`FileFormatError` when it is not a UTF-8 CSV.
+
+    The content is sniffed before pandas sees it (pandas can spend minutes on a compressed or
+    binary file): gzip magic bytes, a NUL byte, or a first character ``{``/``[`` (JSON) are
+    refused. A byte sequence that is not UTF-8 is an error naming its line rather than a row
+    read with replacement characters: in these files it means damage or another encoding, and
+    a replaced character would silently change an id used for scoring.
+    """
+    with open(path, "rb") as fh:
+        raw = fh.read()
+    if raw[:2] == b"\x1f\x8b":
+        raise FileFormatError(path, None, "gzip-compressed file, not a CSV (decompress it first)")
+    nul = raw.find(b"\x00")
+    if nul >= 0:
+        line = raw.count(b"\n", 0, nul) + 1
+        raise FileFormatError(path, line, "binary content (NUL byte), not a CSV")
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        start = exc.start + (3 if raw.startswith(b"\xef\xbb\xbf") else 0)
+        line = raw.count(b"\n", 0, start) + 1
+        raise FileFormatError(
+            path, line, f"byte 0x{raw[start]:02x} is not UTF-8 text (damaged or other encoding)"
+        ) from None
+    if text.lstrip()[:1] in ("{", "["):
+        raise FileFormatError(path, 1, "JSON content, not a CSV")
+    return text
+
+
+def _last_row_cut(text: str) -> bool:
+    """True when the last row has fewer fields than the header (a file cut mid-line)."""
+    import csv
+
+    body = text.rstrip()
+    first, _, rest = body.partition("\n")
+    if not rest:
+        return False
+    header = next(csv.reader(first.splitlines()))
+    last = next(csv.reader(rest.rpartition("\n")[2].splitlines()))
+    return len(last) < len(header)
+
+
+def _read_frame(path: StrPath) -> tuple[Any, bool]:
+    """The file as a frame of strings, and whether its last row was cut short."""
+    import io
+
     import pandas as pd
 
+    text = _read_text(path)
     try:
-        return pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
+        df = pd.read_csv(io.StringIO(text), dtype=str, keep_default_na=False, skipinitialspace=True)
     except pd.errors.EmptyDataError:
         raise FileFormatError(path, 1, "empty file (no header)") from None
     except pd.errors.ParserError as exc:
         raise FileFormatError(path, None, f"not a readable CSV: {exc}") from None
+    return df, _last_row_cut(text)
 
 
 def _require(path: StrPath, df: Any, cols: list[str]) -> None:
@@ -157,7 +209,9 @@ def _finish(
     course: FloatArray,
     ids: np.ndarray,
     used: list[str],
+    cut_last: bool,
     max_range_km: float | None,
+    max_time_days: float | None,
 ) -> TrackDetections:
     n = len(t)
     line = np.arange(2, n + 2, dtype=np.int64)  # header is line 1
@@ -168,6 +222,8 @@ def _finish(
         new = mask & (reason == "")
         reason[new] = why
 
+    if cut_last and n:
+        reason[-1] = "last row has fewer fields than the header (file cut mid-line)"
     flag(~np.isfinite(t), "time not readable")
     if geo:
         flag(~np.isfinite(lat) | ~np.isfinite(lon), "latitude/longitude not a finite number")
@@ -175,6 +231,13 @@ def _finish(
         flag(np.abs(lon) > 180, "longitude outside [-180, 180]")
     else:
         flag(~np.isfinite(x) | ~np.isfinite(y), "x_m/y_m not a finite number")
+    ok = reason == ""
+    if max_time_days is not None and ok.any():
+        t_mid = np.median(t[ok])
+        flag(
+            ok & (np.abs(t - t_mid) > max_time_days * 86400.0),
+            f"time more than {max_time_days:g} days from the median time",
+        )
     ok = reason == ""
     if max_range_km is not None and ok.any():
         if geo:
@@ -218,10 +281,12 @@ def _finish(
     )
 
 
-def read_ais_csv(path: StrPath, max_range_km: float | None = 1000.0) -> TrackDetections:
+def read_ais_csv(
+    path: StrPath, max_range_km: float | None = 1000.0, max_time_days: float | None = 30.0
+) -> TrackDetections:
     """Solent AIS file: ``Time`` (UTC), ``MMSI``, ``Latitude_degrees``, ``Longitude_degrees``,
     ``COG_degrees``, ``SOG_knots``."""
-    df = _read_frame(path)
+    df, cut_last = _read_frame(path)
     cols = ["Time", "MMSI", "Latitude_degrees", "Longitude_degrees"]
     _require(path, df, cols)
     n = len(df)
@@ -239,16 +304,20 @@ def read_ais_csv(path: StrPath, max_range_km: float | None = 1000.0) -> TrackDet
         _num(df, "COG_degrees"),
         df["MMSI"].to_numpy(),
         [*cols, "COG_degrees", "SOG_knots"],
+        cut_last,
         max_range_km,
+        max_time_days,
     )
 
 
-def read_opensky_csv(path: StrPath, max_range_km: float | None = 1000.0) -> TrackDetections:
+def read_opensky_csv(
+    path: StrPath, max_range_km: float | None = 1000.0, max_time_days: float | None = 30.0
+) -> TrackDetections:
     """OpenSky state vectors: ``time`` (Unix s), ``icao24``, ``lat``, ``lon``, ``velocity``
     (m/s), ``heading`` (deg), ``geoaltitude`` (m, else ``baroaltitude``)."""
     from navtrack.timescale import utc_to_gps
 
-    df = _read_frame(path)
+    df, cut_last = _read_frame(path)
     cols = ["time", "icao24", "lat", "lon"]
     _require(path, df, cols)
     n = len(df)
@@ -268,15 +337,19 @@ def read_opensky_csv(path: StrPath, max_range_km: float | None = 1000.0) -> Trac
         _num(df, "heading"),
         df["icao24"].to_numpy(),
         [*cols, alt_col, "velocity", "heading"],
+        cut_last,
         max_range_km,
+        max_time_days,
     )
 
 
-def read_track_csv(path: StrPath, max_range_km: float | None = 1000.0) -> TrackDetections:
+def read_track_csv(
+    path: StrPath, max_range_km: float | None = 1000.0, max_time_days: float | None = 30.0
+) -> TrackDetections:
     """Generic layout: ``time`` (ISO 8601 UTC), ``lat`` and ``lon`` (deg) or ``x_m`` and ``y_m``,
     optional ``id``, ``alt_m``, ``speed_mps``, ``course_deg``; other columns are ignored (and
     listed in ``ignored_columns``)."""
-    df = _read_frame(path)
+    df, cut_last = _read_frame(path)
     _require(path, df, ["time"])
     has_ll = "lat" in df.columns and "lon" in df.columns
     has_xy = "x_m" in df.columns and "y_m" in df.columns
@@ -303,16 +376,23 @@ def read_track_csv(path: StrPath, max_range_km: float | None = 1000.0) -> TrackD
         _num(df, "course_deg"),
         ids,
         used,
+        cut_last,
         max_range_km,
+        max_time_days,
     )
 
 
-def read_tracks(path: StrPath, fmt: str, max_range_km: float | None = 1000.0) -> TrackDetections:
+def read_tracks(
+    path: StrPath,
+    fmt: str,
+    max_range_km: float | None = 1000.0,
+    max_time_days: float | None = 30.0,
+) -> TrackDetections:
     """Dispatch on ``fmt`` in ``{"ais", "opensky", "csv"}``."""
     readers = {"ais": read_ais_csv, "opensky": read_opensky_csv, "csv": read_track_csv}
     if fmt not in readers:
         raise ValueError(f"fmt must be one of {sorted(readers)}, got {fmt!r}")
-    return readers[fmt](path, max_range_km)
+    return readers[fmt](path, max_range_km, max_time_days)
 
 
 def _reference_deg(

@@ -214,10 +214,10 @@ def clear_mot(
 
     tf = np.asarray(truth_frame)
     tid = np.asarray(truth_id)
-    tp = np.asarray(truth_pos, dtype=float).reshape(len(tf), -1)
+    tp = _points(truth_pos)  # (an empty frame list is (0, 1): no distance is taken)
     hf = np.asarray(hyp_frame)
     hid = np.asarray(hyp_id)
-    hp = np.asarray(hyp_pos, dtype=float).reshape(len(hf), -1)
+    hp = _points(hyp_pos)
     frames = np.union1d(tf, hf)
     t_order = np.argsort(tf, kind="stable")
     h_order = np.argsort(hf, kind="stable")
