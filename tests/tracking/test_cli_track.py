@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -64,7 +65,7 @@ def test_track_command_reports_missing_columns(
     assert "bad.csv, line 1: missing column" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("option", ["--report-s", "--match-m", "--max-range-km"])
+@pytest.mark.parametrize("option", ["--report-s", "--match-m", "--max-range-km", "--max-time-days"])
 @pytest.mark.parametrize("value", ["0", "-5", "nan"])
 def test_track_cli_refuses_non_positive_settings(tmp_path: Path, option: str, value: str) -> None:
     # before: "--report-s 0" silently fell back to the default and a negative value gave an
@@ -73,3 +74,40 @@ def test_track_cli_refuses_non_positive_settings(tmp_path: Path, option: str, va
     f.write_text("time,x_m,y_m\n2020-01-01T00:00:00Z,0,0\n")
     with pytest.raises(SystemExit, match=option):
         main(["track", str(f), "--format", "csv", option, value])
+
+
+def _ships(k_last: int, extra: str = "") -> str:
+    """Two ids 10 s apart for ``k_last`` + 1 reports, generic CSV layout."""
+    rows = ["time,lat,lon,id"]
+    for k in range(k_last + 1):
+        for i in range(2):
+            t = f"2020-01-01T00:{k // 6:02d}:{(k % 6) * 10:02d}Z"
+            rows.append(f"{t},{50.0 + 0.05 * i + 1e-4 * k},{-1.0 + 2e-4 * k},s{i}")
+    return "\n".join(rows) + "\n" + extra
+
+
+def test_track_command_scores_a_one_minute_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # issue 9, failure 3: a file shorter than a minute had no track at its one scoring frame and
+    # scorer raised "cannot reshape array of size 0"; now every truth object is a miss
+    f = tmp_path / "short.csv"
+    f.write_text(_ships(5))  # 50 s: one scoring frame, at the first report
+    assert main(["track", str(f), "--format", "csv"]) == 0
+    text = capsys.readouterr().out
+    assert re.search(r"truth objects / matches / misses / false +2 0 2 0\n", text)
+
+
+def test_track_command_skips_a_century_old_row_and_bounds_the_grid(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # issue 9, failure 1: one row dated 1920 made the report grid span a century (hang, GBs)
+    f = tmp_path / "ships.csv"
+    f.write_text(_ships(12, "1920-01-01T00:00:30Z,50.0,-1.0,s0\n"))
+    assert main(["track", str(f), "--format", "csv"]) == 0
+    text = capsys.readouterr().out
+    assert "time more than 30 days from the median time: 1" in text
+    assert "3 frames every 60 s" in text
+    # with the time check off, the grid size is refused before it is allocated
+    with pytest.raises(SystemExit, match=r"--report-s 60 .* more than 1000000"):
+        main(["track", str(f), "--format", "csv", "--max-time-days", "1e6"])

@@ -18,6 +18,7 @@ DEFAULTS = {
     "opensky": (10.0, 60.0, 2000.0),
     "csv": (60.0, 400.0, 500.0),
 }
+MAX_REPORT_FRAMES = 1_000_000  # scoring grid size refused before it is allocated
 
 
 def register(subparsers: Any) -> None:
@@ -53,6 +54,12 @@ def register(subparsers: Any) -> None:
         default=1000.0,
         help="skip rows farther than this from the median position (default 1000)",
     )
+    p.add_argument(
+        "--max-time-days",
+        type=float,
+        default=30.0,
+        help="skip rows dated farther than this from the median time (default 30)",
+    )
     p.set_defaults(func=run_track)
 
 
@@ -69,11 +76,12 @@ def run_track(args: argparse.Namespace) -> int:
         ("--report-s", args.report_s),
         ("--match-m", args.match_m),
         ("--max-range-km", args.max_range_km),
+        ("--max-time-days", args.max_time_days),
     ):
         if value is not None and not value > 0:  # also refuses NaN
             raise SystemExit(f"navtrack track: {name} must be a positive number, got {value:g}")
     clock = time.perf_counter()
-    det = read_tracks(args.file, args.fmt, args.max_range_km)
+    det = read_tracks(args.file, args.fmt, args.max_range_km, args.max_time_days)
     t_read = time.perf_counter() - clock
     summary: dict[str, Any] = det.summary()
     if len(det) == 0:
@@ -91,6 +99,13 @@ def run_track(args: argparse.Namespace) -> int:
     else:
         cfg = TrackerConfig(associator=args.associator)
     t0 = det.t_gps_s[0]
+    n_frames = int((det.t_gps_s[-1] - t0) // report_s) + 1
+    if n_frames > MAX_REPORT_FRAMES:
+        raise SystemExit(
+            f"navtrack track: --report-s {report_s:g} over {det.t_gps_s[-1] - t0:.0f} s of "
+            f"detections gives {n_frames} report times, more than {MAX_REPORT_FRAMES}; "
+            "give a larger --report-s (or a smaller --max-time-days)"
+        )
     grid = t0 + np.arange(0.0, det.t_gps_s[-1] - t0 + 1e-9, report_s)
     vel = None if args.no_velocity else velocity_local_enu(det, *ref) if det.geodetic else None
     if vel is not None and not np.isfinite(vel).any():
