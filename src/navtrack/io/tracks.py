@@ -388,7 +388,22 @@ def read_tracks(
     max_range_km: float | None = 1000.0,
     max_time_days: float | None = 30.0,
 ) -> TrackDetections:
-    """Dispatch on ``fmt`` in ``{"ais", "opensky", "csv"}``."""
+    """Read a tracking file of format ``fmt`` in ``{"ais", "opensky", "csv"}``.
+
+    Parameters
+    ----------
+    path : str or path-like
+    fmt : str
+    max_range_km : float or None
+        Rows farther than this (km) from the median position are skipped (None: no check).
+    max_time_days : float or None
+        Rows dated farther than this (days) from the median time are skipped (None: no check).
+
+    Raises
+    ------
+    FileFormatError
+        Content that is not a UTF-8 CSV, or required columns missing.
+    """
     readers = {"ais": read_ais_csv, "opensky": read_opensky_csv, "csv": read_track_csv}
     if fmt not in readers:
         raise ValueError(f"fmt must be one of {sorted(readers)}, got {fmt!r}")

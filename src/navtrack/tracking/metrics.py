@@ -214,7 +214,7 @@ def clear_mot(
 
     tf = np.asarray(truth_frame)
     tid = np.asarray(truth_id)
-    tp = _points(truth_pos)  # (an empty frame list is (0, 1): no distance is taken)
+    tp = _points(truth_pos)  # (N, d); (0, 1) when empty: distances need both sides non-empty
     hf = np.asarray(hyp_frame)
     hid = np.asarray(hyp_id)
     hp = _points(hyp_pos)
