@@ -495,3 +495,22 @@ def test_rinex305_glonass_fifth_line(tmp_path: Path) -> None:
     path.write_text("".join(lines))
     with pytest.raises(FileFormatError, match=f"line {k + 6}: R record has 6 lines"):
         read_nav(path)
+
+
+def test_header_without_records(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A header and no records is an empty NavData; ``pos`` then says there are no ephemerides."""
+    from navtrack.cli import main
+
+    lines = _sample_lines()
+    end = next(i for i, ln in enumerate(lines) if "END OF HEADER" in ln)
+    path = tmp_path / "header_only.05n"
+    path.write_text("".join(lines[: end + 1]))
+    nav = read_nav(path)
+    assert nav.tables == {}
+    assert nav.systems == ""
+    assert nav.leap_seconds == 13  # the header is still read
+    assert main(["rinex", "info", str(path)]) == 0
+    assert "records_per_system  none" in capsys.readouterr().out
+    obs = sample_path("07590920.05o")
+    assert main(["pos", str(obs), str(path), "--no-progress"]) == 1
+    assert f"{path}: no ephemerides" in capsys.readouterr().err

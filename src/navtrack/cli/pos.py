@@ -224,6 +224,9 @@ def run_pos(args: argparse.Namespace) -> int:
     if n_epochs == 0:
         print(f"navtrack pos: {args.obs}: no observation epochs", file=sys.stderr)
         return 1
+    if sp3 is None and not any(nav.tables for nav in navs):
+        print(f"navtrack pos: {', '.join(map(str, args.nav))}: no ephemerides", file=sys.stderr)
+        return 1
     result = _solve(obs, navs, sp3, config, progress=not args.no_progress)
     counts = result.status_counts()
     solved = counts["ok"]

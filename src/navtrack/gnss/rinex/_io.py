@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import bz2
 import gzip
+import zlib
+from collections.abc import Callable
 from dataclasses import dataclass
 from os import fspath
 from pathlib import Path
@@ -14,6 +16,10 @@ from navtrack.errors import FileFormatError, MissingDependencyError
 _GZIP_MAGIC = b"\x1f\x8b"
 _LZW_MAGIC = b"\x1f\x9d"
 _BZ2_MAGIC = b"BZh"
+_DECOMPRESSORS: tuple[tuple[bytes, str, Callable[[bytes], bytes]], ...] = (
+    (_GZIP_MAGIC, "gzip", gzip.decompress),
+    (_BZ2_MAGIC, "bzip2", bz2.decompress),
+)
 
 
 def read_bytes(path: StrPath) -> bytes:
@@ -29,15 +35,17 @@ def read_bytes(path: StrPath) -> bytes:
         For an empty file or a damaged compressed stream.
     """
     raw = Path(path).read_bytes()
-    try:
-        if raw.startswith(_GZIP_MAGIC):
-            raw = gzip.decompress(raw)
-        elif raw.startswith(_BZ2_MAGIC):
-            raw = bz2.decompress(raw)
-        elif raw.startswith(_LZW_MAGIC):
-            raw = _hatanaka_decompress(path, raw)
-    except (OSError, EOFError, ValueError) as exc:
-        raise FileFormatError(path, None, f"damaged compressed file ({exc})") from exc
+    if raw.startswith(_LZW_MAGIC):
+        raw = _hatanaka_decompress(path, raw)
+    for magic, name, decompress in _DECOMPRESSORS:
+        if raw.startswith(magic):
+            try:
+                raw = decompress(raw)
+            except (OSError, EOFError, ValueError, zlib.error) as exc:
+                # zlib.error (bad deflate data) is not an OSError; a cut stream is an EOFError
+                message = f"damaged compressed file ({name}: {exc})"
+                raise FileFormatError(path, None, message) from exc
+            break
     if raw[60:71] == b"CRINEX VERS":
         raw = _hatanaka_decompress(path, raw)
     if not raw.strip():

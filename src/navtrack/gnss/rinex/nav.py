@@ -428,7 +428,7 @@ def _parse_records(
             raise FileFormatError(path, start + 1, msg)
         skipped.append(SkippedLine(start + 1, msg))
     groups: dict[str, _Group] = {}
-    ends = [*starts[1:], n]
+    ends = [*starts[1:], n] if starts else []
     for i0, i1 in zip(starts, ends, strict=True):
         try:
             sys_letter, sat, n_lines, t_cal = _record_head(path, lines, i0, i1, v2, file_system)
