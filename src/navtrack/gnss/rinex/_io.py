@@ -53,6 +53,30 @@ def read_bytes(path: StrPath) -> bytes:
     return raw
 
 
+def ends_inside_field(data: bytes, lead: int, width: int, complete: tuple[int, ...]) -> bool:
+    """Whether a fixed-column file was cut in the middle of a field of its last line.
+
+    A file cut at a random byte ends with no end-of-line after its last line; that line is cut
+    when, its trailing blanks removed, it does not end where a field of the format can end.
+    A last line without an end-of-line that ends on a field boundary reads as complete.
+
+    Parameters
+    ----------
+    data : bytes
+        Whole (decompressed) file content.
+    lead : int
+        Characters before the first field of the line (satellite id, indentation).
+    width : int
+        Characters per field.
+    complete : tuple of int
+        Offsets within a field, modulo ``width``, at which a written field may end.
+    """
+    if data.endswith((b"\n", b"\r")):
+        return False
+    last = data[data.rfind(b"\n") + 1 :].rstrip()
+    return bool(last) and (len(last) < lead or (len(last) - lead) % width not in complete)
+
+
 def _hatanaka_decompress(path: StrPath, raw: bytes) -> bytes:
     try:
         import hatanaka
