@@ -323,7 +323,9 @@ def test_record_cut_inside_clock_field(tmp_path: Path) -> None:
     assert read_sp3(path).implausible == ()
 
 
-def test_implausible_position_flagged_and_excluded(tmp_path: Path) -> None:
+def test_implausible_position_flagged_and_excluded(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """One coordinate set to 999999999999 km: the record is named with its line, that satellite
     is missing at that epoch only, and single point positioning solves every epoch."""
     from navtrack.cli import main
@@ -348,3 +350,4 @@ def test_implausible_position_flagged_and_excluded(tmp_path: Path) -> None:
     assert sp3.summary()["implausible_records"] == 1
     data = sample_path("SEPT078M_120.21O"), sample_path("SEPT078M.21P")
     assert main(["pos", *map(str, data), "--sp3", str(path), "--no-progress"]) == 0
+    assert f"{path}, line {k + 1}: position 1e+12 km" in capsys.readouterr().err

@@ -146,6 +146,8 @@ def _read_inputs(args: argparse.Namespace) -> tuple[Observations, list[NavData],
         from navtrack.gnss.sp3 import read_sp3
 
         sp3 = read_sp3(args.sp3)
+        for bad in sp3.implausible:
+            print(f"navtrack pos: {args.sp3}, line {bad.line}: {bad.reason}", file=sys.stderr)
     return obs, navs, sp3
 
 
