@@ -52,6 +52,34 @@ def test_empty_and_damaged(tmp_path: Path) -> None:
     assert info.value.path == str(tmp_path / "d.gz")
 
 
+@pytest.mark.parametrize(
+    ("content", "compression"),
+    [
+        (b"\x1f\x8b" + b"not gzip at all" * 10, "gzip"),  # gzip magic, then garbage
+        # a valid gzip header, then bytes that are no deflate stream: zlib.error
+        (b"\x1f\x8b\x08\x00\x00\x00\x00\x00\x00\x03" + b"\xff" * 50, "gzip"),
+        (gzip.compress(sample_path(OBS2).read_bytes())[:2000], "gzip"),  # cut stream
+        (bz2.compress(sample_path(OBS2).read_bytes())[:2000], "bzip2"),
+        (b"BZh9" + b"\x00" * 100, "bzip2"),
+    ],
+)
+def test_damaged_compression_named_by_every_reader(
+    tmp_path: Path, content: bytes, compression: str
+) -> None:
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.sp3 import read_sp3
+
+    path = tmp_path / "damaged"
+    path.write_bytes(content)
+    for reader in (read_bytes, read_obs, read_nav, read_sp3):
+        with pytest.raises(
+            FileFormatError, match=f"damaged compressed file \\({compression}: "
+        ) as info:
+            reader(path)
+        assert info.value.path == str(path)
+
+
 def test_sniff_rinex_and_sp3() -> None:
     kind = sniff(OBS2, sample_path(OBS2).read_bytes())
     assert (kind.format, kind.version, kind.file_type, kind.system) == ("rinex", 2.10, "O", "G")

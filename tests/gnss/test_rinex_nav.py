@@ -495,3 +495,43 @@ def test_rinex305_glonass_fifth_line(tmp_path: Path) -> None:
     path.write_text("".join(lines))
     with pytest.raises(FileFormatError, match=f"line {k + 6}: R record has 6 lines"):
         read_nav(path)
+
+
+def test_header_without_records(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A header and no records is an empty NavData; ``pos`` then says there are no ephemerides."""
+    from navtrack.cli import main
+
+    lines = _sample_lines()
+    end = next(i for i, ln in enumerate(lines) if "END OF HEADER" in ln)
+    path = tmp_path / "header_only.05n"
+    path.write_text("".join(lines[: end + 1]))
+    nav = read_nav(path)
+    assert nav.tables == {}
+    assert nav.systems == ""
+    assert nav.leap_seconds == 13  # the header is still read
+    assert main(["rinex", "info", str(path)]) == 0
+    assert "records_per_system  none" in capsys.readouterr().out
+    obs = sample_path("07590920.05o")
+    assert main(["pos", str(obs), str(path), "--no-progress"]) == 1
+    assert f"{path}: no ephemerides" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["07590920.05n", "SEPT078M.21P"])
+def test_file_cut_mid_line(tmp_path: Path, name: str) -> None:
+    """A record line cut inside a field by the end of the file: an error naming the line
+    (strict); in lenient reading that line and its record are skipped and counted."""
+    raw = sample_path(name).read_bytes().rstrip()
+    path = tmp_path / name
+    path.write_bytes(
+        raw[:-7]
+    )  # the last field loses its exponent: '.000000000000D+00' -> '.0000000000'
+    n_lines = raw.count(b"\n") + 1
+    with pytest.raises(FileFormatError, match="cut in the middle of a field") as exc:
+        read_nav(path)
+    assert exc.value.line == n_lines
+    nav = read_nav(path, lenient=True)
+    assert [s.line for s in nav.skipped] == [n_lines - 7, n_lines]
+    n_full = sum(len(t["sat"]) for t in read_nav(sample_path(name)).tables.values())
+    assert sum(len(t["sat"]) for t in nav.tables.values()) == n_full - 1
+    path.write_bytes(raw)  # no end-of-line after a complete last line
+    assert read_nav(path).skipped == ()

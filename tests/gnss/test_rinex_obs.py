@@ -1101,3 +1101,31 @@ def test_against_georinex(gnss_data: Path, rel: str) -> None:
     assert compared == int(np.isfinite(obs.values).sum())
     assert indicators > 0  # georinex gave indicator columns to compare (ARL1's are all blank)
     assert set(ref.data_vars) <= {c + s for c in obs.codes for s in ("", "lli", "ssi")}
+
+
+@pytest.mark.parametrize("name", ["07590920.05o", "SEPT078M_120.21O"])
+def test_file_cut_mid_line(tmp_path: Path, name: str) -> None:
+    """A data line cut inside a field by the end of the file is never read as a value: an error
+    naming the line (strict), or the line and its epoch counted as skipped (lenient)."""
+    raw = sample_path(name).read_bytes()
+    lines = raw.split(b"\n")
+    # the first data line of the last 8-satellite (RINEX 2) / complete (RINEX 3) epoch's 2nd sat
+    k = len(lines) * 3 // 4
+    while not lines[k][:1].isalpha() if name.endswith("O") else not lines[k].startswith(b"   "):
+        k += 1
+    stem = lines[k][: lines[k].index(b".") - 3]  # the pseudorange's first digits, e.g. '    3714'
+    path = tmp_path / name
+    path.write_bytes(b"\n".join([*lines[:k], stem]))
+    _raises_at(path, k + 1, "data line cut in the middle of a field")
+    obs = read_obs(path, lenient=True)
+    assert obs.skipped[-1].line == k + 1
+    assert "cut short" in obs.skipped[-2].reason
+    full = read_obs(sample_path(name))
+    n = len(obs.t_gps_s)
+    # what was read equals the full file's values; the cut value is nowhere
+    np.testing.assert_array_equal(obs.t_gps_s, full.t_gps_s[:n])
+    cut_value = float(stem.split()[-1])
+    assert not np.isin(obs.values, [cut_value]).any()
+    # a last line with no end-of-line that ends on a field boundary is complete
+    path.write_bytes(raw.rstrip())
+    np.testing.assert_array_equal(read_obs(path).values, full.values)

@@ -293,3 +293,61 @@ def test_sp3_agrees_with_broadcast_ephemeris(gnss_data: Path) -> None:
             assert abs(dt) < 10e-9, sat
             n += 1
     assert n >= 25
+
+
+@pytest.mark.parametrize("keep_chars", [30, 0])
+def test_last_epoch_cut_short(tmp_path: Path, keep_chars: int) -> None:
+    """A file cut inside its last epoch (no EOF line) is refused, naming the epoch or the line,
+    whether the cut falls inside a P record (its y coordinate would read as -14044.3773 km)
+    or between records (the last epoch's other satellites would read as missing)."""
+    lines = _bundled_lines()
+    last_epoch = max(k for k, ln in enumerate(lines) if ln.startswith("*"))
+    k = last_epoch + 10
+    path = tmp_path / "cut.sp3"
+    path.write_text("".join(lines[:k]) + lines[k][:keep_chars])
+    with pytest.raises(FileFormatError, match="cut short by the end of the file") as exc:
+        read_sp3(path)
+    assert exc.value.line == last_epoch + 1
+
+
+def test_record_cut_inside_clock_field(tmp_path: Path) -> None:
+    """All P records of the last epoch present, the last one cut inside its clock field."""
+    lines = _bundled_lines()
+    eof = next(k for k, ln in enumerate(lines) if ln.startswith("EOF"))
+    path = tmp_path / "cut.sp3"
+    path.write_text("".join(lines[: eof - 1]) + lines[eof - 1][:56])  # clock -1.963693 -> -1.9
+    with pytest.raises(FileFormatError, match=r"cut\.sp3, line \d+: P record cut short") as exc:
+        read_sp3(path)
+    assert exc.value.line == eof
+    path.write_text("".join(lines[:eof]))  # complete, only the EOF line missing: accepted
+    assert read_sp3(path).implausible == ()
+
+
+def test_implausible_position_flagged_and_excluded(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One coordinate set to 999999999999 km: the record is named with its line, that satellite
+    is missing at that epoch only, and single point positioning solves every epoch."""
+    from navtrack.cli import main
+
+    lines = _bundled_lines()
+    star = [k for k, ln in enumerate(lines) if ln.startswith("*")]
+    k = next(j for j in range(star[15], star[16]) if lines[j][1:4] == "G01")
+    lines[k] = lines[k][:4] + "999999999999".rjust(14) + lines[k][18:]
+    path = tmp_path / "bad.sp3"
+    path.write_text("".join(lines))
+    sp3 = read_sp3(path)
+    full = read_sp3(sample_path(BUNDLED))
+    assert [s.line for s in sp3.implausible] == [k + 1]
+    assert "outside the 6500-50000 km orbit shell" in sp3.implausible[0].reason
+    g01 = sp3.sat_index("G01")
+    assert np.isnan(sp3.pos_m[15, g01]).all()
+    assert np.isnan(sp3.clock_s[15, g01])
+    keep = np.ones(sp3.pos_m.shape[:2], dtype=bool)
+    keep[15, g01] = False
+    np.testing.assert_array_equal(sp3.pos_m[keep], full.pos_m[keep])
+    assert full.implausible == ()
+    assert sp3.summary()["implausible_records"] == 1
+    data = sample_path("SEPT078M_120.21O"), sample_path("SEPT078M.21P")
+    assert main(["pos", *map(str, data), "--sp3", str(path), "--no-progress"]) == 0
+    assert f"{path}, line {k + 1}: position 1e+12 km" in capsys.readouterr().err

@@ -146,6 +146,8 @@ def _read_inputs(args: argparse.Namespace) -> tuple[Observations, list[NavData],
         from navtrack.gnss.sp3 import read_sp3
 
         sp3 = read_sp3(args.sp3)
+        for bad in sp3.implausible:
+            print(f"navtrack pos: {args.sp3}, line {bad.line}: {bad.reason}", file=sys.stderr)
     return obs, navs, sp3
 
 
@@ -223,6 +225,9 @@ def run_pos(args: argparse.Namespace) -> int:
     n_epochs = len(obs.t_gps_s)
     if n_epochs == 0:
         print(f"navtrack pos: {args.obs}: no observation epochs", file=sys.stderr)
+        return 1
+    if sp3 is None and not any(nav.tables for nav in navs):
+        print(f"navtrack pos: {', '.join(map(str, args.nav))}: no ephemerides", file=sys.stderr)
         return 1
     result = _solve(obs, navs, sp3, config, progress=not args.no_progress)
     counts = result.status_counts()

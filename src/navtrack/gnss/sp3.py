@@ -28,6 +28,7 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, Int8Array, StrPath
 from navtrack.errors import FileFormatError
+from navtrack.gnss.observations import SkippedLine
 from navtrack.timescale import calendar_gps_seconds, to_datetime64, to_gps
 
 __all__ = ["Sp3", "Sp3Header", "read_sp3"]
@@ -35,6 +36,12 @@ __all__ = ["Sp3", "Sp3Header", "read_sp3"]
 _FILE_TYPES = {"G", "M", "R", "E", "C", "J", "I", "L", "S"}
 _BAD_CLOCK = 999999.0  # 999999.999999 marks a bad/absent clock (any value >= this)
 _FLAG_BITS = ((74, 1), (75, 2), (78, 4), (79, 8))  # column -> flag bit (E, P, M, P)
+# Plausible distance of an orbit from the geocentre (m). GNSS orbits lie between GLONASS
+# (semi-major axis 25,510 km) and GEO/IGSO (42,164 km; QZSS IGSO apogee about 45,300 km with
+# e = 0.075), LEO satellites in SP3 files above about 6,500 km (120 km altitude over the 6,378 km
+# equatorial radius): GLONASS ICD 5.1 3.1.1, BDS-OS-SIS-ICD 3.0 3.1, IS-QZSS-PNT-005 table 3.1-1.
+PLAUSIBLE_RADIUS_M = (6.5e6, 5.0e7)
+_P_RECORD_CHARS = 60  # 'P', id, x, y, z (F14.6 km) and clock (F14.6 us): the fields always written
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -126,6 +133,10 @@ class Sp3:
     flags : ndarray of int8, shape (n_epochs, n_sats)
         Bit mask of the ``P`` record flags: 1 clock event, 2 clock predicted, 4 maneuver,
         8 orbit predicted.
+    implausible : tuple of SkippedLine
+        ``P`` records whose position lies outside :data:`PLAUSIBLE_RADIUS_M` from the geocentre
+        (line and why); their position and clock are NaN, so that satellite is missing at that
+        epoch only.
 
     References
     ----------
@@ -143,6 +154,7 @@ class Sp3:
     pos_sd_m: FloatArray | None = None
     clock_sd_s: FloatArray | None = None
     flags: Int8Array | None = None
+    implausible: tuple[SkippedLine, ...] = ()
 
     def __post_init__(self) -> None:
         n_e, n_s = len(self.t_gps_s), len(self.sats)
@@ -195,6 +207,7 @@ class Sp3:
             "sats_per_system": per_system,
             "positions_missing": int(np.isnan(self.pos_m[..., 0]).sum()),
             "clocks_missing": int(np.isnan(self.clock_s).sum()),
+            "implausible_records": len(self.implausible),
         }
 
 
@@ -314,6 +327,8 @@ def read_sp3(path: StrPath) -> Sp3:
             f"header announces {n_epochs} epochs, file has {len(epochs)}"
             + ("" if saw_eof else " and no EOF line (truncated file?)"),
         )
+    if not saw_eof and len(data) > int(star[-1]) + 1:
+        _check_last_epoch(path, data, kinds, star, i)
     p_rows = _rows(path, chars, kinds, "P", star, sat_col, i)
     v_rows = _rows(path, chars, kinds, "V", star, sat_col, i)
     n_e, n_s = len(epochs), len(sats)
@@ -328,6 +343,7 @@ def read_sp3(path: StrPath) -> Sp3:
     pos_m, clock_s, pos_sd, clk_sd, flags = _records(path, p_rows, n_e, n_s, base_pos, base_clk)
     pos_m *= 1e3
     clock_s *= 1e-6
+    implausible = _implausible(pos_m, clock_s, p_rows)
     vel_mps = clock_rate = None
     if len(v_rows[2]):
         vel, rate, _, _, _ = _records(path, v_rows, n_e, n_s, base_pos, base_clk)
@@ -361,7 +377,59 @@ def read_sp3(path: StrPath) -> Sp3:
         pos_sd_m=pos_sd,
         clock_sd_s=clk_sd,
         flags=flags,
+        implausible=implausible,
     )
+
+
+def _check_last_epoch(
+    path: StrPath, data: list[str], kinds: np.ndarray, star: np.ndarray, offset: int
+) -> None:
+    """Refuse a last epoch cut short by the end of a file that has no EOF line.
+
+    It is cut when it has fewer ``P`` records than the epoch before it, or when its last
+    ``P`` record ends before the clock field.
+    """
+    last = int(star[-1])
+    n_last = int((kinds[last:] == ord("P")).sum())
+    n_before = int((kinds[int(star[-2]) : last] == ord("P")).sum()) if len(star) > 1 else n_last
+    p_lines = np.flatnonzero(kinds[last:] == ord("P"))
+    if n_last < n_before:
+        raise FileFormatError(
+            path,
+            offset + last + 1,
+            f"last epoch cut short by the end of the file: {n_last} of {n_before} P records "
+            "and no EOF line",
+        )
+    if len(p_lines):
+        k = last + int(p_lines[-1])
+        if len(data[k].rstrip()) < _P_RECORD_CHARS:
+            raise FileFormatError(
+                path, offset + k + 1, "P record cut short by the end of the file (no EOF line)"
+            )
+
+
+def _implausible(pos_m: FloatArray, clock_s: FloatArray, p_rows: _Rows) -> tuple[SkippedLine, ...]:
+    """Set positions off the orbit shell to NaN (with their clocks); their lines and why."""
+    r = np.linalg.norm(pos_m, axis=-1)
+    lo, hi = PLAUSIBLE_RADIUS_M
+    with np.errstate(invalid="ignore"):
+        bad = (r < lo) | (r > hi)
+    if not bad.any():
+        return ()
+    ei, si, _, lineno = p_rows
+    line_at = np.zeros(bad.shape, dtype=np.int64)
+    line_at[ei, si] = lineno
+    out = [
+        SkippedLine(
+            int(line_at[e, s]),
+            f"position {r[e, s] / 1e3:.6g} km from the geocentre, outside the "
+            f"{lo / 1e3:g}-{hi / 1e3:g} km orbit shell: satellite excluded at this epoch",
+        )
+        for e, s in zip(*np.nonzero(bad), strict=True)
+    ]
+    pos_m[bad] = np.nan
+    clock_s[bad] = np.nan
+    return tuple(sorted(out, key=lambda sk: sk.line))
 
 
 _Rows = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]  # epoch, column, chars, line no.

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import bz2
 import gzip
+import zlib
+from collections.abc import Callable
 from dataclasses import dataclass
 from os import fspath
 from pathlib import Path
@@ -14,6 +16,10 @@ from navtrack.errors import FileFormatError, MissingDependencyError
 _GZIP_MAGIC = b"\x1f\x8b"
 _LZW_MAGIC = b"\x1f\x9d"
 _BZ2_MAGIC = b"BZh"
+_DECOMPRESSORS: tuple[tuple[bytes, str, Callable[[bytes], bytes]], ...] = (
+    (_GZIP_MAGIC, "gzip", gzip.decompress),
+    (_BZ2_MAGIC, "bzip2", bz2.decompress),
+)
 
 
 def read_bytes(path: StrPath) -> bytes:
@@ -29,20 +35,46 @@ def read_bytes(path: StrPath) -> bytes:
         For an empty file or a damaged compressed stream.
     """
     raw = Path(path).read_bytes()
-    try:
-        if raw.startswith(_GZIP_MAGIC):
-            raw = gzip.decompress(raw)
-        elif raw.startswith(_BZ2_MAGIC):
-            raw = bz2.decompress(raw)
-        elif raw.startswith(_LZW_MAGIC):
-            raw = _hatanaka_decompress(path, raw)
-    except (OSError, EOFError, ValueError) as exc:
-        raise FileFormatError(path, None, f"damaged compressed file ({exc})") from exc
+    if raw.startswith(_LZW_MAGIC):
+        raw = _hatanaka_decompress(path, raw)
+    for magic, name, decompress in _DECOMPRESSORS:
+        if raw.startswith(magic):
+            try:
+                raw = decompress(raw)
+            except (OSError, EOFError, ValueError, zlib.error) as exc:
+                # zlib.error (bad deflate data) is not an OSError; a cut stream is an EOFError
+                message = f"damaged compressed file ({name}: {exc})"
+                raise FileFormatError(path, None, message) from exc
+            break
     if raw[60:71] == b"CRINEX VERS":
         raw = _hatanaka_decompress(path, raw)
     if not raw.strip():
         raise FileFormatError(path, 1, "empty file")
     return raw
+
+
+def ends_inside_field(data: bytes, lead: int, width: int, complete: tuple[int, ...]) -> bool:
+    """Whether a fixed-column file was cut in the middle of a field of its last line.
+
+    A file cut at a random byte ends with no end-of-line after its last line; that line is cut
+    when, its trailing blanks removed, it does not end where a field of the format can end.
+    A last line without an end-of-line that ends on a field boundary reads as complete.
+
+    Parameters
+    ----------
+    data : bytes
+        Whole (decompressed) file content.
+    lead : int
+        Characters before the first field of the line (satellite id, indentation).
+    width : int
+        Characters per field.
+    complete : tuple of int
+        Offsets within a field, modulo ``width``, at which a written field may end.
+    """
+    if data.endswith((b"\n", b"\r")):
+        return False
+    last = data[data.rfind(b"\n") + 1 :].rstrip()
+    return bool(last) and (len(last) < lead or (len(last) - lead) % width not in complete)
 
 
 def _hatanaka_decompress(path: StrPath, raw: bytes) -> bytes:

@@ -37,7 +37,7 @@ import numpy as np
 from navtrack._typing import FloatArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import SkippedLine
-from navtrack.gnss.rinex._io import read_bytes, sniff
+from navtrack.gnss.rinex._io import ends_inside_field, read_bytes, sniff
 from navtrack.timescale import (
     BDS_WEEK_OFFSET,
     BDT_MINUS_GPST_S,
@@ -307,7 +307,16 @@ def read_nav(path: StrPath, *, lenient: bool = False) -> NavData:
         system = _RINEX2_SYSTEM[kind.file_type]
     if v2 and system == "E" and "GPSA" in header.iono:  # RINEX 2.12 Galileo: ION ALPHA = ai0-2
         header.iono["GAL"] = header.iono.pop("GPSA")[:3]
+    # 3X (RINEX 2) or 4X (RINEX 3) then D19.12 fields; the satellite/epoch line is on that grid
+    cut = len(lines) > header.end and ends_inside_field(data, 3 if v2 else 4, 19, (0,))
+    if cut:
+        reason = "record line cut in the middle of a field by the end of the file"
+        if not lenient:
+            raise FileFormatError(path, len(lines), reason)
+        lines.pop()
     groups, skipped = _parse_records(path, lines, header.end, v2, system, lenient)
+    if cut:
+        skipped.append(SkippedLine(len(lines) + 1, reason))
     tables = _tables(groups)
     return NavData(
         path=fspath(path),
@@ -428,7 +437,7 @@ def _parse_records(
             raise FileFormatError(path, start + 1, msg)
         skipped.append(SkippedLine(start + 1, msg))
     groups: dict[str, _Group] = {}
-    ends = [*starts[1:], n]
+    ends = [*starts[1:], n] if starts else []
     for i0, i1 in zip(starts, ends, strict=True):
         try:
             sys_letter, sat, n_lines, t_cal = _record_head(path, lines, i0, i1, v2, file_system)

@@ -34,7 +34,7 @@ from navtrack.gnss.observations import (
     ObsHeader,
     SkippedLine,
 )
-from navtrack.gnss.rinex._io import read_bytes, sniff
+from navtrack.gnss.rinex._io import ends_inside_field, read_bytes, sniff
 from navtrack.timescale import calendar_gps_seconds, to_gps
 
 __all__ = ["read_obs"]
@@ -134,6 +134,18 @@ def read_obs(path: StrPath, *, lenient: bool = False) -> Observations:
     v3 = kind.version >= 3
     header, seg0, body = _parse_header(path, lines, end, kind.version, kind.system)
     scan = _Scan()
+    last = lines[end - 1] if end > body else b""
+    # not an epoch record, nor a header record of an event (its label in columns 61-80)
+    epoch_line = last.startswith(b">") if v3 else _V2_EPOCH.match(last)
+    data_line = not epoch_line and not last[60:].strip(b" 0123456789.-")
+    # F14.3 then LLI and SSI (I1 each), 16 characters per field after the satellite id (A1,I2)
+    if last and data_line and ends_inside_field(data, 3 if v3 else 0, 16, (0, 14, 15)):
+        reason = "data line cut in the middle of a field by the end of the file"
+        if not lenient:
+            raise FileFormatError(path, end, reason)
+        scan.skipped.append(SkippedLine(line=end, reason=reason))
+        del lines[end - 1 :]
+        end -= 1
     if v3:
         _scan_v3(path, lines, body, end, seg0, scan, lenient)
     else:
