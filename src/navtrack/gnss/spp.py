@@ -1158,10 +1158,13 @@ def merge_estimates(estimate: Estimate, update: Estimate) -> Estimate:
         or update.used.shape[1:] != estimate.used.shape[1:]
     ):
         raise ValueError("update: estimate of other satellites or parameters")
-    pos = {int(e): i for i, e in enumerate(estimate.epochs)}
-    if any(int(e) not in pos for e in update.epochs):
+    order = np.argsort(estimate.epochs, kind="stable")
+    at = np.searchsorted(estimate.epochs, update.epochs, sorter=order)
+    rows = order[np.minimum(at, max(order.size - 1, 0))] if order.size else at
+    if update.epochs.size and (
+        not order.size or not np.array_equal(estimate.epochs[rows], update.epochs)
+    ):
         raise ValueError("update: epochs that estimate does not have")
-    rows = np.array([pos[int(e)] for e in update.epochs], dtype=np.int64)
     fields = {}
     for name in Estimate.__dataclass_fields__:
         value = np.array(getattr(estimate, name))
