@@ -148,9 +148,9 @@ def test_condition_on_fix_is_the_conditional_mean() -> None:
     A = rng.normal(size=(5, 5))
     P = A @ A.T + np.eye(5)
     x = rng.normal(size=5)
-    idx = np.array([3, 4])
+    A = np.eye(5)[3:]  # the ambiguities are the last two states
     fix = resolve_ambiguities(np.array([2.0, -1.0]), np.eye(2) * 1e-4)
-    xf, Pf = condition_on_fix(x, P, idx, fix)
+    xf, Pf = condition_on_fix(x, P, A, fix)
     # Gaussian conditioning on x[3:] = (2, -1): the textbook formula
     G = P[:3, 3:] @ np.linalg.inv(P[3:, 3:])
     np.testing.assert_allclose(xf[:3], x[:3] - G @ (x[3:] - np.array([2.0, -1.0])))

@@ -91,7 +91,7 @@ class AmbiguityConfig:
     """
 
     ratio_threshold: float = 3.0
-    partial: bool = True
+    partial: bool = False
     min_success_rate: float = 0.999
     min_fixed: int = 2
 
@@ -445,30 +445,33 @@ def resolve_ambiguities(
 
 
 def condition_on_fix(
-    x: FloatArray, P: FloatArray, amb_index: IntArray, fix: AmbiguityResult
+    x: FloatArray, P: FloatArray, A: FloatArray, fix: AmbiguityResult
 ) -> tuple[FloatArray, FloatArray]:
     """State and covariance conditioned on the fixed integer combinations (Teunissen 1995,
-    eq. 5: ``x_fix = x - P_xz P_zz^-1 (Z a_hat - z)``, ``P_fix = P - P_xz P_zz^-1 P_zx``).
+    eq. 5: ``x_fix = x - P_xz P_zz^-1 (z_hat - z)``, ``P_fix = P - P_xz P_zz^-1 P_zx`` with
+    ``z_hat = Z A x``).
 
     Parameters
     ----------
     x : ndarray, shape (m,)
-        Float state that contains the ambiguities (cycles) at ``amb_index``.
+        Float state.
     P : ndarray, shape (m, m)
-    amb_index : ndarray of int, shape (n,)
-        Positions of the ambiguities of ``fix`` in ``x``.
+    A : ndarray, shape (n, m)
+        The ambiguities (cycles) of ``fix`` as linear functions of the state, ``a = A x``
+        (a selection matrix, or double differences of single-differenced ambiguities).
     fix : AmbiguityResult
-        An accepted fix of ``x[amb_index]``.
+        An accepted fix of ``A x``.
 
     Returns
     -------
     x_fix : ndarray, shape (m,)
     P_fix : ndarray, shape (m, m)
     """
+    x = np.asarray(x, dtype=float)
+    P = np.asarray(P, dtype=float)
     if fix.n_fixed == 0:
-        return np.array(x, dtype=float), np.array(P, dtype=float)
-    T = np.zeros((fix.n_fixed, x.size))
-    T[:, amb_index] = fix.Z
+        return x.copy(), P.copy()
+    T = fix.Z.astype(float) @ np.asarray(A, dtype=float)
     Pxz = P @ T.T
     Pzz = T @ Pxz
     G = np.linalg.solve(Pzz, Pxz.T).T
