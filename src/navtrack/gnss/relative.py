@@ -146,6 +146,11 @@ class RtkConfig:
         Ratio test and partial fixing (:func:`navtrack.gnss.ambiguity.resolve_ambiguities`).
     fix : bool
         Resolve integer ambiguities (False: float solution only).
+    direction : str
+        ``forward`` (real-time order), ``backward``, or ``combined``: both filters joined
+        epoch by epoch (RTKLIB ``-c``): the better status wins; equal statuses are averaged
+        with their covariances; two fixed solutions that disagree by more than 4 standard
+        deviations of their difference fall back to the combined float solution.
     """
 
     mode: str = "kinematic"
@@ -163,6 +168,7 @@ class RtkConfig:
     max_gap_s: float = 5.0
     ambiguity: AmbiguityConfig = field(default_factory=AmbiguityConfig)
     fix: bool = True
+    direction: str = "forward"
 
     def __post_init__(self) -> None:
         if self.mode not in ("kinematic", "static"):
@@ -171,6 +177,10 @@ class RtkConfig:
             raise ValueError(f"frequencies: expected 1 or 2, got {self.frequencies}")
         if "R" in self.systems:
             raise ValueError("systems: GLONASS (R) is not supported in double differences")
+        if self.direction not in ("forward", "backward", "combined"):
+            raise ValueError(
+                f"direction: expected 'forward', 'backward' or 'combined', got {self.direction!r}"
+            )
         if self.min_sats < 2:
             raise ValueError(f"min_sats: expected >= 2, got {self.min_sats}")
 
@@ -614,6 +624,7 @@ class _FilterOut:
         self.pos = np.full((k, 3), np.nan)
         self.float_pos = np.full((k, 3), np.nan)
         self.cov = np.full((k, 3, 3), np.nan)
+        self.float_cov = np.full((k, 3, 3), np.nan)
         self.status = np.full(k, RtkStatus.NO_SOLUTION, dtype=np.int8)
         self.ratio = np.full(k, np.nan)
         self.n_sats = np.zeros(k, dtype=np.int64)
@@ -641,7 +652,7 @@ def _run_filter(ep: _Epochs, cfg: RtkConfig) -> _FilterOut:
     ratio_c = cfg.code_phase_ratio**2
     for k in range(k_n):
         t = ep.t[k]
-        dt = 0.0 if t_prev is None else t - t_prev
+        dt = 0.0 if t_prev is None else abs(t - t_prev)  # backward: time runs back
         t_prev = t
         spp = ep.spp[k]
         # predict the position
@@ -666,7 +677,7 @@ def _run_filter(ep: _Epochs, cfg: RtkConfig) -> _FilterOut:
         # ambiguities: random walk; restart after a slip, a gap or on first sight
         amb = np.arange(n_amb) + 3
         P[amb[active], amb[active]] += cfg.q_amb_cyc**2 * dt
-        restart = phase_ok & (~active | ep.reset[k] | (t - last_seen > cfg.max_gap_s))
+        restart = phase_ok & (~active | ep.reset[k] | (np.abs(t - last_seen) > cfg.max_gap_s))
         out.slip[k] = np.bincount(rep, weights=(phase_ok & ep.reset[k]), minlength=n_s) > 0
         if restart.any():
             ri = amb[restart]
@@ -713,6 +724,7 @@ def _run_filter(ep: _Epochs, cfg: RtkConfig) -> _FilterOut:
         out.float_pos[k] = x[:3]
         out.n_sats[k] = n_sat_dd
         out.cov[k] = P[:3, :3]
+        out.float_cov[k] = P[:3, :3]
         out.pos[k] = x[:3]
         out.status[k] = RtkStatus.FLOAT if ref_p.size else RtkStatus.DGNSS
         if not (cfg.fix and ref_p.size):
@@ -732,6 +744,73 @@ def _run_filter(ep: _Epochs, cfg: RtkConfig) -> _FilterOut:
             out.cov[k] = Pf[:3, :3]
             out.status[k] = RtkStatus.FIX
             out.n_fixed[k] = fix.n_fixed
+    return out
+
+
+def _reversed(ep: _Epochs) -> _Epochs:
+    """The epochs in backward order: a slip flagged at epoch ``e`` (between ``e-1`` and ``e``)
+    restarts the ambiguity when the backward filter moves on to ``e-1``."""
+    reset = np.zeros_like(ep.reset)
+    reset[:-1] = ep.reset[1:]
+    fields = {
+        name: getattr(ep, name)[::-1].copy()
+        for name in ("t", "sd_phase", "sd_code", "x_lin", "G", "el", "var_sd", "half", "spp")
+    }
+    return _Epochs(**fields, reset=reset[::-1].copy(), lam=ep.lam, groups=ep.groups, n_f=ep.n_f)
+
+
+def _reversed_output(out: _FilterOut) -> _FilterOut:
+    rev = _FilterOut(out.status.size, out.slip.shape[1])
+    for name in vars(out):
+        setattr(rev, name, getattr(out, name)[::-1].copy())
+    return rev
+
+
+def _weighted_mean(
+    xa: FloatArray, Pa: FloatArray, xb: FloatArray, Pb: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Inverse-covariance weighted mean of two estimates, ``(B, 3)`` and ``(B, 3, 3)``."""
+    Ia = np.linalg.inv(Pa)
+    Ib = np.linalg.inv(Pb)
+    P = np.linalg.inv(Ia + Ib)
+    x = np.einsum(
+        "bij,bj->bi", P, np.einsum("bij,bj->bi", Ia, xa) + np.einsum("bij,bj->bi", Ib, xb)
+    )
+    return x, P
+
+
+def _combine(fwd: _FilterOut, bwd: _FilterOut) -> _FilterOut:
+    """Forward and backward solutions joined epoch by epoch (RTKLIB ``postpos`` ``combres``
+    rules: better status wins, equal statuses averaged, disagreeing fixes fall back to float).
+
+    Notes
+    -----
+    Both filters use the epoch's own measurements, so the average counts them twice (as the
+    two-filter combination of RTKLIB does); the formal covariance is slightly optimistic.
+    """
+    out = _FilterOut(fwd.status.size, fwd.slip.shape[1])
+    better_b = bwd.status < fwd.status
+    for name in vars(out):
+        a, b = getattr(fwd, name), getattr(bwd, name)
+        sel = better_b.reshape((-1,) + (1,) * (a.ndim - 1))
+        setattr(out, name, np.where(sel, b, a))
+    out.slip = fwd.slip | bwd.slip
+    relative = (RtkStatus.FIX, RtkStatus.FLOAT, RtkStatus.DGNSS)
+    same = (fwd.status == bwd.status) & np.isin(fwd.status, relative)
+    if same.any():
+        x, P = _weighted_mean(fwd.pos[same], fwd.cov[same], bwd.pos[same], bwd.cov[same])
+        out.pos[same], out.cov[same] = x, P
+        xf, Pf = _weighted_mean(
+            fwd.float_pos[same], fwd.float_cov[same], bwd.float_pos[same], bwd.float_cov[same]
+        )
+        out.float_pos[same], out.float_cov[same] = xf, Pf
+        d = fwd.pos[same] - bwd.pos[same]
+        sd = np.sqrt(np.einsum("bii->bi", fwd.cov[same] + bwd.cov[same]))
+        bad = (fwd.status[same] == RtkStatus.FIX) & np.any(np.abs(d) > 4.0 * sd, axis=1)
+        rows = np.flatnonzero(same)[bad]
+        out.pos[rows], out.cov[rows] = out.float_pos[rows], out.float_cov[rows]
+        out.status[rows] = RtkStatus.FLOAT
+        out.n_fixed[rows] = 0
     return out
 
 
@@ -799,7 +878,12 @@ def solve_relative(
     slips_r = detect_slips(rover, cfg)
     slips_b = detect_slips(base, cfg)
     ep = _epoch_inputs(rover, base, base_xyz, ir, ib, js_r, js_b, slips_r, slips_b, cfg)
-    out = _run_filter(ep, cfg)
+    if cfg.direction == "forward":
+        out = _run_filter(ep, cfg)
+    else:
+        out = _reversed_output(_run_filter(_reversed(ep), cfg))
+        if cfg.direction == "combined":
+            out = _combine(_run_filter(ep, cfg), out)
     return _result(rover, common, ir, out, slips_r, slips_b, base, warnings, dist)
 
 
