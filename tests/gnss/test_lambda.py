@@ -131,7 +131,7 @@ def test_partial_fix_of_the_well_determined_subset() -> None:
     # three precise ambiguities and two hopeless ones, uncorrelated: only the precise ones fix
     Q = np.diag([4.0, 4.0, 1e-3, 1e-3, 1e-3])
     a = np.array([0.5, -0.4, 3.01, -7.02, 5.0])
-    fix = resolve_ambiguities(a, Q)
+    fix = resolve_ambiguities(a, Q, AmbiguityConfig(partial=True))
     assert fix.status == FixStatus.PARTIAL
     assert fix.n_fixed == 3
     np.testing.assert_array_equal(fix.Z @ np.array([0, 0, 3, -7, 5]), fix.z)

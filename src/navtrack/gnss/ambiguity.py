@@ -9,8 +9,8 @@ depth-first search of the shrinking ellipsoid, enumerating each level around its
 estimate in zig-zag order.
 
 The kernels are scalar recursions over at most a few tens of ambiguities: compiled with numba
-when it is installed (extra ``speed``; 20 ambiguities in well under a millisecond), plain Python
-loops otherwise (a few milliseconds).
+when it is installed (extra ``speed``; 20 ambiguities in well under a millisecond; numba is
+imported on the first search), plain Python loops otherwise (several milliseconds).
 
 References
 ----------
@@ -25,6 +25,7 @@ bootstrapping. Journal of Geodesy 72, 606-612 (bootstrapped success rate, eq. 7)
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import os
 from dataclasses import dataclass
@@ -36,16 +37,22 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, IntArray
 
-_numba: Any
-try:  # optional accelerator (extra ``speed``); everything works without it
-    if os.environ.get("NAVTRACK_NO_NUMBA"):
-        raise ImportError("disabled by NAVTRACK_NO_NUMBA")
-    import numba as _numba
-except ImportError:
-    _numba = None
 
-#: True when the LAMBDA kernels are compiled (numba installed).
-HAVE_NUMBA = _numba is not None
+def _numba_module() -> Any:
+    """numba, or None when it is not installed or disabled by ``NAVTRACK_NO_NUMBA``."""
+    if os.environ.get("NAVTRACK_NO_NUMBA"):
+        return None
+    try:
+        import numba
+    except ImportError:
+        return None
+    return numba
+
+
+#: True when the LAMBDA kernels can be compiled (numba installed; extra ``speed``).
+HAVE_NUMBA = importlib.util.find_spec("numba") is not None and not os.environ.get(
+    "NAVTRACK_NO_NUMBA"
+)
 
 __all__ = [
     "HAVE_NUMBA",
@@ -256,12 +263,19 @@ def _search_py(
     return cands[order], sq[order]
 
 
-if _numba is not None:
-    _ltdl = _numba.njit(cache=True, nogil=True)(_ltdl_py)
-    _reduce = _numba.njit(cache=True, nogil=True)(_reduce_py)
-    _search = _numba.njit(cache=True, nogil=True)(_search_py)
-else:
-    _ltdl, _reduce, _search = _ltdl_py, _reduce_py, _search_py
+_COMPILED: dict[str, Any] = {}
+
+
+def _kernel(name: str) -> Any:
+    """The kernel ``name`` (``ltdl``, ``reduce``, ``search``): compiled when numba is available
+    (imported on first use, which costs about a second), the Python function otherwise."""
+    py = {"ltdl": _ltdl_py, "reduce": _reduce_py, "search": _search_py}[name]
+    if not HAVE_NUMBA:
+        return py
+    if name not in _COMPILED:
+        numba = _numba_module()
+        _COMPILED[name] = py if numba is None else numba.njit(cache=True, nogil=True)(py)
+    return _COMPILED[name]
 
 
 def ltdl(Q: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -287,7 +301,7 @@ def ltdl(Q: FloatArray) -> tuple[FloatArray, FloatArray]:
     A = np.ascontiguousarray(Q, dtype=float)
     if A.ndim != 2 or A.shape[0] != A.shape[1]:
         raise ValueError(f"Q: expected a square matrix, got shape {A.shape}")
-    L, D, ok = _ltdl(A)
+    L, D, ok = _kernel("ltdl")(A)
     if not ok:
         raise ValueError("Q: not positive definite")
     return L, D
@@ -313,7 +327,7 @@ def decorrelate(Q: FloatArray) -> tuple[IntArray, FloatArray, FloatArray]:
     """
     L, D = ltdl(Q)
     Z = np.eye(D.size)
-    _reduce(L, D, Z)
+    _kernel("reduce")(L, D, Z)
     return Z.astype(np.int64), L, D
 
 
@@ -352,7 +366,8 @@ def integer_search(
         raise ValueError(f"n_cands: expected >= 1, got {n_cands}")
     if a.size == 0:
         return np.zeros((n_cands, 0), dtype=np.int64), np.zeros(n_cands)
-    cands, sq = _search(a, np.ascontiguousarray(L), np.ascontiguousarray(D), n_cands)
+    search = _kernel("search")
+    cands, sq = search(a, np.ascontiguousarray(L), np.ascontiguousarray(D), n_cands)
     return cands.astype(np.int64), sq
 
 
