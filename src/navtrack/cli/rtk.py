@@ -218,8 +218,9 @@ def _print_summary(
         + (f"  sp3 {args.sp3}" if args.sp3 else "")
     )
     systems = "".join(dict.fromkeys(s[0] for s in result.sats))
+    bands = "L1+L2" if config.frequencies == 2 else "L1"
     print(
-        f"mode           {config.mode}, {config.direction}, L1{'+L2' if config.frequencies == 2 else ''}, "
+        f"mode           {config.mode}, {config.direction}, {bands}, "
         f"systems {systems or '-'}, elevation mask {config.elmask_deg:g} deg, ratio "
         f"{config.ambiguity.ratio_threshold:g}{', partial' if config.ambiguity.partial else ''}"
     )
