@@ -140,8 +140,9 @@ class RtkConfig:
     slip_gf_m : float
         Slip when the geometry-free combination jumps by more than this (m; RTKLIB
         ``thresslip`` 0.05).
-    max_gap_s : float
-        A satellite unseen for longer restarts its ambiguity.
+    max_outage : int
+        A satellite unseen for more than this many epochs restarts its ambiguity (RTKLIB
+        ``maxout`` 5).
     ambiguity : AmbiguityConfig
         Ratio test and partial fixing (:func:`navtrack.gnss.ambiguity.resolve_ambiguities`).
     fix : bool
@@ -165,7 +166,7 @@ class RtkConfig:
     q_amb_cyc: float = 1e-4
     slip_doppler_cyc: float = 5.0
     slip_gf_m: float = 0.05
-    max_gap_s: float = 5.0
+    max_outage: int = 5
     ambiguity: AmbiguityConfig = field(default_factory=AmbiguityConfig)
     fix: bool = True
     direction: str = "forward"
@@ -181,6 +182,8 @@ class RtkConfig:
             raise ValueError(
                 f"direction: expected 'forward', 'backward' or 'combined', got {self.direction!r}"
             )
+        if self.max_outage < 0:
+            raise ValueError(f"max_outage: expected >= 0, got {self.max_outage}")
         if self.min_sats < 2:
             raise ValueError(f"min_sats: expected >= 2, got {self.min_sats}")
 
@@ -588,7 +591,12 @@ def _epoch_inputs(
     x_lin = _forward_fill(spp)
     sat_r = rover.sat_pos_m[ir][:, js_r]
     rho_r, los_r, el_r = _elevation(sat_r, x_lin)
-    corr_r = (rho_r + _troposphere(x_lin, el_r))[..., None]
+    trop_r = _troposphere(x_lin, el_r)
+    # the slant delay changes with the rover height too: its gradient joins the geometry
+    llh = ecef_to_geodetic(x_lin)
+    up = enu_rotation(llh[:, 0], llh[:, 1])[:, 2, :]
+    dtrop_dh = _troposphere(x_lin + up, el_r) - trop_r
+    corr_r = (rho_r + trop_r)[..., None]
     ph = rover.phase_m[ir][:, js_r] - (base.phase_m[ib][:, js_b] - corr_b) - corr_r
     co = rover.code_m[ir][:, js_r] - (base.code_m[ib][:, js_b] - corr_b) - corr_r
     # phase needs its code (for the ambiguity start value)
@@ -599,7 +607,8 @@ def _epoch_inputs(
     sys_id = np.array(["GRECJSI".index(s[0]) for s in rover.sats], dtype=np.int64)[js_r]
     groups = (sys_id[:, None] * 4 + np.arange(n_f)[None, :]).reshape(-1)
     var = np.broadcast_to((_variance(el_b, cfg) + _variance(el_r, cfg))[..., None], (k, n_s, n_f))
-    G = np.repeat(np.where(np.isfinite(los_r), -los_r, 0.0), n_f, axis=1)
+    G = -los_r + dtrop_dh[..., None] * up[:, None, :]
+    G = np.repeat(np.where(np.isfinite(G), G, 0.0), n_f, axis=1)
     return _Epochs(
         t=rover.t_gps_s[ir],
         sd_phase=ph.reshape(k, -1),
@@ -644,7 +653,7 @@ def _run_filter(ep: _Epochs, cfg: RtkConfig) -> _FilterOut:
     x = np.zeros(n_x)
     P = np.zeros((n_x, n_x))
     active = np.zeros(n_amb, dtype=bool)
-    last_seen = np.full(n_amb, -np.inf)
+    last_seen = np.full(n_amb, -(10**9), dtype=np.int64)  # epoch index
     have_pos = False
     t_prev = None
     el_mask = math.radians(cfg.elmask_deg)
@@ -677,7 +686,7 @@ def _run_filter(ep: _Epochs, cfg: RtkConfig) -> _FilterOut:
         # ambiguities: random walk; restart after a slip, a gap or on first sight
         amb = np.arange(n_amb) + 3
         P[amb[active], amb[active]] += cfg.q_amb_cyc**2 * dt
-        restart = phase_ok & (~active | ep.reset[k] | (np.abs(t - last_seen) > cfg.max_gap_s))
+        restart = phase_ok & (~active | ep.reset[k] | (k - last_seen > cfg.max_outage + 1))
         out.slip[k] = np.bincount(rep, weights=(phase_ok & ep.reset[k]), minlength=n_s) > 0
         if restart.any():
             ri = amb[restart]
@@ -686,7 +695,7 @@ def _run_filter(ep: _Epochs, cfg: RtkConfig) -> _FilterOut:
             P[ri, ri] = (cfg.sigma_amb0_m / ep.lam[restart]) ** 2
             x[ri] = (ep.sd_phase[k, restart] - ep.sd_code[k, restart]) / ep.lam[restart]
         active |= restart
-        last_seen[phase_ok] = t
+        last_seen[phase_ok] = k
         # double differences
         ref_p, oth_p = _double_differences(ep.groups, phase_ok, el_f)
         ref_c, oth_c = _double_differences(ep.groups, code_ok, el_f)
