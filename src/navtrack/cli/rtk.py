@@ -1,4 +1,6 @@
-"""``navtrack rtk ROVER BASE NAV...``: carrier-phase relative positions of a rover against a base.
+"""``navtrack rtk ROVER BASE NAV...`` and ``navtrack ppp OBS NAV... --sp3 FILE``: precise positions.
+
+``rtk``: carrier-phase relative positions of a rover against a base.
 
 Reads the rover and base observations (RINEX), the navigation file(s) and optionally an SP3
 file, solves every rover epoch with double-differenced code and carrier phase and integer
@@ -7,6 +9,9 @@ receiver and in common, count of each status, fix rate, slips per detector, rati
 input warnings, and with ``--ref``/``--ref-pos`` the error statistics), and writes the solution
 with ``--out`` (CSV, Parquet, NMEA GGA, KML, GPX by suffix) with RTKLIB's ``quality`` column.
 The exit code is 1 when no epoch has a relative solution or the input cannot be read.
+
+``ppp``: static precise point positioning (:func:`navtrack.gnss.ppp.solve_ppp`) with the
+convergence of the position against ``--ref`` over time.
 """
 
 from __future__ import annotations
@@ -64,6 +69,26 @@ def register(subparsers: Any) -> None:
         "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
     )
     p.set_defaults(func=run_rtk)
+
+    q = subparsers.add_parser(
+        "ppp",
+        help="static precise point positioning with SP3 orbits and clocks",
+        description="Dual-frequency ionosphere-free code and phase, Saastamoinen + estimated "
+        "zenith wet delay, float ambiguities, static position (convergence over time).",
+    )
+    q.add_argument("obs", type=Path, help="RINEX observation file (dual frequency)")
+    q.add_argument("nav", nargs="*", type=Path, help="RINEX navigation file(s) (optional)")
+    q.add_argument("--sp3", type=Path, required=True, help="precise orbits and clocks (SP3)")
+    q.add_argument(
+        "--clk", type=Path, help="clock RINEX (not read yet: refused rather than ignored)"
+    )
+    q.add_argument("--systems", default="G", help="systems to use (default G)")
+    q.add_argument("--elmask", type=float, default=15.0, metavar="DEG", help="elevation mask")
+    _add_reference(q)
+    q.add_argument(
+        "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
+    )
+    q.set_defaults(func=run_ppp)
 
 
 def _add_reference(p: argparse.ArgumentParser) -> None:
@@ -259,3 +284,71 @@ def _print_summary(
                     f"  {name:<12} {np.median(e):8.3f}  {np.percentile(e, 95):8.3f}  "
                     f"{e.max():8.3f}  ({sel.sum()} epochs)"
                 )
+
+
+def run_ppp(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from navtrack.gnss.ppp import PppConfig, convergence, solution_frame, solve_ppp
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.sp3 import read_sp3
+
+    if args.clk is not None:
+        raise SystemExit(
+            "navtrack ppp: --clk: clock RINEX files are not read yet; the SP3 clocks are used "
+            "when --clk is left out"
+        )
+    for path in [args.obs, *args.nav, args.sp3]:
+        if not path.is_file():
+            raise SystemExit(f"navtrack ppp: file {str(path)!r} not found")
+    from navtrack.cli.pos import _check_output
+
+    out_problem = _check_output(args.out)
+    try:
+        config = PppConfig(systems=args.systems.upper(), elmask_deg=args.elmask)
+    except ValueError as exc:
+        raise SystemExit(f"navtrack ppp: {exc}") from None
+    obs = read_obs(args.obs)
+    navs = [read_nav(p) for p in args.nav]
+    sp3 = read_sp3(args.sp3)
+    try:
+        result = solve_ppp(obs, navs, sp3, config)
+    except ValueError as exc:
+        raise SystemExit(f"navtrack ppp: {exc}") from None
+    n = result.t_gps_s.size
+    print(f"observations   {args.obs}")
+    print(f"orbits/clocks  {args.sp3}")
+    print(f"systems        {config.systems}, elevation mask {config.elmask_deg:g} deg, static")
+    print(f"epochs         {n}, updated {int(result.updated.sum())}")
+    s = result.slips
+    print(
+        f"slips          lli {s['lli']}, doppler {s['doppler']}, geometry-free {s['geometry_free']}"
+    )
+    last = np.flatnonzero(result.updated)
+    if last.size:
+        x, y, z = result.pos_m[last[-1]]
+        e, nn, u = result.sd_enu_m[last[-1]]
+        print(f"final position {x:.4f} {y:.4f} {z:.4f}  (sd E/N/U {e:.3f} {nn:.3f} {u:.3f} m)")
+        print(f"final ZWD      {result.zwd_m[last[-1]]:.3f} m")
+    from navtrack.cli.pos import _reference
+
+    ref = _reference(args) if args.ref_pos is None else None
+    if ref is not None and last.size:
+        print("convergence    time (s)  horizontal  up      3D   (m, error vs ref)")
+        for t, h, u, d in convergence(result, np.asarray(ref)):
+            print(f"  {t:14.0f}  {h:10.3f}  {u:7.3f}  {d:7.3f}")
+    code = 0 if last.size else 1
+    if args.out is not None:
+        if out_problem:
+            print(f"navtrack ppp: solution NOT written: {out_problem}", file=sys.stderr)
+            return 1
+        from navtrack.io.solution import write_solution
+
+        try:
+            path = write_solution(solution_frame(result), args.out, ok_status="ppp")
+            print(f"written        {path}")
+        except OSError as exc:
+            print(f"navtrack ppp: solution NOT written: {exc}", file=sys.stderr)
+            code = 1
+    return code

@@ -259,12 +259,16 @@ def receiver_signals(
     -----
     The carrier of a band is the ``L`` code of the pseudorange code chosen for it (``C1C`` ->
     ``L1C``, RINEX 2 ``C1``/``P1`` -> ``L1``, ``P2`` -> ``L2``), its Doppler the ``D`` code.
+    With SP3 the broadcast group delays are not applied (precise clocks refer to the
+    ionosphere-free combination of their analysis centre).
     """
     from navtrack.gnss import spp
     from navtrack.gnss.corrections import frequency_hz
 
     cfg = config or RtkConfig()
-    scfg = spp.SppConfig(systems=cfg.systems, elmask_deg=cfg.elmask_deg)
+    # precise clocks refer to the ionosphere-free combination: no broadcast group delay on them
+    tgd = "" if sp3 is not None else spp.SppConfig().tgd_systems
+    scfg = spp.SppConfig(systems=cfg.systems, elmask_deg=cfg.elmask_deg, tgd_systems=tgd)
     tables = spp.navigation_tables(nav, ephemeris)
     pr = spp.code_pseudoranges(obs, scfg)
     sv = spp.satellite_states(pr, nav, sp3=sp3, config=scfg, ephemeris=tables)
