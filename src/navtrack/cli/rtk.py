@@ -214,7 +214,9 @@ def run_rtk(args: argparse.Namespace) -> int:
 
         try:
             path = write_solution(
-                solution_frame(result), args.out, ok_status=("fix", "float", "dgnss", "single")
+                solution_frame(result),
+                args.out,
+                ok_status=("fix", "float", "dgnss", "single", "no_base"),
             )
             print(f"written        {path}")
         except OSError as exc:
