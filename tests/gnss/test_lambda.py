@@ -174,3 +174,18 @@ def test_twenty_ambiguities_within_one_millisecond() -> None:
     np.testing.assert_array_equal(fix.a_fixed, truth)
     # the bar is 1 ms; the loaded CI machine gets a factor 3 of slack
     assert np.median(times) <= 3e-3
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="needs numba for the compiled kernels")
+def test_compiled_and_interpreted_kernels_agree(monkeypatch: pytest.MonkeyPatch) -> None:
+    from navtrack.gnss import ambiguity
+
+    rng = np.random.default_rng(6)
+    n = 14
+    Q = _random_cov(rng, n, scale=0.05)
+    a = rng.normal(scale=5.0, size=n)
+    compiled = resolve_ambiguities(a, Q, AmbiguityConfig(ratio_threshold=1.0))
+    monkeypatch.setattr(ambiguity, "COMPILE_MIN_AMBIGUITIES", 10**6)
+    interpreted = resolve_ambiguities(a, Q, AmbiguityConfig(ratio_threshold=1.0))
+    np.testing.assert_array_equal(compiled.a_fixed, interpreted.a_fixed)
+    assert compiled.ratio == pytest.approx(interpreted.ratio, rel=1e-9)

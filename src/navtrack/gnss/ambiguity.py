@@ -8,9 +8,11 @@ integer least-squares problem ``min_z (z_hat - z)^T Q_z^-1 (z_hat - z)`` is then
 depth-first search of the shrinking ellipsoid, enumerating each level around its conditional
 estimate in zig-zag order.
 
-The kernels are scalar recursions over at most a few tens of ambiguities: compiled with numba
-when it is installed (extra ``speed``; 20 ambiguities in well under a millisecond; numba is
-imported on the first search), plain Python loops otherwise (several milliseconds).
+The kernels are scalar recursions over at most a few tens of ambiguities, one source run two
+ways: compiled by numba on NumPy arrays for problems of :data:`COMPILE_MIN_AMBIGUITIES` or more
+when numba is installed (extra ``speed``; 20 ambiguities in well under a millisecond),
+interpreted on Python lists otherwise (a fraction of a millisecond for the handful of a
+single-system L1 rover, about 20 ms for 20 ambiguities).
 
 References
 ----------
@@ -55,6 +57,7 @@ HAVE_NUMBA = importlib.util.find_spec("numba") is not None and not os.environ.ge
 )
 
 __all__ = [
+    "COMPILE_MIN_AMBIGUITIES",
     "HAVE_NUMBA",
     "AmbiguityConfig",
     "AmbiguityResult",
@@ -147,62 +150,74 @@ class AmbiguityResult:
         return self.status in (FixStatus.FIXED, FixStatus.PARTIAL)
 
 
-def _ltdl_py(Q: FloatArray) -> tuple[FloatArray, FloatArray, bool]:
-    n = Q.shape[0]
-    q = Q.copy()
-    L = np.zeros((n, n))
-    D = np.zeros(n)
+# The kernels index ``M[i][j]`` and write into buffers the caller allocates, so that the same
+# source runs compiled on NumPy arrays (numba) and interpreted on Python lists (whose element
+# access is several times faster than NumPy's from Python).
+
+
+def _ltdl_py(q: Any, L: Any, D: Any) -> bool:
+    n = len(D)
     for i in range(n - 1, -1, -1):
-        d = q[i, i]
+        d = q[i][i]
         if not d > 0.0:
-            return L, D, False
+            return False
         D[i] = d
         s = math.sqrt(d)
+        Li = L[i]
+        qi = q[i]
         for j in range(i + 1):
-            L[i, j] = q[i, j] / s
+            Li[j] = qi[j] / s
         for j in range(i):
-            lij = L[i, j]
+            lij = Li[j]
+            qj = q[j]
             for k in range(j + 1):
-                q[j, k] -= L[i, k] * lij
-        lii = L[i, i]
+                qj[k] -= Li[k] * lij
+        lii = Li[i]
         for j in range(i + 1):
-            L[i, j] /= lii
-    return L, D, True
+            Li[j] /= lii
+    return True
 
 
-def _reduce_py(L: FloatArray, D: FloatArray, Z: FloatArray) -> None:
-    n = D.size
+def _reduce_py(L: Any, D: Any, Zt: Any) -> None:
+    """Reduction on ``L``, ``D`` and the transpose ``Zt`` of ``Z`` (row ``j`` is column ``j``)."""
+    n = len(D)
     j = n - 2
     sw = n - 1  # columns j <= sw were touched by a permutation since their Gauss step
     while j >= 0:
         if j <= sw:
             for i in range(j + 1, n):
-                mu = np.rint(L[i, j])
-                if mu != 0.0:
+                mu = math.floor(L[i][j] + 0.5)
+                if mu != 0:
                     for k in range(i, n):
-                        L[k, j] -= mu * L[k, i]
+                        L[k][j] -= mu * L[k][i]
+                    zi = Zt[i]
+                    zj = Zt[j]
                     for k in range(n):
-                        Z[k, j] -= mu * Z[k, i]
-        delta = D[j] + L[j + 1, j] ** 2 * D[j + 1]
+                        zj[k] -= mu * zi[k]
+        delta = D[j] + L[j + 1][j] ** 2 * D[j + 1]
         if delta + 1e-6 < D[j + 1]:
             eta = D[j] / delta
-            lam = D[j + 1] * L[j + 1, j] / delta
+            lam = D[j + 1] * L[j + 1][j] / delta
             D[j] = eta * D[j + 1]
             D[j + 1] = delta
+            Lj = L[j]
+            Lj1 = L[j + 1]
             for k in range(j):
-                a0 = L[j, k]
-                a1 = L[j + 1, k]
-                L[j, k] = -L[j + 1, j] * a0 + a1
-                L[j + 1, k] = eta * a0 + lam * a1
-            L[j + 1, j] = lam
+                a0 = Lj[k]
+                a1 = Lj1[k]
+                Lj[k] = -Lj1[j] * a0 + a1
+                Lj1[k] = eta * a0 + lam * a1
+            Lj1[j] = lam
             for k in range(j + 2, n):
-                t = L[k, j]
-                L[k, j] = L[k, j + 1]
-                L[k, j + 1] = t
+                t = L[k][j]
+                L[k][j] = L[k][j + 1]
+                L[k][j + 1] = t
+            zj = Zt[j]
+            zj1 = Zt[j + 1]
             for k in range(n):
-                t = Z[k, j]
-                Z[k, j] = Z[k, j + 1]
-                Z[k, j + 1] = t
+                t = zj[k]
+                zj[k] = zj1[k]
+                zj1[k] = t
             sw = j
             j = n - 2
         else:
@@ -210,20 +225,17 @@ def _reduce_py(L: FloatArray, D: FloatArray, Z: FloatArray) -> None:
 
 
 def _search_py(
-    a: FloatArray, L: FloatArray, D: FloatArray, m: int
-) -> tuple[FloatArray, FloatArray]:
-    n = a.size
-    zc = np.zeros(n)  # conditional estimates
-    z = np.zeros(n)
-    step = np.zeros(n)
-    dist = np.zeros(n + 1)  # dist[k]: partial squared norm of the levels above k
-    cands = np.zeros((m, n))
-    sq = np.full(m, np.inf)
+    a: Any, L: Any, D: Any, zc: Any, z: Any, step: Any, dist: Any, cands: Any, sq: Any
+) -> None:
+    """Search into ``cands (m, n)`` and ``sq (m,)`` (unsorted; ``sq`` starts at infinity);
+    ``zc``, ``z``, ``step`` (n) and ``dist`` (n + 1) are work buffers."""
+    n = len(a)
+    m = len(sq)
     found = 0
-    max_dist = np.inf
+    max_dist = math.inf
     k = n - 1
     zc[k] = a[k]
-    z[k] = np.rint(a[k])
+    z[k] = math.floor(a[k] + 0.5)
     y = zc[k] - z[k]
     step[k] = 1.0 if y > 0 else -1.0
     while True:
@@ -234,9 +246,9 @@ def _search_py(
                 dist[k] = new
                 s = a[k]
                 for j in range(k + 1, n):
-                    s -= L[j, k] * (zc[j] - z[j])
+                    s -= L[j][k] * (zc[j] - z[j])
                 zc[k] = s
-                z[k] = np.rint(s)
+                z[k] = math.floor(s + 0.5)
                 y = s - z[k]
                 step[k] = 1.0 if y > 0 else -1.0
                 continue
@@ -245,10 +257,15 @@ def _search_py(
                 if sq[i] > sq[worst]:
                     worst = i
             sq[worst] = new
-            cands[worst] = z
+            cw = cands[worst]
+            for i in range(n):
+                cw[i] = z[i]
             found += 1
             if found >= m:
-                max_dist = sq.max()
+                max_dist = sq[0]
+                for i in range(m):
+                    if sq[i] > max_dist:
+                        max_dist = sq[i]
             z[0] += step[0]
             y = zc[0] - z[0]
             step[0] = -step[0] - (1.0 if step[0] > 0 else -1.0)
@@ -259,23 +276,39 @@ def _search_py(
             z[k] += step[k]
             y = zc[k] - z[k]
             step[k] = -step[k] - (1.0 if step[k] > 0 else -1.0)
-    order = np.argsort(sq)
-    return cands[order], sq[order]
+
+
+def _buffers(compiled: bool, *shapes: tuple[int, ...], fill: float = 0.0) -> list[Any]:
+    """Zero (or ``fill``) buffers: NumPy arrays for the compiled kernels, lists otherwise."""
+    if compiled:
+        return [np.full(shape, fill) for shape in shapes]
+    out: list[Any] = []
+    for shape in shapes:
+        if len(shape) == 1:
+            out.append([fill] * shape[0])
+        else:
+            out.append([[fill] * shape[1] for _ in range(shape[0])])
+    return out
 
 
 _COMPILED: dict[str, Any] = {}
 
 
-def _kernel(name: str) -> Any:
-    """The kernel ``name`` (``ltdl``, ``reduce``, ``search``): compiled when numba is available
-    (imported on first use, which costs about a second), the Python function otherwise."""
+COMPILE_MIN_AMBIGUITIES = 10
+"""Problems of this many ambiguities or more run compiled (numba is imported on the first such
+problem, about a second); smaller ones run interpreted (well under a millisecond each)."""
+
+
+def _kernel(name: str, n: int) -> tuple[Any, bool]:
+    """The kernel ``name`` (``ltdl``, ``reduce``, ``search``) for ``n`` ambiguities and whether
+    it is compiled."""
     py = {"ltdl": _ltdl_py, "reduce": _reduce_py, "search": _search_py}[name]
-    if not HAVE_NUMBA:
-        return py
+    if not HAVE_NUMBA or n < COMPILE_MIN_AMBIGUITIES:
+        return py, False
     if name not in _COMPILED:
         numba = _numba_module()
         _COMPILED[name] = py if numba is None else numba.njit(cache=True, nogil=True)(py)
-    return _COMPILED[name]
+    return _COMPILED[name], _COMPILED[name] is not py
 
 
 def ltdl(Q: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -301,10 +334,13 @@ def ltdl(Q: FloatArray) -> tuple[FloatArray, FloatArray]:
     A = np.ascontiguousarray(Q, dtype=float)
     if A.ndim != 2 or A.shape[0] != A.shape[1]:
         raise ValueError(f"Q: expected a square matrix, got shape {A.shape}")
-    L, D, ok = _kernel("ltdl")(A)
-    if not ok:
+    n = A.shape[0]
+    fn, compiled = _kernel("ltdl", n)
+    q = A.copy() if compiled else A.tolist()
+    L, D = _buffers(compiled, (n, n), (n,))
+    if not fn(q, L, D):
         raise ValueError("Q: not positive definite")
-    return L, D
+    return np.asarray(L, dtype=float), np.asarray(D, dtype=float)
 
 
 def decorrelate(Q: FloatArray) -> tuple[IntArray, FloatArray, FloatArray]:
@@ -325,10 +361,19 @@ def decorrelate(Q: FloatArray) -> tuple[IntArray, FloatArray, FloatArray]:
     L, D
         Factors of ``Q_z`` as returned by :func:`ltdl`.
     """
-    L, D = ltdl(Q)
-    Z = np.eye(D.size)
-    _kernel("reduce")(L, D, Z)
-    return Z.astype(np.int64), L, D
+    L0, D0 = ltdl(Q)
+    n = D0.size
+    fn, compiled = _kernel("reduce", n)
+    L: Any
+    D: Any
+    Zt: Any
+    if compiled:
+        L, D, Zt = L0, D0, np.eye(n)
+    else:
+        L, D, Zt = L0.tolist(), D0.tolist(), np.eye(n).tolist()
+    fn(L, D, Zt)
+    Z = np.rint(np.asarray(Zt, dtype=float).T).astype(np.int64)
+    return Z, np.asarray(L, dtype=float), np.asarray(D, dtype=float)
 
 
 def integer_search(
@@ -366,9 +411,17 @@ def integer_search(
         raise ValueError(f"n_cands: expected >= 1, got {n_cands}")
     if a.size == 0:
         return np.zeros((n_cands, 0), dtype=np.int64), np.zeros(n_cands)
-    search = _kernel("search")
-    cands, sq = search(a, np.ascontiguousarray(L), np.ascontiguousarray(D), n_cands)
-    return cands.astype(np.int64), sq
+    n = a.size
+    fn, compiled = _kernel("search", n)
+    zc, z, step, dist, cands = _buffers(compiled, (n,), (n,), (n,), (n + 1,), (n_cands, n))
+    (sq,) = _buffers(compiled, (n_cands,), fill=math.inf)
+    if compiled:
+        fn(a, np.ascontiguousarray(L), np.ascontiguousarray(D), zc, z, step, dist, cands, sq)
+    else:
+        fn(a.tolist(), np.asarray(L).tolist(), np.asarray(D).tolist(), zc, z, step, dist, cands, sq)
+    sq_a = np.asarray(sq, dtype=float)
+    order = np.argsort(sq_a, kind="stable")
+    return np.rint(np.asarray(cands, dtype=float)[order]).astype(np.int64), sq_a[order]
 
 
 def bootstrap_success_rate(D: FloatArray) -> float:
