@@ -68,6 +68,7 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
     )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run_rtk)
 
     q = subparsers.add_parser(
@@ -196,10 +197,29 @@ def run_rtk(args: argparse.Namespace) -> int:
         from navtrack.gnss.sp3 import read_sp3
 
         sp3 = read_sp3(args.sp3)
-    try:
-        result = solve_relative(rover, base, navs, base_xyz, config, sp3=sp3)
-    except ValueError as exc:
-        raise SystemExit(f"navtrack rtk: {exc}") from None
+    from tqdm import tqdm
+
+    n_common = min(len(rover.t_gps_s), len(base.t_gps_s))
+    n_total = (2 if args.direction == "combined" else 1) * n_common
+    disable = True if args.no_progress else None  # None: only on a terminal
+    with tqdm(
+        total=n_total, unit="epoch", desc="filtering", file=sys.stderr, disable=disable
+    ) as bar:
+        state = {"done_passes": 0, "last": 0}
+
+        def progress(done: int, total: int) -> None:
+            if done < state["last"]:  # the next filter pass started
+                state["done_passes"] += state["last"]
+            state["last"] = done
+            bar.n = min(state["done_passes"] + done, n_total)
+            bar.refresh()
+
+        try:
+            result = solve_relative(rover, base, navs, base_xyz, config, sp3=sp3, progress=progress)
+        except ValueError as exc:
+            raise SystemExit(f"navtrack rtk: {exc}") from None
+        bar.n = n_total
+        bar.refresh()
     _print_summary(args, result, config, base_xyz, base_src, STATUS_NAMES)
     counts = result.status_counts()
     relative = counts["fix"] + counts["float"] + counts["dgnss"]

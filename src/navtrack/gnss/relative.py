@@ -54,6 +54,7 @@ if TYPE_CHECKING:
     from navtrack.gnss.observations import Observations
     from navtrack.gnss.rinex.nav import NavData
     from navtrack.gnss.sp3 import Sp3
+    from navtrack.gnss.spp import ProgressFn
 
 __all__ = [
     "QUALITY",
@@ -645,7 +646,7 @@ class _FilterOut:
         self.slip = np.zeros((k, n_s), dtype=bool)
 
 
-def _run_filter(ep: _Epochs, cfg: RtkConfig) -> _FilterOut:
+def _run_filter(ep: _Epochs, cfg: RtkConfig, progress: ProgressFn | None = None) -> _FilterOut:
     """The Kalman filter over the common epochs: predict, restart slipped ambiguities, update
     with double differences, fix by LAMBDA."""
     from navtrack.tracking.kalman import gain_update, innovation_gain
@@ -664,6 +665,8 @@ def _run_filter(ep: _Epochs, cfg: RtkConfig) -> _FilterOut:
     var_pos0 = cfg.sigma_pos0_m**2
     ratio_c = cfg.code_phase_ratio**2
     for k in range(k_n):
+        if progress is not None and k % 100 == 0:
+            progress(k, k_n)
         t = ep.t[k]
         dt = 0.0 if t_prev is None else abs(t - t_prev)  # backward: time runs back
         t_prev = t
@@ -836,6 +839,7 @@ def solve_relative(
     *,
     sp3: Sp3 | None = None,
     base_warn_m: float = 100.0,
+    progress: ProgressFn | None = None,
 ) -> RtkResult:
     """Relative (RTK) positions of every rover epoch against a base at a known position.
 
@@ -850,6 +854,8 @@ def solve_relative(
     sp3 : Sp3, optional
     base_warn_m : float
         Warn when ``base_xyz_m`` is farther than this from the base's own median SPP.
+    progress : callable, optional
+        ``progress(epochs_done, epochs_total)`` every 100 epochs of each filter pass.
 
     Returns
     -------
@@ -892,11 +898,11 @@ def solve_relative(
     slips_b = detect_slips(base, cfg)
     ep = _epoch_inputs(rover, base, base_xyz, ir, ib, js_r, js_b, slips_r, slips_b, cfg)
     if cfg.direction == "forward":
-        out = _run_filter(ep, cfg)
+        out = _run_filter(ep, cfg, progress)
     else:
-        out = _reversed_output(_run_filter(_reversed(ep), cfg))
+        out = _reversed_output(_run_filter(_reversed(ep), cfg, progress))
         if cfg.direction == "combined":
-            out = _combine(_run_filter(ep, cfg), out)
+            out = _combine(_run_filter(ep, cfg, progress), out)
     return _result(rover, common, ir, out, slips_r, slips_b, base, warnings, dist)
 
 
