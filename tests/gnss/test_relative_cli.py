@@ -43,9 +43,12 @@ def test_rtk_summary_and_csv(
     assert (q == 1).sum() == (table["status"] == "fix").sum() >= 22
 
 
-def test_rtk_nmea_quality(gnss_data: Path, tmp_path: Path) -> None:
+def test_rtk_nmea_quality_and_plots(gnss_data: Path, tmp_path: Path) -> None:
     out = tmp_path / "rtk.nmea"
-    assert main(["rtk", *_yama(gnss_data), "--base-pos", *BASE, "--out", str(out)]) == 0
+    args = ["--base-pos", *BASE, "--out", str(out), "--plot", str(tmp_path / "fig")]
+    assert main(["rtk", *_yama(gnss_data), *args]) == 0
+    for name in ("rtk_error.png", "rtk_ratio.png", "rtk_sats.png"):
+        assert (tmp_path / "fig" / name).stat().st_size > 1000
     fields = [line.split(",") for line in out.read_text().splitlines()]
     gga_quality = {f[6] for f in fields}
     assert gga_quality <= {"1", "4", "5"}

@@ -68,6 +68,7 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
     )
+    p.add_argument("--plot", type=Path, metavar="DIR", help="write figures into this directory")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run_rtk)
 
@@ -226,6 +227,17 @@ def run_rtk(args: argparse.Namespace) -> int:
     code = 0 if relative else 1
     if not relative:
         print("navtrack rtk: no epoch has a relative solution", file=sys.stderr)
+    if args.plot is not None:
+        from navtrack.plots.rtk import plot_rtk
+
+        errs = reference_errors(result.t_gps_s, result.pos_m, args)
+        paths = plot_rtk(
+            result,
+            args.plot,
+            error_m=None if errs is None else errs[0],
+            ratio_threshold=config.ambiguity.ratio_threshold,
+        )
+        print(f"figures        {', '.join(str(p) for p in paths)}")
     if args.out is not None:
         if out_problem:
             print(f"navtrack rtk: solution NOT written: {out_problem}", file=sys.stderr)
