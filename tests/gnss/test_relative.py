@@ -270,3 +270,73 @@ def test_half_rate_rover_uses_common_epochs(yamatogawa) -> None:  # type: ignore
     ir, _ = common_epochs(rover.t_gps_s[even], base.t_gps_s)
     assert res.n_common_epochs == ir.size < base.t_gps_s.size
     assert any(f"{ir.size} common epochs" in w for w in res.warnings)
+
+
+def test_static_filter_equals_batch_least_squares(gnss_data: Path) -> None:
+    """The static filter (no process noise) is the recursive form of the batch least-squares
+    solution: the normal equations of all epochs' double differences plus the start priors
+    (position at the first SPP, each ambiguity at phase minus code when first seen) give the
+    same float estimate."""
+    from navtrack.gnss import relative as rel
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+
+    d = gnss_data / "rtklib_gsi0759"
+    rover = read_obs(d / "07590920.05o")
+    nav = read_nav(d / "07590920.05n")
+    llh = ecef_to_geodetic(GSI0759_REF)
+    base_xyz = GSI0759_REF + enu_rotation(llh[0], llh[1]).T @ np.array([1200.0, 700.0, 0.0])
+    base = _shifted_copy(rover, nav, GSI0759_REF, base_xyz, seed=3)
+    cfg = RtkConfig(mode="static", frequencies=2, q_amb_cyc=0.0, fix=False)
+    rs, bs = rel.receiver_signals(rover, nav, cfg), rel.receiver_signals(base, nav, cfg)
+    ir, ib = common_epochs(rs.t_gps_s, bs.t_gps_s)
+    js = np.arange(len(rs.sats))
+    assert rs.sats == bs.sats
+    ep = rel._epoch_inputs(
+        rs, bs, base_xyz, ir, ib, js, js, detect_slips(rs, cfg), detect_slips(bs, cfg), cfg
+    )
+    out = rel._run_filter(ep, cfg)
+
+    # batch: one ambiguity parameter per satellite arc (a new arc where the filter restarts)
+    n_amb = ep.lam.size
+    col = np.full(n_amb, -1)
+    last = np.full(n_amb, -(10**9))
+    n_par = 3
+    blocks = []  # (columns, H, R^-1, z) of each epoch's DDs and of each prior
+    x0 = np.concatenate([ep.spp[0], np.zeros(0)])
+    blocks.append((np.arange(3), np.eye(3), np.eye(3) / cfg.sigma_pos0_m**2, x0))
+    mask = np.radians(cfg.elmask_deg)
+    for k in range(ep.t.size):
+        up = ep.el[k] >= mask
+        code_ok = np.isfinite(ep.sd_code[k]) & up
+        phase_ok = np.isfinite(ep.sd_phase[k]) & up
+        new = phase_ok & ((col < 0) | ep.reset[k] | (k - last > cfg.max_outage + 1))
+        for j in np.flatnonzero(new):
+            col[j] = n_par
+            n_par += 1
+            w = (ep.lam[j] / cfg.sigma_amb0_m) ** 2
+            prior = (ep.sd_phase[k, j] - ep.sd_code[k, j]) / ep.lam[j]
+            blocks.append((np.array([col[j]]), np.eye(1), np.eye(1) * w, np.array([prior])))
+        last[phase_ok] = k
+        var = np.where(code_ok, ep.var_sd[k], 0.0)
+        G = ep.G[k]
+        z_lin = G @ ep.x_lin[k]
+        for ok, ratio, amb in ((phase_ok, 1.0, True), (code_ok, cfg.code_phase_ratio, False)):
+            ref, oth = _double_differences(ep.groups, ok, ep.el[k])
+            if ref.size == 0:
+                continue
+            D = _dd_matrix(ref, oth, n_amb)
+            cols = np.concatenate([np.arange(3), col[phase_ok]]) if amb else np.arange(3)
+            H = D @ G
+            if amb:
+                H = np.hstack([H, (D * ep.lam)[:, phase_ok]])
+            obs = np.where(ok, (ep.sd_phase if amb else ep.sd_code)[k], 0.0)
+            z = D @ (obs + np.where(ok, z_lin, 0.0))
+            blocks.append((cols, H, np.linalg.inv((D * (var * ratio**2)) @ D.T), z))
+    N = np.zeros((n_par, n_par))
+    rhs = np.zeros(n_par)
+    for cols, H, Ri, z in blocks:
+        N[np.ix_(cols, cols)] += H.T @ Ri @ H
+        rhs[cols] += H.T @ Ri @ z
+    x = np.linalg.solve(N, rhs)
+    np.testing.assert_allclose(out.float_pos[-1], x[:3], atol=1e-6)
