@@ -160,6 +160,83 @@ def test_static_baseline_of_a_shifted_copy_fixes_within_2_cm(
     assert np.all(np.linalg.norm(res.pos_m[fixed] - GSI0759_REF, axis=1) < 0.05)
 
 
+def _write_rinex2_like(src: Path, obs, base_xyz: np.ndarray, path: Path) -> None:  # type: ignore[no-untyped-def]
+    """Write ``obs`` (values of a copy of the RINEX 2 file ``src``) in the layout of ``src``:
+    same records, lines and LLI/SSI columns, new values and APPROX POSITION."""
+    lines = src.read_text().splitlines()
+    out = []
+    i = 0
+    while "END OF HEADER" not in lines[i]:
+        line = lines[i]
+        if "APPROX POSITION XYZ" in line:
+            line = "".join(f"{v:14.4f}" for v in base_xyz).ljust(60) + "APPROX POSITION XYZ"
+        out.append(line)
+        i += 1
+    out.append(lines[i])
+    i += 1
+    types = [c for c in obs.header.obs_types["G"]]
+    kk = [obs.codes.index(c) for c in types]
+    e = -1
+    while i < len(lines):
+        line = lines[i]
+        out.append(line)
+        i += 1
+        flag, n = int(line[26:29]), int(line[29:32])
+        if flag > 1:  # special records follow
+            out.extend(lines[i : i + n])
+            i += n
+            continue
+        e += 1
+        for j in range(n):
+            col = obs.sats.index(line[32 + 3 * j : 35 + 3 * j].replace(" ", "0"))
+            row = lines[i].ljust(16 * len(types))
+            i += 1
+            fields = []
+            for m, k in enumerate(kk):
+                raw, v = row[16 * m : 16 * m + 16], obs.values[e, col, k]
+                num = f"{v:14.3f}" if np.isfinite(v) and raw[:14].strip() else " " * 14
+                fields.append(num + raw[14:16])
+            out.append("".join(fields).rstrip())
+    path.write_text("\n".join(out) + "\n")
+
+
+@pytest.mark.skipif(shutil.which("rnx2rtkp") is None, reason="RTKLIB rnx2rtkp not installed")
+def test_static_baseline_of_a_shifted_copy_beside_rtklib_static(
+    gnss_data: Path, tmp_path: Path
+) -> None:
+    """The same shifted-copy pair, written as RINEX, solved by RTKLIB's ``-p 3`` (static, L1+L2):
+    both fix and both are within 2 cm of the reference, and within 1 cm of each other."""
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.io.rtklib import read_pos
+
+    d = gnss_data / "rtklib_gsi0759"
+    rover = read_obs(d / "07590920.05o")
+    nav = read_nav(d / "07590920.05n")
+    llh = ecef_to_geodetic(GSI0759_REF)
+    base_xyz = GSI0759_REF + enu_rotation(llh[0], llh[1]).T @ np.array([2500.0, -1800.0, 5.0])
+    base = _shifted_copy(rover, nav, GSI0759_REF, base_xyz, seed=7)
+    base_file = tmp_path / "shft0920.05o"
+    _write_rinex2_like(d / "07590920.05o", base, base_xyz, base_file)
+    written = read_obs(base_file)  # both programs solve the file (values to 1 mm)
+    np.testing.assert_allclose(written.values, base.values, atol=6e-4)
+    out = tmp_path / "static.pos"
+    subprocess.run(
+        ["rnx2rtkp", "-p", "3", "-f", "2", "-m", "15", "-e", "-r"]
+        + [repr(float(v)) for v in base_xyz]
+        + [str(d / "07590920.05o"), str(d / "07590920.05n"), str(base_file), "-o", str(out)],
+        check=True,
+        capture_output=True,
+    )
+    ref = read_pos(out)
+    rtk_last = ref[["x_m", "y_m", "z_m"]].to_numpy()[-1]
+    assert ref["q"].to_numpy()[-1] == 1
+    assert np.linalg.norm(rtk_last - GSI0759_REF) < 0.02
+    res = solve_relative(rover, written, nav, base_xyz, RtkConfig(mode="static", frequencies=2))
+    assert res.status[-1] == RtkStatus.FIX
+    assert np.linalg.norm(res.pos_m[-1] - rtk_last) < 0.01
+
+
 # ----------------------------------------------------------------------- yamatogawa
 @pytest.fixture(scope="module")
 def yamatogawa(gnss_data: Path):  # type: ignore[no-untyped-def]
