@@ -45,6 +45,9 @@ class AlhatParams:
         Rays per synthetic RANSAC scene (Monte Carlo runs; 20 % of them outliers).
     pose_gnss : bool
         Write ``pose_trajectory.parquet`` of the first trial with the pyins GNSS positions.
+    duration_s : float
+        Use only the first ``duration_s`` seconds of each trial (0: the whole trial; the tests
+        run a shortened reproduction).
     """
 
     trials: tuple[str, ...] = ("07_undisturbed_fast_rotation_B", "02_undisturbed_slow_rotation_B")
@@ -64,3 +67,4 @@ class AlhatParams:
     sigma_bias_rad_s_sqrt_s: float = 1e-4
     n_rays: int = 10
     pose_gnss: bool = True
+    duration_s: float = 0.0

@@ -45,7 +45,7 @@ def tables_markdown(results: dict[str, Any]) -> str:
                 )
     lines += ["", "## Truncated series against the closed form (whole trial)", ""]
     lines += [
-        "| trial | order 1 rad | order 2 rad | order 3 rad | bound Σθ⁵/384 | closed ms "
+        "| trial | order 1 rad | order 2 rad | order 3 rad | bound Σθ⁵/480 | closed ms "
         "| series ms |",
         "|---|---|---|---|---|---|---|",
     ]
