@@ -139,7 +139,7 @@ def test_read_gnss_positions(shared_data: Path, tmp_path: Path) -> None:
     assert np.linalg.norm(gnss.xyz_m[0]) == pytest.approx(6.364e6, rel=1e-3)
     bad = tmp_path / "g.csv"
     bad.write_text("time,lat,lon\n0,1,2\n")
-    with pytest.raises(FileFormatError, match="g.csv"):
+    with pytest.raises(FileFormatError, match=r"g\.csv"):
         read_gnss_positions(bad)
     bad.write_text("time,lat,lon,alt\n1,58,56,100\n0,58,56,100\n")
     with pytest.raises(FileFormatError, match="increase strictly"):
