@@ -41,7 +41,7 @@ from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray
 
 _numba: Any
-try:  # optional accelerator (extra ``speed``): the sequential product as a compiled loop
+try:  # optional accelerator (extra ``speed``): propagation as one compiled loop
     if os.environ.get("NAVTRACK_NO_NUMBA"):
         raise ImportError("disabled by NAVTRACK_NO_NUMBA")
     import numba as _numba
@@ -64,7 +64,8 @@ __all__ = [
     "series_matrix",
 ]
 
-#: True when the sequential quaternion product runs compiled (numba, extra ``speed``).
+#: True when propagation runs as one compiled loop (numba, extra ``speed``); pure NumPy
+#: (vectorised step quaternions, blocked product) otherwise.
 HAVE_NUMBA = _numba is not None
 
 #: Tolerance on ``| |q| - 1 |`` of quaternions given as attitudes.
@@ -212,7 +213,8 @@ def delta_quaternions(
     if method == "closed":
         th = np.sqrt(th2)
         scalar = np.cos(0.5 * th)
-        vec_coef = 0.5 * np.sinc(th / (2.0 * math.pi))  # sin(θ/2)/θ, finite at θ = 0
+        small = th < 1e-4  # sin(θ/2)/θ by its series where the quotient loses digits
+        vec_coef = np.where(small, 0.5 - th2 / 48.0, np.sin(0.5 * th) / np.where(small, 1.0, th))
     elif method == "series":
         if order < 1:
             raise ValueError(f"order: the series needs order >= 1, got {order}")
@@ -228,24 +230,6 @@ def delta_quaternions(
     else:
         raise ValueError(f"method: expected 'closed' or 'series', got {method!r}")
     return np.concatenate([vec_coef[..., None] * d, scalar[..., None]], axis=-1)
-
-
-def _cumulative_product_loop(q0: FloatArray, steps: FloatArray) -> FloatArray:
-    """``out[0] = q0``, ``out[k+1] = out[k] ⊗ steps[k]`` as a plain loop (compiled by numba)."""
-    m = steps.shape[0]
-    out = np.empty((m + 1, 4))
-    x, y, z, w = q0[0], q0[1], q0[2], q0[3]
-    out[0, 0], out[0, 1], out[0, 2], out[0, 3] = x, y, z, w
-    for k in range(m):
-        sx, sy, sz, sw = steps[k, 0], steps[k, 1], steps[k, 2], steps[k, 3]
-        x, y, z, w = (
-            w * sx + x * sw + y * sz - z * sy,
-            w * sy - x * sz + y * sw + z * sx,
-            w * sz + x * sy - y * sx + z * sw,
-            w * sw - x * sx - y * sy - z * sz,
-        )
-        out[k + 1, 0], out[k + 1, 1], out[k + 1, 2], out[k + 1, 3] = x, y, z, w
-    return out
 
 
 def _cumulative_product_blocked(q0: FloatArray, steps: FloatArray) -> FloatArray:
@@ -277,10 +261,53 @@ def _cumulative_product_blocked(q0: FloatArray, steps: FloatArray) -> FloatArray
     return out
 
 
-_cumulative_product: Any = (
-    _numba.njit(cache=True, nogil=True)(_cumulative_product_loop)
-    if _numba is not None
-    else _cumulative_product_blocked
+def _propagate_loop(
+    q0: FloatArray, d: FloatArray, closed: bool, order: int, backward: bool
+) -> tuple[FloatArray, FloatArray]:
+    """Step quaternions and their running product in one loop (compiled by numba): the same
+    arithmetic as :func:`delta_quaternions` then :func:`_cumulative_product_loop`; with
+    ``backward`` each step is inverted (``d`` given in the order of application). Returns the
+    normalised products ``(m + 1, 4)`` and the norms of the unnormalised ones ``(m + 1,)``."""
+    m = d.shape[0]
+    out = np.empty((m + 1, 4))
+    norm = np.empty(m + 1)
+    x, y, z, w = q0[0], q0[1], q0[2], q0[3]
+    norm[0] = math.sqrt(x * x + y * y + z * z + w * w)
+    out[0, 0], out[0, 1], out[0, 2], out[0, 3] = x, y, z, w
+    for k in range(m):
+        dx, dy, dz = d[k, 0], d[k, 1], d[k, 2]
+        th2 = dx * dx + dy * dy + dz * dz
+        if closed:
+            th = math.sqrt(th2)
+            sw = math.cos(0.5 * th)
+            c = 0.5 - th2 / 48.0 if th < 1e-4 else math.sin(0.5 * th) / th
+        else:
+            sw, c, term, fact = 1.0, 0.0, 1.0, 1.0
+            for j in range(1, order + 1):
+                fact *= j
+                if j % 2:
+                    c += 0.5 * term / fact
+                else:
+                    term *= -0.25 * th2
+                    sw += term / fact
+        sx, sy, sz = c * dx, c * dy, c * dz
+        if backward:
+            n2 = sx * sx + sy * sy + sz * sz + sw * sw
+            sx, sy, sz, sw = -sx / n2, -sy / n2, -sz / n2, sw / n2
+        x, y, z, w = (
+            w * sx + x * sw + y * sz - z * sy,
+            w * sy - x * sz + y * sw + z * sx,
+            w * sz + x * sy - y * sx + z * sw,
+            w * sw - x * sx - y * sy - z * sz,
+        )
+        r = math.sqrt(x * x + y * y + z * z + w * w)
+        norm[k + 1] = r
+        out[k + 1, 0], out[k + 1, 1], out[k + 1, 2], out[k + 1, 3] = x / r, y / r, z / r, w / r
+    return out, norm
+
+
+_propagate_compiled: Any = (
+    _numba.njit(cache=True, nogil=True)(_propagate_loop) if _numba is not None else None
 )
 
 
@@ -353,13 +380,33 @@ def propagate(
         q0 = np.asarray(q_start.as_quat(), dtype=np.float64).reshape(4)
     else:
         q0 = check_quaternions(q_start, "q_start").reshape(4)
+    if method not in ("closed", "series"):
+        raise ValueError(f"method: expected 'closed' or 'series', got {method!r}")
+    if method == "series" and order < 1:
+        raise ValueError(f"order: the series needs order >= 1, got {order}")
+    if _propagate_compiled is not None:
+        closed = method == "closed"
+        quat, norm = _propagate_compiled(q0, np.ascontiguousarray(d[start:]), closed, order, False)
+        if start > 0:
+            back = np.ascontiguousarray(d[:start][::-1])
+            qb, nb = _propagate_compiled(q0, back, closed, order, True)
+            quat = np.concatenate([qb[:0:-1], quat])
+            norm = np.concatenate([nb[:0:-1], norm])
+        return Propagation(quat, norm, start, method, order)
+    return _propagate_numpy(q0, d, start, method, order)
+
+
+def _propagate_numpy(
+    q0: FloatArray, d: FloatArray, start: int, method: Method, order: int
+) -> Propagation:
+    """:func:`propagate` without numba: vectorised step quaternions, blocked product."""
     steps = delta_quaternions(d, method, order)
-    raw = np.empty((n, 4))
-    raw[start:] = _cumulative_product(q0, steps[start:])
+    raw = np.empty((d.shape[0] + 1, 4))
+    raw[start:] = _cumulative_product_blocked(q0, steps[start:])
     if start > 0:
-        back = steps[:start][::-1] * np.array([-1.0, -1.0, -1.0, 1.0])  # inverses (unit or not)
+        back = steps[:start][::-1] * np.array([-1.0, -1.0, -1.0, 1.0])  # inverses
         back /= np.einsum("ij,ij->i", back, back)[:, None]
-        raw[: start + 1] = _cumulative_product(q0, back)[::-1]
+        raw[: start + 1] = _cumulative_product_blocked(q0, back)[::-1]
     norm = np.linalg.norm(raw, axis=1)
     return Propagation(raw / norm[:, None], norm, start, method, order)
 
