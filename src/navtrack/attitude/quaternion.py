@@ -421,8 +421,8 @@ def interpolate_attitude(
     t_s : (n,) sample times, s (increasing)
     quat : (n, 4) scalar-last attitudes at ``t_s``
     gyr_rad_s : (n, 3) body-frame rates used for the fraction of the interval, rad/s
-    t_query_s : (m,) query times, s; clipped to ``[t[0], t[-1]]`` (then extrapolated from the
-        end samples by their rate)
+    t_query_s : (m,) query times, s; outside ``[t[0], t[-1]]`` extrapolated from the first or
+        last sample by its rate
 
     Returns
     -------

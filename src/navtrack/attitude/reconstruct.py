@@ -8,6 +8,9 @@
 4. ``filter`` / ``smoother`` — the error-state filter and RTS smoother about the calibrated
    propagation (:mod:`~navtrack.attitude.smoother`).
 
+The first two use the configured step (the paper's third-order series by default); the
+calibration, and the nominal of the filter, use the closed form.
+
 Each estimate is attitudes at the IMU samples plus the rates and the timing offset it assumes,
 so it can be evaluated (and written) on the camera clock: :meth:`Reconstruction.on_camera_clock`.
 """
