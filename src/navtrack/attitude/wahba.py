@@ -98,7 +98,7 @@ class RansacConfig:
     threshold_rad: float = 5e-3
     trials: int = 52
     confidence: float = 0.999
-    chunk: int = 8
+    chunk: int = 16
     degenerate_tol: float = 1e-3
     refine: int = 2
 
