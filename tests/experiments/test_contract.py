@@ -173,7 +173,7 @@ def test_params_of_another_type_are_refused(tmp_path: Path) -> None:
 
 
 def test_unknown_experiment_is_refused(tmp_path: Path) -> None:
-    with pytest.raises(ValueError, match="unknown experiment 'nope'; known: .*ari"):
+    with pytest.raises(ValueError, match=r"unknown experiment 'nope'; known: .*ari"):
         reproduce("nope", ReproduceOptions(out_dir=tmp_path))
 
 
