@@ -37,13 +37,14 @@ def test_reconstruct_from_tables(tmp_path: Path, capsys: pytest.CaptureFixture[s
     out = tmp_path / "pose.csv"
     summary = tmp_path / "s.json"
     args = ["attitude", "reconstruct", str(imu), "--fixes", str(fixes), "--out", str(out)]
-    rc = main([*args, "--json", str(summary), "--estimate", "calibrated"])
+    rc = main([*args, "--json", str(summary), "--estimate", "calibrated", "--t0-gps-s", "1e9"])
     assert rc == 0
     text = capsys.readouterr().out
     assert "20 camera fixes" in text
     pose = pd.read_csv(out)
     assert {"qx", "qy", "qz", "qw", "roll_deg", "pitch_deg", "yaw_deg", "x_m"} <= set(pose)
     assert len(pose) == 2000
+    assert pose["time_gps"].iloc[0].startswith("2011-09-14")  # GPS second 1e9
     s = json.loads(summary.read_text())
     assert s["calibration"]["bias_rad_s"][0] == pytest.approx(0.002, abs=2e-4)
 

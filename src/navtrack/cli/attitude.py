@@ -67,6 +67,13 @@ def register(subparsers: Any) -> None:
         default=None,
         help="GNSS time of attitude time t is t + offset (default: align the first epochs)",
     )
+    rec.add_argument(
+        "--t0-gps-s",
+        type=float,
+        default=0.0,
+        help="GPS time (s) of attitude time 0 for the t_gps_s column (default 0: the recording "
+        "has no absolute time)",
+    )
     rec.add_argument("--json", type=Path, help="write the summary as JSON")
     rec.set_defaults(func=run_reconstruct)
     cmd.set_defaults(func=lambda args: cmd.print_help() or 2)
@@ -184,7 +191,7 @@ def run_reconstruct(args: argparse.Namespace) -> int:
     offset = args.gnss_offset_s
     if offset is None:
         offset = float(gnss.t_s[0] - t_cam[0]) if gnss is not None else 0.0
-    frame = pose_frame(t_cam, est.quat, gnss, gnss_offset_s=offset)
+    frame = pose_frame(t_cam, est.quat, gnss, gnss_offset_s=offset, t0_gps_s=args.t0_gps_s)
     path = write_solution(frame, args.out)
     n_pos = int(np.count_nonzero(frame["status"] == "ok"))
     print(f"wrote      {path}: {args.estimate}, {t_cam.size} epochs, {n_pos} with a GNSS position")
