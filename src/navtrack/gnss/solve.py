@@ -185,11 +185,14 @@ def gauss_newton(
     xtol: float = 1e-4,
     min_measurements: int | None = None,
     rcond: float = 1e-12,
+    gtol: float | None = None,
 ) -> LsqResult:
     """Batched (weighted) Gauss–Newton iteration.
 
     Each epoch iterates ``x <- x + (J^T W J)^-1 J^T W v`` until the step norm is below ``xtol``
     (RTKLIB's ``estpos`` criterion, 1e-4 in the units of ``x``) or ``max_iter`` steps were taken.
+    With ``gtol``, an epoch also stops after the step taken from an iterate whose gradient norm
+    ``||J^T W v||`` is at most ``gtol`` (the stopping rule of Li (2010) step 6 with ``mu = 0``).
     Epochs leave the batch as they converge or fail.
 
     Parameters
@@ -207,6 +210,8 @@ def gauss_newton(
     rcond : float
         A normal matrix (scaled to unit diagonal) whose smallest eigenvalue is below ``rcond``
         times its largest is singular.
+    gtol : float, optional
+        Gradient-norm stopping threshold (units of ``J^T W v``); None: step norm only.
 
     Returns
     -------
@@ -238,6 +243,8 @@ def gauss_newton(
         x[ids] += dx
         iterations[ids] += 1
         done = np.linalg.norm(dx, axis=1) < xtol
+        if gtol is not None:
+            done |= np.linalg.norm(g[go], axis=1) <= gtol
         status[ids[done]] = LsqStatus.CONVERGED
         active = ids[~done]
     return _finish(fun, x, iterations, status, rcond)
