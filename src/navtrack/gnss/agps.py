@@ -58,6 +58,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "HEIGHT_RANGE_M",
+    "MAX_START_CONDITION",
     "SOLVERS",
     "STATUS_NAMES",
     "AgpsConfig",
@@ -352,6 +353,24 @@ class _AgpsModel:
         return v, J, w, valid
 
 
+MAX_START_CONDITION = 1e8
+"""A fix whose five equations (height equation in metres) have a Jacobian at the start with a
+larger condition number is ``singular`` (a well-posed 2-min fix has about 1e2..1e4)."""
+
+
+def _singular_start(problem: AgpsProblem, x0: FloatArray) -> BoolArray:
+    """Fixes whose system is singular at the start: same satellite twice, start at the
+    earth's centre, both epochs with the same geometry."""
+    metric = (WGS84_A_M + problem.height_m) / 2.0
+    model = _AgpsModel(problem, metric, 1.0, 1.0, None)
+    _, J, _, valid = model(x0, np.arange(problem.size))
+    J = np.where(valid[..., None], J, 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sv = np.linalg.svd(J, compute_uv=False)
+        cond = sv[:, 0] / sv[:, -1]
+    return np.asarray(~(cond <= MAX_START_CONDITION) & valid.all(axis=1))
+
+
 def solve_agps(
     problem: AgpsProblem, solver: Solver = "lm", config: AgpsConfig | None = None
 ) -> AgpsResult:
@@ -420,7 +439,9 @@ def solve_agps(
 
     status = np.full(n, AgpsStatus.OK, dtype=np.int8)
     status[lsq.status == LsqStatus.NO_CONVERGENCE] = AgpsStatus.NO_CONVERGENCE
-    status[lsq.status == LsqStatus.SINGULAR] = AgpsStatus.SINGULAR
+    if solver != "lm":  # Marquardt's damped steps exist; its final covariance is not used
+        status[lsq.status == LsqStatus.SINGULAR] = AgpsStatus.SINGULAR
+    status[_singular_start(p, x0)] = AgpsStatus.SINGULAR
     x = lsq.x
     finite = np.isfinite(x).all(axis=1)
     norm = np.linalg.norm(np.where(finite[:, None], x[:, :3], 0.0), axis=1)

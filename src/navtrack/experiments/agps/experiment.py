@@ -23,6 +23,7 @@ from navtrack.experiments.agps.simulation import (
     AgpsExperimentParams,
     default_nav_path,
     simulate_fix_set,
+    solver_config,
 )
 from navtrack.experiments.agps.summary import findings, height_key, interval_key, summarize_cases
 from navtrack.experiments.agps.tables import summary_lines, tables_markdown, write_figures
@@ -80,8 +81,7 @@ class AgpsExperiment(Experiment[AgpsExperimentParams, _RunResult]):
             intervals_min=params.intervals_min,
             fixes=params.real_fixes,
             base_distance_m=params.base_distance_m,
-            prior_sigma_m=params.prior_sigma_m,
-            sigma_pr_m=params.sigma_noise_m,
+            config=solver_config(params),
             elmask_deg=params.elmask_deg,
         )
         heights = [height_key(float(o), offset=True) for o in offsets]

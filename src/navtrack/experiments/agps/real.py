@@ -16,11 +16,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from navtrack.geodesy import ecef_to_geodetic, enu_rotation
+
+if TYPE_CHECKING:
+    from navtrack.gnss.agps import AgpsConfig
 
 __all__ = ["REAL_DATA_SETS", "RealDataSet", "real_data_study"]
 
@@ -122,8 +125,7 @@ def real_data_study(
     intervals_min: tuple[float, ...],
     fixes: int,
     base_distance_m: tuple[float, float],
-    prior_sigma_m: float,
-    sigma_pr_m: float,
+    config: AgpsConfig,
     elmask_deg: float = 15.0,
 ) -> tuple[dict[str, Any], list[str]]:
     """Solve sampled two-satellite fixes of every shared data set found.
@@ -141,8 +143,8 @@ def real_data_study(
         Fixes per data set and interval (fewer when fewer combinations exist).
     base_distance_m : (float, float)
         Base-station distance range (m).
-    prior_sigma_m, sigma_pr_m : float
-        ``map`` solver prior and pseudorange standard deviations (m).
+    config : AgpsConfig
+        Solver options.
     elmask_deg : float
 
     Returns
@@ -156,7 +158,6 @@ def real_data_study(
     """
     from navtrack.experiments.agps.simulation import SOLVER_NAMES
     from navtrack.gnss.agps import (
-        AgpsConfig,
         AgpsStatus,
         assisted_pseudoranges,
         problem_from_measurements,
@@ -170,7 +171,6 @@ def real_data_study(
     )
 
     cfg = SppConfig(systems="G", elmask_deg=elmask_deg)
-    acfg = AgpsConfig(prior_sigma_m=prior_sigma_m, sigma_pr_m=sigma_pr_m)
     n_s, n_i, n_h = len(SOLVER_NAMES), len(intervals_min), len(height_offsets_m)
     rows_err, rows_it, rows_st, rows_set = [], [], [], []
     counts: dict[str, dict[str, int]] = {}
@@ -216,7 +216,7 @@ def real_data_study(
             for hh, dh in enumerate(height_offsets_m):
                 prob = problem_from_measurements(meas, y, ep, sv, h_ref + dh, cells)
                 for j, solver in enumerate(SOLVER_NAMES):
-                    res = solve_agps(prob, solver, acfg)  # type: ignore[arg-type]
+                    res = solve_agps(prob, solver, config)  # type: ignore[arg-type]
                     ok = res.status == AgpsStatus.OK
                     d = np.linalg.norm(res.pos_m - ref, axis=1)
                     err[:n, j, ii, hh] = np.where(ok, d, np.nan)

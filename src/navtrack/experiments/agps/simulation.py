@@ -36,12 +36,15 @@ import math
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from navtrack._typing import FloatArray
 from navtrack.geodesy import C_MPS, azimuth_elevation, enu_rotation, geodetic_to_ecef
+
+if TYPE_CHECKING:
+    from navtrack.gnss.agps import AgpsConfig
 
 __all__ = [
     "PAPER_HEIGHTS_M",
@@ -50,6 +53,7 @@ __all__ = [
     "AgpsExperimentParams",
     "default_nav_path",
     "simulate_fix_set",
+    "solver_config",
 ]
 
 PAPER_SITE_LLH = (39.959103, 116.352853, 56.23)
@@ -90,6 +94,10 @@ class AgpsExperimentParams:
         Receiver clock bias bound (m) per epoch.
     prior_sigma_m : float
         ``map`` solver: prior standard deviation of the cell position (m).
+    lm_ellipsoid_scale : float
+        Factor on the height equation in Marquardt's objective
+        (:attr:`navtrack.gnss.agps.AgpsConfig.lm_ellipsoid_scale`): 1 is the paper's
+        dimensionless ``f_5``; 3.19e6 (``(a + h) / 2``) puts it in metres of height.
     real_data : bool
         Run the real-data study on the shared stations and the Android log.
     real_fixes : int
@@ -109,6 +117,7 @@ class AgpsExperimentParams:
     sigma_orbit_m: float = 1.0
     clock_bias_m: float = 300.0
     prior_sigma_m: float = 3000.0
+    lm_ellipsoid_scale: float = 1.0
     real_data: bool = True
     real_fixes: int = 300
 
@@ -120,6 +129,18 @@ class AgpsExperimentParams:
             raise ValueError(f"intervals_min: expected positive intervals, got {self.intervals_min}")
         if not self.heights_m:
             raise ValueError("heights_m: expected at least one assumed height")
+
+
+def solver_config(params: AgpsExperimentParams) -> AgpsConfig:
+    """The solver options of the study: the paper's Marquardt parameters, the MAP prior and
+    pseudorange sigma, the scale of the height equation."""
+    from navtrack.gnss.agps import AgpsConfig
+
+    return AgpsConfig(
+        prior_sigma_m=params.prior_sigma_m,
+        sigma_pr_m=params.sigma_noise_m,
+        lm_ellipsoid_scale=params.lm_ellipsoid_scale,
+    )
 
 
 def default_nav_path() -> Path:
@@ -183,7 +204,7 @@ def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> 
         NaN where not ``ok``), linear solves, :class:`~navtrack.gnss.agps.AgpsStatus`;
         ``sats`` (the pair), ``t_gps_s`` (first epoch), ``base_distance_m``.
     """
-    from navtrack.gnss.agps import AgpsConfig, AgpsProblem, AgpsStatus, solve_agps
+    from navtrack.gnss.agps import AgpsProblem, AgpsStatus, solve_agps
     from navtrack.gnss.corrections import geometric_range
 
     nav = params.nav if params.nav is not None else default_nav_path()
@@ -232,7 +253,7 @@ def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> 
         start_xyz_m=np.repeat(start[None], n, 0),
         usable=np.ones((n, 4), dtype=bool),
     )
-    config = AgpsConfig(prior_sigma_m=params.prior_sigma_m, sigma_pr_m=params.sigma_noise_m)
+    config = solver_config(params)
     shape = (len(SOLVER_NAMES), n_i, n_h)
     out: dict[str, Any] = {
         "error_m": np.full(shape, np.nan),
