@@ -59,6 +59,7 @@ if TYPE_CHECKING:
 __all__ = [
     "HEIGHT_RANGE_M",
     "MAX_START_CONDITION",
+    "XTOL_M",
     "SOLVERS",
     "STATUS_NAMES",
     "AgpsConfig",
@@ -190,7 +191,9 @@ class AgpsProblem:
     usable: BoolArray
 
     def __post_init__(self) -> None:
-        b = np.asarray(self.y_m).shape[0] if np.ndim(self.y_m) == 2 else -1
+        for name in ("t_gps_s", "sat_pos_m", "y_m", "height_m", "start_xyz_m"):
+            object.__setattr__(self, name, np.array(getattr(self, name), dtype=float))
+        b = self.y_m.shape[0] if self.y_m.ndim == 2 else -1
         shapes = {
             "t_gps_s": (b, 2),
             "sat_pos_m": (b, 4, 3),
@@ -353,6 +356,11 @@ class _AgpsModel:
         return v, J, w, valid
 
 
+XTOL_M = 1e-4
+"""Safeguard of ``gn`` and ``map`` beyond the paper: a step shorter than this (m, RTKLIB's
+``estpos`` threshold) also ends the iteration, where rounding keeps ``||A^T f||`` above a tiny
+``epsilon``."""
+
 MAX_START_CONDITION = 1e8
 """A fix whose five equations (height equation in metres) have a Jacobian at the start with a
 larger condition number is ``singular`` (a well-posed 2-min fix has about 1e2..1e4)."""
@@ -411,7 +419,7 @@ def solve_agps(
     metric = (WGS84_A_M + p.height_m) / 2.0  # f5 in metres of height
     if solver == "gn":
         model = _AgpsModel(p, metric, 1.0, 1.0, None)
-        lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=0.0, gtol=cfg.eps)
+        lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=XTOL_M, gtol=cfg.eps)
     elif solver == "lm":
         scale = np.full(n, cfg.lm_ellipsoid_scale)
         model = _AgpsModel(p, scale, 1.0, 1.0, None)
@@ -435,7 +443,7 @@ def solve_agps(
             cfg.prior_sigma_m**-2,
         )
         grad_tol = cfg.eps * cfg.sigma_pr_m**-2  # epsilon in metres of pseudorange
-        lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=0.0, gtol=grad_tol)
+        lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=XTOL_M, gtol=grad_tol)
 
     status = np.full(n, AgpsStatus.OK, dtype=np.int8)
     status[lsq.status == LsqStatus.NO_CONVERGENCE] = AgpsStatus.NO_CONVERGENCE
