@@ -58,7 +58,6 @@ if TYPE_CHECKING:
 
 __all__ = [
     "HEIGHT_RANGE_M",
-    "MAX_START_CONDITION",
     "XTOL_M",
     "SOLVERS",
     "STATUS_NAMES",
@@ -361,22 +360,18 @@ XTOL_M = 1e-4
 ``estpos`` threshold) also ends the iteration, where rounding keeps ``||A^T f||`` above a tiny
 ``epsilon``."""
 
-MAX_START_CONDITION = 1e8
-"""A fix whose five equations (height equation in metres) have a Jacobian at the start with a
-larger condition number is ``singular`` (a well-posed 2-min fix has about 1e2..1e4)."""
-
-
 def _singular_start(problem: AgpsProblem, x0: FloatArray) -> BoolArray:
-    """Fixes whose system is singular at the start: same satellite twice, start at the
-    earth's centre, both epochs with the same geometry."""
+    """Fixes whose five equations (height equation in metres) are singular at the start — the
+    same satellite twice, a start at the earth's centre, two epochs of the same geometry — by
+    the singularity test of the Gauss–Newton kernel (``rcond = 1e-12`` on the scaled normal
+    matrix)."""
+    from navtrack.gnss.solve import _singular
+
     metric = (WGS84_A_M + problem.height_m) / 2.0
     model = _AgpsModel(problem, metric, 1.0, 1.0, None)
     _, J, _, valid = model(x0, np.arange(problem.size))
     J = np.where(valid[..., None], J, 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sv = np.linalg.svd(J, compute_uv=False)
-        cond = sv[:, 0] / sv[:, -1]
-    return np.asarray(~(cond <= MAX_START_CONDITION) & valid.all(axis=1))
+    return np.asarray(_singular(np.einsum("bmp,bmq->bpq", J, J), 1e-12) & valid.all(axis=1))
 
 
 def solve_agps(

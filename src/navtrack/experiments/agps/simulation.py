@@ -44,7 +44,7 @@ from navtrack._typing import FloatArray
 from navtrack.geodesy import C_MPS, azimuth_elevation, enu_rotation, geodetic_to_ecef
 
 if TYPE_CHECKING:
-    from navtrack.gnss.agps import AgpsConfig
+    from navtrack.gnss.agps import AgpsConfig, AgpsProblem
 
 __all__ = [
     "PAPER_HEIGHTS_M",
@@ -52,6 +52,7 @@ __all__ = [
     "PAPER_SITE_LLH",
     "AgpsExperimentParams",
     "default_nav_path",
+    "fix_set_problem",
     "simulate_fix_set",
     "solver_config",
 ]
@@ -188,8 +189,10 @@ def _states(
     return st.pos_m, st.valid & (st.svh == 0)
 
 
-def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> dict[str, Any]:
-    """One fix set solved for every interval, assumed height and solver.
+def fix_set_problem(
+    params: AgpsExperimentParams, rng: np.random.Generator
+) -> tuple[AgpsProblem, FloatArray, dict[str, Any]]:
+    """Draw one fix set: the fixes of every interval and assumed height (interval-major).
 
     Parameters
     ----------
@@ -198,13 +201,15 @@ def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> 
 
     Returns
     -------
-    dict
-        ``error_m``, ``horizontal_m``, ``iterations``, ``status``: arrays of shape
-        (solvers, intervals, heights) — 3-D and horizontal distance of the fix to the truth (m,
-        NaN where not ``ok``), linear solves, :class:`~navtrack.gnss.agps.AgpsStatus`;
+    problem : AgpsProblem
+        ``intervals x heights`` fixes sharing the first epoch, the satellites, the errors and
+        the base station.
+    truth_m : ndarray, shape (3,)
+        The true position (ECEF, m).
+    meta : dict
         ``sats`` (the pair), ``t_gps_s`` (first epoch), ``base_distance_m``.
     """
-    from navtrack.gnss.agps import AgpsProblem, AgpsStatus, solve_agps
+    from navtrack.gnss.agps import AgpsProblem
     from navtrack.gnss.corrections import geometric_range
 
     nav = params.nav if params.nav is not None else default_nav_path()
@@ -253,6 +258,32 @@ def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> 
         start_xyz_m=np.repeat(start[None], n, 0),
         usable=np.ones((n, 4), dtype=bool),
     )
+    meta = {"sats": tuple(sats[i] for i in pair), "t_gps_s": t1, "base_distance_m": dist}
+    return problem, truth, meta
+
+
+def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> dict[str, Any]:
+    """One fix set (:func:`fix_set_problem`) solved for every interval, assumed height and
+    solver.
+
+    Parameters
+    ----------
+    params : AgpsExperimentParams
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    dict
+        ``error_m``, ``horizontal_m``, ``iterations``, ``status``: arrays of shape
+        (solvers, intervals, heights) — 3-D and horizontal distance of the fix to the truth (m,
+        NaN where not ``ok``), linear solves, :class:`~navtrack.gnss.agps.AgpsStatus`;
+        ``sats`` (the pair), ``t_gps_s`` (first epoch), ``base_distance_m``.
+    """
+    from navtrack.gnss.agps import AgpsStatus, solve_agps
+
+    problem, truth, meta = fix_set_problem(params, rng)
+    n_i, n_h = len(params.intervals_min), len(params.heights_m)
+    lat, lon = math.radians(params.site_llh[0]), math.radians(params.site_llh[1])
     config = solver_config(params)
     shape = (len(SOLVER_NAMES), n_i, n_h)
     out: dict[str, Any] = {
@@ -260,9 +291,7 @@ def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> 
         "horizontal_m": np.full(shape, np.nan),
         "iterations": np.zeros(shape, dtype=np.int64),
         "status": np.zeros(shape, dtype=np.int8),
-        "sats": tuple(sats[i] for i in pair),
-        "t_gps_s": t1,
-        "base_distance_m": dist,
+        **meta,
     }
     rot = enu_rotation(lat, lon)
     for j, solver in enumerate(SOLVER_NAMES):
