@@ -133,13 +133,20 @@ class AgpsExperimentParams:
 
 
 def solver_config(params: AgpsExperimentParams) -> AgpsConfig:
-    """The solver options of the study: the paper's Marquardt parameters, the MAP prior and
-    pseudorange sigma, the scale of the height equation."""
+    """The solver options of the study: the paper's Marquardt parameters, the scale of the
+    height equation, the MAP prior and pseudorange sigma (the root sum square of the error
+    model's zenith-level terms, at least 0.1 m)."""
     from navtrack.gnss.agps import AgpsConfig
 
+    sigma = math.hypot(
+        params.sigma_noise_m,
+        params.sigma_iono_zenith_m,
+        params.sigma_tropo_zenith_m,
+        params.sigma_orbit_m,
+    )
     return AgpsConfig(
         prior_sigma_m=params.prior_sigma_m,
-        sigma_pr_m=params.sigma_noise_m,
+        sigma_pr_m=max(sigma, 0.1),
         lm_ellipsoid_scale=params.lm_ellipsoid_scale,
     )
 

@@ -148,7 +148,7 @@ def findings(table: dict[str, Any], true_height: str, intervals: Sequence[str]) 
         ``lm_below_gn`` (Marquardt's mean error below half of Gauss–Newton's: "well below");
         ``iteration_ratio`` (Marquardt / Gauss–Newton mean iterations) and ``ratio_below_1_5``;
         ``gain_m`` per interval (Gauss–Newton minus Marquardt mean error) and
-        ``gain_shrinks`` (it decreases with the interval, first to last).
+        ``gain_shrinks`` (Marquardt gains at the first interval and gains less at the last).
     """
 
     def mean(solver: str, interval: str, key: str = "mean_m") -> float:
@@ -171,5 +171,5 @@ def findings(table: dict[str, Any], true_height: str, intervals: Sequence[str]) 
         "iteration_ratio": ratio,
         "ratio_below_1_5": bool(ratio < 1.5),
         "gain_m": gain,
-        "gain_shrinks": bool(len(values) > 1 and values[-1] < values[0]),
+        "gain_shrinks": bool(len(values) > 1 and values[0] > 0.0 and values[-1] < values[0]),
     }
