@@ -170,7 +170,8 @@ def test_map_with_huge_prior_variance_equals_gauss_newton(gps_sats) -> None:
     prob = _problem(t, sat, truth, 2, 56.0, _cell(truth, -3000.0, 1000.0), noise)
     gn = solve_agps(prob, "gn", AgpsConfig(eps=1e-9))
     mp = solve_agps(prob, "map", AgpsConfig(eps=1e-9, prior_sigma_m=1e8))
-    assert (gn.status == AgpsStatus.OK).all() and (mp.status == AgpsStatus.OK).all()
+    assert (gn.status == AgpsStatus.OK).all()
+    assert (mp.status == AgpsStatus.OK).all()
     np.testing.assert_allclose(mp.pos_m, gn.pos_m, atol=1e-3)
     # a tight prior pulls the fix to the cell: the prior is honoured
     tight = solve_agps(prob, "map", AgpsConfig(eps=1e-9, prior_sigma_m=0.01))
@@ -198,9 +199,9 @@ def test_bad_input_raises_naming_the_parameter(gps_sats) -> None:
     fields = {name: getattr(good, name) for name in AgpsProblem.__slots__}
     with pytest.raises(ValueError, match="same epoch twice"):
         AgpsProblem(**(fields | {"t_gps_s": np.array([[t[0], t[0]]])}))
-    with pytest.raises(ValueError, match="height_m.*outside the earth's range"):
+    with pytest.raises(ValueError, match=r"height_m.*outside the earth's range"):
         AgpsProblem(**(fields | {"height_m": np.array([56230.0])}))
-    with pytest.raises(ValueError, match="height_m.*outside"):
+    with pytest.raises(ValueError, match=r"height_m.*outside"):
         AgpsProblem(**(fields | {"height_m": np.array([np.nan])}))
     with pytest.raises(ValueError, match="start_xyz_m"):
         AgpsProblem(**(fields | {"start_xyz_m": np.full((1, 3), np.nan)}))

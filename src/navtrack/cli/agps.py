@@ -105,7 +105,9 @@ def run_agps(args: argparse.Namespace) -> int:
         raise SystemExit(f"navtrack agps: --sats must be GPS satellites (Gnn), got {args.sats!r}")
     lat, lon = args.approx
     if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 360.0):
-        raise SystemExit(f"navtrack agps: --approx {lat:g} {lon:g} is not latitude/longitude in deg")
+        raise SystemExit(
+            f"navtrack agps: --approx {lat:g} {lon:g} is not latitude/longitude in deg"
+        )
     times = [_gps_time(t) for t in args.epochs]
     if _is_android(args.obs):
         from navtrack.gnss.android import read_gnsslogger
@@ -133,7 +135,9 @@ def run_agps(args: argparse.Namespace) -> int:
             raise SystemExit(f"navtrack agps: {args.obs}: no epoch at {text} (file spans {span})")
         epochs.append(k)
     if epochs[0] == epochs[1]:
-        raise SystemExit(f"navtrack agps: --epochs {args.epochs[0]} {args.epochs[1]}: same epoch twice")
+        raise SystemExit(
+            f"navtrack agps: --epochs {args.epochs[0]} {args.epochs[1]}: same epoch twice"
+        )
     cols = []
     for s in sats:
         if s not in meas.sats:

@@ -58,9 +58,9 @@ if TYPE_CHECKING:
 
 __all__ = [
     "HEIGHT_RANGE_M",
-    "XTOL_M",
     "SOLVERS",
     "STATUS_NAMES",
+    "XTOL_M",
     "AgpsConfig",
     "AgpsProblem",
     "AgpsResult",
@@ -360,6 +360,7 @@ XTOL_M = 1e-4
 ``estpos`` threshold) also ends the iteration, where rounding keeps ``||A^T f||`` above a tiny
 ``epsilon``."""
 
+
 def _singular_start(problem: AgpsProblem, x0: FloatArray) -> BoolArray:
     """Fixes whose five equations (height equation in metres) are singular at the start — the
     same satellite twice, a start at the earth's centre, two epochs of the same geometry — by
@@ -446,7 +447,7 @@ def solve_agps(
         status[lsq.status == LsqStatus.SINGULAR] = AgpsStatus.SINGULAR
     status[_singular_start(p, x0)] = AgpsStatus.SINGULAR
     x = lsq.x
-    finite = np.isfinite(x).all(axis=1)
+    finite = np.asarray(np.isfinite(x).all(axis=1))
     norm = np.linalg.norm(np.where(finite[:, None], x[:, :3], 0.0), axis=1)
     lo, hi = NEAR_SURFACE_NORM_M
     off = ~finite | (norm < lo) | (norm > hi)

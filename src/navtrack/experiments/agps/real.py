@@ -151,7 +151,8 @@ def real_data_study(
     -------
     arrays : dict
         ``error_m``, ``iterations``, ``status`` of shape (n, solvers, intervals, heights),
-        padded with NaN / 0 / status -1 where an interval has fewer fixes, and ``set`` (n,) the data set of each
+        padded with NaN / 0 / status -1 where an interval has fewer fixes, and ``set`` (n,)
+        the data set of each
         row; ``n_fixes[name][interval]`` counts.
     skipped : list of str
         Data sets not run, with the reason.

@@ -127,7 +127,9 @@ class AgpsExperimentParams:
         if not 0.0 <= lo <= hi:
             raise ValueError(f"base_distance_m: expected 0 <= lo <= hi, got {self.base_distance_m}")
         if not self.intervals_min or min(self.intervals_min) <= 0.0:
-            raise ValueError(f"intervals_min: expected positive intervals, got {self.intervals_min}")
+            raise ValueError(
+                f"intervals_min: expected positive intervals, got {self.intervals_min}"
+            )
         if not self.heights_m:
             raise ValueError("heights_m: expected at least one assumed height")
 

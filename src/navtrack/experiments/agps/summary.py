@@ -18,8 +18,8 @@ from navtrack._typing import ArrayLike
 
 __all__ = [
     "PAPER_MEAN_ITERATIONS",
-    "PAPER_TABLE_I_MEAN_M",
     "PAPER_TABLE_II_MEAN_M",
+    "PAPER_TABLE_I_MEAN_M",
     "error_statistics",
     "findings",
     "height_key",
@@ -55,7 +55,9 @@ def interval_key(interval_min: float) -> str:
     return f"{interval_min:g}"
 
 
-def error_statistics(error_m: ArrayLike, iterations: ArrayLike, status: ArrayLike) -> dict[str, Any]:
+def error_statistics(
+    error_m: ArrayLike, iterations: ArrayLike, status: ArrayLike
+) -> dict[str, Any]:
     """The paper's statistics of a set of fixes.
 
     Parameters

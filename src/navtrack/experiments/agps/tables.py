@@ -25,7 +25,9 @@ def _f(value: Any, digits: int = 1) -> str:
     return str(value)
 
 
-def _error_table(study: dict[str, Any], solver: str, interval: str, paper: dict[str, float] | None) -> list[str]:
+def _error_table(
+    study: dict[str, Any], solver: str, interval: str, paper: dict[str, float] | None
+) -> list[str]:
     head = "| H/m | 90 % | 80 % | 70 % | 60 % | 50 % | mean | n | not ok |"
     rule = "|---|---|---|---|---|---|---|---|---|"
     if paper is not None:
@@ -50,7 +52,8 @@ def _error_table(study: dict[str, Any], solver: str, interval: str, paper: dict[
 
 def _iteration_table(study: dict[str, Any], interval: str, paper: bool) -> list[str]:
     lines = [
-        "| H/m | Gauss–Newton | Marquardt | ratio | MAP |" + (" paper GN | paper LM |" if paper else ""),
+        "| H/m | Gauss–Newton | Marquardt | ratio | MAP |"
+        + (" paper GN | paper LM |" if paper else ""),
         "|---|---|---|---|---|" + ("---|---|" if paper else ""),
     ]
     for height in study.get("gn", {}):
@@ -89,7 +92,8 @@ def _verdict(f: dict[str, Any]) -> list[str]:
     gain = ", ".join(f"{k} min {_f(v)} m" for k, v in f["gain_m"].items())
     return [
         f"- Marquardt mean error at {f['interval_min']} min, height {f['height']}: "
-        f"{_f(f['lm_mean_m'])} m vs Gauss–Newton {_f(f['gn_mean_m'])} m (MAP {_f(f['map_mean_m'])} m)"
+        f"{_f(f['lm_mean_m'])} m vs Gauss–Newton {_f(f['gn_mean_m'])} m "
+        f"(MAP {_f(f['map_mean_m'])} m)"
         f" — well below (< half): **{'holds' if f['lm_below_gn'] else 'does not hold'}**.",
         f"- Iteration ratio Marquardt / Gauss–Newton {_f(f['iteration_ratio'], 3)} "
         f"— below 1.5: **{'holds' if f['ratio_below_1_5'] else 'does not hold'}**.",
@@ -127,11 +131,11 @@ def tables_markdown(results: dict[str, Any]) -> str:
         ("Table II b — MAP with the cell prior (beyond the paper)", "map", None),
     ):
         lines += [f"## {title}, simulation, {first} min", ""]
-        lines += _error_table(sim, solver, first, paper) + [""]
+        lines += [*_error_table(sim, solver, first, paper), ""]
     lines += [f"## Table III — mean iterations, simulation, {first} min", ""]
-    lines += _iteration_table(sim, first, True) + [""]
+    lines += [*_iteration_table(sim, first, True), ""]
     lines += ["## Figs. 2 and 3 — mean error (m) vs interval, simulation", ""]
-    lines += _interval_table(sim, ["56", "76", "96", "156"]) + [""]
+    lines += [*_interval_table(sim, ["56", "76", "96", "156"]), ""]
     real = results.get("real_data") or {}
     if real.get("gn"):
         lines += [
@@ -148,11 +152,11 @@ def tables_markdown(results: dict[str, Any]) -> str:
         ]
         for title, solver in (("Gauss–Newton", "gn"), ("Marquardt", "lm"), ("MAP", "map")):
             lines += [f"### {title}, real data, {first} min", ""]
-            lines += _error_table(real, solver, first, None) + [""]
+            lines += [*_error_table(real, solver, first, None), ""]
         lines += [f"### Mean iterations, real data, {first} min", ""]
-        lines += _iteration_table(real, first, False) + [""]
+        lines += [*_iteration_table(real, first, False), ""]
         lines += ["### Mean error (m) vs interval, real data", ""]
-        lines += _interval_table(real, ["+0", "+20", "+40", "+100"]) + [""]
+        lines += [*_interval_table(real, ["+0", "+20", "+40", "+100"]), ""]
         per_set = results.get("real_data_sets", {})
         if per_set:
             lines += [
@@ -213,7 +217,9 @@ def write_figures(results: dict[str, Any], out_dir: Path) -> list[Path]:
             for solver, style in (("gn", "o-"), ("lm", "s-"), ("map", "^--")):
                 cases = study[solver].get(height, {})
                 xs = [float(k) for k in cases]
-                ys = [c["mean_m"] if c["mean_m"] is not None else float("nan") for c in cases.values()]
+                ys = [
+                    c["mean_m"] if c["mean_m"] is not None else float("nan") for c in cases.values()
+                ]
                 ax.plot(xs, ys, style, label=_LABEL[solver])
             where = "offset" if study_key == "real_data" else "height"
             ax.set_title(f"{study_key.replace('_', ' ')}, {where}: {height} m")
