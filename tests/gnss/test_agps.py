@@ -326,3 +326,27 @@ def test_problem_from_measurements_real_fixes_and_bad_indices() -> None:
             meas, y, eps[:1], np.array([[both[0], missing[0]]]), 68.4, cell
         )
         assert solve_agps(p2, "lm").status[0] == AgpsStatus.MISSING_MEASUREMENT
+
+
+def test_marquardt_needs_the_clocks_the_cell_start_gives(gps_sats) -> None:
+    """Receiver clocks of hundreds of km (real receivers: 0759, SEPT): the paper's zero start
+    leaves Marquardt tens of km off — damping slows the clock steps and the dimensionless height
+    equation does not hold the position — while clocks started from the cell bring it back to
+    the cell's neighbourhood."""
+    t, sat = gps_sats
+    truth = _on_height_surface(SITE[0], SITE[1], SITE[2])
+    noise = np.random.default_rng(2).normal(0.0, 5.0, (10, 4))
+    cell = _cell(truth, 1500.0, 1500.0)
+    prob = _problem(t, sat, truth, 1, 56.0, cell, noise, (4.0e5, -1.3e5))
+    zero = solve_agps(prob, "lm")
+    from_cell = solve_agps(prob, "lm", AgpsConfig(clock_start="cell"))
+    err_zero = np.linalg.norm(zero.pos_m - truth, axis=1)
+    err_cell = np.linalg.norm(from_cell.pos_m - truth, axis=1)
+    assert np.nanmedian(err_zero) > 10_000.0
+    assert np.nanmedian(err_cell) < 3_000.0
+    # Gauss–Newton's clock steps are exact (the clocks enter linearly): the start does not matter
+    gn_zero = solve_agps(prob, "gn")
+    gn_cell = solve_agps(prob, "gn", AgpsConfig(clock_start="cell"))
+    np.testing.assert_allclose(gn_zero.pos_m, gn_cell.pos_m, atol=1e-2)
+    with pytest.raises(ValueError, match="clock_start"):
+        AgpsConfig(clock_start="mean")  # type: ignore[arg-type]

@@ -125,6 +125,11 @@ class AgpsConfig:
         ``map``: standard deviation (m) of a corrected pseudorange.
     sigma_height_m : float
         ``map``: standard deviation (m) of the assumed height.
+    clock_start : {"zero", "cell"}
+        Start of the clock biases: ``zero`` (the paper's step 1) or ``cell``, beyond the paper,
+        the mean over the epoch's two satellites of ``P - |X_S - R_cell|`` (what a receiver
+        knows before any iteration; it matters to Marquardt, whose damping also slows the
+        clock steps, when the receiver clock is kilometres off).
     """
 
     mu1: float = 0.1
@@ -135,6 +140,7 @@ class AgpsConfig:
     prior_sigma_m: float = 3000.0
     sigma_pr_m: float = 5.0
     sigma_height_m: float = 20.0
+    clock_start: Literal["zero", "cell"] = "zero"
 
     def __post_init__(self) -> None:
         for name in ("mu1", "eps", "prior_sigma_m", "sigma_pr_m", "sigma_height_m"):
@@ -143,6 +149,8 @@ class AgpsConfig:
                 raise ValueError(f"{name}: expected a finite positive number, got {value}")
         if not self.beta > 1.0:
             raise ValueError(f"beta: growth factor must be > 1, got {self.beta}")
+        if self.clock_start not in ("zero", "cell"):
+            raise ValueError(f"clock_start: expected 'zero' or 'cell', got {self.clock_start!r}")
         if self.max_iter < 1:
             raise ValueError(f"max_iter: expected >= 1, got {self.max_iter}")
         if not (math.isfinite(self.lm_ellipsoid_scale) and self.lm_ellipsoid_scale > 0.0):
@@ -412,6 +420,13 @@ def solve_agps(
     n = p.size
     x0 = np.zeros((n, 5))
     x0[:, :3] = p.start_xyz_m
+    if cfg.clock_start == "cell":
+        from navtrack.gnss.corrections import geometric_range
+
+        rho, _ = geometric_range(p.sat_pos_m, p.start_xyz_m[:, None, :])
+        offset = np.where(p.usable, p.y_m - rho, 0.0)
+        x0[:, 3] = 0.5 * (offset[:, 0] + offset[:, 1])
+        x0[:, 4] = 0.5 * (offset[:, 2] + offset[:, 3])
     metric = (WGS84_A_M + p.height_m) / 2.0  # f5 in metres of height
     if solver == "gn":
         model = _AgpsModel(p, metric, 1.0, 1.0, None)

@@ -36,7 +36,7 @@ import math
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -99,6 +99,9 @@ class AgpsExperimentParams:
         Factor on the height equation in Marquardt's objective
         (:attr:`navtrack.gnss.agps.AgpsConfig.lm_ellipsoid_scale`): 1 is the paper's
         dimensionless ``f_5``; 3.19e6 (``(a + h) / 2``) puts it in metres of height.
+    clock_start : {"zero", "cell"}
+        Start of the clock biases (:attr:`navtrack.gnss.agps.AgpsConfig.clock_start`; the
+        paper: zero).
     real_data : bool
         Run the real-data study on the shared stations and the Android log.
     real_fixes : int
@@ -119,6 +122,7 @@ class AgpsExperimentParams:
     clock_bias_m: float = 300.0
     prior_sigma_m: float = 3000.0
     lm_ellipsoid_scale: float = 1.0
+    clock_start: Literal["zero", "cell"] = "zero"
     real_data: bool = True
     real_fixes: int = 300
 
@@ -150,6 +154,7 @@ def solver_config(params: AgpsExperimentParams) -> AgpsConfig:
         prior_sigma_m=params.prior_sigma_m,
         sigma_pr_m=max(sigma, 0.1),
         lm_ellipsoid_scale=params.lm_ellipsoid_scale,
+        clock_start=params.clock_start,
     )
 
 
