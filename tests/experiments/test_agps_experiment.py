@@ -133,3 +133,12 @@ def test_real_data_study_on_the_shared_data(gnss_data: Path) -> None:
     # real two-satellite Gauss–Newton fixes land within kilometres of the reference
     assert np.nanmedian(err[gn_ok, 0, 0, 0]) < 3000.0
     assert not math.isnan(float(np.nanmedian(err[gn_ok, 0, 0, 0])))
+
+
+def test_parameters_refuse_bad_values(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="nav: navigation file"):
+        AgpsExperimentParams(nav=tmp_path / "missing.n")
+    with pytest.raises(ValueError, match="base_distance_m"):
+        AgpsExperimentParams(base_distance_m=(5000.0, 1000.0))
+    with pytest.raises(ValueError, match="intervals_min"):
+        AgpsExperimentParams(intervals_min=(0.0, 2.0))

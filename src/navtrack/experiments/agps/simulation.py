@@ -136,6 +136,8 @@ class AgpsExperimentParams:
             )
         if not self.heights_m:
             raise ValueError("heights_m: expected at least one assumed height")
+        if self.nav is not None and not Path(self.nav).is_file():
+            raise ValueError(f"nav: navigation file {self.nav} not found")
 
 
 def solver_config(params: AgpsExperimentParams) -> AgpsConfig:
