@@ -121,7 +121,8 @@ def _singular(N: FloatArray, rcond: float) -> BoolArray:
     The scaled matrix has a unit diagonal, so its largest eigenvalue is at most ``P`` and its
     smallest at least ``det / P^(P-1)``: a determinant above ``rcond P^P`` proves it regular
     without an eigen-decomposition (the batched LU is several times cheaper); only the others
-    are decided by their eigenvalues.
+    are decided by their eigenvalues. The decisions are those of the eigenvalue test, except
+    where ``rcond`` is within rounding of machine epsilon and the eigenvalue is itself noise.
     """
     d = np.sqrt(np.einsum("bpp->bp", N))
     with np.errstate(divide="ignore", invalid="ignore"):
