@@ -25,7 +25,13 @@ from navtrack.experiments.agps.simulation import (
     simulate_fix_set,
     solver_config,
 )
-from navtrack.experiments.agps.summary import findings, height_key, interval_key, summarize_cases
+from navtrack.experiments.agps.summary import (
+    error_statistics,
+    findings,
+    height_key,
+    interval_key,
+    summarize_cases,
+)
 from navtrack.experiments.agps.tables import summary_lines, tables_markdown, write_figures
 from navtrack.experiments.contract import Experiment, ExperimentContext, ExtraResult, Outcome
 
@@ -57,6 +63,20 @@ class AgpsExperiment(Experiment[AgpsExperimentParams, _RunResult]):
             stack("error_m"), stack("iterations"), stack("status"), SOLVER_NAMES, heights, intervals
         )
         true_h = height_key(min(params.heights_m, key=lambda h: abs(h - params.site_llh[2])))
+        near_shape = (0, len(SOLVER_NAMES), len(intervals))
+
+        def near(key: str) -> np.ndarray:
+            arr = np.stack([r[key] for r in runs]) if runs else np.zeros(near_shape)
+            return arr[..., None]
+
+        near_cell = summarize_cases(
+            near("near_error_m"),
+            near("near_iterations"),
+            near("near_status"),
+            SOLVER_NAMES,
+            [true_h],
+            intervals,
+        )
         nav = params.nav if params.nav is not None else default_nav_path()
         return {
             "paper": "Li, Two satellites positioning algorithm based on AGPS system with two "
@@ -64,6 +84,8 @@ class AgpsExperiment(Experiment[AgpsExperimentParams, _RunResult]):
             "nav_file": str(nav),
             "simulation": sim,
             "findings_simulation": findings(sim, true_h, intervals),
+            "simulation_near_cell": near_cell,
+            "findings_near_cell": findings(near_cell, true_h, intervals),
             "simulation_pairs": [list(r["sats"]) for r in runs],
         }
 
@@ -103,6 +125,11 @@ class AgpsExperiment(Experiment[AgpsExperimentParams, _RunResult]):
                 intervals,
             )
             per_set[name] = {s: sub[s][heights[zero]] for s in SOLVER_NAMES}
+            cc_err, cc_it, cc_st = (a[rows] for a in arrays["lm_cell_clock"])
+            per_set[name]["lm_cell_clock"] = {
+                i: error_statistics(cc_err[:, k], cc_it[:, k], cc_st[:, k])
+                for k, i in enumerate(intervals)
+            }
         results = {
             "real_data": real,
             "findings_real_data": findings(real, heights[zero], intervals) if real else {},

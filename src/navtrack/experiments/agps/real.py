@@ -13,6 +13,7 @@ reference position.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -153,7 +154,9 @@ def real_data_study(
         ``error_m``, ``iterations``, ``status`` of shape (n, solvers, intervals, heights),
         padded with NaN / 0 / status -1 where an interval has fewer fixes, and ``set`` (n,)
         the data set of each
-        row; ``n_fixes[name][interval]`` counts.
+        row; ``lm_cell_clock`` the (error, iterations, status) arrays (n, intervals) of
+        Marquardt with the clocks started from the cell (``clock_start="cell"``) at the height
+        offset nearest 0; ``n_fixes[name][interval]`` counts.
     skipped : list of str
         Data sets not run, with the reason.
     """
@@ -174,6 +177,9 @@ def real_data_study(
     cfg = SppConfig(systems="G", elmask_deg=elmask_deg)
     n_s, n_i, n_h = len(SOLVER_NAMES), len(intervals_min), len(height_offsets_m)
     rows_err, rows_it, rows_st, rows_set = [], [], [], []
+    rows_cc: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    zero_h = int(np.argmin(np.abs(np.asarray(height_offsets_m))))
+    cell_clock = dataclasses.replace(config, clock_start="cell")
     counts: dict[str, dict[str, int]] = {}
     skipped: list[str] = []
     for ds in REAL_DATA_SETS:
@@ -206,6 +212,11 @@ def real_data_study(
         err = np.full((n_max, n_s, n_i, n_h), np.nan)
         its = np.zeros((n_max, n_s, n_i, n_h), dtype=np.int64)
         sts = np.full((n_max, n_s, n_i, n_h), -1, dtype=np.int8)  # -1: padding, no fix
+        cc = (
+            np.full((n_max, n_i), np.nan),
+            np.zeros((n_max, n_i), dtype=np.int64),
+            np.full((n_max, n_i), -1, dtype=np.int8),
+        )
         for ii, ep, sv, y in per_interval:
             n = ep.shape[0]
             if n == 0:
@@ -223,6 +234,13 @@ def real_data_study(
                     err[:n, j, ii, hh] = np.where(ok, d, np.nan)
                     its[:n, j, ii, hh] = res.iterations
                     sts[:n, j, ii, hh] = res.status
+                if hh == zero_h:  # Marquardt with the clocks started from the cell
+                    res = solve_agps(prob, "lm", cell_clock)
+                    d = np.linalg.norm(res.pos_m - ref, axis=1)
+                    cc[0][:n, ii] = np.where(res.status == AgpsStatus.OK, d, np.nan)
+                    cc[1][:n, ii] = res.iterations
+                    cc[2][:n, ii] = res.status
+        rows_cc.append(cc)
         rows_err.append(err)
         rows_it.append(its)
         rows_st.append(sts)
@@ -234,6 +252,7 @@ def real_data_study(
             "iterations": empty.astype(np.int64),
             "status": empty.astype(np.int8),
             "set": np.array([], dtype=str),
+            "lm_cell_clock": tuple(np.zeros((0, n_i)) for _ in range(3)),
             "n_fixes": counts,
         }, skipped
     return {
@@ -241,5 +260,6 @@ def real_data_study(
         "iterations": np.concatenate(rows_it),
         "status": np.concatenate(rows_st),
         "set": np.array(rows_set),
+        "lm_cell_clock": tuple(np.concatenate([c[k] for c in rows_cc]) for k in range(3)),
         "n_fixes": counts,
     }, skipped

@@ -89,6 +89,9 @@ class AgpsExperimentParams:
         Satellites must be above this elevation at both epochs.
     base_distance_m : tuple of float
         Range of the base-station distance (m), uniform.
+    near_cell_distance_m : tuple of float
+        Sensitivity beyond the paper: the fixes at the true height are solved again from a cell
+        at this distance range (m), in the same direction.
     sigma_noise_m, sigma_iono_zenith_m, sigma_tropo_zenith_m, sigma_orbit_m : float
         Error model (m), see the module docstring.
     clock_bias_m : float
@@ -115,6 +118,7 @@ class AgpsExperimentParams:
     intervals_min: tuple[float, ...] = PAPER_INTERVALS_MIN
     elmask_deg: float = 15.0
     base_distance_m: tuple[float, float] = (1000.0, 5000.0)
+    near_cell_distance_m: tuple[float, float] = (200.0, 500.0)
     sigma_noise_m: float = 5.0
     sigma_iono_zenith_m: float = 2.0
     sigma_tropo_zenith_m: float = 0.1
@@ -320,4 +324,46 @@ def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> 
         out["horizontal_m"][j] = horiz.reshape(n_i, n_h)
         out["iterations"][j] = res.iterations.reshape(n_i, n_h)
         out["status"][j] = res.status.reshape(n_i, n_h)
+    out.update(_near_cell(params, rng, problem, truth, config))
+    return out
+
+
+def _near_cell(
+    params: AgpsExperimentParams,
+    rng: np.random.Generator,
+    problem: AgpsProblem,
+    truth: FloatArray,
+    config: AgpsConfig,
+) -> dict[str, np.ndarray]:
+    """The fixes at the height nearest the truth's, solved from a cell moved to
+    ``near_cell_distance_m`` along the same direction: ``near_error_m``, ``near_iterations``,
+    ``near_status`` of shape (solvers, intervals)."""
+    from navtrack.gnss.agps import AgpsProblem, AgpsStatus, solve_agps
+
+    n_i, n_h = len(params.intervals_min), len(params.heights_m)
+    h0 = int(np.argmin(np.abs(np.asarray(params.heights_m) - params.site_llh[2])))
+    rows = np.arange(n_i) * n_h + h0
+    offset = problem.start_xyz_m[0] - truth
+    dist = rng.uniform(*params.near_cell_distance_m)
+    start = truth + offset * (dist / max(float(np.linalg.norm(offset)), 1e-9))
+    near = AgpsProblem(
+        problem.t_gps_s[rows],
+        problem.sat_pos_m[rows],
+        problem.y_m[rows],
+        problem.height_m[rows],
+        np.repeat(start[None], rows.size, 0),
+        problem.usable[rows],
+    )
+    shape = (len(SOLVER_NAMES), n_i)
+    out = {
+        "near_error_m": np.full(shape, np.nan),
+        "near_iterations": np.zeros(shape, dtype=np.int64),
+        "near_status": np.zeros(shape, dtype=np.int8),
+    }
+    for j, solver in enumerate(SOLVER_NAMES):
+        res = solve_agps(near, solver, config)  # type: ignore[arg-type]
+        ok = res.status == AgpsStatus.OK
+        out["near_error_m"][j] = np.where(ok, np.linalg.norm(res.pos_m - truth, axis=1), np.nan)
+        out["near_iterations"][j] = res.iterations
+        out["near_status"][j] = res.status
     return out

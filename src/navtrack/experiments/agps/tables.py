@@ -136,6 +136,19 @@ def tables_markdown(results: dict[str, Any]) -> str:
     lines += [*_iteration_table(sim, first, True), ""]
     lines += ["## Figs. 2 and 3 — mean error (m) vs interval, simulation", ""]
     lines += [*_interval_table(sim, ["56", "76", "96", "156"]), ""]
+    near = results.get("simulation_near_cell") or {}
+    if near.get("gn"):
+        lo, hi = params["near_cell_distance_m"]
+        lines += [
+            f"## Sensitivity — the same fixes from a near cell ({lo:g}–{hi:g} m), true height",
+            "",
+            *_verdict(results["findings_near_cell"]),
+            "",
+            *_interval_table(near, list(near["gn"])),
+            "",
+            *_iteration_table(near, first, False),
+            "",
+        ]
     real = results.get("real_data") or {}
     if real.get("gn"):
         lines += [
@@ -162,12 +175,17 @@ def tables_markdown(results: dict[str, Any]) -> str:
             lines += [
                 "### Per data set, true height (+0), mean error (m) / fixes",
                 "",
-                "| data set | interval | Gauss–Newton | Marquardt | MAP |",
-                "|---|---|---|---|---|",
+                "Last column: Marquardt with the clocks started from the cell "
+                "(`clock_start=cell`, beyond the paper's zero start).",
+                "",
+                "| data set | interval | Gauss–Newton | Marquardt | MAP | Marquardt, clocks "
+                "from the cell |",
+                "|---|---|---|---|---|---|",
             ]
             for name, by_solver in per_set.items():
                 for interval in by_solver.get("gn", {}):
-                    cells = [by_solver[s][interval] for s in ("gn", "lm", "map")]
+                    keys = ("gn", "lm", "map", "lm_cell_clock")
+                    cells = [by_solver[s][interval] for s in keys if s in by_solver]
                     lines.append(
                         f"| {name} | {interval} min | "
                         + " | ".join(f"{_f(c['mean_m'])} / {c['n']}" for c in cells)
@@ -182,7 +200,11 @@ def tables_markdown(results: dict[str, Any]) -> str:
 def summary_lines(results: dict[str, Any]) -> list[str]:
     """Console lines: the verdicts of both studies."""
     out = []
-    for key, name in (("findings_simulation", "simulation"), ("findings_real_data", "real data")):
+    for key, name in (
+        ("findings_simulation", "simulation"),
+        ("findings_near_cell", "near cell"),
+        ("findings_real_data", "real data"),
+    ):
         f = results.get(key)
         if not f:
             continue
