@@ -22,6 +22,7 @@ COMMAND_MODULES = (
     "navtrack.cli.track",
     "navtrack.cli.smooth",
     "navtrack.cli.reproduce",
+    "navtrack.cli.agps",
     "navtrack.cli.attitude",
 )
 
