@@ -23,6 +23,8 @@ COMMAND_MODULES = (
     "navtrack.cli.smooth",
     "navtrack.cli.reproduce",
     "navtrack.cli.rtk",
+    "navtrack.cli.agps",
+    "navtrack.cli.attitude",
 )
 
 
