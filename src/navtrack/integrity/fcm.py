@@ -301,7 +301,7 @@ def gross_error_columns(classes: ArrayLike) -> BoolArray:
     return np.asarray(in_t | alone)
 
 
-def hierarchical_classes(samples: ArrayLike, n_classes: int = 2, method: str = "average") -> IntArray:
+def hierarchical_classes(samples: ArrayLike, n_classes: int = 2, method: str = "single") -> IntArray:
     """Hard (agglomerative) clustering of whitened samples, the paper's comparison (5.2.1).
 
     Parameters
@@ -311,7 +311,8 @@ def hierarchical_classes(samples: ArrayLike, n_classes: int = 2, method: str = "
     n_classes : int
         Classes the dendrogram is cut into (paper: two, gross error and random error).
     method : str
-        Linkage of :func:`scipy.cluster.hierarchy.linkage`.
+        Linkage of :func:`scipy.cluster.hierarchy.linkage` (default ``single``, the default of
+        MATLAB's ``linkage``; the paper names none).
 
     Returns
     -------

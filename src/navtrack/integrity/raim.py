@@ -63,6 +63,7 @@ __all__ = [
     "pair_hypotheses",
     "solution_separation",
     "subset_solutions",
+    "variance_factor",
     "whitened",
     "wraim_levels",
 ]
@@ -112,6 +113,11 @@ class RaimConfig:
         FCM weighting exponent (Bezdek's 2; the paper gives none).
     fcm_tol : float
     fcm_max_iter : int
+    variance_factor : float, optional
+        Scale ``s^2`` of the measurement variances of the SPP weighting (``sigma^2 s^2``);
+        default: estimated from the block of epochs by :func:`variance_factor`. RTKLIB's
+        receiver model is conservative: ``s^2`` is 0.04-0.24 on the shared files, and with
+        ``s^2 = 1`` the test misses faults of 10-20 m.
     """
 
     method: str = "fde"
@@ -122,6 +128,7 @@ class RaimConfig:
     fcm_m: float = 2.0
     fcm_tol: float = 1e-6
     fcm_max_iter: int = 100
+    variance_factor: float | None = None
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -136,6 +143,9 @@ class RaimConfig:
             raise ValueError(f"max_faults: expected 1 or 2, got {self.max_faults}")
         if not self.fcm_m > 1.0:
             raise ValueError(f"fcm_m: the weighting exponent must be > 1, got {self.fcm_m}")
+        vf = self.variance_factor
+        if vf is not None and not (math.isfinite(vf) and vf > 0.0):
+            raise ValueError(f"variance_factor: expected a positive number, got {vf}")
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -302,13 +312,22 @@ def chi2_test(
     return stat, thr.reshape(dof.shape), dof.astype(np.int64)
 
 
+def _safe_inverse(n: FloatArray) -> tuple[FloatArray, BoolArray]:
+    """Inverses of a stack of symmetric matrices; NaN and ``True`` in the mask where singular
+    (``|det| <= 1e-12 prod(diag)``)."""
+    d = np.einsum("...pp->...p", n)
+    with np.errstate(all="ignore"):
+        singular = ~(np.abs(np.linalg.det(n)) > 1e-12 * np.prod(np.abs(d), axis=-1))
+    n = np.where(singular[..., None, None], np.eye(n.shape[-1]), n)
+    inv = np.linalg.inv(n)
+    return np.where(singular[..., None, None], np.nan, inv), singular
+
+
 def _normal_inverse(g: FloatArray) -> FloatArray:
-    """``(g^T g)^-1`` with unit diagonal for parameters no measurement touches."""
+    """``(g^T g)^-1`` with zero rows/columns for parameters no measurement touches."""
     n = np.einsum("...sp,...sq->...pq", g, g)
     absent = np.einsum("...pp->...p", n) <= 0.0
-    n = n + np.eye(n.shape[-1]) * absent[..., None, :]
-    with np.errstate(all="ignore"):
-        inv = np.linalg.inv(n)
+    inv, _ = _safe_inverse(n + np.eye(n.shape[-1]) * absent[..., None, :])
     return inv * ~absent[..., None, :] * ~absent[..., :, None]
 
 
@@ -465,10 +484,8 @@ def subset_solutions(g: FloatArray, y: FloatArray, used: BoolArray, members: Int
         np.swapaxes(gj, 2, 3) @ yj[..., None]
     )[..., 0]
     absent = np.einsum("bhpp->bhp", nk) <= 1e-12
-    nk = nk + np.eye(n_p) * absent[..., None, :]
-    with np.errstate(all="ignore"):
-        cov = np.linalg.inv(nk)
-    cov = cov * ~absent[..., None, :] * ~absent[..., :, None]
+    cov, singular = _safe_inverse(nk + np.eye(n_p) * absent[..., None, :])
+    cov = np.where(singular[..., None, None], 0.0, cov) * ~absent[..., None, :] * ~absent[..., :, None]
     dx = (cov @ b[..., None])[..., 0]
     sat_axis = np.arange(n_s)
     left_out = ((sat_axis == m[..., 0, None]) & real[..., 0, None]) | (
@@ -478,7 +495,7 @@ def subset_solutions(g: FloatArray, y: FloatArray, used: BoolArray, members: Int
     res = y[:, None, :] - dx @ np.swapaxes(g, 1, 2)
     chi2 = np.sum(np.where(keep, res, 0.0) ** 2, axis=-1)
     dof = keep.sum(axis=-1) - (~absent).sum(axis=-1)
-    valid = real.any(axis=-1) & (dof >= 1) & np.all(~real | used[rows, m], axis=-1)
+    valid = real.any(axis=-1) & (dof >= 1) & np.all(~real | used[rows, m], axis=-1) & ~singular
     return Subsets(members=members, valid=valid, dx=dx, cov=cov, chi2=chi2, dof=dof)
 
 
@@ -624,10 +641,38 @@ def fcm_exclusion(g: FloatArray, y: FloatArray, used: BoolArray, config: RaimCon
 
 
 # --------------------------------------------------------------------------- the stage
+def variance_factor(estimate: Estimate) -> float:
+    """A-posteriori variance factor of the weighting model over a block of epochs.
+
+    ``s^2 = median_e(chi2_e / chi2_0.5(dof_e))`` over the solved epochs with ``dof >= 1``: the
+    median is the estimator's robustness (faulty epochs, fewer than half, do not inflate it);
+    dividing by the median of each epoch's chi-square distribution makes it unbiased for a
+    correct model (``s^2 = 1``). 1 where no epoch has redundancy.
+
+    Parameters
+    ----------
+    estimate : Estimate
+
+    Returns
+    -------
+    float
+    """
+    from navtrack.gnss.spp import SppStatus, chi2_quantile
+
+    ok = (estimate.status == SppStatus.OK) & (estimate.dof >= 1) & np.isfinite(estimate.chi2)
+    if not ok.any():
+        return 1.0
+    med = np.array([chi2_quantile(0.5, int(k)) for k in estimate.dof[ok]])
+    s2 = float(np.median(estimate.chi2[ok] / med))
+    return s2 if s2 > 0.0 else 1.0
+
+
 def _test(
-    est: Estimate, pfa: float
+    est: Estimate, pfa: float, s2: float
 ) -> tuple[FloatArray, FloatArray, IntArray, FloatArray, FloatArray, BoolArray]:
     g, y, used = whitened(est)
+    scale = 1.0 / math.sqrt(s2)
+    g, y = g * scale, y * scale
     stat, thr, dof = chi2_test(y, used, _n_params(g), pfa)
     return stat, thr, dof, g, y, used
 
@@ -650,6 +695,8 @@ def monitor(
         For the re-estimation and the GDOP limit (its ``chi2_alpha`` is replaced by
         ``raim.pfa``).
     raim : RaimConfig
+        With ``variance_factor`` None, the factor is estimated from ``estimate``
+        (:func:`variance_factor`).
 
     Returns
     -------
@@ -664,7 +711,8 @@ def monitor(
     from navtrack.gnss.spp import SppStatus, estimate_position, merge_estimates, validate
 
     solved = estimate.status == SppStatus.OK
-    stat, thr, dof, g, y, used = _test(estimate, raim.pfa)
+    s2 = variance_factor(estimate) if raim.variance_factor is None else raim.variance_factor
+    stat, thr, dof, g, y, used = _test(estimate, raim.pfa, s2)
     avail = solved & (dof >= 1)
     detected = avail & (stat > thr)
     n_excl_max = {"chi2": 0, "loo": 1, "fde": raim.max_exclusions, "fcm": raim.max_exclusions}
@@ -715,13 +763,13 @@ def monitor(
             rows, pick = rows[~none], pick[~none]
             excluded[rows] |= pick
             reestimate(rows)
-            stat, thr, dof, g, y, used = _test(est, raim.pfa)
+            stat, thr, dof, g, y, used = _test(est, raim.pfa, s2)
             fail = np.zeros(n_epochs, dtype=bool)
             fail[rows] = (dof[rows] >= 1) & (stat[rows] > thr[rows])
             if raim.method == "loo":
                 break
 
-    stat, thr, dof, g, y, used = _test(est, raim.pfa)
+    stat, thr, dof, g, y, used = _test(est, raim.pfa, s2)
     status = np.full(n_epochs, RaimStatus.UNAVAILABLE, dtype=np.int8)
     if raim.method == "ss":
         final_fail = sep.detected.copy()
