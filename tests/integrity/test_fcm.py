@@ -2,7 +2,8 @@
 oracle, parity-matrix properties and bad input.
 
 The matrices are transcribed from section 5 of Gu et al. (2019),
-``shared/papers/2_raim_fuzzy_clustering.txt`` (provenance in ``tests/data/README.md``).
+``shared/papers/2_raim_fuzzy_clustering.txt``, in :mod:`navtrack.experiments.raim_fcm.example`
+(which states the five minus signs of T the text extraction lost).
 """
 
 from __future__ import annotations
@@ -10,6 +11,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from navtrack.experiments.raim_fcm.example import (
+    EPS_ONE,
+    EPS_TWO,
+    F_ONE,
+    F_TWO,
+    T_PAPER,
+    T_PRINTED,
+    paper_example,
+)
 from navtrack.integrity.fcm import (
     fcm_initial_centres,
     full_design_matrix,
@@ -19,44 +29,6 @@ from navtrack.integrity.fcm import (
     mahalanobis_whitening,
     parity_matrix,
 )
-
-# T (5 x 9) as printed in the extracted text, row by row.
-T_PRINTED = np.array(
-    "0.421 -0.047 -0.127 0.053 0.689 -0.297 -0.421 -0.248 -0.023 "
-    "0.224 0.353 0.175 0.226 0.026 0.649 0.169 0.369 0.396 "
-    "0.313 0.193 0.441 0.365 -0.313 -0.402 0.403 -0.291 0.174 "
-    "0.250 -0.410 -0.090 0.106 0.008 -0.296 0.185 0.670 -0.422 "
-    "0.304 -0.604 0.187 -0.390 -0.083 -0.031 0.193 -0.120 0.544".split(),
-    dtype=float,
-).reshape(5, 9)
-# The text extraction lost five minus signs of T (T22, T23, T28, T29, T33): the printed full
-# design matrix has the opposite signs in exactly these entries (e.g. e2 T22 = 0.208 with
-# e2 = -0.590), and only with them restored are the rows of T orthonormal (T T^T = I to the
-# printed precision), as a QR parity matrix must be.
-T_PAPER = T_PRINTED.copy()
-T_PAPER[1, [1, 2, 7, 8]] *= -1.0
-T_PAPER[2, 2] *= -1.0
-EPS_ONE = np.array([0.774, -0.590, 0.581, -3.303, -0.762, 0.684, -0.842, 0.223, -0.872])
-EPS_TWO = EPS_ONE.copy()
-EPS_TWO[6] = -4.842
-# Full design matrices (5 x 10) as printed, single fault (satellite 4) and two (4 and 7).
-F_ONE = np.array(
-    "0.326 0.028 -0.074 -0.175 -0.525 -0.203 0.354 -0.055 0.020 -0.304 "
-    "0.173 0.208 -0.102 -0.746 -0.020 0.444 -0.142 -0.082 0.345 0.078 "
-    "0.242 -0.114 -0.256 -1.206 0.239 -0.275 -0.339 -0.065 -0.152 -1.926 "
-    "0.193 0.242 -0.052 -0.350 -0.006 -0.202 -0.156 0.149 0.368 0.186 "
-    "0.235 0.356 0.109 1.288 0.063 -0.021 -0.163 -0.027 -0.474 1.367".split(),
-    dtype=float,
-).reshape(5, 10)
-F_TWO = np.array(
-    "0.326 0.028 -0.074 -0.175 -0.525 -0.203 2.038 -0.055 0.020 1.380 "
-    "0.173 0.208 -0.102 -0.746 -0.020 0.444 -0.818 -0.082 0.345 -0.598 "
-    "0.242 -0.114 -0.256 -1.206 0.239 -0.275 -1.951 -0.065 -0.152 -3.538 "
-    "0.193 0.242 -0.052 -0.350 -0.006 -0.202 -0.896 0.149 0.368 -0.554 "
-    "0.235 0.356 0.109 1.288 0.063 -0.021 -0.935 -0.027 -0.474 0.595".split(),
-    dtype=float,
-).reshape(5, 10)
-
 
 def _print_tolerance(eps: np.ndarray) -> np.ndarray:
     """Bound of |F(T, e) - F_printed| from rounding T, e and F to 3 decimals."""
@@ -176,3 +148,12 @@ def test_bad_input() -> None:
         full_design_matrix(T_PAPER, np.where(np.arange(9) == 3, np.inf, EPS_ONE))
     with pytest.raises(ValueError, match="n > u"):
         parity_matrix(np.ones((4, 4)))
+
+
+def test_reproduction_example_reports_the_paper_classes() -> None:
+    ex = paper_example()
+    assert ex["t_orthonormality_error"] < 2.5e-3
+    assert ex["single"]["fcm_gross_errors"] == [4]
+    assert ex["double"]["fcm_gross_errors"] == [4, 7]
+    assert ex["double"]["hierarchical_gross_errors"] == [7]
+    assert ex["double"]["max_abs_difference"] < 3e-3
