@@ -157,3 +157,23 @@ def test_reproduction_example_reports_the_paper_classes() -> None:
     assert ex["double"]["fcm_gross_errors"] == [4, 7]
     assert ex["double"]["hierarchical_gross_errors"] == [7]
     assert ex["double"]["max_abs_difference"] < 3e-3
+
+
+def test_batched_fcm_equals_each_problem_alone() -> None:
+    """Padded problems of different sizes in one call give each problem's own result."""
+    rng = np.random.default_rng(5)
+    sizes = [(10, 5), (7, 3), (12, 6)]
+    probs = [rng.normal(size=s) * [1.0] + np.eye(s[0], s[1]) * 5.0 for s in sizes]
+    x = np.zeros((3, 12, 6))
+    valid = np.zeros((3, 12), dtype=bool)
+    for i, p in enumerate(probs):
+        x[i, : p.shape[0], : p.shape[1]] = p
+        valid[i, : p.shape[0]] = True
+    batch = fuzzy_cmeans(x, 3, 2.0, valid=valid, tol=1e-9, max_iter=200)
+    for i, p in enumerate(probs):
+        one = fuzzy_cmeans(p, 3, 2.0, tol=1e-9, max_iter=200)
+        n = p.shape[0]
+        assert batch.iterations[i] == one.iterations
+        np.testing.assert_allclose(batch.u[i, :, :n], one.u, atol=1e-12)
+        np.testing.assert_array_equal(batch.classes[i, :n], one.classes)
+        assert np.all(batch.classes[i, n:] == -1)

@@ -127,17 +127,19 @@ def mahalanobis_whitening(samples: ArrayLike, cov: ArrayLike | None = None) -> F
     return np.asarray(((x @ vec) * inv_sqrt) @ vec.T, dtype=np.float64)
 
 
-def fcm_initial_centres(samples: ArrayLike) -> IntArray:
+def fcm_initial_centres(samples: ArrayLike, valid: ArrayLike | None = None) -> IntArray:
     """Indices of the samples the paper starts the three centres at: the maximum, the minimum
     and the middle (median) sample by their norm.
 
     Parameters
     ----------
-    samples : array_like, shape (N, q)
+    samples : array_like, shape (..., N, q)
+    valid : array_like of bool, shape (..., N), optional
+        Samples that exist (padding of a batch is False).
 
     Returns
     -------
-    ndarray of int, shape (3,)
+    ndarray of int, shape (..., 3)
 
     Notes
     -----
@@ -146,26 +148,31 @@ def fcm_initial_centres(samples: ArrayLike) -> IntArray:
     space they are clustered in (whitened: the Mahalanobis norm).
     """
     x = np.asarray(samples, dtype=float)
-    order = np.argsort(np.linalg.norm(x, axis=-1), kind="stable")
-    return np.array([order[-1], order[0], order[(order.size - 1) // 2]], dtype=np.int64)
+    ok = np.ones(x.shape[:-1], dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+    norm = np.where(ok, np.linalg.norm(x, axis=-1), np.inf)
+    order = np.argsort(norm, axis=-1, kind="stable")
+    n_ok = ok.sum(axis=-1, keepdims=True)
+    top = np.take_along_axis(order, n_ok - 1, axis=-1)
+    mid = np.take_along_axis(order, (n_ok - 1) // 2, axis=-1)
+    return np.concatenate([top, order[..., :1], mid], axis=-1).astype(np.int64)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
 class FcmResult:
-    """Outcome of :func:`fuzzy_cmeans`.
+    """Outcome of :func:`fuzzy_cmeans` (leading batch axes ``...`` of the samples).
 
     Attributes
     ----------
-    u : ndarray, shape (c, N)
-        Memberships, columns sum to 1.
-    u0 : ndarray, shape (c, N)
+    u : ndarray, shape (..., c, N)
+        Memberships, columns sum to 1 (0 for padding samples).
+    u0 : ndarray, shape (..., c, N)
         Memberships from the initial centres (the start of the iteration).
-    centres : ndarray, shape (c, q)
+    centres : ndarray, shape (..., c, q)
         Class centres (in the clustered, whitened space).
-    classes : ndarray of int, shape (N,)
-        Class of largest membership per sample.
-    iterations : int
-    converged : bool
+    classes : ndarray of int, shape (..., N)
+        Class of largest membership per sample (-1 for padding).
+    iterations : ndarray of int, shape (...)
+    converged : ndarray of bool, shape (...)
         ``|u - u_prev| < tol`` reached within ``max_iter``.
     """
 
@@ -173,19 +180,24 @@ class FcmResult:
     u0: FloatArray
     centres: FloatArray
     classes: IntArray
-    iterations: int
-    converged: bool
+    iterations: IntArray
+    converged: BoolArray
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
 
 
-def _memberships(x: FloatArray, centres: FloatArray, m: float) -> FloatArray:
-    """FCM membership update (paper eq. 8): ``u_ik = 1 / sum_j (d_ik / d_jk)^(2/(m-1))``."""
-    d2 = np.sum((x[None, :, :] - centres[:, None, :]) ** 2, axis=-1)
-    d = np.fmax(np.sqrt(d2), _EPS)
-    p = d ** (-2.0 / (m - 1.0))
-    return p / p.sum(axis=0, keepdims=True)
+def _memberships(
+    x: FloatArray, x2: FloatArray, centres: FloatArray, m: float, valid: FloatArray
+) -> FloatArray:
+    """FCM membership update (paper eq. 8): ``u_ik = 1 / sum_j (d_ik / d_jk)^(2/(m-1))``,
+    distances floored at machine epsilon (as scikit-fuzzy)."""
+    d2 = x2[..., None, :] - 2.0 * (centres @ np.swapaxes(x, -1, -2))
+    d2 += np.sum(centres * centres, axis=-1)[..., None]
+    np.maximum(d2, _EPS * _EPS, out=d2)
+    p = 1.0 / d2 if m == 2.0 else d2 ** (-1.0 / (m - 1.0))
+    p *= valid[..., None, :]
+    return np.asarray(p / np.maximum(p.sum(axis=-2, keepdims=True), 1e-300))
 
 
 def fuzzy_cmeans(
@@ -193,26 +205,29 @@ def fuzzy_cmeans(
     c: int = 3,
     m: float = 2.0,
     *,
+    valid: ArrayLike | None = None,
     init_centres: IntArray | None = None,
     tol: float = 1e-6,
     max_iter: int = 100,
 ) -> FcmResult:
-    """Fuzzy c-means clustering (paper eqs. 1-9) from given initial centres.
+    """Fuzzy c-means clustering (paper eqs. 1-9) from given initial centres, batched.
 
     Parameters
     ----------
-    samples : array_like, shape (N, q)
-        Samples to cluster, Euclidean metric (whiten with :func:`mahalanobis_whitening` for the
-        paper's Mahalanobis distance).
+    samples : array_like, shape (..., N, q)
+        Samples to cluster (leading axes: independent problems, e.g. epochs), Euclidean metric
+        (whiten with :func:`mahalanobis_whitening` for the paper's Mahalanobis distance).
     c : int
         Number of classes (paper: 3), ``2 <= c <= N``.
     m : float
         Weighting exponent, ``m > 1`` (paper: not given; 2 is Bezdek's common choice).
-    init_centres : ndarray of int, shape (c,), optional
+    valid : array_like of bool, shape (..., N), optional
+        Samples that exist: padding (False) takes no part (zero-padded features are harmless).
+    init_centres : ndarray of int, shape (..., c), optional
         Samples the centres start at (default: :func:`fcm_initial_centres` for ``c = 3``,
         else the ``c`` samples of largest norm).
     tol : float
-        Stop when the Frobenius norm of the membership change is below ``tol``.
+        A problem stops when the Frobenius norm of its membership change is below ``tol``.
     max_iter : int
 
     Returns
@@ -224,46 +239,57 @@ def fuzzy_cmeans(
     The iteration is Ross's (scikit-fuzzy ``cmeans``): memberships from the initial centres
     ("according to the distance as the initial membership coefficient", paper 5.2.2), then
     repeatedly centres ``c_i = sum_k u_ik^m x_k / sum_k u_ik^m`` and memberships from the
-    distances, with memberships and distances floored at machine epsilon.
+    distances, memberships and distances floored at machine epsilon. Problems of a batch
+    stop independently (a converged problem is no longer updated), so a batch gives what each
+    problem gives alone.
     """
     x = np.asarray(samples, dtype=float)
-    if x.ndim != 2:
-        raise ValueError(f"samples: expected shape (N, q), got {x.shape}")
+    if x.ndim < 2:
+        raise ValueError(f"samples: expected shape (..., N, q), got {x.shape}")
     if not np.all(np.isfinite(x)):
         raise ValueError("samples: need finite values")
-    if not (isinstance(c, int | np.integer) and 2 <= c <= x.shape[0]):
-        raise ValueError(f"c: expected an integer 2 <= c <= {x.shape[0]} (samples), got {c}")
+    ok = np.ones(x.shape[:-1], dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+    if ok.shape != x.shape[:-1]:
+        raise ValueError(f"valid: expected shape {x.shape[:-1]}, got {ok.shape}")
+    n_min = int(ok.sum(axis=-1).min(initial=x.shape[-2]))
+    if not (isinstance(c, int | np.integer) and 2 <= c <= n_min):
+        raise ValueError(f"c: expected an integer 2 <= c <= {n_min} (samples), got {c}")
     if not m > 1.0:
         raise ValueError(f"m: the weighting exponent must be > 1, got {m}")
     if init_centres is None:
         if c == 3:
-            init_centres = fcm_initial_centres(x)
+            init_centres = fcm_initial_centres(x, ok)
         else:
-            init_centres = np.argsort(-np.linalg.norm(x, axis=-1), kind="stable")[:c]
+            norm = np.where(ok, np.linalg.norm(x, axis=-1), -np.inf)
+            init_centres = np.argsort(-norm, axis=-1, kind="stable")[..., :c]
     start = np.asarray(init_centres, dtype=np.int64)
-    if start.shape != (c,):
-        raise ValueError(f"init_centres: expected {c} sample indices, got shape {start.shape}")
-    u0 = _memberships(x, x[start], m)
-    u = np.fmax(u0, _EPS)
-    converged = False
-    it = 0
-    centres = x[start]
-    while it < max_iter:
+    if start.shape != (*x.shape[:-2], c):
+        raise ValueError(f"init_centres: expected shape {(*x.shape[:-2], c)}, got {start.shape}")
+    w = ok.astype(float)
+    x2 = np.sum(x * x, axis=-1)
+    centres = np.take_along_axis(x, start[..., None], axis=-2)
+    u0 = _memberships(x, x2, centres, m, w)
+    u = np.maximum(u0, _EPS) * w[..., None, :]
+    batch = x.shape[:-2]
+    active = np.ones(batch, dtype=bool)
+    iterations = np.zeros(batch, dtype=np.int64)
+    for _ in range(max_iter):
         prev = u
-        um = np.fmax(prev / prev.sum(axis=0, keepdims=True), _EPS) ** m
-        centres = (um @ x) / um.sum(axis=1, keepdims=True)
-        u = _memberships(x, centres, m)
-        it += 1
-        if np.linalg.norm(u - prev) < tol:
-            converged = True
+        total = np.maximum(prev.sum(axis=-2, keepdims=True), 1e-300)
+        um = (np.maximum(prev / total, _EPS) * w[..., None, :]) ** m
+        new_c = (um @ x) / um.sum(axis=-1, keepdims=True)
+        new_u = _memberships(x, x2, new_c, m, w)
+        a = active[..., None, None]
+        centres = np.where(a, new_c, centres)
+        u = np.where(a, new_u, prev)
+        iterations += active
+        change = np.sqrt(np.sum((u - prev) ** 2, axis=(-2, -1)))
+        active &= ~(change < tol)
+        if not active.any():
             break
+    classes = np.where(ok, np.argmax(u, axis=-2), -1).astype(np.int64)
     return FcmResult(
-        u=u,
-        u0=u0,
-        centres=centres,
-        classes=np.argmax(u, axis=0).astype(np.int64),
-        iterations=it,
-        converged=converged,
+        u=u, u0=u0, centres=centres, classes=classes, iterations=iterations, converged=~active
     )
 
 
@@ -290,8 +316,8 @@ def gross_error_columns(classes: ArrayLike) -> BoolArray:
     discuss.
     """
     k = np.asarray(classes, dtype=np.int64)
-    if k.ndim != 1 or k.size < 2:
-        raise ValueError(f"classes: expected shape (n+1,), n >= 1, got {k.shape}")
+    if k.ndim != 1 or k.size < 2 or k.min() < 0:
+        raise ValueError(f"classes: expected shape (n+1,) of classes >= 0, n >= 1, got {k.shape}")
     sats, t_class = k[:-1], k[-1]
     counts = np.bincount(sats, minlength=int(k.max()) + 1)
     in_t = sats == t_class

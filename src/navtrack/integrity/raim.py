@@ -606,7 +606,8 @@ def fcm_exclusion(g: FloatArray, y: FloatArray, used: BoolArray, config: RaimCon
     """Satellites the fuzzy clustering of paper 2 names as gross errors, per epoch.
 
     For each epoch: parity matrix of the whitened design (:func:`.fcm.parity_matrix`), full
-    design matrix of the whitened residuals, FCM with three classes from the maximum, minimum
+    design matrix of the whitened residuals; then one FCM over all epochs (batched, each epoch
+    padded to the largest) with three classes from the maximum, minimum
     and middle column (Mahalanobis distance of the fault-free parity space, which is the
     Euclidean one here, :func:`.fcm.mahalanobis_whitening`), and the paper's rule
     (:func:`.fcm.gross_error_columns`).
@@ -626,17 +627,30 @@ def fcm_exclusion(g: FloatArray, y: FloatArray, used: BoolArray, config: RaimCon
     from navtrack.integrity.fcm import parity_matrix as qr_parity
 
     out = np.zeros(used.shape, dtype=bool)
+    rows, mats, cols_of = [], [], []
     for b in range(used.shape[0]):
         cols = np.flatnonzero(used[b])
         gb = g[b][cols]
         gb = gb[:, np.abs(gb).sum(axis=0) > 0]
         if cols.size < gb.shape[1] + 2:
             continue
-        f = full_design_matrix(qr_parity(gb), -y[b, cols])
-        res = fuzzy_cmeans(
-            f.T, 3, config.fcm_m, tol=config.fcm_tol, max_iter=config.fcm_max_iter
-        )
-        out[b, cols] = gross_error_columns(res.classes)
+        rows.append(b)
+        cols_of.append(cols)
+        mats.append(full_design_matrix(qr_parity(gb), -y[b, cols]).T)
+    if not rows:
+        return out
+    n_max = max(f.shape[0] for f in mats)
+    q_max = max(f.shape[1] for f in mats)
+    x = np.zeros((len(rows), n_max, q_max))
+    valid = np.zeros((len(rows), n_max), dtype=bool)
+    for i, f in enumerate(mats):
+        x[i, : f.shape[0], : f.shape[1]] = f
+        valid[i, : f.shape[0]] = True
+    res = fuzzy_cmeans(
+        x, 3, config.fcm_m, valid=valid, tol=config.fcm_tol, max_iter=config.fcm_max_iter
+    )
+    for i, (b, cols) in enumerate(zip(rows, cols_of, strict=True)):
+        out[b, cols] = gross_error_columns(res.classes[i, : cols.size + 1])
     return out
 
 
