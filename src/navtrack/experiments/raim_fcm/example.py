@@ -102,7 +102,7 @@ def paper_example(m: float = 2.0) -> dict[str, Any]:
             "max_abs_difference": float(np.max(np.abs(f - printed))),
             "memberships": np.round(res.u, 4).tolist(),
             "fcm_classes": (res.classes + 1).tolist(),
-            "fcm_iterations": res.iterations,
+            "fcm_iterations": int(res.iterations),
             "fcm_gross_errors": (np.flatnonzero(gross_error_columns(res.classes)) + 1).tolist(),
             "hierarchical_classes": (hard + 1).tolist(),
             "hierarchical_gross_errors": (np.flatnonzero(gross_error_columns(hard)) + 1).tolist(),
