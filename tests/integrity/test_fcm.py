@@ -30,6 +30,7 @@ from navtrack.integrity.fcm import (
     parity_matrix,
 )
 
+
 def _print_tolerance(eps: np.ndarray) -> np.ndarray:
     """Bound of |F(T, e) - F_printed| from rounding T, e and F to 3 decimals."""
     col = 0.0005 * (np.abs(eps)[None, :] + np.abs(T_PAPER)) + 0.0005 + 1e-9
@@ -127,7 +128,9 @@ def test_parity_matrix_properties(seed: int) -> None:
     t = parity_matrix(b)
     assert t.shape == (2, 5, 9)
     np.testing.assert_allclose(t @ b, 0.0, atol=1e-12)
-    np.testing.assert_allclose(t @ np.swapaxes(t, 1, 2), np.broadcast_to(np.eye(5), (2, 5, 5)), atol=1e-12)
+    np.testing.assert_allclose(
+        t @ np.swapaxes(t, 1, 2), np.broadcast_to(np.eye(5), (2, 5, 5)), atol=1e-12
+    )
     # the parity vector carries the whole residual: |T e|^2 = e^T (I - H) e
     e = rng.normal(size=9)
     h = b[0] @ np.linalg.solve(b[0].T @ b[0], b[0].T)

@@ -32,7 +32,9 @@ def _faulty_sample(tmp_path: Path) -> Path:
     return path
 
 
-def test_fde_excludes_the_faulty_satellite(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_fde_excludes_the_faulty_satellite(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     from navtrack.data import sample_path
 
     out = tmp_path / "sol.csv"
@@ -48,7 +50,8 @@ def test_fde_excludes_the_faulty_satellite(tmp_path: Path, capsys: pytest.Captur
         assert col in df.columns
     assert list(df["excluded"][20:40]) == ["G28"] * 20
     assert set(df["excluded"][:20]) == {""}
-    assert np.all(df["hpl_m"] > 0) and np.all(df["test_stat"][20:40] <= df["threshold"][20:40])
+    assert np.all(df["hpl_m"] > 0)
+    assert np.all(df["test_stat"][20:40] <= df["threshold"][20:40])
 
 
 def test_default_writes_no_integrity_columns(tmp_path: Path) -> None:
@@ -68,4 +71,5 @@ def test_android_log_with_fcm(gnss_data: Path, capsys: pytest.CaptureFixture[str
     rc = main(["pos", str(log), str(nav), "--raim", "fcm", "--no-progress"])
     assert rc == 0
     text = capsys.readouterr().out
-    assert "integrity      fcm:" in text and "unavailable 7" in text
+    assert "integrity      fcm:" in text
+    assert "unavailable 7" in text

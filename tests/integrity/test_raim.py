@@ -46,9 +46,7 @@ def _problem(seed: int, n_b: int = 3, n_s: int = 9, n_p: int = 4):  # type: igno
     )
     e = rng.normal(size=(n_b, n_s))
     x = np.linalg.lstsq(g[0], e[0], rcond=None)[0]
-    y = np.stack(
-        [e[b] - g[b] @ np.linalg.lstsq(g[b], e[b], rcond=None)[0] for b in range(n_b)]
-    )
+    y = np.stack([e[b] - g[b] @ np.linalg.lstsq(g[b], e[b], rcond=None)[0] for b in range(n_b)])
     assert x.shape == (n_p,)
     used = np.ones((n_b, n_s), dtype=bool)
     return g, y, used
@@ -56,7 +54,7 @@ def _problem(seed: int, n_b: int = 3, n_s: int = 9, n_p: int = 4):  # type: igno
 
 def test_chi2_thresholds_and_non_central_cdf_match_scipy() -> None:
     stats = pytest.importorskip("scipy.stats")
-    g, y, used = _problem(0)
+    _g, y, used = _problem(0)
     stat, thr, dof = chi2_test(y, used, np.full(3, 4), 1e-3)
     np.testing.assert_array_equal(dof, 5)
     np.testing.assert_allclose(thr, stats.chi2.ppf(1 - 1e-3, 5), rtol=1e-8)
@@ -100,7 +98,7 @@ def test_normalised_residuals_are_baarda_w() -> None:
 def test_wraim_protection_level_bounds_the_undetectable_bias() -> None:
     """A bias on the satellite of the largest slope that just reaches the non-centrality
     ``p_bias^2`` moves the position by exactly HPL (Walter & Enge 1995)."""
-    g, y, used = _problem(2, n_b=1, n_s=8)
+    g, _y, used = _problem(2, n_b=1, n_s=8)
     rot = np.eye(3)[None]
     hpl, vpl = wraim_levels(g, used, rot, 1e-3, 1e-3)
     q = np.linalg.inv(g[0].T @ g[0])
@@ -151,7 +149,8 @@ def test_a_single_30m_fault_is_excluded(method: str) -> None:
     assert np.all(integ.status[:10] == RaimStatus.OK)
     assert np.all(status == SppStatus.OK)
     assert np.all(~est.used[10:30, meas.sats.index("G03")])
-    assert np.all(np.isfinite(integ.hpl_m)) and np.all(np.isfinite(integ.vpl_m))
+    assert np.all(np.isfinite(integ.hpl_m))
+    assert np.all(np.isfinite(integ.vpl_m))
 
 
 @pytest.mark.parametrize("method", ["fde", "ss"])
@@ -168,7 +167,7 @@ def test_two_simultaneous_faults_are_excluded(method: str) -> None:
 
 def test_chi2_method_alerts_without_excluding() -> None:
     meas, _, cfg = _faulty(["G03"], 60.0, slice(0, 5))
-    est, status, integ = monitor(meas, estimate_position(meas, cfg), cfg, RaimConfig("chi2"))
+    _est, status, integ = monitor(meas, estimate_position(meas, cfg), cfg, RaimConfig("chi2"))
     assert np.all(integ.status[:5] == RaimStatus.ALERT)
     assert np.all(status[:5] == SppStatus.REJECTED_VALIDITY)
     assert not integ.excluded.any()
@@ -176,7 +175,7 @@ def test_chi2_method_alerts_without_excluding() -> None:
 
 def test_too_few_satellites_is_unavailable_not_an_error() -> None:
     """5 satellites: detection only (a fault cannot be excluded); 4: nothing."""
-    meas, cfg, _, _ = _sample_measurements()
+    meas, _cfg, _, _ = _sample_measurements()
     keep = {"G03", "G04", "G06", "G09", "G17"}
     ex = np.array([[s not in keep for s in meas.sats]] * meas.y_m.shape[0])
     gps = SppConfig(systems="G")
@@ -207,13 +206,15 @@ def test_solution_separation_detects_what_chi2_detects_on_a_large_fault() -> Non
     y[0] += (np.eye(10) - h)[:, 2] * 30.0  # residuals of a 30-sigma fault on satellite 2
     sep = solution_separation(g, y, used, np.eye(3)[None], RaimConfig("ss"))
     assert sep.detected[0]
-    assert np.isfinite(sep.hpl_m[0]) and sep.vpl_m[0] > 0
+    assert np.isfinite(sep.hpl_m[0])
+    assert sep.vpl_m[0] > 0
 
 
 def test_solve_spp_with_raim_writes_integrity_columns() -> None:
     _, cfg, obs, nav = _sample_measurements()
     res = solve_spp(obs, [nav], config=cfg, raim=RaimConfig("fde"), chunk_epochs=50)
-    assert res.integrity is not None and res.integrity.status.shape == (120,)
+    assert res.integrity is not None
+    assert res.integrity.status.shape == (120,)
     frame = solution_frame(res)
     for col in ("raim_status", "excluded", "hpl_m", "vpl_m", "test_stat", "threshold"):
         assert frame[col].shape == (120,)

@@ -52,7 +52,8 @@ def test_reproduce_writes_results_and_figures(tmp_path: Path, gnss_data: Path) -
     assert res["example"]["double"]["fcm_gross_errors"] == [4, 7]
     assert set(res["injection"]["ARL1"]["cases"]) == {"clean", "k2_b20"}
     prot = res["clean_protection"]["ARL1"]["fde"]
-    assert prot["epochs"] == 120 and prot["bounded_h"] == 1.0
+    assert prot["epochs"] == 120
+    assert prot["bounded_h"] == 1.0
     assert (tmp_path / "fcm_memberships.png").stat().st_size > 0
     assert (tmp_path / "stanford_ARL1.png").stat().st_size > 0
     assert "Paper example" in (tmp_path / "tables.md").read_text()

@@ -367,9 +367,7 @@ def _solve(
 
     n = len(obs.t_gps_s)
     if not progress or n <= CHUNK_EPOCHS:
-        return solve_spp(
-            obs, navs, sp3=sp3, config=config, chunk_epochs=CHUNK_EPOCHS, raim=raim
-        )
+        return solve_spp(obs, navs, sp3=sp3, config=config, chunk_epochs=CHUNK_EPOCHS, raim=raim)
     from tqdm import tqdm
 
     with tqdm(total=n, unit="epoch", desc="solving", file=sys.stderr, disable=None) as bar:

@@ -61,10 +61,10 @@ from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
 
 if TYPE_CHECKING:
     from navtrack.gnss.ephemeris import EphemerisTable
-    from navtrack.integrity.raim import IntegrityResult, RaimConfig
     from navtrack.gnss.observations import Observations
     from navtrack.gnss.rinex.nav import NavData
     from navtrack.gnss.sp3 import Sp3
+    from navtrack.integrity.raim import IntegrityResult, RaimConfig
 
 
 class SppStatus(IntEnum):

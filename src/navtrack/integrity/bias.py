@@ -89,7 +89,9 @@ def residual_bias(estimate: Estimate, sats: tuple[str, ...], ref_xyz_m: ArrayLik
     ok = estimate.status == SppStatus.OK
     used = estimate.used & ok[:, None] & (estimate.weights > 0)
     b = estimate.design
-    v = np.nan_to_num(estimate.residuals_m) - np.einsum("bsp,bp->bs", b[..., :3], ref - estimate.x[:, :3])
+    v = np.nan_to_num(estimate.residuals_m) - np.einsum(
+        "bsp,bp->bs", b[..., :3], ref - estimate.x[:, :3]
+    )
     w = np.where(used, estimate.weights, 0.0)
     bc = b[..., 3:]
     n = np.einsum("bsp,bs,bsq->bpq", bc, w, bc)
@@ -103,7 +105,10 @@ def residual_bias(estimate: Estimate, sats: tuple[str, ...], ref_xyz_m: ArrayLik
     letters = np.array([s[0] for s in sats])
     sys_count = np.array([int(count[letters == s].sum()) for s in systems], dtype=np.int64)
     sys_mean = np.array(
-        [float(v[:, letters == s].sum()) / max(int(c), 1) for s, c in zip(systems, sys_count, strict=True)]
+        [
+            float(v[:, letters == s].sum()) / max(int(c), 1)
+            for s, c in zip(systems, sys_count, strict=True)
+        ]
     )
     return ResidualBias(
         sats=tuple(sats),

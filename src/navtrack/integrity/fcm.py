@@ -327,7 +327,9 @@ def gross_error_columns(classes: ArrayLike) -> BoolArray:
     return np.asarray(in_t | alone)
 
 
-def hierarchical_classes(samples: ArrayLike, n_classes: int = 2, method: str = "single") -> IntArray:
+def hierarchical_classes(
+    samples: ArrayLike, n_classes: int = 2, method: str = "single"
+) -> IntArray:
     """Hard (agglomerative) clustering of whitened samples, the paper's comparison (5.2.1).
 
     Parameters

@@ -215,7 +215,8 @@ def _ncx2_cdf(x: float, k: int, lam: float) -> float:
     ``sum_j e^(-lam/2) (lam/2)^j / j! P(chi2_(k+2j) <= x)`` (Johnson, Kotz & Balakrishnan,
     *Continuous Univariate Distributions* vol. 2, 2nd ed., 29.2), with the central CDFs by the
     recursion ``P_(k+2j+2) = P_(k+2j) - (x/2)^(k/2+j) e^(-x/2) / Gamma(k/2+j+1)``, summed until
-    the Poisson weights are below 1e-17 past their mode. ``scipy.stats.ncx2.cdf`` is the test oracle."""
+    the Poisson weights are below 1e-17 past their mode. ``scipy.stats.ncx2.cdf`` is the test
+    oracle."""
     from navtrack.gnss.spp import _chi2_cdf
 
     half, a, y = 0.5 * lam, 0.5 * k, 0.5 * x
@@ -485,7 +486,11 @@ def subset_solutions(g: FloatArray, y: FloatArray, used: BoolArray, members: Int
     )[..., 0]
     absent = np.einsum("bhpp->bhp", nk) <= 1e-12
     cov, singular = _safe_inverse(nk + np.eye(n_p) * absent[..., None, :])
-    cov = np.where(singular[..., None, None], 0.0, cov) * ~absent[..., None, :] * ~absent[..., :, None]
+    cov = (
+        np.where(singular[..., None, None], 0.0, cov)
+        * ~absent[..., None, :]
+        * ~absent[..., :, None]
+    )
     dx = (cov @ b[..., None])[..., 0]
     sat_axis = np.arange(n_s)
     left_out = ((sat_axis == m[..., 0, None]) & real[..., 0, None]) | (
@@ -589,7 +594,9 @@ def solution_separation(
     covered = np.zeros(used.shape, dtype=bool)
     rows = np.arange(used.shape[0])[:, None]
     np.logical_or.at(
-        covered, (rows.repeat(members.shape[1], 1), np.maximum(members[..., 0], 0)), sub.valid & single
+        covered,
+        (rows.repeat(members.shape[1], 1), np.maximum(members[..., 0], 0)),
+        sub.valid & single,
     )
     available = np.all(covered | ~used, axis=1) & (used.sum(axis=1) > 0)
     return Separation(

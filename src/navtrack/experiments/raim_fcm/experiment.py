@@ -85,7 +85,9 @@ class RaimFcmExperiment(Experiment[RaimFcmParams, _RunResult]):
     real data, protection levels."""
 
     name = "raim-fcm"
-    description = "Paper 2: RAIM by fuzzy clustering (Gu et al. 2019) vs chi2/LOO/FDE/SS on real data"
+    description = (
+        "Paper 2: RAIM by fuzzy clustering (Gu et al. 2019) vs chi2/LOO/FDE/SS on real data"
+    )
     params_type = RaimFcmParams
     default_runs = 5
 
@@ -126,7 +128,12 @@ def tables_markdown(results: dict[str, Any]) -> str:
     out = ["# RAIM by fuzzy clustering (paper 2)", ""]
     ex = results.get("example", {})
     if ex:
-        out += ["## Paper example (section 5)", "", "| case | injected | FCM | hierarchical | max |F - printed| |", "|---|---|---|---|---|"]  # fmt: skip
+        out += [
+            "## Paper example (section 5)",
+            "",
+            "| case | injected | FCM | hierarchical | max abs(F - printed) |",
+            "|---|---|---|---|---|",
+        ]
         for case in ("single", "double"):
             c = ex[case]
             out.append(
@@ -149,12 +156,17 @@ def tables_markdown(results: dict[str, Any]) -> str:
     prot = results.get("clean_protection", {})
     if prot:
         out += ["## Clean epochs: protection levels against actual errors", ""]
-        out += ["| station | method | epochs | HPL bounds | VPL bounds | median HPL | median VPL | exclusions |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+        out += [
+            "| station | method | epochs | HPL bounds | VPL bounds | median HPL | median VPL "
+            "| exclusions |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
         for name, d in prot.items():
             for m, v in d.items():
                 out.append(
-                    f"| {name} | {m} | {v['epochs']} | {v['bounded_h']:.4f} | {v['bounded_v']:.4f}"
-                    f" | {_fmt(v['hpl_median_m'])} | {_fmt(v['vpl_median_m'])} | {v['exclusion']:.4f} |"
+                    f"| {name} | {m} | {v['epochs']} | {v['bounded_h']:.4f} "
+                    f"| {v['bounded_v']:.4f} | {_fmt(v['hpl_median_m'])} "
+                    f"| {_fmt(v['vpl_median_m'])} | {v['exclusion']:.4f} |"
                 )
         out.append("")
     return "\n".join(out)
@@ -174,7 +186,9 @@ def summary_lines(results: dict[str, Any]) -> list[str]:
         )
     for name, st in results.get("injection", {}).items():
         for k in (1, 2):
-            keys = [c for c in st["cases"] if c.startswith(f"k{k}_") and float(c.split("_b")[1]) >= 10]
+            keys = [
+                c for c in st["cases"] if c.startswith(f"k{k}_") and float(c.split("_b")[1]) >= 10
+            ]
             if not keys:
                 continue
             methods = list(st["cases"][keys[0]])
