@@ -22,6 +22,7 @@ from navtrack.experiments.raim_fcm.example import paper_example
 from navtrack.experiments.raim_fcm.study import (
     RaimFcmParams,
     injection_run,
+    rtklib_live_raim,
     station_data,
     summarize_study,
 )
@@ -103,7 +104,12 @@ class RaimFcmExperiment(Experiment[RaimFcmParams, _RunResult]):
     def extra(self, params: RaimFcmParams, context: ExperimentContext) -> ExtraResult:
         protection, art = clean_protection(params, _gnss_dir())
         example = paper_example(params.fcm_m)
-        return ExtraResult({"example": example, "clean_protection": protection}, art)
+        results = {"example": example, "clean_protection": protection}
+        if "ARL1" in params.stations:
+            work = context.out_dir / "rtklib_live"
+            work.mkdir(parents=True, exist_ok=True)
+            results["rtklib_live"] = rtklib_live_raim(params, context.rng, _gnss_dir(), work)
+        return ExtraResult(results, art)
 
     def tables(self, results: dict[str, Any]) -> str:
         return tables_markdown(results)
@@ -153,6 +159,24 @@ def tables_markdown(results: dict[str, Any]) -> str:
             ]
             out.append(f"| {case} | " + " | ".join(cells) + " |")
         out.append("")
+    live = results.get("rtklib_live", {})
+    if live and "skipped" not in live:
+        out += [
+            "## ARL1 single faults: RTKLIB 2.4.3 rnx2rtkp RAIM FDE (live) vs navtrack fde",
+            "",
+            "| bias (m) | trials | RTKLIB id / wrong / excl | fde id / wrong / excl "
+            "| RTKLIB e95 H (m) | fde e95 H (m) |",
+            "|---|---|---|---|---|---|",
+        ]
+        for b, d in live.items():
+            r, f = d["rtklib"], d["fde"]
+            out.append(
+                f"| {b} | {r['trials']} | {r['identification']:.2f} / {r['wrong_exclusion']:.2f}"
+                f" / {r['exclusion']:.2f} | {f['identification']:.2f} / "
+                f"{f['wrong_exclusion']:.2f} / {f['exclusion']:.2f} | {r['err_h_p95_m']:.1f} "
+                f"| {f['err_h_p95_m']:.1f} |"
+            )
+        out.append("")
     prot = results.get("clean_protection", {})
     if prot:
         out += ["## Clean epochs: protection levels against actual errors", ""]
@@ -183,6 +207,15 @@ def summary_lines(results: dict[str, Any]) -> list[str]:
             f"{ex['double']['fcm_gross_errors']}, hierarchical "
             f"{ex['single']['hierarchical_gross_errors']} / "
             f"{ex['double']['hierarchical_gross_errors']}"
+        )
+    live = results.get("rtklib_live", {})
+    if live and "skipped" not in live:
+        lines.append(
+            "ARL1 live   single-fault identification RTKLIB / fde "
+            + " ".join(
+                f"{b} m {d['rtklib']['identification']:.2f}/{d['fde']['identification']:.2f}"
+                for b, d in live.items()
+            )
         )
     for name, st in results.get("injection", {}).items():
         for k in (1, 2):

@@ -40,6 +40,7 @@ __all__ = [
     "Station",
     "StationData",
     "injection_run",
+    "rtklib_live_raim",
     "station_data",
     "summarize_study",
 ]
@@ -280,4 +281,145 @@ def summarize_study(params: RaimFcmParams, runs: Sequence[dict[str, Any]]) -> di
                     "hpl_median_m": float(np.nanmedian(hpl)) if np.isfinite(hpl).any() else None,
                 }
         out[name] = {"variance_factor": present[0]["variance_factor"], "cases": cases}
+    return out
+
+
+def _biased_rinex2(lines: list[str], code: str, faults: dict[tuple[int, str], float]) -> str:
+    """A RINEX 2 observation file with ``faults[(epoch, sat)]`` metres added to the ``code``
+    pseudorange (F14.3 fields of 16 columns, 5 per line)."""
+    types: list[str] = []
+    out = list(lines)
+    i = 0
+    while "END OF HEADER" not in out[i]:
+        if "# / TYPES OF OBSERV" in out[i]:
+            types += out[i][6:60].split()
+        i += 1
+    per_sat = (len(types) + 4) // 5
+    col = types.index(code)
+    i += 1
+    epoch = -1
+    while i < len(out):
+        head = out[i]
+        if not head.strip():
+            i += 1
+            continue
+        epoch += 1
+        n = int(head[29:32])
+        sats = head[32:68]
+        j = i + 1
+        while len(sats) < 3 * n:  # continuation lines of the satellite list
+            sats += out[j][32:68]
+            j += 1
+        names = [sats[3 * k : 3 * k + 3].replace(" ", "0") for k in range(n)]
+        for k, sat in enumerate(names):
+            bias = faults.get((epoch, sat))
+            if bias:
+                li = j + k * per_sat + col // 5
+                c0 = 16 * (col % 5)
+                text = out[li].rstrip("\n").ljust(80)
+                value = float(text[c0 : c0 + 14]) + bias
+                out[li] = text[:c0] + f"{value:14.3f}" + text[c0 + 14 :].rstrip() + "\n"
+        i = j + n * per_sat
+    return "".join(out)
+
+
+def _rtklib_used(stat_path: Path) -> dict[int, set[str]]:
+    """Satellites RTKLIB used per epoch, keyed by the rounded time of week: its residual
+    status file has a ``$SAT`` record for each valid satellite (``ssat.vs``) only."""
+    used: dict[int, set[str]] = {}
+    for line in stat_path.read_text().splitlines():
+        if line.startswith("$SAT"):
+            f = line.split(",")
+            used.setdefault(round(float(f[2])), set()).add(f[3])
+    return used
+
+
+def _run_rnx2rtkp(exe: str, conf: Path, obs: Path, nav: Path, pos: Path) -> dict[int, set[str]]:
+    import subprocess
+
+    cmd = [exe, "-k", str(conf), str(obs), str(nav), "-o", str(pos)]
+    subprocess.run(cmd, check=True, capture_output=True)
+    return _rtklib_used(Path(str(pos) + ".stat"))
+
+
+def rtklib_live_raim(
+    params: RaimFcmParams,
+    rng: np.random.Generator,
+    gnss_dir: str,
+    work_dir: Path,
+    biases_m: tuple[float, ...] = (10.0, 15.0, 20.0),
+    station: str = "ARL1",
+) -> dict[str, Any]:
+    """RTKLIB's RAIM FDE (live ``rnx2rtkp``, ``spp_gps_raim.conf``) and navtrack's ``fde`` on
+    the same single faults: one satellite per epoch biased in every epoch of a faulty copy of
+    the RINEX 2 file, one copy per bias.
+
+    Returns
+    -------
+    dict
+        ``{bias: {"rtklib": {...}, "fde": {...}}}`` with ``trials``, ``identification``,
+        ``wrong_exclusion``, ``exclusion``, ``err_h_p95_m``.
+    """
+    import shutil
+
+    from navtrack.io.rtklib import read_pos
+
+    exe = shutil.which("rnx2rtkp")
+    if exe is None:
+        return {"skipped": "rnx2rtkp not on PATH"}
+    st = STATIONS[station]
+    data = station_data(gnss_dir, station)
+    conf_src = Path(gnss_dir) / "rtklib_spp" / "conf" / "spp_gps_raim.conf"
+    conf = work_dir / "spp_gps_raim_residuals.conf"
+    conf.write_text(
+        conf_src.read_text().replace("out-outstat        =off", "out-outstat        =residual")
+    )
+    lines = (Path(gnss_dir) / st.obs).read_text().splitlines(keepends=True)
+    meas, clean = data.meas, data.clean
+    n_e = meas.y_m.shape[0]
+    nav = Path(gnss_dir) / st.nav
+    clean_used = _run_rnx2rtkp(exe, conf, Path(gnss_dir) / st.obs, nav, work_dir / "clean.pos")
+    out: dict[str, Any] = {}
+    for b in biases_m:
+        pick = np.array([rng.choice(np.flatnonzero(clean.used[e])) for e in range(n_e)])
+        sign = rng.choice([-1.0, 1.0], size=n_e)
+        faults = {(e, meas.sats[pick[e]]): b * sign[e] for e in range(n_e)}
+        obs_path = work_dir / f"{station}_bias{b:g}.obs"
+        obs_path.write_text(_biased_rinex2(lines, "C1", faults))
+        pos = work_dir / f"{station}_bias{b:g}.pos"
+        used = _run_rnx2rtkp(exe, conf, obs_path, nav, pos)
+        sol = read_pos(pos)
+        tows = sorted(clean_used)
+        if len(tows) != n_e or sorted(used) != tows or len(sol) != n_e:
+            return {"skipped": f"RTKLIB solved {len(sol)} of {n_e} epochs"}
+        rows: dict[str, list[tuple[set[str], float]]] = {"rtklib": [], "fde": []}
+        enu = ecef_to_enu(sol[["x_m", "y_m", "z_m"]].to_numpy(), data.ref_xyz_m)
+        for k, tow in enumerate(tows):
+            excl = clean_used[tow] - used[tow]
+            rows["rtklib"].append((excl, float(np.hypot(enu[k, 0], enu[k, 1]))))
+        fault = np.zeros(meas.y_m.shape, dtype=bool)
+        fault[np.arange(n_e), pick] = True
+        y = np.array(meas.y_m) + b * sign[:, None] * fault
+        mf = dataclasses.replace(meas, y_m=y)
+        est = estimate_position(mf, data.config, x0_m=clean.x)
+        final, _, integ = monitor(mf, est, data.config, _raim(params, "fde", data.variance_factor))
+        enu_n = ecef_to_enu(final.x[:, :3], data.ref_xyz_m)
+        for e in range(n_e):
+            excl = {meas.sats[j] for j in np.flatnonzero(integ.excluded[e])}
+            rows["fde"].append((excl, float(np.hypot(enu_n[e, 0], enu_n[e, 1]))))
+        res_b: dict[str, Any] = {}
+        for name, r in rows.items():
+            truth = [{meas.sats[pick[e]]} for e in range(len(r))]
+            res_b[name] = {
+                "trials": len(r),
+                "identification": float(
+                    np.mean([x == t for (x, _), t in zip(r, truth, strict=True)])
+                ),
+                "wrong_exclusion": float(
+                    np.mean([bool(x - t) for (x, _), t in zip(r, truth, strict=True)])
+                ),
+                "exclusion": float(np.mean([bool(x) for x, _ in r])),
+                "err_h_p95_m": float(np.percentile([h for _, h in r], 95)),
+            }
+        out[f"{b:g}"] = res_b
     return out
