@@ -271,22 +271,33 @@ def fuzzy_cmeans(
     u0 = _memberships(x, x2, centres, m, w)
     u = np.maximum(u0, _EPS) * w[..., None, :]
     batch = x.shape[:-2]
-    active = np.ones(batch, dtype=bool)
-    iterations = np.zeros(batch, dtype=np.int64)
+    # flatten the batch axes; work on the problems still iterating only
+    n_s, q = x.shape[-2:]
+    xf, x2f, wf = x.reshape(-1, n_s, q), x2.reshape(-1, n_s), w.reshape(-1, n_s)
+    uf = np.array(u.reshape(-1, c, n_s))
+    cf = np.array(centres.reshape(-1, c, q))
+    iterations = np.zeros(xf.shape[0], dtype=np.int64)
+    act = np.arange(xf.shape[0])
+    xs, x2s, ws = xf, x2f, wf
     for _ in range(max_iter):
-        prev = u
-        total = np.maximum(prev.sum(axis=-2, keepdims=True), 1e-300)
-        um = (np.maximum(prev / total, _EPS) * w[..., None, :]) ** m
-        new_c = (um @ x) / um.sum(axis=-1, keepdims=True)
-        new_u = _memberships(x, x2, new_c, m, w)
-        a = active[..., None, None]
-        centres = np.where(a, new_c, centres)
-        u = np.where(a, new_u, prev)
-        iterations += active
-        change = np.sqrt(np.sum((u - prev) ** 2, axis=(-2, -1)))
-        active &= ~(change < tol)
-        if not active.any():
+        if not act.size:
             break
+        prev = uf[act]
+        total = np.maximum(prev.sum(axis=-2, keepdims=True), 1e-300)
+        um = (np.maximum(prev / total, _EPS) * ws[:, None, :]) ** m
+        new_c = (um @ xs) / um.sum(axis=-1, keepdims=True)
+        new_u = _memberships(xs, x2s, new_c, m, ws)
+        cf[act], uf[act] = new_c, new_u
+        iterations[act] += 1
+        done = np.sqrt(np.sum((new_u - prev) ** 2, axis=(-2, -1))) < tol
+        if done.any():
+            act, xs, x2s, ws = act[~done], xs[~done], x2s[~done], ws[~done]
+    converged = np.ones(xf.shape[0], dtype=bool)
+    converged[act] = False
+    u = uf.reshape(u.shape)
+    centres = cf.reshape(centres.shape)
+    iterations = iterations.reshape(batch)
+    active = ~converged.reshape(batch)
     classes = np.where(ok, np.argmax(u, axis=-2), -1).astype(np.int64)
     return FcmResult(
         u=u, u0=u0, centres=centres, classes=classes, iterations=iterations, converged=~active
