@@ -296,11 +296,15 @@ def fuzzy_cmeans(
     converged[act] = False
     u = uf.reshape(u.shape)
     centres = cf.reshape(centres.shape)
-    iterations = iterations.reshape(batch)
     active = ~converged.reshape(batch)
     classes = np.where(ok, np.argmax(u, axis=-2), -1).astype(np.int64)
     return FcmResult(
-        u=u, u0=u0, centres=centres, classes=classes, iterations=iterations, converged=~active
+        u=u,
+        u0=u0,
+        centres=centres,
+        classes=classes,
+        iterations=iterations.reshape(batch),
+        converged=~active,
     )
 
 
