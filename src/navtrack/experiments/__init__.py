@@ -58,6 +58,7 @@ EXPERIMENTS: dict[str, str] = {
     "ari": "navtrack.experiments.ari",
     "agps": "navtrack.experiments.agps",
     "alhat": "navtrack.experiments.alhat",
+    "raim-fcm": "navtrack.experiments.raim_fcm",
 }
 
 
