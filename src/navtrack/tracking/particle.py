@@ -183,7 +183,7 @@ class JmpdStep:
     ----------
     state : JmpdState
         Posterior after the step (after resampling when it happened).
-    status : (B,) int8
+    status : (B,) int
         :class:`StepStatus` of each filter.
     n_eff : (B,) float
         Effective sample size before resampling (Table 1 step 12).
@@ -316,7 +316,8 @@ def joint_log_likelihood(
     Parameters
     ----------
     L : (B, N, T, M + 1)
-        From :func:`target_log_likelihoods`.
+        From :func:`target_log_likelihoods`; the valid measurements of each row must come first
+        (as :meth:`~navtrack.tracking.models.FovealSensor.scan` returns them).
     valid : (B, M) bool
     clutter_density : float
         λ, false alarms per rad.
@@ -328,19 +329,51 @@ def joint_log_likelihood(
         prod_{t missed} (1 - Pd) λ^(number of clutter measurements)`` (Bar-Shalom & Fortmann
         9.4; the Poisson clutter-count factor and ``V^-M`` are common to all particles).
     best : (B, N) int
-        Index into :func:`association_hypotheses` of the most likely hypothesis (GNN).
+        Most likely hypothesis, a row index of ``association_hypotheses(T, M)`` (GNN); rows
+        with fewer valid measurements index their own, shorter enumeration, whose rows are the
+        first ones of the longer (only hypotheses over valid measurements are scored).
     n_hypotheses : int
+        Hypotheses enumerated for the row with the most measurements.
+
+    Notes
+    -----
+    Rows are grouped by their count of valid measurements, so padding costs nothing. Within a
+    group the sum is taken in the linear domain after shifting each target's terms by their
+    maximum (``prod_t`` of numbers <= 1 times the clutter weight); particles whose shifted sum
+    underflows to 0 are recomputed by log-sum-exp, so nothing is lost to underflow.
     """
-    T, M = L.shape[-2], L.shape[-1] - 1
-    H = association_hypotheses(T, M)
-    cols = np.where(H < 0, M, H)
-    per_h = L[..., np.arange(T), cols].sum(axis=-1)  # (B, N, N_H)
-    n_clutter = valid.sum(axis=-1)[:, None] - (H >= 0).sum(axis=-1)[None, :]  # (B, N_H)
+    B, N, T, M1 = L.shape
+    counts = valid.sum(axis=-1)
+    loglik = np.empty((B, N))
+    best = np.zeros((B, N), dtype=np.int64)
     log_lam = _log(clutter_density)
-    with np.errstate(invalid="ignore"):
-        clutter = np.where(n_clutter > 0, n_clutter * log_lam, 0.0)
-    per_h = per_h + clutter[:, None, :]
-    return _logsumexp(per_h, axis=-1), np.argmax(per_h, axis=-1), int(H.shape[0])
+    n_max = 0
+    for m in np.unique(counts):
+        rows = np.flatnonzero(counts == m)
+        H = association_hypotheses(T, int(m))
+        cols = np.where(H < 0, M1 - 1, H)
+        n_clutter = int(m) - (H >= 0).sum(axis=-1)
+        with np.errstate(invalid="ignore"):
+            log_c = np.where(n_clutter > 0, n_clutter * log_lam, 0.0)  # (N_H,)
+        Lg = L[rows][..., np.r_[0 : int(m), M1 - 1]]  # (G, N, T, m + 1)
+        top = Lg.max(axis=-1, keepdims=True)
+        top = np.where(np.isfinite(top), top, 0.0)
+        E = np.exp(Lg - top)
+        mc = np.where(H < 0, int(m), H)
+        prod = np.prod(E[..., np.arange(T), mc], axis=-1)  # (G, N, N_H)
+        wc = np.exp(log_c - log_c.max())
+        total = prod @ wc
+        with np.errstate(divide="ignore"):
+            ll = np.log(total) + top[..., 0].sum(axis=-1) + log_c.max()
+        lost = total == 0.0
+        if np.any(lost):
+            g, i = np.nonzero(lost)
+            per_h = L[rows[g], i][:, np.arange(T), cols].sum(axis=-1) + log_c
+            ll[g, i] = _logsumexp(per_h, axis=-1)
+        loglik[rows] = ll
+        best[rows] = np.argmax(prod * wc, axis=-1)
+        n_max = max(n_max, int(H.shape[0]))
+    return loglik, best, n_max
 
 
 def ip_jpda_log_likelihoods(L: FloatArray, sensor: FovealSensor) -> FloatArray:
@@ -373,12 +406,13 @@ def ip_jpda_log_likelihoods(L: FloatArray, sensor: FovealSensor) -> FloatArray:
     return np.asarray(np.logaddexp(detected, missed))
 
 
-def ip_gnn_log_likelihoods(L: FloatArray, best: IntArray) -> FloatArray:
+def ip_gnn_log_likelihoods(L: FloatArray, valid: BoolArray, best: IntArray) -> FloatArray:
     """Partition log-weights of IP-GNN: each target's term of the best joint assignment.
 
     Parameters
     ----------
     L : (B, N, T, M + 1)
+    valid : (B, M) bool
     best : (B, N) int
         Most likely joint hypothesis of each particle (:func:`joint_log_likelihood`); with the
         cost ``-log`` of the likelihood terms this is the one-to-one assignment of least total
@@ -390,7 +424,7 @@ def ip_gnn_log_likelihoods(L: FloatArray, best: IntArray) -> FloatArray:
         ``log Pd g(z_j|x_t)`` of the assigned measurement, ``log(1 - Pd)`` when unassigned.
     """
     T, M = L.shape[-2], L.shape[-1] - 1
-    H = association_hypotheses(T, M)
+    H = association_hypotheses(T, int(valid.sum(axis=-1).max(initial=0)))
     cols = np.where(H < 0, M, H)[best]  # (B, N, T)
     return np.take_along_axis(L, cols[..., None], axis=-1)[..., 0]
 
@@ -470,7 +504,6 @@ def resample_partitions(
     idx : (B, N, T) int
         ``j_t(i)``.
     """
-    B, N, T, n = particles.shape
     lw = log_prior[:, :, None] + log_partition  # (B, N, T)
     idx = systematic_resample(np.moveaxis(lw, 1, 2), rng)  # (B, T, N)
     idx = np.moveaxis(idx, 1, 2)  # (B, N, T)
@@ -534,7 +567,7 @@ def kmeans_permute(
     -------
     (B, N, T, n)
     """
-    B, N, T, n = particles.shape
+    T, n = particles.shape[-2:]
     if T == 1 or iterations == 0:
         return particles
     perms = _permutations(T)
@@ -542,10 +575,10 @@ def kmeans_permute(
     w = np.exp(log_weights)[:, :, None, None]
     x = particles
     for _ in range(iterations):
-        mu = np.sum(w * x, axis=1)  # (B, T, n)
-        diff = x[:, :, :, None, :] - mu[:, None, None, :, :]  # (B, N, T_src, T_dst, n)
-        D = np.sum(diff * diff * scale, axis=-1)
-        cost = D[:, :, perms, np.arange(T)].sum(axis=-1)  # (B, N, T!)
+        mu = np.sum(w * x, axis=1) * scale  # (B, T, n)
+        # sum_t |x_perm(t) - mu_t|² = const - 2 sum_t x_perm(t) · mu_t
+        C = np.einsum("bisk,btk->bist", x, mu)  # (B, N, T_src, T_dst)
+        cost = -C[:, :, perms, np.arange(T)].sum(axis=-1)  # (B, N, T!)
         best = np.argmin(cost, axis=-1)
         if not np.any(best):
             break
@@ -629,25 +662,26 @@ def jmpd_step(
     if scan.z.shape[0] != B:
         raise ValueError(f"scan has {scan.z.shape[0]} batch rows, the state {B}")
     pred = predict_particles(state.particles, config.motion, config.dt, rng)
-    status = np.zeros(B, dtype=np.int8)
+    status = np.zeros(B, dtype=np.int64)
     M = scan.z.shape[-1]
     if hypothesis_count(T, M) > MAX_HYPOTHESES:
         status[:] = StepStatus.TOO_MANY_HYPOTHESES
         log_w, n_h = state.log_weights, 0
     else:
         L = target_log_likelihoods(pred, scan, c, d, sensor)
-        loglik, best, n_h = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
         if config.proposal == "kp":
+            loglik, _, n_h = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
             log_w = state.log_weights + loglik
             fallback = state.log_weights
         else:
             if config.proposal == "ip_jpda":
                 log_part = ip_jpda_log_likelihoods(L, sensor)
             else:
-                log_part = ip_gnn_log_likelihoods(L, best)
+                _, best, _ = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
+                log_part = ip_gnn_log_likelihoods(L, scan.valid, best)
             pred, log_bias, idx = resample_partitions(pred, state.log_weights, log_part, rng)
             L = np.take_along_axis(L, idx[..., None], axis=1)
-            loglik, _, _ = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
+            loglik, _, n_h = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
             with np.errstate(invalid="ignore"):
                 log_w = loglik - log_bias.sum(axis=-1)
             log_w = np.where(np.isnan(log_w), -np.inf, log_w)
