@@ -361,10 +361,11 @@ def joint_log_likelihood(
         E = np.exp(Lg - top)
         mc = np.where(H < 0, int(m), H)
         prod = np.prod(E[..., np.arange(T), mc], axis=-1)  # (G, N, N_H)
-        wc = np.exp(log_c - log_c.max())
+        c_top = float(log_c.max()) if np.isfinite(log_c.max()) else 0.0
+        wc = np.exp(log_c - c_top)
         total = prod @ wc
         with np.errstate(divide="ignore"):
-            ll = np.log(total) + top[..., 0].sum(axis=-1) + log_c.max()
+            ll = np.log(total) + top[..., 0].sum(axis=-1) + c_top
         lost = total == 0.0
         if np.any(lost):
             g, i = np.nonzero(lost)
