@@ -149,7 +149,8 @@ def test_underflowing_weights_are_recovered_and_counted():
     step = jmpd_step(state, _scan([1.2]), [1.0], [0.0], sensor, cfg, rng)
     assert step.status[0] == StepStatus.UNDERFLOW_RECOVERED
     w = np.exp(step.state.log_weights[0])
-    assert np.all(np.isfinite(step.state.log_weights)) and w.sum() == pytest.approx(1.0)
+    assert np.all(np.isfinite(step.state.log_weights))
+    assert w.sum() == pytest.approx(1.0)
 
 
 def test_infeasible_scan_keeps_prior_weights():
@@ -226,7 +227,8 @@ def test_scan_with_too_many_hypotheses_is_skipped_and_counted():
     state = jmpd_init(np.zeros((1, 4, 2)), np.eye(2), cfg, rng)
     sensor = FovealSensor(0.05, 0.9, 0.5)
     step = jmpd_step(state, _scan(list(np.linspace(-1, 1, 30))), [1.0], [0.0], sensor, cfg, rng)
-    assert step.status[0] == StepStatus.TOO_MANY_HYPOTHESES and step.n_hypotheses == 0
+    assert step.status[0] == StepStatus.TOO_MANY_HYPOTHESES
+    assert step.n_hypotheses == 0
     assert isinstance(step.state, JmpdState)
 
 

@@ -62,11 +62,14 @@ def test_configure_rules():
     P = np.tile(np.eye(2), (1, 3, 1, 1))
     P[0, 1, 0, 0] = 3.0
     c, d, t = configure("wo", x, P, 0.05, 1)
-    assert t[0] == 1 and d[0] == 2.0 and c[0] == pytest.approx(float(foveal_gain(3.0, 0.05)))
+    assert t[0] == 1
+    assert d[0] == 2.0
+    assert c[0] == pytest.approx(float(foveal_gain(3.0, 0.05)))
     for k, expect in ((1, 0), (2, 1), (3, 2), (4, 0)):
         assert configure("to", x, P, 0.05, k)[2][0] == expect
     c, d, t = configure("so", x, P, 0.05, 1)
-    assert d[0] == 2.5 and t[0] == -1
+    assert d[0] == 2.5
+    assert t[0] == -1
     assert c[0] == pytest.approx(float(so_gain(5.0, 1.0, 1.0, 0.05)))
 
 

@@ -180,7 +180,7 @@ def expected_posterior_variance(
     P: float,
     R: float,
     offset: ArrayLike = 0.0,
-    n_grid: int = 241,
+    n_grid: int = 161,
 ) -> FloatArray:
     """Expected posterior variance of a target's position after one foveal scan, by quadrature.
 
@@ -241,7 +241,7 @@ def optimal_gain(P: float, R: float, offset: ArrayLike = 0.0) -> float:
     from scipy.optimize import minimize_scalar
 
     scale = 1.0 / math.sqrt(P)
-    grid = scale * np.logspace(-2, 2, 41)
+    grid = scale * np.logspace(-2, 2, 25)
     v = expected_posterior_variance(grid, P, R, offset)
     i = int(np.argmin(v))
     lo, hi = math.log(grid[max(i - 1, 0)]), math.log(grid[min(i + 1, len(grid) - 1)])

@@ -49,7 +49,7 @@ class FovealExperiment(Experiment[FovealParams, _RunResult]):
         }
 
     def extra(self, params: FovealParams, context: ExperimentContext) -> ExtraResult:
-        return ExtraResult({"gain_check": gain_check(params.R)})
+        return ExtraResult({"gain_check": gain_check(params.R)} if params.gain_check else {})
 
     def tables(self, results: dict[str, Any]) -> str:
         return tables_markdown(results)

@@ -82,6 +82,9 @@ class FovealParams:
         Control rule of Table 5 (the paper does not say; WO, its best rule).
     resample_fraction : float
         ``N_T / N_part`` (paper: not given).
+    gain_check : bool
+        Run the gain-rule check (:func:`~navtrack.experiments.foveal.gains.gain_check`) in the
+        ``extra`` step (26 one-scan optimisations, about 20 s).
     """
 
     q: float = 0.01
@@ -100,6 +103,7 @@ class FovealParams:
     last_steps: int = 10
     table5_rule: Literal["so", "to", "wo"] = "wo"
     resample_fraction: float = 0.5
+    gain_check: bool = True
 
     def __post_init__(self) -> None:
         for name in ("x0_three", "x0_two"):
