@@ -242,3 +242,14 @@ def test_scan_simulation_counts_detections_and_clutter():
     assert n_clutter.mean() == pytest.approx(0.5, abs=0.05)
     assert np.all(np.abs(scan.z[(scan.origin < 0) & scan.valid]) < math.pi / 2)
     assert constant_velocity(1, 0.01).dim_x == sensor.dim_x
+
+
+@pytest.mark.parametrize("proposal", ["kp", "ip_jpda", "ip_gnn"])
+def test_scan_without_measurements_is_all_missed(proposal):
+    # Pd < 1: an empty scan is feasible (every target missed), weights stay equal
+    rng = np.random.default_rng(0)
+    cfg = JmpdConfig(n_particles=20, proposal=proposal, resample_fraction=1e-9)
+    state = jmpd_init(np.zeros((1, 2, 2)), np.eye(2), cfg, rng)
+    step = jmpd_step(state, _scan([]), [1.0], [0.0], FovealSensor(0.05, 0.9, 0.5), cfg, rng)
+    assert step.status[0] == StepStatus.OK
+    np.testing.assert_allclose(step.state.log_weights, -math.log(20))

@@ -270,6 +270,8 @@ def _check_target_count(T: int) -> None:
 
 
 def _logsumexp(a: FloatArray, axis: int) -> FloatArray:
+    if a.shape[axis] == 0:  # an empty sum (a scan without measurements)
+        return np.full(np.delete(a.shape, axis), -np.inf)
     m = np.max(a, axis=axis, keepdims=True)
     m = np.where(np.isfinite(m), m, 0.0)
     with np.errstate(divide="ignore"):
