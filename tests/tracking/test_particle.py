@@ -22,6 +22,7 @@ from navtrack.tracking.particle import (
     StepStatus,
     association_hypotheses,
     hypothesis_count,
+    ip_gnn_log_likelihoods,
     jmpd_init,
     jmpd_step,
     joint_log_likelihood,
@@ -253,3 +254,26 @@ def test_scan_without_measurements_is_all_missed(proposal):
     step = jmpd_step(state, _scan([]), [1.0], [0.0], FovealSensor(0.05, 0.9, 0.5), cfg, rng)
     assert step.status[0] == StepStatus.OK
     np.testing.assert_allclose(step.state.log_weights, -math.log(20))
+
+
+def test_gnn_assignment_is_the_best_hypothesis_per_row():
+    # two batch rows with different measurement counts: each row's best map, by brute force
+    rng = np.random.default_rng(11)
+    sensor = FovealSensor(0.05, 0.9, 1.0)
+    particles = rng.normal(0, 1, (2, 4, 2, 2))
+    z = np.array([[0.3, -0.5, 1.0], [0.2, 0.0, 0.0]])
+    valid = np.array([[True, True, True], [True, False, False]])
+    scan = FovealScan(z, valid, np.full(z.shape, -1))
+    L = target_log_likelihoods(particles, scan, [1.0, 2.0], [0.0, 0.5], sensor)
+    _, best, _ = joint_log_likelihood(L, valid, sensor.clutter_density)
+    lam = sensor.clutter_density
+    for b, m in ((0, 3), (1, 1)):
+        for i in range(4):
+            score = {
+                h: (m - sum(j >= 0 for j in h)) * math.log(lam)
+                + sum(L[b, i, t, j if j >= 0 else 3] for t, j in enumerate(h))
+                for h in map(tuple, association_hypotheses(2, m))
+            }
+            assert tuple(best[b, i]) == max(score, key=score.get)
+    part = ip_gnn_log_likelihoods(L, best)
+    assert part[1, 0, 0] == L[1, 0, 0, best[1, 0, 0] if best[1, 0, 0] >= 0 else 3]

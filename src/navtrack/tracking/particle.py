@@ -330,10 +330,9 @@ def joint_log_likelihood(
         Up to a constant per scan: ``log sum_h prod_{t detected} Pd g(z_{h_t}|x_t)
         prod_{t missed} (1 - Pd) λ^(number of clutter measurements)`` (Bar-Shalom & Fortmann
         9.4; the Poisson clutter-count factor and ``V^-M`` are common to all particles).
-    best : (B, N) int
-        Most likely hypothesis, a row index of ``association_hypotheses(T, M)`` (GNN); rows
-        with fewer valid measurements index their own, shorter enumeration, whose rows are the
-        first ones of the longer (only hypotheses over valid measurements are scored).
+    best : (B, N, T) int
+        The most likely hypothesis of each particle (GNN): measurement index assigned to each
+        target, ``-1`` when not detected.
     n_hypotheses : int
         Hypotheses enumerated for the row with the most measurements.
 
@@ -347,7 +346,7 @@ def joint_log_likelihood(
     B, N, T, M1 = L.shape
     counts = valid.sum(axis=-1)
     loglik = np.empty((B, N))
-    best = np.zeros((B, N), dtype=np.int64)
+    best = np.full((B, N, T), -1, dtype=np.int64)
     log_lam = _log(clutter_density)
     n_max = 0
     for m in np.unique(counts):
@@ -374,7 +373,7 @@ def joint_log_likelihood(
             per_h = L[rows[g], i][:, np.arange(T), cols].sum(axis=-1) + log_c
             ll[g, i] = _logsumexp(per_h, axis=-1)
         loglik[rows] = ll
-        best[rows] = np.argmax(prod * wc, axis=-1)
+        best[rows] = H[np.argmax(prod * wc, axis=-1)]
         n_max = max(n_max, int(H.shape[0]))
     return loglik, best, n_max
 
@@ -409,15 +408,14 @@ def ip_jpda_log_likelihoods(L: FloatArray, sensor: FovealSensor) -> FloatArray:
     return np.asarray(np.logaddexp(detected, missed))
 
 
-def ip_gnn_log_likelihoods(L: FloatArray, valid: BoolArray, best: IntArray) -> FloatArray:
+def ip_gnn_log_likelihoods(L: FloatArray, best: IntArray) -> FloatArray:
     """Partition log-weights of IP-GNN: each target's term of the best joint assignment.
 
     Parameters
     ----------
     L : (B, N, T, M + 1)
-    valid : (B, M) bool
-    best : (B, N) int
-        Most likely joint hypothesis of each particle (:func:`joint_log_likelihood`); with the
+    best : (B, N, T) int
+        Most likely joint hypothesis of each particle (:func:`joint_log_likelihood`): with the
         cost ``-log`` of the likelihood terms this is the one-to-one assignment of least total
         distance (Blackman & Popoli's GNN, found here exactly by enumeration).
 
@@ -426,9 +424,8 @@ def ip_gnn_log_likelihoods(L: FloatArray, valid: BoolArray, best: IntArray) -> F
     (B, N, T)
         ``log Pd g(z_j|x_t)`` of the assigned measurement, ``log(1 - Pd)`` when unassigned.
     """
-    T, M = L.shape[-2], L.shape[-1] - 1
-    H = association_hypotheses(T, int(valid.sum(axis=-1).max(initial=0)))
-    cols = np.where(H < 0, M, H)[best]  # (B, N, T)
+    M = L.shape[-1] - 1
+    cols = np.where(best < 0, M, best)
     return np.take_along_axis(L, cols[..., None], axis=-1)[..., 0]
 
 
@@ -681,7 +678,7 @@ def jmpd_step(
                 log_part = ip_jpda_log_likelihoods(L, sensor)
             else:
                 _, best, _ = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
-                log_part = ip_gnn_log_likelihoods(L, scan.valid, best)
+                log_part = ip_gnn_log_likelihoods(L, best)
             pred, log_bias, idx = resample_partitions(pred, state.log_weights, log_part, rng)
             L = np.take_along_axis(L, idx[..., None], axis=1)
             loglik, _, n_h = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
