@@ -395,10 +395,12 @@ def ip_jpda_log_likelihoods(L: FloatArray, sensor: FovealSensor) -> FloatArray:
 
     Notes
     -----
-    The paper treats "observations from other targets as false alarms". Without clutter
-    (λ = 0) that false-alarm density must still be positive, so the density used is
-    ``λ_t = λ + (T - 1) Pd / V``: the clutter plus the expected detections of the other targets
-    spread over the measurement space.
+    The paper treats "observations from other targets as false alarms"; the false-alarm
+    density used is therefore ``λ_t = λ + (T - 1) Pd / V``: the clutter plus the expected
+    detections of the other targets spread over the measurement space (without it, a scan
+    without clutter would make every single-target hypothesis impossible before the common
+    factor is divided out). It weighs only the missed-detection term, so it matters for
+    ``Pd < 1``.
     """
     T = L.shape[-2]
     lam_t = sensor.clutter_density + (T - 1) * sensor.pd / sensor.volume
