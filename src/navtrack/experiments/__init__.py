@@ -55,8 +55,8 @@ __all__ = [
 
 #: Experiment name -> module holding its ``EXPERIMENT``. Later reproductions add one line each.
 EXPERIMENTS: dict[str, str] = {
-    "ari": "navtrack.experiments.ari",
     "foveal": "navtrack.experiments.foveal",
+    "ari": "navtrack.experiments.ari",
 }
 
 
