@@ -55,6 +55,7 @@ __all__ = [
 
 #: Experiment name -> module holding its ``EXPERIMENT``. Later reproductions add one line each.
 EXPERIMENTS: dict[str, str] = {
+    "foveal": "navtrack.experiments.foveal",
     "ari": "navtrack.experiments.ari",
     "agps": "navtrack.experiments.agps",
     "alhat": "navtrack.experiments.alhat",
