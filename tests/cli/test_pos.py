@@ -147,11 +147,20 @@ def test_nav_not_matching_exits_nonzero(capsys: pytest.CaptureFixture[str]) -> N
     assert "NAV file matches the observation day" in captured.err
 
 
-def test_reference_in_wrong_units_is_refused() -> None:
-    with pytest.raises(SystemExit, match="ECEF metres"):
-        main(["pos", "--example", "--ref", "-3962.108", "3381.309", "3668.678"])  # km
-    with pytest.raises(SystemExit, match="degrees"):
-        main(["pos", "--example", "--ref-llh", "-3962108.6", "3381309.5", "3668678.6"])
+def _refused(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
+    """The error line of a command refused as bad input (exit 2, no traceback)."""
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert err.startswith("navtrack pos: error: ")
+    return err
+
+
+def test_reference_in_wrong_units_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
+    km = ["pos", "--example", "--ref", "-3962.108", "3381.309", "3668.678"]
+    assert "ECEF metres" in _refused(km, capsys)
+    llh = ["pos", "--example", "--ref-llh", "-3962108.6", "3381309.5", "3668678.6"]
+    assert "degrees" in _refused(llh, capsys)
 
 
 def test_unwritable_output_still_solves(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -163,13 +172,11 @@ def test_unwritable_output_still_solves(tmp_path: Path, capsys: pytest.CaptureFi
     assert "NOT written" in captured.err
 
 
-def test_missing_inputs() -> None:
-    with pytest.raises(SystemExit, match="no navigation file"):
-        main(["pos", str(sample_path("SEPT078M_120.21O"))])
-    with pytest.raises(SystemExit, match="not found"):
-        main(["pos", "/nonexistent.21o", str(sample_path("SEPT078M.21P"))])
-    with pytest.raises(SystemExit, match="systems"):
-        main(["pos", "--example", "--systems", "GXQ"])
+def test_missing_inputs(capsys: pytest.CaptureFixture[str]) -> None:
+    obs, nav = str(sample_path("SEPT078M_120.21O")), str(sample_path("SEPT078M.21P"))
+    assert "no navigation file" in _refused(["pos", obs], capsys)
+    assert "not found" in _refused(["pos", "/nonexistent.21o", nav], capsys)
+    assert "systems" in _refused(["pos", "--example", "--systems", "GXQ"], capsys)
 
 
 def test_android_log(capsys: pytest.CaptureFixture[str]) -> None:

@@ -38,11 +38,24 @@ def register(subparsers: Any) -> None:
         "(time ISO 8601 UTC, lat/lon deg or x_m/y_m, optional id, alt_m, speed_mps, "
         "course_deg)",
     )
-    p.add_argument("--associator", choices=("gnn", "jpda"), default="gnn")
+    p.add_argument(
+        "--associator",
+        choices=("gnn", "jpda"),
+        default="gnn",
+        help="data association: global nearest neighbour or joint probabilistic",
+    )
     p.add_argument("--out", type=Path, help="write track states to this .csv or .parquet file")
     p.add_argument("--plot", type=Path, metavar="DIR", help="write a map of the tracks here")
-    p.add_argument("--report-s", type=float, help="scoring grid interval, s")
-    p.add_argument("--match-m", type=float, help="CLEAR-MOT match threshold, m")
+    p.add_argument(
+        "--report-s",
+        type=float,
+        help="scoring grid interval, s (default: " + _by_format(0) + ")",
+    )
+    p.add_argument(
+        "--match-m",
+        type=float,
+        help="CLEAR-MOT match threshold, m (default: " + _by_format(2) + ")",
+    )
     p.add_argument(
         "--no-velocity",
         action="store_true",
@@ -52,15 +65,20 @@ def register(subparsers: Any) -> None:
         "--max-range-km",
         type=float,
         default=1000.0,
-        help="skip rows farther than this from the median position (default 1000)",
+        help="skip rows farther than this from the median position",
     )
     p.add_argument(
         "--max-time-days",
         type=float,
         default=30.0,
-        help="skip rows dated farther than this from the median time (default 30)",
+        help="skip rows dated farther than this from the median time",
     )
     p.set_defaults(func=run_track)
+
+
+def _by_format(k: int) -> str:
+    """One column of :data:`DEFAULTS` as help text: ``60 for ais, 10 for opensky, ...``."""
+    return ", ".join(f"{v[k]:g} for {fmt}" for fmt, v in DEFAULTS.items())
 
 
 def run_track(args: argparse.Namespace) -> int:
