@@ -263,3 +263,17 @@ def test_garbage_and_malformed_unused_fields_are_counted(tmp_path: Path) -> None
     path.write_text("".join(strict_garbage))
     with pytest.raises(FileFormatError, match=rf"line {raw[5] + 1}: not a GnssLogger record"):
         read_gnsslogger(path)
+
+
+def test_last_row_cut_by_the_end_of_the_file(tmp_path: Path) -> None:
+    # issue 9, failure 10: a last Raw row cut mid-line was read with its cut value as data
+    text = PIXEL7.read_text()
+    last_raw = text.rstrip("\n").rsplit("\n", 1)[1]
+    assert last_raw.startswith("Raw,")
+    n_lines = len(text.rstrip("\n").split("\n"))
+    path = tmp_path / "cut.txt"
+    path.write_text(text.rstrip("\n")[: -len(last_raw) // 2])
+    with pytest.raises(FileFormatError, match=rf"line {n_lines}: Raw row cut short"):
+        read_gnsslogger(path)
+    lenient = read_gnsslogger(path, lenient=True)
+    assert n_lines in [s.line for s in lenient.skipped if s.reason == "unreadable row"]

@@ -118,6 +118,10 @@ def run_smooth(args: argparse.Namespace) -> int:
     from navtrack.smoothing.ari import AriConfig, fit_ari, regularize_time
 
     df = read_table(args.file)
+    if len(df) == 0:
+        from navtrack.errors import FileFormatError
+
+        raise FileFormatError(args.file, None, "no data rows (a header only)")
     if args.order == "auto":
         order = None
     else:
@@ -159,7 +163,9 @@ def run_smooth(args: argparse.Namespace) -> int:
             f"(has {', '.join(map(str, df.columns))})"
         )
     if not columns:
-        raise SystemExit("navtrack smooth: no numeric columns to smooth; give --columns")
+        raise SystemExit(
+            f"navtrack smooth: {args.file}: no numeric columns to smooth; give --columns"
+        )
     values = np.column_stack([numeric_column(args.file, df, c) for c in columns])
     n_read = values.shape[0]
     if time_col is not None:

@@ -196,6 +196,14 @@ def read_gnsslogger(
             garbage.append(SkippedLine(i + 1, "not a log record"))
     if columns is None:
         raise FileFormatError(path, None, "not a GnssLogger log: no '# Raw,...' header line")
+    cut = rows and rows[-1][0] == len(lines) and not text.endswith(("\n", "\r"))
+    if cut and len(rows[-1][1]) < len(columns):
+        # the last row, without its end of line, has fewer fields than the header: cut short
+        # by the end of the file, its last field possibly cut too
+        if not lenient:
+            raise FileFormatError(path, len(lines), "Raw row cut short by the end of the file")
+        garbage.append(SkippedLine(len(lines), "unreadable row"))
+        rows.pop()
     obs = _build(path, rows, columns, version_line, comments, max_sv_time_uncertainty_ns, lenient)
     if not garbage:
         return obs
