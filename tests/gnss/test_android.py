@@ -277,3 +277,20 @@ def test_last_row_cut_by_the_end_of_the_file(tmp_path: Path) -> None:
         read_gnsslogger(path)
     lenient = read_gnsslogger(path, lenient=True)
     assert n_lines in [s.line for s in lenient.skipped if s.reason == "unreadable row"]
+
+
+def test_infinite_integer_field_is_unreadable(tmp_path: Path) -> None:
+    # found by the fuzz suite (bad_number, seed 606): "inf" in an integer column raised
+    # OverflowError from int(float("inf"))
+    lines = PIXEL7.read_text().splitlines(keepends=True)
+    header = next(ln for ln in lines if ln.startswith("# Raw"))
+    col = {n: k for k, n in enumerate(header.split(","))}
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("Raw,"))
+    fields = lines[k].split(",")
+    fields[col["State"]] = "inf"
+    lines[k] = ",".join(fields)
+    path = tmp_path / "inf.txt"
+    path.write_text("".join(lines))
+    with pytest.raises(FileFormatError, match=rf"line {k + 1}: unreadable Raw row"):
+        read_gnsslogger(path)
+    assert skipped_counts(read_gnsslogger(path, lenient=True))["unreadable row"] == 1

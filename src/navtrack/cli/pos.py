@@ -307,7 +307,12 @@ def run_pos(args: argparse.Namespace) -> int:
         from navtrack.plots.gnss import plot_solution
 
         paths = plot_solution(
-            table, args.plot, ref_xyz_m=ref, azel=(result.azel_rad, list(result.sats))
+            table,
+            args.plot,
+            ref_xyz_m=ref,
+            azel=(result.azel_rad, list(result.sats)),
+            max_gdop=config.max_gdop,
+            elmask_deg=args.elmask,
         )
         print(f"figures        {', '.join(str(p) for p in paths)}")
     return status_code

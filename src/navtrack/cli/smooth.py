@@ -56,7 +56,9 @@ def register(subparsers: Any) -> None:
         help="|T| above which an epoch is a gross error (default 3.29)",
     )
     cmd.add_argument("--out", type=Path, help="write filtered series (.csv or .parquet)")
-    cmd.add_argument("--plot", type=Path, help="write one PNG per column into this directory")
+    cmd.add_argument(
+        "--plot", type=Path, metavar="DIR", help="write one PNG per column into this directory"
+    )
     cmd.set_defaults(func=run_smooth)
 
 
@@ -211,7 +213,14 @@ def run_smooth(args: argparse.Namespace) -> int:
             from navtrack.plots.canvas import figure_dir
 
             plot_dir = figure_dir(args.plot)
-            path = plot_series(plot_dir / f"{args.file.stem}_{col}.png", t_grid, res, col, unit)
+            path = plot_series(
+                plot_dir / f"{args.file.stem}_{col}.png",
+                t_grid,
+                res,
+                col,
+                unit,
+                time_name=time_col or "epoch index",
+            )
             print(f"figure     {path}")
     out_cols["gross_error"] = any_gross
     statuses: dict[str, int] = {}

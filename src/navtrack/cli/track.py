@@ -179,7 +179,9 @@ def run_track(args: argparse.Namespace) -> int:
     if args.plot:
         from navtrack.plots.tracks import plot_tracks
 
-        path = plot_tracks(args.plot, en, res, title=f"{args.file.name} ({args.associator})")
+        path = plot_tracks(
+            args.plot, en, res, title=f"{args.file.name} ({args.associator})", ref_deg=ref
+        )
         print(f"plot written to {path}")
     return 0
 

@@ -221,7 +221,10 @@ def _int_field(text: str) -> int:
     try:
         return int(text)
     except ValueError:
-        return int(float(text))  # some loggers write integers as 1.0E10
+        value = float(text)  # some loggers write integers as 1.0E10
+        if not math.isfinite(value):
+            raise ValueError(f"{text.strip()!r} is not an integer") from None
+        return int(value)
 
 
 def _check_numbers(fields: list[str], numeric: list[tuple[int, str]]) -> None:

@@ -13,7 +13,13 @@ from navtrack.plots.canvas import figure_dir, new_figure, save_figure
 __all__ = ["plot_tracks"]
 
 
-def plot_tracks(out_dir: StrPath, en: ArrayLike, result: Any, title: str = "") -> Path:
+def plot_tracks(
+    out_dir: StrPath,
+    en: ArrayLike,
+    result: Any,
+    title: str = "",
+    ref_deg: tuple[float, float] | None = None,
+) -> Path:
     """Write ``tracks.png`` in ``out_dir``: detections (grey dots), confirmed tracks (lines).
 
     Parameters
@@ -27,6 +33,9 @@ def plot_tracks(out_dir: StrPath, en: ArrayLike, result: Any, title: str = "") -
         (north) of the rows of each confirmed ``track_id``.
     title : str, optional
         First line of the figure title (the second gives the number of confirmed tracks).
+    ref_deg : (lat, lon), optional
+        Latitude and longitude (deg) of the local frame's origin, written on the axes; NaN or
+        None for detections given in the file's own x/y frame.
 
     Returns
     -------
@@ -59,7 +68,15 @@ def plot_tracks(out_dir: StrPath, en: ArrayLike, result: Any, title: str = "") -
     for k, tid in enumerate(confirmed_ids):
         sel = ids == tid
         ax.plot(x[sel, 0] / 1e3, x[sel, 2] / 1e3, "-", lw=0.9, color=cmap(k % 20))
-    ax.set_xlabel("east (km)")
+    if ref_deg is not None and np.isfinite(ref_deg).all():
+        lat, lon = ref_deg
+        origin = (
+            f"of the reference {abs(lat):.5f}°{'N' if lat >= 0 else 'S'} "
+            f"{abs(lon):.5f}°{'E' if lon >= 0 else 'W'} (tangent plane at height 0)"
+        )
+    else:
+        origin = "(the file's x_m/y_m frame)"
+    ax.set_xlabel(f"east (km) {origin}")
     ax.set_ylabel("north (km)")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_title(f"{title}\n{len(confirmed_ids)} confirmed tracks")
