@@ -13,6 +13,7 @@ import pytest
 from navtrack.cli import main
 from navtrack.data import sample_path
 from navtrack.geodesy import ecef_to_geodetic
+from navtrack.gnss.android import read_gnsslogger
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
 from navtrack.gnss.spp import SppConfig, SppResult, solve_spp
@@ -197,8 +198,20 @@ def test_android_log(capsys: pytest.CaptureFixture[str]) -> None:
     assert rc == 0
     text = capsys.readouterr().out
     assert "weighting cn0" in text
+    # every Raw row without an observation is counted with its reason
+    obs = read_gnsslogger(sample_path("pseudoranges_log_2016_08_22_14_45_50.txt"))
+    assert f"rows skipped   {len(obs.skipped)} (" in text
     line = next(ln for ln in text.splitlines() if ln.strip().startswith("3D"))
     assert float(line.split()[2]) <= 15.0  # 3D RMS
+
+
+def test_android_prints_the_systems_solved(capsys: pytest.CaptureFixture[str]) -> None:
+    # issue 9: with all systems allowed, the GPS-only navigation file solves GPS alone, and
+    # the summary names the systems whose satellites entered a solution
+    log = sample_path("pseudoranges_log_2016_08_22_14_45_50.txt")
+    assert {s[0] for s in read_gnsslogger(log).sats} > {"G"}
+    assert main(["pos", str(log), str(sample_path("hour2350.16n"))]) == 0
+    assert "\nsystems        G  (" in capsys.readouterr().out
 
 
 def test_long_files_are_solved_in_blocks(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -113,3 +113,26 @@ def test_track_command_skips_a_century_old_row_and_bounds_the_grid(
     # with the time check off, the grid size is refused before it is allocated
     assert main(["track", str(f), "--format", "csv", "--max-time-days", "1e6"]) == 2
     assert re.search(r"--report-s 60 .* more than 1000000", capsys.readouterr().err)
+
+
+def test_track_progress_indicator_on_a_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
+    import io
+    import sys
+    import time
+
+    from navtrack.cli.track import PROGRESS_MIN_DETECTIONS, _progress
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    err = Terminal()
+    monkeypatch.setattr(sys, "stderr", err)
+    with _progress(PROGRESS_MIN_DETECTIONS, quiet=False):
+        time.sleep(1.2)
+    assert f"tracking {PROGRESS_MIN_DETECTIONS} detections: 00:01 elapsed" in err.getvalue()
+    quiet = Terminal()
+    monkeypatch.setattr(sys, "stderr", quiet)
+    with _progress(PROGRESS_MIN_DETECTIONS, quiet=True):
+        time.sleep(0.6)
+    assert quiet.getvalue() == ""

@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -249,6 +250,10 @@ def run_pos(args: argparse.Namespace) -> int:
         f"weighting {weighting}, elevation mask {args.elmask:g} deg)"
     )
     print(f"epochs         {n_epochs}")
+    if obs.skipped:
+        reasons = Counter(sk.reason for sk in obs.skipped)
+        listed = "; ".join(f"{r}: {n}" for r, n in reasons.most_common())
+        print(f"rows skipped   {len(obs.skipped)} ({listed})")
     print(f"solved         {solved}")
     for name in STATUS_NAMES:
         if counts[name]:

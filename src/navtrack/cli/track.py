@@ -9,6 +9,8 @@ between its own reports.
 from __future__ import annotations
 
 import argparse
+import contextlib
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -73,6 +75,9 @@ def register(subparsers: Any) -> None:
         default=30.0,
         help="skip rows dated farther than this from the median time",
     )
+    p.add_argument(
+        "--quiet", action="store_true", help="no progress indicator on stderr while tracking"
+    )
     p.set_defaults(func=run_track)
 
 
@@ -129,7 +134,8 @@ def run_track(args: argparse.Namespace) -> int:
     if vel is not None and not np.isfinite(vel).any():
         vel = None
     clock = time.perf_counter()
-    res = run_tracker(det.t_gps_s, en, cfg, report_times=grid, velocity=vel)
+    with _progress(len(det), quiet=args.quiet):
+        res = run_tracker(det.t_gps_s, en, cfg, report_times=grid, velocity=vel)
     t_track = time.perf_counter() - clock
     status = np.bincount(res.det_status, minlength=len(DET_STATUS_NAMES))
     summary["reference (lat, lon deg)"] = f"{ref[0]:.6f} {ref[1]:.6f}"
@@ -184,6 +190,48 @@ def run_track(args: argparse.Namespace) -> int:
         )
         print(f"plot written to {path}")
     return 0
+
+
+PROGRESS_MIN_DETECTIONS = 5000  # files this long take seconds: show that the tracker runs
+
+
+@contextlib.contextmanager
+def _progress(n_detections: int, *, quiet: bool) -> Iterator[None]:
+    """An elapsed-time indicator on stderr while the tracker runs over a long file.
+
+    ``run_tracker`` reports no progress of its own, so the indicator shows the detections
+    being tracked and the seconds elapsed (refreshed twice a second); it is off with
+    ``--quiet``, for files under :data:`PROGRESS_MIN_DETECTIONS` rows and when stderr is not a
+    terminal (tqdm's ``disable=None``).
+    """
+    if quiet or n_detections < PROGRESS_MIN_DETECTIONS:
+        yield
+        return
+    import sys
+    import threading
+
+    from tqdm import tqdm
+
+    done = threading.Event()
+    with tqdm(
+        desc=f"tracking {n_detections} detections",
+        bar_format="{desc}: {elapsed} elapsed",
+        file=sys.stderr,
+        disable=None,
+        leave=False,
+    ) as bar:
+
+        def tick() -> None:
+            while not done.wait(0.5):
+                bar.refresh()
+
+        ticker = threading.Thread(target=tick, daemon=True)
+        ticker.start()
+        try:
+            yield
+        finally:
+            done.set()
+            ticker.join()
 
 
 def _print(summary: dict[str, Any]) -> None:

@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from navtrack._typing import ArrayLike, StrPath
+from navtrack._typing import ArrayLike, FloatArray, StrPath
 from navtrack.plots.canvas import figure_dir, new_figure, save_figure
 
-__all__ = ["plot_tracks"]
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["plot_tracks", "tracks_figure"]
 
 
 def plot_tracks(
@@ -55,6 +58,13 @@ def plot_tracks(
     if en.ndim != 2 or en.shape[1] != 2:
         raise ValueError(f"en: expected shape (n_detections, 2), got {en.shape}")
     out = figure_dir(out_dir)
+    return save_figure(tracks_figure(en, result, title, ref_deg), out / "tracks.png", dpi=130)
+
+
+def tracks_figure(
+    en: FloatArray, result: Any, title: str = "", ref_deg: tuple[float, float] | None = None
+) -> Figure:
+    """The figure :func:`plot_tracks` writes (same parameters, ``en`` checked)."""
     fig = new_figure((9.0, 8.0))
     ax = fig.subplots()
     ax.plot(en[:, 0] / 1e3, en[:, 1] / 1e3, ".", color="0.75", ms=1.5, label="detections")
@@ -81,4 +91,4 @@ def plot_tracks(
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_title(f"{title}\n{len(confirmed_ids)} confirmed tracks")
     ax.legend(loc="best", fontsize=8)
-    return save_figure(fig, out / "tracks.png", dpi=130)
+    return fig
