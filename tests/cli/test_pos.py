@@ -42,6 +42,7 @@ def test_example_prints_summary_and_writes_csv(
     assert "epochs         120" in text
     assert "solved         120" in text
     assert "error vs ref" in text
+    assert "reference      -3962108.673 3381309.574 3668678.638 (ECEF m; station SEPT, " in text
     res = _library_result()
     lines = out.read_text().splitlines()
     assert lines[0].split(",") == [*SOLUTION_COLUMNS, "gdop", "hdop", "vdop", "isb_E_m"]
