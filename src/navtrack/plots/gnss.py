@@ -421,8 +421,11 @@ def skyplot_figure(tracks: Sequence[SkyTrack], elmask_deg: float | None = None) 
         k = _label_point(tr, placed)
         placed.append(_planar(tr.az_rad[k], tr.zenith_deg[k]))
         ax.text(tr.az_rad[k], tr.zenith_deg[k], tr.sat, fontsize=7, color=colour)
-    handles = [
-        ax.plot([], [], color=c, lw=2, label=_SYSTEM_NAMES.get(sys, sys))[0]
+    from matplotlib.lines import Line2D
+
+    # legend entries drawn apart from the axes' lines (one line per track stays the rule)
+    handles: list[Any] = [
+        Line2D([], [], color=c, lw=2, label=_SYSTEM_NAMES.get(sys, sys))
         for sys, c in systems.items()
     ]
     if elmask_deg is not None:
