@@ -151,7 +151,9 @@ def test_nav_not_matching_exits_nonzero(capsys: pytest.CaptureFixture[str]) -> N
 
 def _refused(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
     """The error line of a command refused as bad input (exit 2, no traceback)."""
-    assert main(argv) == 2
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err
     assert err.startswith("navtrack pos: error: ")

@@ -138,7 +138,10 @@ def _command(argv: Callable[[Path], list[str]]) -> Callable[[Path], int]:
 
         err = io.StringIO()
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
-            code = main(argv(path))
+            try:
+                code = main(argv(path))
+            except SystemExit as exc:  # a refused command line (CommandLineExit, exit 2)
+                code = exc.code if isinstance(exc.code, int) else 3
         if code in (0, 1):
             return 0
         raise CommandFailed(code, err.getvalue())

@@ -74,7 +74,9 @@ def test_track_cli_refuses_non_positive_settings(
     # empty scoring grid; now the command stops and names the option.
     f = tmp_path / "d.csv"
     f.write_text("time,x_m,y_m\n2020-01-01T00:00:00Z,0,0\n")
-    assert main(["track", str(f), "--format", "csv", option, value]) == 2
+    with pytest.raises(SystemExit, match=option) as info:
+        main(["track", str(f), "--format", "csv", option, value])
+    assert info.value.code == 2
     assert f"navtrack track: error: {option} must be" in capsys.readouterr().err
 
 
@@ -111,8 +113,10 @@ def test_track_command_skips_a_century_old_row_and_bounds_the_grid(
     assert "time more than 30 days from the median time: 1" in text
     assert "3 frames every 60 s" in text
     # with the time check off, the grid size is refused before it is allocated
-    assert main(["track", str(f), "--format", "csv", "--max-time-days", "1e6"]) == 2
-    assert re.search(r"--report-s 60 .* more than 1000000", capsys.readouterr().err)
+    with pytest.raises(SystemExit, match=r"--report-s 60 .* more than 1000000") as info:
+        main(["track", str(f), "--format", "csv", "--max-time-days", "1e6"])
+    assert info.value.code == 2
+    assert "navtrack track: error: --report-s 60 " in capsys.readouterr().err
 
 
 def test_track_progress_indicator_on_a_terminal(monkeypatch: pytest.MonkeyPatch) -> None:

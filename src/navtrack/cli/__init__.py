@@ -15,7 +15,8 @@ exit code
   (:class:`~navtrack.errors.FileFormatError` and every other
   :class:`~navtrack.errors.NavtrackError`), a file that cannot be opened
   (``OSError``), a refused option (a command raises ``SystemExit("navtrack CMD: why")``;
-  argparse's own usage errors exit with 2 too);
+  :func:`main` prints the error line and raises :class:`CommandLineExit`, exit 2, as
+  argparse's own usage errors do);
 * :data:`EXIT_INTERNAL` (3) -- an unexpected exception (a defect in navtrack): a short message
   and a hint to rerun with ``--debug``; 3 keeps it apart from 1, which scripts read as "no
   solution".
@@ -144,8 +145,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:
         if not isinstance(exc.code, str):
             raise
-        _report(name, _strip_prefix(exc.code, name), exc, args.debug)
-        return EXIT_BAD_INPUT
+        message = _strip_prefix(exc.code, name)
+        _report(name, message, exc, args.debug)
+        raise CommandLineExit(message) from None
     except (NavtrackError, OSError) as exc:
         _report(name, error_message(exc), exc, args.debug)
         return EXIT_BAD_INPUT
@@ -164,6 +166,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         sys.stdout.flush()
         sys.stdout = stdout
+
+
+class CommandLineExit(SystemExit):
+    """Exit 2 for a refused command line, raised by :func:`main` after printing the error line.
+
+    A command refuses its options with ``SystemExit("navtrack CMD: why")``; :func:`main`
+    prints ``navtrack CMD: error: why`` and raises this instead, whose exit code is
+    :data:`EXIT_BAD_INPUT` (so the interpreter prints nothing more) and whose ``str()`` is
+    still the message (so ``pytest.raises(SystemExit, match=...)`` reads it).
+    """
+
+    def __init__(self, message: str) -> None:
+        super().__init__(EXIT_BAD_INPUT)
+        self.message = message
+
+    def __str__(self) -> str:
+        return self.message
 
 
 def _strip_prefix(message: str, name: str) -> str:
