@@ -74,3 +74,17 @@ def test_singular_system_is_a_status(monkeypatch: pytest.MonkeyPatch) -> None:
     assert res.status == AriStatus.SINGULAR
     assert "Singular matrix" in res.message
     assert np.isnan(res.x).all()
+
+
+def test_last_row_cut_mid_line_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # issue 9, failure 10 for tables: "59,0.9" cut to "59," read the row as a missing value
+    path = tmp_path / "cut.csv"
+    path.write_text("\n".join(_LINES)[: -len(_LINES[-1]) + 2])  # no end of line
+    assert main(["smooth", str(path)]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert err.startswith(f"navtrack smooth: error: {path}:{len(_LINES)}: last row cut short")
+    whole = tmp_path / "whole.csv"
+    whole.write_text("\n".join(_LINES))  # no end of line, but the row is whole
+    assert main(["smooth", str(whole), "--order", "1,1"]) == 0

@@ -23,7 +23,14 @@ import pandas as pd
 from navtrack._typing import FloatArray, StrPath
 from navtrack.errors import FileFormatError, MissingDependencyError
 
-__all__ = ["TABLE_SUFFIXES", "file_line", "numeric_column", "read_csv_text", "read_table"]
+__all__ = [
+    "TABLE_SUFFIXES",
+    "file_line",
+    "last_row_cut",
+    "numeric_column",
+    "read_csv_text",
+    "read_table",
+]
 
 #: Suffixes :func:`read_table` understands (compared lower-cased).
 TABLE_SUFFIXES = (".pos", ".csv", ".txt", ".parquet")
@@ -52,8 +59,9 @@ def read_table(path: StrPath) -> pd.DataFrame:
     Raises
     ------
     FileFormatError
-        Unknown suffix, or content that is not a table of that format (the message names the
-        file, and the line when there is one).
+        Unknown suffix, content that is not a table of that format, or a CSV whose last row
+        has fewer fields than the header (a file cut mid-line); the message names the file,
+        and the line when there is one.
     MissingDependencyError
         A Parquet file without pyarrow installed.
     """
@@ -80,6 +88,10 @@ def read_table(path: StrPath) -> pd.DataFrame:
         except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
             raise FileFormatError(p, None, f"not a CSV table: {exc}") from None
         lines = _data_lines(text)
+        if not text.endswith(("\n", "\r")) and last_row_cut(text, "#"):
+            raise FileFormatError(
+                p, int(lines[-1]), "last row cut short by the end of the file (fewer fields)"
+            )
     else:
         raise FileFormatError(
             p, None, f"unknown table suffix {suffix!r} (known: {', '.join(TABLE_SUFFIXES)})"
@@ -121,6 +133,23 @@ def read_csv_text(path: StrPath) -> str:
     if text.lstrip()[:1] in ("{", "["):
         raise FileFormatError(path, 1, "JSON content, not a CSV")
     return text
+
+
+def last_row_cut(text: str, comment: str | None = None) -> bool:
+    """True when the last row has fewer fields than the header (a file cut mid-line).
+
+    ``comment`` starts a comment: lines empty before it are not rows (nor the header).
+    """
+    import csv
+
+    lines = text.rstrip().splitlines()
+    if comment is not None:
+        lines = [ln for ln in lines if ln.split(comment, 1)[0].strip()]
+    if len(lines) < 2:
+        return False
+    header = next(csv.reader(lines[:1]))
+    last = next(csv.reader(lines[-1:]))
+    return len(last) < len(header)
 
 
 def _data_lines(text: str) -> np.ndarray:

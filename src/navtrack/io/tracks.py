@@ -26,7 +26,7 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError
-from navtrack.io.tables import read_csv_text
+from navtrack.io.tables import last_row_cut, read_csv_text
 
 __all__ = [
     "TrackDetections",
@@ -105,19 +105,6 @@ class TrackDetections:
         }
 
 
-def _last_row_cut(text: str) -> bool:
-    """True when the last row has fewer fields than the header (a file cut mid-line)."""
-    import csv
-
-    body = text.rstrip()
-    first, _, rest = body.partition("\n")
-    if not rest:
-        return False
-    header = next(csv.reader(first.splitlines()))
-    last = next(csv.reader(rest.rpartition("\n")[2].splitlines()))
-    return len(last) < len(header)
-
-
 def _read_frame(path: StrPath) -> tuple[Any, bool]:
     """The file as a frame of strings, and whether its last row was cut short."""
     import io
@@ -131,7 +118,7 @@ def _read_frame(path: StrPath) -> tuple[Any, bool]:
         raise FileFormatError(path, 1, "empty file (no header)") from None
     except pd.errors.ParserError as exc:
         raise FileFormatError(path, None, f"not a readable CSV: {exc}") from None
-    return df, _last_row_cut(text)
+    return df, last_row_cut(text)
 
 
 def _require(path: StrPath, df: Any, cols: list[str]) -> None:
