@@ -142,3 +142,26 @@ def test_mutations_are_seeded() -> None:
         assert mutate(data, 12, op, 7) == mutate(data, 12, op, 7)
     assert len({mutate(data, 12, "flip_bytes", s)[0] for s in range(5)}) == 5
     assert np.all([mutate(data, 12, "empty", 1)[0] == b""])
+
+
+@pytest.mark.parametrize(
+    ("target", "argv", "operator", "seed"),
+    [
+        ("tracks_csv", ["track", "{}", "--format", "csv", "--quiet"], "bad_number", 2),
+        ("smooth_command", ["smooth", "{}", "--order", "0,1"], "garbage_line", 3),
+    ],
+)
+def test_table_command_exits_cleanly_on_mutant(
+    target: str, argv: list[str], operator: str, seed: int, tmp_path: Path
+) -> None:
+    """``track`` and ``smooth`` on a mutant of their seed, as processes (see above)."""
+    src = TARGETS[target].seed(tmp_path)
+    assert src is not None
+    mutant, _ = mutate(src.read_bytes(), 1, operator, seed)
+    path = tmp_path / f"mutant{src.suffix}"
+    path.write_bytes(mutant)
+    proc = _cli([str(path) if a == "{}" else a for a in argv])
+    assert proc.returncode in (0, 1, 2), proc.stderr
+    assert "Traceback" not in proc.stderr
+    if proc.returncode == 2:
+        assert proc.stderr.startswith(f"navtrack {argv[0]}: error: {path}")
