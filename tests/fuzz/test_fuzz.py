@@ -5,8 +5,9 @@ Each mutant (:mod:`fuzz_mutations`) runs in a worker process limited in memory a
 line, where the reader knows one), or read with its damaged records skipped and counted,
 or read as valid -- never another exception, a hang or a memory blow-up. CI runs 14
 derandomized mutants per target (one per operator and three more) and a sample of the
-commands as separate processes; ``--hypothesis-profile=deep`` runs many more, and
-``tests/fuzz/report.py`` prints the table of outcomes.
+commands as separate processes; ``--hypothesis-profile=deep`` (registered in
+``tests/conftest.py``) runs 300 per target, and ``tests/fuzz/report.py`` prints the table of
+outcomes.
 """
 
 from __future__ import annotations
