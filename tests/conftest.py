@@ -10,8 +10,18 @@ import os
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 REPO = Path(__file__).resolve().parents[1]
+
+# Deep runs outside CI (``pytest tests/fuzz --hypothesis-profile=deep``): 300 examples per
+# test instead of the fuzz suite's 14 derandomized mutants per target.
+settings.register_profile(
+    "deep",
+    max_examples=300,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 SHARED_DATA = Path(os.environ.get("NAVTRACK_SHARED_DATA", REPO.parent / "shared" / "data"))
 TEST_DATA = REPO / "tests" / "data"
 # The folders of the shared data the tests read.

@@ -65,7 +65,7 @@ def test_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit, match="fix_quat: quaternion row 3 is not a unit"):
         main(["attitude", "reconstruct", str(imu), "--fixes", str(nonunit), "--out", out])
     f.drop(columns="qw").to_csv(nonunit, index=False)
-    assert main(["attitude", "reconstruct", str(imu), "--fixes", str(nonunit), "--out", out]) == 1
+    assert main(["attitude", "reconstruct", str(imu), "--fixes", str(nonunit), "--out", out]) == 2
     assert "lacks the columns qw" in capsys.readouterr().err
     with pytest.raises(SystemExit, match="exactly one of"):
         main(["attitude", "reconstruct", str(imu), "--out", out])

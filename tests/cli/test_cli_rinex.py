@@ -45,11 +45,14 @@ def test_info_bad_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> No
     rows[18] = rows[18].replace("24767684.822", "2476x684.822")
     bad = tmp_path / "bad.05o"
     bad.write_text("\n".join(rows) + "\n")
-    assert main(["rinex", "info", str(bad)]) == 1
+    assert main(["rinex", "info", str(bad)]) == 2  # bad input
     err = capsys.readouterr().err
-    assert "bad.05o, line 19" in err
+    assert f"navtrack rinex info: error: {bad}:19: " in err
+    assert "Traceback" not in err
 
 
-def test_info_needs_one_input() -> None:
-    with pytest.raises(SystemExit):
+def test_info_needs_one_input(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
         main(["rinex", "info"])
+    assert info.value.code == 2
+    assert "navtrack rinex info: error: give exactly one of" in capsys.readouterr().err

@@ -13,6 +13,7 @@ import pytest
 from navtrack.cli import main
 from navtrack.data import sample_path
 from navtrack.geodesy import ecef_to_geodetic
+from navtrack.gnss.android import read_gnsslogger
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
 from navtrack.gnss.spp import SppConfig, SppResult, solve_spp
@@ -41,6 +42,7 @@ def test_example_prints_summary_and_writes_csv(
     assert "epochs         120" in text
     assert "solved         120" in text
     assert "error vs ref" in text
+    assert "reference      -3962108.673 3381309.574 3668678.638 (ECEF m; station SEPT, " in text
     res = _library_result()
     lines = out.read_text().splitlines()
     assert lines[0].split(",") == [*SOLUTION_COLUMNS, "gdop", "hdop", "vdop", "isb_E_m"]
@@ -147,11 +149,22 @@ def test_nav_not_matching_exits_nonzero(capsys: pytest.CaptureFixture[str]) -> N
     assert "NAV file matches the observation day" in captured.err
 
 
-def test_reference_in_wrong_units_is_refused() -> None:
-    with pytest.raises(SystemExit, match="ECEF metres"):
-        main(["pos", "--example", "--ref", "-3962.108", "3381.309", "3668.678"])  # km
-    with pytest.raises(SystemExit, match="degrees"):
-        main(["pos", "--example", "--ref-llh", "-3962108.6", "3381309.5", "3668678.6"])
+def _refused(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
+    """The error line of a command refused as bad input (exit 2, no traceback)."""
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert err.startswith("navtrack pos: error: ")
+    return err
+
+
+def test_reference_in_wrong_units_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
+    km = ["pos", "--example", "--ref", "-3962.108", "3381.309", "3668.678"]
+    assert "ECEF metres" in _refused(km, capsys)
+    llh = ["pos", "--example", "--ref-llh", "-3962108.6", "3381309.5", "3668678.6"]
+    assert "degrees" in _refused(llh, capsys)
 
 
 def test_unwritable_output_still_solves(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -163,13 +176,11 @@ def test_unwritable_output_still_solves(tmp_path: Path, capsys: pytest.CaptureFi
     assert "NOT written" in captured.err
 
 
-def test_missing_inputs() -> None:
-    with pytest.raises(SystemExit, match="no navigation file"):
-        main(["pos", str(sample_path("SEPT078M_120.21O"))])
-    with pytest.raises(SystemExit, match="not found"):
-        main(["pos", "/nonexistent.21o", str(sample_path("SEPT078M.21P"))])
-    with pytest.raises(SystemExit, match="systems"):
-        main(["pos", "--example", "--systems", "GXQ"])
+def test_missing_inputs(capsys: pytest.CaptureFixture[str]) -> None:
+    obs, nav = str(sample_path("SEPT078M_120.21O")), str(sample_path("SEPT078M.21P"))
+    assert "no navigation file" in _refused(["pos", obs], capsys)
+    assert "not found" in _refused(["pos", "/nonexistent.21o", nav], capsys)
+    assert "systems" in _refused(["pos", "--example", "--systems", "GXQ"], capsys)
 
 
 def test_android_log(capsys: pytest.CaptureFixture[str]) -> None:
@@ -190,8 +201,20 @@ def test_android_log(capsys: pytest.CaptureFixture[str]) -> None:
     assert rc == 0
     text = capsys.readouterr().out
     assert "weighting cn0" in text
+    # every Raw row without an observation is counted with its reason
+    obs = read_gnsslogger(sample_path("pseudoranges_log_2016_08_22_14_45_50.txt"))
+    assert f"rows skipped   {len(obs.skipped)} (" in text
     line = next(ln for ln in text.splitlines() if ln.strip().startswith("3D"))
     assert float(line.split()[2]) <= 15.0  # 3D RMS
+
+
+def test_android_prints_the_systems_solved(capsys: pytest.CaptureFixture[str]) -> None:
+    # issue 9: with all systems allowed, the GPS-only navigation file solves GPS alone, and
+    # the summary names the systems whose satellites entered a solution
+    log = sample_path("pseudoranges_log_2016_08_22_14_45_50.txt")
+    assert {s[0] for s in read_gnsslogger(log).sats} > {"G"}
+    assert main(["pos", str(log), str(sample_path("hour2350.16n"))]) == 0
+    assert "\nsystems        G  (" in capsys.readouterr().out
 
 
 def test_long_files_are_solved_in_blocks(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

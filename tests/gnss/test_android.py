@@ -225,3 +225,72 @@ def test_bad_input(tmp_path: Path) -> None:
     empty.write_text("")
     with pytest.raises(FileFormatError, match="empty file"):
         read_gnsslogger(empty)
+
+
+def test_garbage_and_malformed_unused_fields_are_counted(tmp_path: Path) -> None:
+    # issue 9, failure 11: a garbage line and a malformed value in a column navtrack does not
+    # use (MultipathIndicator) were accepted without a word
+    lines = PIXEL7.read_text().splitlines(keepends=True)
+    col = {
+        n: k for k, n in enumerate(next(ln for ln in lines if ln.startswith("# Raw")).split(","))
+    }
+    raw = [i for i, ln in enumerate(lines) if ln.startswith("Raw,")]
+    bad = lines.copy()
+    fields = bad[raw[3]].split(",")
+    fields[col["MultipathIndicator"]] = "x1"
+    bad[raw[3]] = ",".join(fields)
+    path = tmp_path / "damaged.txt"
+    path.write_text("".join(bad))
+    with pytest.raises(
+        FileFormatError, match=rf"line {raw[3] + 1}: unreadable Raw row \(MultipathIndicator 'x1'"
+    ):
+        read_gnsslogger(path)
+    bad.insert(raw[5], "%%garbage: 12 34\n")
+    path.write_text("".join(bad))
+    good = read_gnsslogger(PIXEL7)
+    lenient = read_gnsslogger(path, lenient=True)
+    counts = skipped_counts(lenient)
+    assert counts["unreadable row"] == 1
+    assert counts["not a log record"] == 1
+    assert {s.line for s in lenient.skipped} - {s.line for s in good.skipped} >= {
+        raw[3] + 1,
+        raw[5] + 1,
+    }
+    # the other rows give what they gave before
+    assert np.isfinite(lenient.values).sum() < np.isfinite(good.values).sum()
+    strict_garbage = lines.copy()
+    strict_garbage.insert(raw[5], "%%garbage: 12 34\n")
+    path.write_text("".join(strict_garbage))
+    with pytest.raises(FileFormatError, match=rf"line {raw[5] + 1}: not a GnssLogger record"):
+        read_gnsslogger(path)
+
+
+def test_last_row_cut_by_the_end_of_the_file(tmp_path: Path) -> None:
+    # issue 9, failure 10: a last Raw row cut mid-line was read with its cut value as data
+    text = PIXEL7.read_text()
+    last_raw = text.rstrip("\n").rsplit("\n", 1)[1]
+    assert last_raw.startswith("Raw,")
+    n_lines = len(text.rstrip("\n").split("\n"))
+    path = tmp_path / "cut.txt"
+    path.write_text(text.rstrip("\n")[: -len(last_raw) // 2])
+    with pytest.raises(FileFormatError, match=rf"line {n_lines}: Raw row cut short"):
+        read_gnsslogger(path)
+    lenient = read_gnsslogger(path, lenient=True)
+    assert n_lines in [s.line for s in lenient.skipped if s.reason == "unreadable row"]
+
+
+def test_infinite_integer_field_is_unreadable(tmp_path: Path) -> None:
+    # found by the fuzz suite (bad_number, seed 606): "inf" in an integer column raised
+    # OverflowError from int(float("inf"))
+    lines = PIXEL7.read_text().splitlines(keepends=True)
+    header = next(ln for ln in lines if ln.startswith("# Raw"))
+    col = {n: k for k, n in enumerate(header.split(","))}
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("Raw,"))
+    fields = lines[k].split(",")
+    fields[col["State"]] = "inf"
+    lines[k] = ",".join(fields)
+    path = tmp_path / "inf.txt"
+    path.write_text("".join(lines))
+    with pytest.raises(FileFormatError, match=rf"line {k + 1}: unreadable Raw row"):
+        read_gnsslogger(path)
+    assert skipped_counts(read_gnsslogger(path, lenient=True))["unreadable row"] == 1

@@ -1129,3 +1129,20 @@ def test_file_cut_mid_line(tmp_path: Path, name: str) -> None:
     # a last line with no end-of-line that ends on a field boundary is complete
     path.write_bytes(raw.rstrip())
     np.testing.assert_array_equal(read_obs(path).values, full.values)
+
+
+def test_v3_epoch_record_cut_in_its_clock_field(tmp_path: Path) -> None:
+    # issue 9: an epoch record ending inside the receiver clock offset (F15.12, columns 42-56)
+    # read the cut digits as the clock; now it is an error naming the line
+    rows = sample_path("SEPT078M_120.21O").read_text().splitlines()
+    assert rows[33].startswith("> 2021 03 19 12 00  0.0000000  0 23")
+    whole = tmp_path / "clock.21o"
+    rows[33] = rows[33] + "      -0.123456789012"
+    whole.write_text("\n".join(rows) + "\n")
+    assert read_obs(whole).clock_offset_s[0] == pytest.approx(-0.123456789012, abs=1e-15)
+    cut = tmp_path / "cut.21o"
+    rows[33] = rows[33][:-8]
+    cut.write_text("\n".join(rows) + "\n")
+    _raises_at(cut, 34, r"receiver clock offset '-0\.1234' cut short")
+    lenient = read_obs(cut, lenient=True)
+    assert 34 in [s.line for s in lenient.skipped]

@@ -351,3 +351,44 @@ def test_implausible_position_flagged_and_excluded(
     data = sample_path("SEPT078M_120.21O"), sample_path("SEPT078M.21P")
     assert main(["pos", *map(str, data), "--sp3", str(path), "--no-progress"]) == 0
     assert f"{path}, line {k + 1}: position 1e+12 km" in capsys.readouterr().err
+
+
+def _shift_x(line: str, km: float) -> str:
+    x = float(line[4:18]) + km
+    return line[:4] + f"{x:14.6f}" + line[18:]
+
+
+def test_jump_between_records_is_flagged_and_excluded(tmp_path: Path) -> None:
+    """Issue 9, failure 9: a coordinate moved 3,000 km (still on the orbit shell) at one epoch
+    is a jump no orbit makes in 5 minutes: that record is missing, with its line; a step from
+    one epoch on (the orbit before and after disagree) excludes the satellite from the file.
+    The real orbits of all 117 satellites (GPS to BeiDou GEO) raise nothing."""
+    lines = _bundled_lines()
+    star = [k for k, ln in enumerate(lines) if ln.startswith("*")] + [len(lines)]
+
+    def record(epoch: int, sat: str) -> int:
+        return next(j for j in range(star[epoch], star[epoch + 1]) if lines[j][1:4] == sat)
+
+    full = read_sp3(sample_path(BUNDLED))
+    assert full.implausible == ()
+    one = lines.copy()
+    k = record(15, "G01")
+    one[k] = _shift_x(one[k], 3000.0)
+    path = tmp_path / "jump.sp3"
+    path.write_text("".join(one))
+    sp3 = read_sp3(path)
+    assert [s.line for s in sp3.implausible] == [k + 1]
+    assert "jumps from the neighbouring records" in sp3.implausible[0].reason
+    g01 = sp3.sat_index("G01")
+    assert np.isnan(sp3.pos_m[15, g01]).all()
+    assert np.isfinite(sp3.pos_m[[14, 16], g01]).all()
+    step = lines.copy()
+    for epoch in range(20, 34):
+        j = record(epoch, "E11")
+        step[j] = _shift_x(step[j], 3000.0)
+    path.write_text("".join(step))
+    sp3 = read_sp3(path)
+    assert [s.line for s in sp3.implausible] == [record(20, "E11") + 1]
+    assert "excluded from the whole file" in sp3.implausible[0].reason
+    assert np.isnan(sp3.pos_m[:, sp3.sat_index("E11")]).all()
+    assert np.isfinite(sp3.pos_m[:, g01]).all()

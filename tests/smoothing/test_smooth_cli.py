@@ -50,8 +50,10 @@ def test_smooth_rtklib_pos(gnss_data: Path, tmp_path: Path, capsys: pytest.Captu
     assert text.count("sigma_n = ") == 3
 
 
-def test_smooth_bad_column(tmp_path: Path) -> None:
+def test_smooth_bad_column(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     src = tmp_path / "a.csv"
     pd.DataFrame({"t": [0.0, 1.0, 2.0], "v": [1.0, 2.0, 3.0]}).to_csv(src, index=False)
-    with pytest.raises(SystemExit, match="not in"):
+    with pytest.raises(SystemExit, match="not in") as info:
         main(["smooth", str(src), "--columns", "w"])
+    assert info.value.code == 2
+    assert "navtrack smooth: error: columns w not in" in capsys.readouterr().err

@@ -61,19 +61,23 @@ def test_track_command_reports_missing_columns(
 ) -> None:
     f = tmp_path / "bad.csv"
     f.write_text("when,lat,lon\n2020-01-01T00:00:00Z,50,-1\n")
-    assert main(["track", str(f), "--format", "csv"]) == 1
-    assert "bad.csv, line 1: missing column" in capsys.readouterr().err
+    assert main(["track", str(f), "--format", "csv"]) == 2
+    assert "navtrack track: error: " + f"{f}:1: missing column" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("option", ["--report-s", "--match-m", "--max-range-km", "--max-time-days"])
 @pytest.mark.parametrize("value", ["0", "-5", "nan"])
-def test_track_cli_refuses_non_positive_settings(tmp_path: Path, option: str, value: str) -> None:
+def test_track_cli_refuses_non_positive_settings(
+    tmp_path: Path, option: str, value: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     # before: "--report-s 0" silently fell back to the default and a negative value gave an
     # empty scoring grid; now the command stops and names the option.
     f = tmp_path / "d.csv"
     f.write_text("time,x_m,y_m\n2020-01-01T00:00:00Z,0,0\n")
-    with pytest.raises(SystemExit, match=option):
+    with pytest.raises(SystemExit, match=option) as info:
         main(["track", str(f), "--format", "csv", option, value])
+    assert info.value.code == 2
+    assert f"navtrack track: error: {option} must be" in capsys.readouterr().err
 
 
 def _ships(k_last: int, extra: str = "") -> str:
@@ -109,5 +113,30 @@ def test_track_command_skips_a_century_old_row_and_bounds_the_grid(
     assert "time more than 30 days from the median time: 1" in text
     assert "3 frames every 60 s" in text
     # with the time check off, the grid size is refused before it is allocated
-    with pytest.raises(SystemExit, match=r"--report-s 60 .* more than 1000000"):
+    with pytest.raises(SystemExit, match=r"--report-s 60 .* more than 1000000") as info:
         main(["track", str(f), "--format", "csv", "--max-time-days", "1e6"])
+    assert info.value.code == 2
+    assert "navtrack track: error: --report-s 60 " in capsys.readouterr().err
+
+
+def test_track_progress_indicator_on_a_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
+    import io
+    import sys
+    import time
+
+    from navtrack.cli.track import PROGRESS_MIN_DETECTIONS, _progress
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    err = Terminal()
+    monkeypatch.setattr(sys, "stderr", err)
+    with _progress(PROGRESS_MIN_DETECTIONS, quiet=False):
+        time.sleep(1.2)
+    assert f"tracking {PROGRESS_MIN_DETECTIONS} detections: 00:01 elapsed" in err.getvalue()
+    quiet = Terminal()
+    monkeypatch.setattr(sys, "stderr", quiet)
+    with _progress(PROGRESS_MIN_DETECTIONS, quiet=True):
+        time.sleep(0.6)
+    assert quiet.getvalue() == ""

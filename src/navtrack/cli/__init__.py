@@ -4,14 +4,38 @@ argparse rather than a decorator framework: it ships with Python, costs nothing 
 positioning command is timed as a whole process against RTKLIB), and keeps each command a plain
 function over the library. Every command module registers its sub-parser and imports its heavy
 dependencies only when run.
+
+One error path for every command (:func:`main`): a command reports trouble by raising, and
+:func:`main` prints one line ``navtrack CMD: error: FILE:LINE: what`` on stderr and returns the
+exit code
+
+* :data:`EXIT_OK` (0) -- the command ran and solved what it was asked;
+* :data:`EXIT_UNSOLVED` (1) -- it ran, but nothing could be solved (the command returns it);
+* :data:`EXIT_BAD_INPUT` (2) -- bad input: a malformed file
+  (:class:`~navtrack.errors.FileFormatError` and every other
+  :class:`~navtrack.errors.NavtrackError`), a file that cannot be opened
+  (``OSError``), a refused option (a command raises ``SystemExit("navtrack CMD: why")``;
+  :func:`main` prints the error line and raises :class:`CommandLineExit`, exit 2, as
+  argparse's own usage errors do);
+* :data:`EXIT_INTERNAL` (3) -- an unexpected exception (a defect in navtrack): a short message
+  and a hint to rerun with ``--debug``; 3 keeps it apart from 1, which scripts read as "no
+  solution".
+
+No traceback is printed unless ``navtrack --debug CMD ...`` is given. Output piped into a
+reader that stops early (``navtrack pos ... | head``) is dropped once the pipe closes, without a
+``Broken pipe`` message; the command still runs to its end, so its ``--out`` file and figures
+are written and its exit code is its own.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+import traceback
 from collections.abc import Sequence
+from typing import Any, TextIO
 
 from navtrack import __version__
 
@@ -27,31 +51,191 @@ COMMAND_MODULES = (
     "navtrack.cli.attitude",
 )
 
+EXIT_OK = 0
+EXIT_UNSOLVED = 1
+EXIT_BAD_INPUT = 2
+EXIT_INTERNAL = 3
+
 
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every command registered."""
     parser = argparse.ArgumentParser(
         prog="navtrack",
         description="Positioning, navigation integrity and multi-target tracking on real data.",
+        epilog="Exit codes: 0 solved, 1 ran but nothing could be solved, 2 bad input or "
+        "options, 3 internal error (rerun with --debug for the traceback).",
     )
     parser.add_argument("--version", action="version", version=f"navtrack {__version__}")
-    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    parser.add_argument(
+        "--debug", action="store_true", help="print the Python traceback of any error"
+    )
+    subparsers = parser.add_subparsers(
+        dest="command", metavar="COMMAND", parser_class=_CommandParser
+    )
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(subparsers)
     return parser
 
 
+class DefaultsHelpFormatter(argparse.HelpFormatter):
+    """``--help`` that states every default: ``(default: VALUE)`` after each option's help.
+
+    Options whose help already says its default (a default that depends on the input, "default:
+    all present") keep their own words; switches (``store_true``) and options without a default
+    (``None``) get nothing.
+    """
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if (
+            "default" in text
+            or default is None
+            or default is False
+            or default is argparse.SUPPRESS
+            or default == []
+            or not (action.option_strings or action.nargs in ("?", "*"))
+        ):
+            return action.help
+        return f"{text} (default: %(default)s)"
+
+
+class _CommandParser(argparse.ArgumentParser):
+    """The parser of one command: its ``--help`` states the defaults."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", DefaultsHelpFormatter)
+        super().__init__(*args, **kwargs)
+
+
+def command_name(args: argparse.Namespace) -> str:
+    """``navtrack CMD`` as typed: the command and its sub-command, if it has one."""
+    words = ["navtrack"]
+    if getattr(args, "command", None):
+        words.append(args.command)
+        sub = getattr(args, f"{args.command}_command", None)
+        if sub:
+            words.append(sub)
+    return " ".join(words)
+
+
+def error_message(exc: BaseException) -> str:
+    """The ``FILE:LINE: what`` part of an error line (``FILE: what`` without a line)."""
+    from navtrack.errors import FileFormatError
+
+    if isinstance(exc, FileFormatError):
+        where = exc.path if exc.line is None else f"{exc.path}:{exc.line}"
+        return f"{where}: {exc.message}"
+    if isinstance(exc, OSError) and exc.filename is not None:
+        return f"{exc.filename}: {exc.strerror or exc}"
+    return str(exc)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the process exit code."""
+    """Run the command line; returns the process exit code (module notes)."""
     from navtrack.errors import NavtrackError
 
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
-        return 2
+        return EXIT_BAD_INPUT
+    name = command_name(args)
+    stdout = sys.stdout
+    sys.stdout = _PipeSafe(stdout)
     try:
-        return int(args.func(args) or 0)
+        return int(args.func(args) or EXIT_OK)
+    except SystemExit as exc:
+        if not isinstance(exc.code, str):
+            raise
+        message = _strip_prefix(exc.code, name)
+        _report(name, message, exc, args.debug)
+        raise CommandLineExit(message) from None
     except (NavtrackError, OSError) as exc:
-        print(f"navtrack: error: {exc}", file=sys.stderr)
-        return 1
+        _report(name, error_message(exc), exc, args.debug)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print(f"{name}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # the defect path: one line, the traceback behind --debug
+        _report(
+            name,
+            f"internal error {type(exc).__name__}: {exc} (this is a navtrack defect; rerun with "
+            "navtrack --debug ... for the traceback and report it)",
+            exc,
+            args.debug,
+        )
+        return EXIT_INTERNAL
+    finally:
+        sys.stdout.flush()
+        sys.stdout = stdout
+
+
+class CommandLineExit(SystemExit):
+    """Exit 2 for a refused command line, raised by :func:`main` after printing the error line.
+
+    A command refuses its options with ``SystemExit("navtrack CMD: why")``; :func:`main`
+    prints ``navtrack CMD: error: why`` and raises this instead, whose exit code is
+    :data:`EXIT_BAD_INPUT` (so the interpreter prints nothing more) and whose ``str()`` is
+    still the message (so ``pytest.raises(SystemExit, match=...)`` reads it).
+    """
+
+    def __init__(self, message: str) -> None:
+        super().__init__(EXIT_BAD_INPUT)
+        self.message = message
+
+    def __str__(self) -> str:
+        return self.message
+
+
+def _strip_prefix(message: str, name: str) -> str:
+    """A command's own ``"navtrack CMD: ..."`` message without that prefix."""
+    for prefix in (f"{name}: ", f"{name.rsplit(' ', 1)[0]}: "):
+        if message.startswith(prefix):
+            return message[len(prefix) :]
+    return message
+
+
+def _report(name: str, message: str, exc: BaseException, debug: bool) -> None:
+    if debug:
+        traceback.print_exception(exc, file=sys.stderr)
+    print(f"{name}: error: {message}", file=sys.stderr)
+
+
+class _PipeSafe:
+    """``sys.stdout`` that drops its output once the reading end of a pipe has closed.
+
+    The first ``BrokenPipeError`` points the file descriptor at ``os.devnull`` (so that the
+    interpreter's last flush at exit succeeds too) and every later write is discarded.
+    """
+
+    def __init__(self, stream: TextIO) -> None:
+        self._stream = stream
+        self._closed = False
+
+    def write(self, text: str) -> int:
+        if not self._closed:
+            try:
+                return self._stream.write(text)
+            except BrokenPipeError:
+                self._drop()
+        return len(text)
+
+    def flush(self) -> None:
+        if not self._closed:
+            try:
+                self._stream.flush()
+            except BrokenPipeError:
+                self._drop()
+
+    def _drop(self) -> None:
+        self._closed = True
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, self._stream.fileno())
+            os.close(devnull)
+        except (OSError, ValueError):  # not a real file descriptor (captured output)
+            pass
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -29,6 +30,7 @@ EXAMPLE_OBS = "SEPT078M_120.21O"
 EXAMPLE_NAV = "SEPT078M.21P"
 # cssrlib's xyz_ref of station SEPT (src/navtrack/data/README.md)
 EXAMPLE_REF_XYZ_M = (-3962108.673, 3381309.574, 3668678.638)
+EXAMPLE_REF_SOURCE = "station SEPT, cssrlib's xyz_ref (src/navtrack/data/README.md)"
 WEIGHTINGS = ("rtklib", "elevation", "cn0", "equal")
 
 
@@ -86,7 +88,8 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--example",
         action="store_true",
-        help=f"run on the bundled {EXAMPLE_OBS} + {EXAMPLE_NAV} with its reference",
+        help=f"run on the bundled {EXAMPLE_OBS} + {EXAMPLE_NAV}; errors against "
+        f"{EXAMPLE_REF_SOURCE}",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     # --- integrity monitoring (navtrack.integrity.raim)
@@ -239,6 +242,7 @@ def run_pos(args: argparse.Namespace) -> int:
         args.nav = [sample_path(EXAMPLE_NAV)]
         if args.ref is None and args.ref_llh is None:
             args.ref = list(EXAMPLE_REF_XYZ_M)
+            args.ref_source = EXAMPLE_REF_SOURCE
     if args.obs is None:
         raise SystemExit("navtrack pos: give OBS and NAV files, or --example")
     if not args.obs.is_file():
@@ -278,7 +282,9 @@ def run_pos(args: argparse.Namespace) -> int:
     result = _solve(obs, navs, sp3, config, progress=not args.no_progress, raim=raim)
     counts = result.status_counts()
     solved = counts["ok"]
-    used_systems = "".join(s for s in "GRECJI" if any(sat[0] == s for sat in result.sats))
+    # the systems of satellites that entered a solution, not those merely observed
+    used_sats = {result.sats[j][0] for j in np.flatnonzero(result.used.any(axis=0))}
+    used_systems = "".join(s for s in "GRECJI" if s in used_sats)
 
     print(f"observations   {args.obs}")
     print(
@@ -290,6 +296,10 @@ def run_pos(args: argparse.Namespace) -> int:
         f"weighting {weighting}, elevation mask {args.elmask:g} deg)"
     )
     print(f"epochs         {n_epochs}")
+    if obs.skipped:
+        reasons = Counter(sk.reason for sk in obs.skipped)
+        listed = "; ".join(f"{r}: {n}" for r, n in reasons.most_common())
+        print(f"rows skipped   {len(obs.skipped)} ({listed})")
     print(f"solved         {solved}")
     for name in STATUS_NAMES:
         if counts[name]:
@@ -307,6 +317,8 @@ def run_pos(args: argparse.Namespace) -> int:
             f"PDOP median {np.nanmedian(result.dop[ok, 1]):.2f}"
         )
     if ref is not None and solved:
+        source = getattr(args, "ref_source", "--ref-llh" if args.ref is None else "--ref")
+        print(f"reference      {ref[0]:.3f} {ref[1]:.3f} {ref[2]:.3f} (ECEF m; {source})")
         st = _error_stats(result.pos_m[result.status == 0], ref)
         print("error vs ref   mean      RMS       95 %    (m)")
         for key, name in (("horizontal", "horizontal"), ("up", "vertical"), ("3D", "3D")):
@@ -347,7 +359,12 @@ def run_pos(args: argparse.Namespace) -> int:
         from navtrack.plots.gnss import plot_solution
 
         paths = plot_solution(
-            table, args.plot, ref_xyz_m=ref, azel=(result.azel_rad, list(result.sats))
+            table,
+            args.plot,
+            ref_xyz_m=ref,
+            azel=(result.azel_rad, list(result.sats)),
+            max_gdop=config.max_gdop,
+            elmask_deg=args.elmask,
         )
         print(f"figures        {', '.join(str(p) for p in paths)}")
     return status_code

@@ -56,7 +56,9 @@ def register(subparsers: Any) -> None:
         help="|T| above which an epoch is a gross error (default 3.29)",
     )
     cmd.add_argument("--out", type=Path, help="write filtered series (.csv or .parquet)")
-    cmd.add_argument("--plot", type=Path, help="write one PNG per column into this directory")
+    cmd.add_argument(
+        "--plot", type=Path, metavar="DIR", help="write one PNG per column into this directory"
+    )
     cmd.set_defaults(func=run_smooth)
 
 
@@ -67,15 +69,61 @@ def _unit(column: str) -> str:
     return "(input units)"
 
 
+def _mostly_numeric(column: Any) -> bool:
+    """A column to smooth by default: most of its non-empty fields are numbers (so that a
+    stray text line is reported, not the column dropped)."""
+    import pandas as pd
+
+    present = column.dropna()
+    return bool(present.size) and bool(pd.to_numeric(present, errors="coerce").notna().mean() > 0.5)
+
+
+def _time_stamps(path: Path, df: Any, column: str) -> Any:
+    """The time column (s), every stamp present and later than the one before it.
+
+    Raises
+    ------
+    FileFormatError
+        A missing, non-numeric or infinite stamp, or one that repeats or goes back in time,
+        naming its file line (and the line it does not follow).
+    """
+    import numpy as np
+
+    from navtrack.errors import FileFormatError
+    from navtrack.io.tables import file_line, numeric_column
+
+    t = numeric_column(path, df, column)
+    if np.isnan(t).any():
+        k = int(np.argmax(np.isnan(t)))
+        raise FileFormatError(path, file_line(df, k), f"time column {column!r}: no time stamp")
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if back.size:
+        k = int(back[0])
+        what = "repeats" if t[k + 1] == t[k] else "goes back from"
+        before = file_line(df, k)
+        raise FileFormatError(
+            path,
+            file_line(df, k + 1),
+            f"time {t[k + 1]:.10g} s {what} {t[k]:.10g} s"
+            + (f" of line {before}" if before is not None else f" of row {k}")
+            + " (times must increase)",
+        )
+    return t
+
+
 def run_smooth(args: argparse.Namespace) -> int:
     import numpy as np
     import pandas as pd
 
     from navtrack.experiments import write_json
-    from navtrack.io.tables import read_table
+    from navtrack.io.tables import numeric_column, read_table
     from navtrack.smoothing.ari import AriConfig, fit_ari, regularize_time
 
     df = read_table(args.file)
+    if len(df) == 0:
+        from navtrack.errors import FileFormatError
+
+        raise FileFormatError(args.file, None, "no data rows (a header only)")
     if args.order == "auto":
         order = None
     else:
@@ -108,9 +156,7 @@ def run_smooth(args: argparse.Namespace) -> int:
         columns = [
             c
             for c in df.columns
-            if c != time_col
-            and pd.api.types.is_numeric_dtype(df[c])
-            and not c.startswith("Unnamed")
+            if c != time_col and _mostly_numeric(df[c]) and not str(c).startswith("Unnamed")
         ]
     missing = [c for c in columns if c not in df.columns]
     if missing:
@@ -119,13 +165,13 @@ def run_smooth(args: argparse.Namespace) -> int:
             f"(has {', '.join(map(str, df.columns))})"
         )
     if not columns:
-        raise SystemExit("navtrack smooth: no numeric columns to smooth; give --columns")
-    values = np.column_stack(
-        [pd.to_numeric(df[c], errors="coerce").to_numpy(float) for c in columns]
-    )
+        raise SystemExit(
+            f"navtrack smooth: {args.file}: no numeric columns to smooth; give --columns"
+        )
+    values = np.column_stack([numeric_column(args.file, df, c) for c in columns])
     n_read = values.shape[0]
     if time_col is not None:
-        t = df[time_col].to_numpy(dtype=float)
+        t = _time_stamps(args.file, df, time_col)
         try:
             t_grid, grid, inserted = regularize_time(t, values)
         except ValueError as exc:
@@ -167,7 +213,14 @@ def run_smooth(args: argparse.Namespace) -> int:
             from navtrack.plots.canvas import figure_dir
 
             plot_dir = figure_dir(args.plot)
-            path = plot_series(plot_dir / f"{args.file.stem}_{col}.png", t_grid, res, col, unit)
+            path = plot_series(
+                plot_dir / f"{args.file.stem}_{col}.png",
+                t_grid,
+                res,
+                col,
+                unit,
+                time_name=time_col or "epoch index",
+            )
             print(f"figure     {path}")
     out_cols["gross_error"] = any_gross
     statuses: dict[str, int] = {}

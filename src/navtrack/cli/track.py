@@ -9,6 +9,8 @@ between its own reports.
 from __future__ import annotations
 
 import argparse
+import contextlib
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -38,11 +40,24 @@ def register(subparsers: Any) -> None:
         "(time ISO 8601 UTC, lat/lon deg or x_m/y_m, optional id, alt_m, speed_mps, "
         "course_deg)",
     )
-    p.add_argument("--associator", choices=("gnn", "jpda"), default="gnn")
+    p.add_argument(
+        "--associator",
+        choices=("gnn", "jpda"),
+        default="gnn",
+        help="data association: global nearest neighbour or joint probabilistic",
+    )
     p.add_argument("--out", type=Path, help="write track states to this .csv or .parquet file")
     p.add_argument("--plot", type=Path, metavar="DIR", help="write a map of the tracks here")
-    p.add_argument("--report-s", type=float, help="scoring grid interval, s")
-    p.add_argument("--match-m", type=float, help="CLEAR-MOT match threshold, m")
+    p.add_argument(
+        "--report-s",
+        type=float,
+        help="scoring grid interval, s (default: " + _by_format(0) + ")",
+    )
+    p.add_argument(
+        "--match-m",
+        type=float,
+        help="CLEAR-MOT match threshold, m (default: " + _by_format(2) + ")",
+    )
     p.add_argument(
         "--no-velocity",
         action="store_true",
@@ -52,15 +67,23 @@ def register(subparsers: Any) -> None:
         "--max-range-km",
         type=float,
         default=1000.0,
-        help="skip rows farther than this from the median position (default 1000)",
+        help="skip rows farther than this from the median position",
     )
     p.add_argument(
         "--max-time-days",
         type=float,
         default=30.0,
-        help="skip rows dated farther than this from the median time (default 30)",
+        help="skip rows dated farther than this from the median time",
+    )
+    p.add_argument(
+        "--quiet", action="store_true", help="no progress indicator on stderr while tracking"
     )
     p.set_defaults(func=run_track)
+
+
+def _by_format(k: int) -> str:
+    """One column of :data:`DEFAULTS` as help text: ``60 for ais, 10 for opensky, ...``."""
+    return ", ".join(f"{v[k]:g} for {fmt}" for fmt, v in DEFAULTS.items())
 
 
 def run_track(args: argparse.Namespace) -> int:
@@ -111,7 +134,8 @@ def run_track(args: argparse.Namespace) -> int:
     if vel is not None and not np.isfinite(vel).any():
         vel = None
     clock = time.perf_counter()
-    res = run_tracker(det.t_gps_s, en, cfg, report_times=grid, velocity=vel)
+    with _progress(len(det), quiet=args.quiet):
+        res = run_tracker(det.t_gps_s, en, cfg, report_times=grid, velocity=vel)
     t_track = time.perf_counter() - clock
     status = np.bincount(res.det_status, minlength=len(DET_STATUS_NAMES))
     summary["reference (lat, lon deg)"] = f"{ref[0]:.6f} {ref[1]:.6f}"
@@ -161,9 +185,53 @@ def run_track(args: argparse.Namespace) -> int:
     if args.plot:
         from navtrack.plots.tracks import plot_tracks
 
-        path = plot_tracks(args.plot, en, res, title=f"{args.file.name} ({args.associator})")
+        path = plot_tracks(
+            args.plot, en, res, title=f"{args.file.name} ({args.associator})", ref_deg=ref
+        )
         print(f"plot written to {path}")
     return 0
+
+
+PROGRESS_MIN_DETECTIONS = 5000  # files this long take seconds: show that the tracker runs
+
+
+@contextlib.contextmanager
+def _progress(n_detections: int, *, quiet: bool) -> Iterator[None]:
+    """An elapsed-time indicator on stderr while the tracker runs over a long file.
+
+    ``run_tracker`` reports no progress of its own, so the indicator shows the detections
+    being tracked and the seconds elapsed (refreshed twice a second); it is off with
+    ``--quiet``, for files under :data:`PROGRESS_MIN_DETECTIONS` rows and when stderr is not a
+    terminal (tqdm's ``disable=None``).
+    """
+    if quiet or n_detections < PROGRESS_MIN_DETECTIONS:
+        yield
+        return
+    import sys
+    import threading
+
+    from tqdm import tqdm
+
+    done = threading.Event()
+    with tqdm(
+        desc=f"tracking {n_detections} detections",
+        bar_format="{desc}: {elapsed} elapsed",
+        file=sys.stderr,
+        disable=None,
+        leave=False,
+    ) as bar:
+
+        def tick() -> None:
+            while not done.wait(0.5):
+                bar.refresh()
+
+        ticker = threading.Thread(target=tick, daemon=True)
+        ticker.start()
+        try:
+            yield
+        finally:
+            done.set()
+            ticker.join()
 
 
 def _print(summary: dict[str, Any]) -> None:

@@ -19,7 +19,12 @@ logged (else the usual smartphone attribute: C for L1/E1/G1, Q for L5/E5a, I for
 
 Rows that cannot give a valid pseudorange are not dropped silently: each is listed in
 :attr:`Observations.skipped` with its line number and one of the reasons in
-:data:`SKIP_REASONS`; :func:`skipped_counts` tallies them.
+:data:`SKIP_REASONS`; :func:`skipped_counts` tallies them. Damage is refused (strict reading)
+or skipped and counted (``lenient=True``) like the RINEX readers do: a ``Raw`` row with a field
+that is not a number -- in any numeric column, used or not -- or with more fields than its
+header (``"unreadable row"``), and a line that is no GnssLogger record at all (neither a
+``#`` comment nor ``Type,...`` with a record-type word, ``"not a log record"``). Records of the
+other types (``Fix``, ``Status``, ``UncalAccel``, ...) are not read.
 
 References
 ----------
@@ -31,7 +36,9 @@ ranges); RINEX 3.05 section 5.2.10 (Doppler sign) and table 4-10 (codes).
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import re
 from collections import Counter
 from os import fspath
 
@@ -76,6 +83,7 @@ SKIP_REASONS = (
     "unknown carrier frequency",
     "duplicate signal in epoch",
     "unreadable row",
+    "not a log record",
 )
 """Reasons a ``Raw`` row gives no observation (the ``reason`` of its ``SkippedLine``)."""
 
@@ -100,6 +108,9 @@ _BANDS: dict[str, tuple[tuple[float, str, str], ...]] = {
 }
 _DEFAULT_FREQ = {"G": 1575.42e6, "J": 1575.42e6, "E": 1575.42e6, "C": 1561.098e6, "I": 1176.45e6}
 _PR_MIN_M, _PR_MAX_M = 1.0e7, 6.0e7
+# a record of any GnssLogger type: "Fix,...", "UncalAccel,...", "Raw,..."
+_RECORD_TYPE = re.compile(r"[A-Za-z][A-Za-z0-9]*,")
+_TEXT_COLUMNS = frozenset({"CodeType"})  # every other Raw column is a number
 
 
 def read_gnsslogger(
@@ -118,8 +129,9 @@ def read_gnsslogger(
         Rows with ``ReceivedSvTimeUncertaintyNanos`` at or above this are skipped (500 ns,
         ~150 m, as in Google's gps-measurement-tools and the shared data README).
     lenient : bool
-        When true, an unreadable ``Raw`` row is skipped with reason ``"unreadable row"``;
-        when false (default) it raises.
+        When true, an unreadable ``Raw`` row is skipped with reason ``"unreadable row"`` and a
+        line that is not a log record with ``"not a log record"``; when false (default) both
+        raise.
 
     Returns
     -------
@@ -147,7 +159,8 @@ def read_gnsslogger(
     ------
     FileFormatError
         No ``# Raw,`` header line, a required column missing, or (strict reading) an
-        unreadable ``Raw`` row; the message names the file and line.
+        unreadable ``Raw`` row or a line that is not a log record; the message names the file
+        and line (and the column of a malformed field).
     """
     text = read_bytes(path).decode("utf-8", "replace")
     lines = text.splitlines()
@@ -155,6 +168,7 @@ def read_gnsslogger(
     version_line = ""
     comments: list[str] = []
     rows: list[tuple[int, list[str]]] = []
+    garbage: list[SkippedLine] = []
     for i, line in enumerate(lines):
         if line.startswith("#"):
             body = line[1:].strip()
@@ -174,9 +188,27 @@ def read_gnsslogger(
             if columns is None:
                 raise FileFormatError(path, i + 1, "Raw row before the '# Raw,...' header line")
             rows.append((i + 1, line.split(",")[1:]))
+        elif line.strip() and not _RECORD_TYPE.match(line):
+            if not lenient:
+                raise FileFormatError(
+                    path, i + 1, f"not a GnssLogger record or comment: {line[:40]!r}"
+                )
+            garbage.append(SkippedLine(i + 1, "not a log record"))
     if columns is None:
         raise FileFormatError(path, None, "not a GnssLogger log: no '# Raw,...' header line")
-    return _build(path, rows, columns, version_line, comments, max_sv_time_uncertainty_ns, lenient)
+    cut = rows and rows[-1][0] == len(lines) and not text.endswith(("\n", "\r"))
+    if cut and len(rows[-1][1]) < len(columns):
+        # the last row, without its end of line, has fewer fields than the header: cut short
+        # by the end of the file, its last field possibly cut too
+        if not lenient:
+            raise FileFormatError(path, len(lines), "Raw row cut short by the end of the file")
+        garbage.append(SkippedLine(len(lines), "unreadable row"))
+        rows.pop()
+    obs = _build(path, rows, columns, version_line, comments, max_sv_time_uncertainty_ns, lenient)
+    if not garbage:
+        return obs
+    skipped = tuple(sorted((*obs.skipped, *garbage), key=lambda sk: sk.line))
+    return dataclasses.replace(obs, skipped=skipped)
 
 
 def skipped_counts(obs: Observations) -> dict[str, int]:
@@ -189,7 +221,20 @@ def _int_field(text: str) -> int:
     try:
         return int(text)
     except ValueError:
-        return int(float(text))  # some loggers write integers as 1.0E10
+        value = float(text)  # some loggers write integers as 1.0E10
+        if not math.isfinite(value):
+            raise ValueError(f"{text.strip()!r} is not an integer") from None
+        return int(value)
+
+
+def _check_numbers(fields: list[str], numeric: list[tuple[int, str]]) -> None:
+    """Every non-empty field of a numeric column is a number (used by navtrack or not)."""
+    for k, name in numeric:
+        if k < len(fields) and fields[k].strip():
+            try:
+                float(fields[k])
+            except ValueError:
+                raise ValueError(f"{name} {fields[k][:20]!r} is not a number") from None
 
 
 def _float_field(text: str) -> float:
@@ -216,10 +261,14 @@ def _build(
     epoch_time: dict[int, float] = {}
     seen: set[tuple[int, str, str]] = set()
     n_cols = max(col.values()) + 1
+    numeric = [(k, name) for name, k in col.items() if name not in _TEXT_COLUMNS]
     for lineno, f in rows:
         try:
             if len(f) < min(n_cols, max(col[c] for c in _REQUIRED) + 1):
                 raise ValueError("too few fields")
+            if len(f) > n_cols:
+                raise ValueError(f"{len(f)} fields, the header has {n_cols}")
+            _check_numbers(f, numeric)
             time_nanos = _int_field(f[col["TimeNanos"]])
             const = _int_field(f[col["ConstellationType"]])
             svid = _int_field(f[col["Svid"]])

@@ -28,6 +28,7 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, Int8Array, StrPath
 from navtrack.errors import FileFormatError
+from navtrack.geodesy import OMEGA_E_RAD_S
 from navtrack.gnss.observations import SkippedLine
 from navtrack.timescale import calendar_gps_seconds, to_datetime64, to_gps
 
@@ -41,6 +42,7 @@ _FLAG_BITS = ((74, 1), (75, 2), (78, 4), (79, 8))  # column -> flag bit (E, P, M
 # e = 0.075), LEO satellites in SP3 files above about 6,500 km (120 km altitude over the 6,378 km
 # equatorial radius): GLONASS ICD 5.1 3.1.1, BDS-OS-SIS-ICD 3.0 3.1, IS-QZSS-PNT-005 table 3.1-1.
 PLAUSIBLE_RADIUS_M = (6.5e6, 5.0e7)
+_GM_M3S2 = 3.986004418e14  # WGS 84 / IS-GPS-200 earth gravitational constant
 _P_RECORD_CHARS = 60  # 'P', id, x, y, z (F14.6 km) and clock (F14.6 us): the fields always written
 
 
@@ -135,8 +137,10 @@ class Sp3:
         8 orbit predicted.
     implausible : tuple of SkippedLine
         ``P`` records whose position lies outside :data:`PLAUSIBLE_RADIUS_M` from the geocentre
-        (line and why); their position and clock are NaN, so that satellite is missing at that
-        epoch only.
+        or jumps from its neighbours farther than orbital motion allows (line and why); their
+        position and clock are NaN, so that satellite is missing at that epoch only. A jump
+        between two parts of one satellite's orbit excludes that satellite from the file (one
+        entry, at the first record after the step).
 
     References
     ----------
@@ -344,6 +348,9 @@ def read_sp3(path: StrPath) -> Sp3:
     pos_m *= 1e3
     clock_s *= 1e-6
     implausible = _implausible(pos_m, clock_s, p_rows)
+    jumps = _jumps(t_gps_s, pos_m, clock_s, p_rows)
+    if jumps:
+        implausible = tuple(sorted((*implausible, *jumps), key=lambda sk: sk.line))
     vel_mps = clock_rate = None
     if len(v_rows[2]):
         vel, rate, _, _, _ = _records(path, v_rows, n_e, n_s, base_pos, base_clk)
@@ -430,6 +437,80 @@ def _implausible(pos_m: FloatArray, clock_s: FloatArray, p_rows: _Rows) -> tuple
     pos_m[bad] = np.nan
     clock_s[bad] = np.nan
     return tuple(sorted(out, key=lambda sk: sk.line))
+
+
+def _jumps(
+    t_gps_s: FloatArray, pos_m: FloatArray, clock_s: FloatArray, p_rows: _Rows
+) -> tuple[SkippedLine, ...]:
+    """Set records that jump farther than orbital motion allows to NaN; their lines and why.
+
+    Between consecutive records ``a, b`` of one satellite (``dt`` apart, gaps skipped) the
+    position may move at most ``(sqrt(2 GM / min(r_a, r_b)) + omega_E max(r_a, r_b)) dt``.
+
+    Notes
+    -----
+    The bound is the escape speed at the lower of the two radii (no bound orbit is faster
+    there) plus the speed the earth-fixed frame's rotation adds at the higher one: about twice
+    the ECEF speed of a GNSS satellite (7.4 vs 3.9 km/s for GPS), so orbits are never flagged
+    while a coordinate off by a few thousand km over a 5-minute interval is. A record that
+    jumps from both neighbours (or from its only neighbour, when that one agrees with its own
+    next neighbour) is the outlier and is set missing at its epoch. A jump that cannot be
+    blamed on one record (a step: the orbit before and after disagree) excludes the satellite
+    from the whole file.
+    """
+    ei, si, _, lineno = p_rows
+    line_at = np.zeros(pos_m.shape[:2], dtype=np.int64)
+    line_at[ei, si] = lineno
+    out: list[SkippedLine] = []
+    for s in range(pos_m.shape[1]):
+        valid = np.flatnonzero(np.isfinite(pos_m[:, s, 0]))
+        if valid.size < 2:
+            continue
+        bad = _jumping(t_gps_s[valid], pos_m[valid, s])
+        if not bad.any():
+            continue
+        n = valid.size
+        before = np.concatenate([[False], bad])  # record k jumps from record k - 1
+        after = np.concatenate([bad, [False]])  # record k jumps to record k + 1
+        outlier = before & after
+        if n > 2:
+            outlier[0] |= bad[0] and not bad[1]
+            outlier[-1] |= bad[-1] and not bad[-2]
+        keep = valid[~outlier]
+        remaining = _jumping(t_gps_s[keep], pos_m[keep, s]) if keep.size > 1 else bad[:0]
+        for k in valid[outlier]:
+            out.append(
+                SkippedLine(
+                    int(line_at[k, s]),
+                    "position jumps from the neighbouring records farther than orbital motion "
+                    "allows: satellite excluded at this epoch",
+                )
+            )
+        pos_m[valid[outlier], s] = np.nan
+        clock_s[valid[outlier], s] = np.nan
+        if remaining.any():
+            k = int(keep[int(np.argmax(remaining)) + 1])
+            out.append(
+                SkippedLine(
+                    int(line_at[k, s]),
+                    "position jumps from the record before farther than orbital motion allows "
+                    "(a step, not one bad record): satellite excluded from the whole file",
+                )
+            )
+            pos_m[:, s] = np.nan
+            clock_s[:, s] = np.nan
+    return tuple(out)
+
+
+def _jumping(t_s: FloatArray, pos_m: FloatArray) -> np.ndarray:
+    """``(n - 1,)`` whether each step between consecutive positions ``(n, 3)`` exceeds the
+    orbital-motion bound of :func:`_jumps`."""
+    r = np.linalg.norm(pos_m, axis=-1)
+    r_lo = np.minimum(r[1:], r[:-1])
+    r_hi = np.maximum(r[1:], r[:-1])
+    speed = np.sqrt(2.0 * _GM_M3S2 / r_lo) + OMEGA_E_RAD_S * r_hi
+    step = np.linalg.norm(np.diff(pos_m, axis=0), axis=-1)
+    return np.asarray(step > speed * np.diff(t_s))
 
 
 _Rows = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]  # epoch, column, chars, line no.

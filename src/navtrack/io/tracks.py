@@ -26,6 +26,7 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError
+from navtrack.io.tables import last_row_cut, read_csv_text
 
 __all__ = [
     "TrackDetections",
@@ -104,63 +105,20 @@ class TrackDetections:
         }
 
 
-def _read_text(path: StrPath) -> str:
-    """The file's text, refused with :class:`FileFormatError` when it is not a UTF-8 CSV.
-
-    The content is sniffed before pandas sees it (pandas can spend minutes on a compressed or
-    binary file): gzip magic bytes, a NUL byte, or a first character ``{``/``[`` (JSON) are
-    refused. A byte sequence that is not UTF-8 is an error naming its line rather than a row
-    read with replacement characters: in these files it means damage or another encoding, and
-    a replaced character would silently change an id used for scoring.
-    """
-    with open(path, "rb") as fh:
-        raw = fh.read()
-    if raw[:2] == b"\x1f\x8b":
-        raise FileFormatError(path, None, "gzip-compressed file, not a CSV (decompress it first)")
-    nul = raw.find(b"\x00")
-    if nul >= 0:
-        line = raw.count(b"\n", 0, nul) + 1
-        raise FileFormatError(path, line, "binary content (NUL byte), not a CSV")
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        start = exc.start + (3 if raw.startswith(b"\xef\xbb\xbf") else 0)
-        line = raw.count(b"\n", 0, start) + 1
-        raise FileFormatError(
-            path, line, f"byte 0x{raw[start]:02x} is not UTF-8 text (damaged or other encoding)"
-        ) from None
-    if text.lstrip()[:1] in ("{", "["):
-        raise FileFormatError(path, 1, "JSON content, not a CSV")
-    return text
-
-
-def _last_row_cut(text: str) -> bool:
-    """True when the last row has fewer fields than the header (a file cut mid-line)."""
-    import csv
-
-    body = text.rstrip()
-    first, _, rest = body.partition("\n")
-    if not rest:
-        return False
-    header = next(csv.reader(first.splitlines()))
-    last = next(csv.reader(rest.rpartition("\n")[2].splitlines()))
-    return len(last) < len(header)
-
-
 def _read_frame(path: StrPath) -> tuple[Any, bool]:
     """The file as a frame of strings, and whether its last row was cut short."""
     import io
 
     import pandas as pd
 
-    text = _read_text(path)
+    text = read_csv_text(path)
     try:
         df = pd.read_csv(io.StringIO(text), dtype=str, keep_default_na=False, skipinitialspace=True)
     except pd.errors.EmptyDataError:
         raise FileFormatError(path, 1, "empty file (no header)") from None
     except pd.errors.ParserError as exc:
         raise FileFormatError(path, None, f"not a readable CSV: {exc}") from None
-    return df, _last_row_cut(text)
+    return df, last_row_cut(text)
 
 
 def _require(path: StrPath, df: Any, cols: list[str]) -> None:

@@ -35,14 +35,20 @@ def _slug(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_")
 
 
-def series_figure(t: ArrayLike, result: AriResult, title: str = "", unit: str = "") -> Figure:
+def series_figure(
+    t: ArrayLike, result: AriResult, title: str = "", unit: str = "", time_name: str = "t"
+) -> Figure:
     """Observed and filtered series (band ±2 sigma_x), gross errors; residuals below.
 
     Top panel: observations ``y`` (dots), filtered ``x`` (line) and ``x ± 2 sigma_x``; flagged
-    gross errors circled. Bottom panel: ``y - x`` with ``±3 sigma_n``.
+    gross errors circled; the y axis names the quantity (``title``) and its ``unit``. Bottom
+    panel: ``y - x`` with ``±3 sigma_n``. The time axis is ``t - t0`` (s) with ``t0`` the first
+    epoch, written in the axis label: its value in ``time_name`` and, for GPS seconds
+    (``time_name == "t_gps_s"``), its GPST calendar time.
     """
     t_arr = np.asarray(t, dtype=float)
-    t_arr = t_arr - t_arr[0] if t_arr.size else t_arr
+    t0 = float(t_arr[0]) if t_arr.size else 0.0
+    t_arr = t_arr - t0
     fig = new_figure((9.0, 5.5))
     ax1, ax2 = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
     ax1.plot(t_arr, result.y, ".", ms=2, color="0.55", label="observed")
@@ -61,7 +67,8 @@ def series_figure(t: ArrayLike, result: AriResult, title: str = "", unit: str = 
         ax1.plot(
             t_arr[flagged], result.y[flagged], "o", mfc="none", color="C3", label="gross error"
         )
-    ax1.set_ylabel(unit)
+    ax1.set_ylabel(f"{title} ({unit})" if title and unit else title or unit)
+    ax1.ticklabel_format(axis="y", useOffset=False, style="plain")  # values, not an offset
     ax1.legend(loc="best", fontsize=8)
     ax1.set_title(
         f"{title}  ARI({result.p},{result.d})  σn={result.sigma_n:.3g}  σe={result.sigma_e:.3g}  "
@@ -75,15 +82,25 @@ def series_figure(t: ArrayLike, result: AriResult, title: str = "", unit: str = 
     for s in (-3, 3):
         ax2.axhline(s * result.sigma_n, color="C1", lw=0.8, ls="--")
     ax2.set_ylabel(f"y − x [{unit}]" if unit else "y − x")
-    ax2.set_xlabel("t − t0 [s]")
+    t0_text = f"{time_name} = {t0:.10g} s"
+    if time_name == "t_gps_s":
+        from navtrack.timescale import to_datetime64
+
+        t0_text += f", {str(to_datetime64(np.array([t0]))[0])[:19]} GPST"
+    ax2.set_xlabel(f"t − t0 (s), t0 = first epoch ({t0_text})")
     return fig
 
 
 def plot_series(
-    path: StrPath, t: ArrayLike, result: AriResult, title: str = "", unit: str = ""
+    path: StrPath,
+    t: ArrayLike,
+    result: AriResult,
+    title: str = "",
+    unit: str = "",
+    time_name: str = "t",
 ) -> Path:
     """Write :func:`series_figure` as a PNG file."""
-    return save_figure(series_figure(t, result, title, unit), Path(path))
+    return save_figure(series_figure(t, result, title, unit, time_name), Path(path))
 
 
 def estimates_figure(ratios: Mapping[str, tuple[Sequence[float], Sequence[float]]]) -> Figure:

@@ -12,6 +12,7 @@ servers and notebooks alike.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from os import fspath
@@ -46,6 +47,8 @@ __all__ = [
 ]
 
 _DOP_COLUMNS = ("gdop", "pdop", "hdop", "vdop")
+#: Top of the DOP axis as a multiple of the GDOP rejection threshold.
+DOP_CLIP = 2.0
 _SYSTEM_COLOURS = {
     "G": "tab:blue",
     "R": "tab:red",
@@ -286,9 +289,22 @@ def enu_error_figure(data: SolutionPlotData) -> Figure:
     stats = enu_error_stats(data.enu_m)
     fig = new_figure((8.0, 6.5))
     axes = fig.subplots(3, 1, sharex=True)
+    bad_t = data.t[~data.ok]
     for k, (ax, name) in enumerate(zip(axes, ("East", "North", "Up"), strict=True)):
         ax.plot(data.t, data.enu_m[:, k], lw=0.8, color=("C0", "C1", "C2")[k])
         ax.axhline(0.0, color="k", lw=0.5)
+        if bad_t.size:  # a tick along the bottom edge at each epoch without a solution
+            ax.vlines(
+                bad_t,
+                0.0,
+                0.06,
+                transform=ax.get_xaxis_transform(),
+                color="C3",
+                lw=1.2,
+                label=f"no valid position ({bad_t.size})",
+            )
+            if k == 0:
+                ax.legend(loc="upper left", fontsize="x-small")
         ax.set_ylabel(f"{name} (m)")
         ax.set_title(f"{name}: RMS {stats[name.lower()].rms_m:.2f} m", fontsize="small", loc="left")
         ax.grid(True, lw=0.3)
@@ -332,19 +348,49 @@ def horizontal_figure(data: SolutionPlotData) -> Figure:
     return fig
 
 
-def sats_dop_figure(data: SolutionPlotData) -> Figure:
-    """Satellites used (top panel, one line) and each DOP (bottom panel, one line per name in
-    ``data.dop_names``) against time."""
+def sats_dop_figure(data: SolutionPlotData, max_gdop: float | None = None) -> Figure:
+    """Satellites used (top panel, one line, integer ticks) and each DOP (bottom panel, one
+    line per name in ``data.dop_names``) against time.
+
+    The DOP axis is logarithmic and clipped to ``[0.5, DOP_CLIP * max_gdop]`` (``[0.5, 50]``
+    without a threshold), so that the usual values of 1-3 stay readable next to a few
+    near-singular epochs; values above the top are drawn as triangles on the top edge. The GDOP
+    rejection threshold ``max_gdop`` (RTKLIB ``pos2-rejgdop``), when given, is a dashed line.
+    """
+    from matplotlib.ticker import FixedLocator, MaxNLocator, NullLocator
+
     fig = new_figure((8.0, 5.5))
     top, bottom = fig.subplots(2, 1, sharex=True)
     top.plot(data.t, data.n_sats, drawstyle="steps-post", lw=1, color="C0")
     top.set_ylabel("satellites used")
+    top.yaxis.set_major_locator(MaxNLocator(integer=True))
     top.grid(True, lw=0.3)
+    y_max = DOP_CLIP * (max_gdop if max_gdop is not None else 25.0)
     for k, name in enumerate(data.dop_names):
-        bottom.plot(data.t, data.dops[:, k], lw=1, label=name.upper())
-    bottom.set_ylabel("DOP")
+        (line,) = bottom.plot(data.t, np.minimum(data.dops[:, k], y_max), lw=1, label=name.upper())
+        above = data.dops[:, k] > y_max
+        if above.any():
+            bottom.plot(
+                data.t[above],
+                np.full(int(above.sum()), y_max),
+                "^",
+                ms=4,
+                color=line.get_color(),
+                clip_on=False,
+            )
+    if max_gdop is not None:
+        bottom.axhline(
+            max_gdop, color="k", ls="--", lw=0.8, label=f"GDOP rejection threshold {max_gdop:g}"
+        )
+    bottom.set_yscale("log")
+    bottom.set_ylim(0.5, y_max)
+    ticks = [t for t in (0.5, 1, 2, 3, 5, 10, 20, 30, 50, 100) if t <= y_max]
+    bottom.yaxis.set_major_locator(FixedLocator(ticks))
+    bottom.yaxis.set_minor_locator(NullLocator())
+    bottom.set_yticklabels([f"{t:g}" for t in ticks])
+    bottom.set_ylabel("DOP (log scale)")
     if data.dop_names:
-        bottom.legend(loc="upper right", fontsize="small")
+        bottom.legend(loc="center left", fontsize="small", ncols=3)
     else:
         bottom.text(0.5, 0.5, "no DOP in the solution", ha="center", transform=bottom.transAxes)
     bottom.grid(True, lw=0.3)
@@ -353,23 +399,79 @@ def sats_dop_figure(data: SolutionPlotData) -> Figure:
     return fig
 
 
-def skyplot_figure(tracks: Sequence[SkyTrack]) -> Figure:
+def skyplot_figure(tracks: Sequence[SkyTrack], elmask_deg: float | None = None) -> Figure:
     """Polar skyplot: north up, azimuth clockwise, zenith at the centre, horizon at the rim;
-    one line per track (x = azimuth in rad, y = 90 - elevation in deg), coloured by system."""
+    one line per track (x = azimuth in rad, y = 90 - elevation in deg), coloured by system,
+    with a legend of the systems and, when given, the elevation mask as a dashed ring.
+
+    Each satellite id is written at the first point of its track (its end, else its start,
+    middle or quarter points) farther than :data:`LABEL_SPACING_DEG` from every label already
+    written, so that labels of neighbouring tracks do not overlap.
+    """
     fig = new_figure((6.5, 6.5))
     ax = cast("PolarAxes", fig.add_subplot(projection="polar"))
     ax.set_theta_zero_location("N")
     ax.set_theta_direction(-1)
+    placed: list[tuple[float, float]] = []
+    systems: dict[str, str] = {}
     for tr in tracks:
         colour = _SYSTEM_COLOURS.get(tr.sat[:1], "k")
+        systems.setdefault(tr.sat[:1], colour)
         ax.plot(tr.az_rad, tr.zenith_deg, lw=1.2, color=colour)
-        last = np.flatnonzero(np.isfinite(tr.zenith_deg))[-1]
-        ax.text(tr.az_rad[last], tr.zenith_deg[last], tr.sat, fontsize=7, color=colour)
+        k = _label_point(tr, placed)
+        placed.append(_planar(tr.az_rad[k], tr.zenith_deg[k]))
+        ax.text(tr.az_rad[k], tr.zenith_deg[k], tr.sat, fontsize=7, color=colour)
+    from matplotlib.lines import Line2D
+
+    # legend entries drawn apart from the axes' lines (one line per track stays the rule)
+    handles: list[Any] = [
+        Line2D([], [], color=c, lw=2, label=_SYSTEM_NAMES.get(sys, sys))
+        for sys, c in systems.items()
+    ]
+    if elmask_deg is not None:
+        ang = np.linspace(0.0, 2 * np.pi, 361)
+        handles += ax.plot(
+            ang,
+            np.full(ang.size, 90.0 - elmask_deg),
+            "k--",
+            lw=0.8,
+            label=f"elevation mask {elmask_deg:g}°",
+        )
+    if handles:
+        ax.legend(handles=handles, loc="upper right", bbox_to_anchor=(1.12, 1.1), fontsize=7)
     ax.set_ylim(0.0, 90.0)
     ax.set_yticks([0, 15, 30, 45, 60, 75, 90])
     ax.set_yticklabels(["90°", "75°", "60°", "45°", "30°", "15°", "0°"], fontsize=7)
     ax.set_title(f"Skyplot, {len(tracks)} satellites (elevation on the radius)")
     return fig
+
+
+#: Smallest distance between two satellite labels of a skyplot (degrees of zenith angle).
+LABEL_SPACING_DEG = 12.0
+_SYSTEM_NAMES = {
+    "G": "GPS",
+    "R": "GLONASS",
+    "E": "Galileo",
+    "C": "BeiDou",
+    "J": "QZSS",
+    "S": "SBAS",
+    "I": "NavIC",
+}
+
+
+def _planar(az_rad: float, zenith_deg: float) -> tuple[float, float]:
+    return zenith_deg * float(np.sin(az_rad)), zenith_deg * float(np.cos(az_rad))
+
+
+def _label_point(track: SkyTrack, placed: list[tuple[float, float]]) -> int:
+    """Index of the track point where its label goes (see :func:`skyplot_figure`)."""
+    idx = np.flatnonzero(np.isfinite(track.zenith_deg))
+    n = idx.size
+    for k in (idx[-1], idx[0], idx[n // 2], idx[n // 4], idx[(3 * n) // 4]):
+        x, y = _planar(track.az_rad[k], track.zenith_deg[k])
+        if all(math.hypot(x - a, y - b) > LABEL_SPACING_DEG for a, b in placed):
+            return int(k)
+    return int(idx[-1])
 
 
 # --------------------------------------------------------------------------------------------
@@ -384,6 +486,8 @@ def plot_solution(
     ref_xyz_m: ArrayLike | None = None,
     azel: tuple[ArrayLike, Sequence[str]] | None = None,
     ok_status: object = "ok",
+    max_gdop: float | None = None,
+    elmask_deg: float | None = None,
 ) -> list[Path]:
     """Write the solution figures as PNG files.
 
@@ -399,6 +503,10 @@ def plot_solution(
         Azimuth/elevation ``(epochs, sats, 2)`` in rad and the satellite ids, for a skyplot.
     ok_status : object, default "ok"
         ``status`` value of a valid epoch.
+    max_gdop : float, optional
+        GDOP rejection threshold of the solution, drawn on the DOP panel.
+    elmask_deg : float, optional
+        Elevation mask of the solution (deg), drawn as a ring on the skyplot.
 
     Returns
     -------
@@ -423,9 +531,9 @@ def plot_solution(
         save_figure(horizontal_figure(data), d / "horizontal.png"),
     ]
     if data.dop_names or np.isfinite(data.n_sats).any():
-        paths.append(save_figure(sats_dop_figure(data), d / "sats_dop.png"))
+        paths.append(save_figure(sats_dop_figure(data, max_gdop), d / "sats_dop.png"))
     if tracks is not None:
-        paths.append(save_figure(skyplot_figure(tracks), d / "skyplot.png"))
+        paths.append(save_figure(skyplot_figure(tracks, elmask_deg), d / "skyplot.png"))
     return paths
 
 

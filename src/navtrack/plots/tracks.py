@@ -3,17 +3,26 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from navtrack._typing import ArrayLike, StrPath
+from navtrack._typing import ArrayLike, FloatArray, StrPath
 from navtrack.plots.canvas import figure_dir, new_figure, save_figure
 
-__all__ = ["plot_tracks"]
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["plot_tracks", "tracks_figure"]
 
 
-def plot_tracks(out_dir: StrPath, en: ArrayLike, result: Any, title: str = "") -> Path:
+def plot_tracks(
+    out_dir: StrPath,
+    en: ArrayLike,
+    result: Any,
+    title: str = "",
+    ref_deg: tuple[float, float] | None = None,
+) -> Path:
     """Write ``tracks.png`` in ``out_dir``: detections (grey dots), confirmed tracks (lines).
 
     Parameters
@@ -27,6 +36,9 @@ def plot_tracks(out_dir: StrPath, en: ArrayLike, result: Any, title: str = "") -
         (north) of the rows of each confirmed ``track_id``.
     title : str, optional
         First line of the figure title (the second gives the number of confirmed tracks).
+    ref_deg : (lat, lon), optional
+        Latitude and longitude (deg) of the local frame's origin, written on the axes; NaN or
+        None for detections given in the file's own x/y frame.
 
     Returns
     -------
@@ -46,6 +58,13 @@ def plot_tracks(out_dir: StrPath, en: ArrayLike, result: Any, title: str = "") -
     if en.ndim != 2 or en.shape[1] != 2:
         raise ValueError(f"en: expected shape (n_detections, 2), got {en.shape}")
     out = figure_dir(out_dir)
+    return save_figure(tracks_figure(en, result, title, ref_deg), out / "tracks.png", dpi=130)
+
+
+def tracks_figure(
+    en: FloatArray, result: Any, title: str = "", ref_deg: tuple[float, float] | None = None
+) -> Figure:
+    """The figure :func:`plot_tracks` writes (same parameters, ``en`` checked)."""
     fig = new_figure((9.0, 8.0))
     ax = fig.subplots()
     ax.plot(en[:, 0] / 1e3, en[:, 1] / 1e3, ".", color="0.75", ms=1.5, label="detections")
@@ -59,9 +78,17 @@ def plot_tracks(out_dir: StrPath, en: ArrayLike, result: Any, title: str = "") -
     for k, tid in enumerate(confirmed_ids):
         sel = ids == tid
         ax.plot(x[sel, 0] / 1e3, x[sel, 2] / 1e3, "-", lw=0.9, color=cmap(k % 20))
-    ax.set_xlabel("east (km)")
+    if ref_deg is not None and np.isfinite(ref_deg).all():
+        lat, lon = ref_deg
+        origin = (
+            f"of the reference {abs(lat):.5f}°{'N' if lat >= 0 else 'S'} "
+            f"{abs(lon):.5f}°{'E' if lon >= 0 else 'W'} (tangent plane at height 0)"
+        )
+    else:
+        origin = "(the file's x_m/y_m frame)"
+    ax.set_xlabel(f"east (km) {origin}")
     ax.set_ylabel("north (km)")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_title(f"{title}\n{len(confirmed_ids)} confirmed tracks")
     ax.legend(loc="best", fontsize=8)
-    return save_figure(fig, out / "tracks.png", dpi=130)
+    return fig

@@ -134,10 +134,15 @@ def _fit_fixed(
     if starts is None:
         starts = starting_values(yc, p, d, cfg.n_starts)
     # the estimator stage: any ``navtrack.smoothing.estimation.Estimator`` fits here
-    outcome = estimate_exact_likelihood(problem, cfg, starts, robust=robust)
-    if outcome.estimate is None:
-        return bad_result(y, AriStatus.SINGULAR, outcome.message, p, d)
-    return _finish(y, offset, observed, outcome.problem, outcome.estimate, outcome.n_iter, cfg)
+    try:
+        outcome = estimate_exact_likelihood(problem, cfg, starts, robust=robust)
+        if outcome.estimate is None:
+            return bad_result(y, AriStatus.SINGULAR, outcome.message, p, d)
+        return _finish(y, offset, observed, outcome.problem, outcome.estimate, outcome.n_iter, cfg)
+    except np.linalg.LinAlgError as exc:
+        # a system the gaps and weights leave singular is an outcome of this series, not an
+        # error of the caller's
+        return bad_result(y, AriStatus.SINGULAR, f"singular system: {exc}", p, d)
 
 
 def _finish(

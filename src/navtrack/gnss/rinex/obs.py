@@ -470,6 +470,12 @@ def _scan_v3(
             else:
                 t_cal = _NAN
             clock = rec[41:56]
+            if clock.strip() and len(rec.rstrip()) < 56:
+                # F15.12 ends in column 56: a shorter line was cut inside the clock value
+                raise ValueError(
+                    f"receiver clock offset {clock.strip().decode('ascii', 'replace')!r} cut "
+                    "short (the field is columns 42-56)"
+                )
             clock_s = float(clock) if clock.strip() else _NAN
         except (ValueError, IndexError) as exc:
             if not lenient:

@@ -1,0 +1,127 @@
+"""Figures a user can read (issue 9): the DOP panel, the skyplot, epochs without a solution,
+smoothing and track figures naming their origin. Checked on the bundled RINEX 2 example,
+whose last five epochs are rejected for GDOP above 30 (GDOP up to about 45)."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from functools import lru_cache
+
+import numpy as np
+import pytest
+
+pytest.importorskip("matplotlib")
+
+from navtrack.data import sample_path
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.spp import SppConfig, SppResult, solution_frame, solve_spp
+from navtrack.plots.gnss import (
+    DOP_CLIP,
+    LABEL_SPACING_DEG,
+    SolutionPlotData,
+    enu_error_figure,
+    sats_dop_figure,
+    skyplot_figure,
+    skyplot_tracks,
+    solution_plot_data,
+)
+
+REF_LLH = (35.160867766, 139.613844940, 68.4545)  # tests/cli/test_pos.py, same station
+
+
+@lru_cache(maxsize=1)
+def _solved() -> tuple[SppResult, SolutionPlotData]:
+    from navtrack.geodesy import geodetic_to_ecef
+
+    res = solve_spp(
+        read_obs(sample_path("07590920.05o")),
+        [read_nav(sample_path("07590920.05n"))],
+        config=SppConfig(),
+    )
+    ref = geodetic_to_ecef([math.radians(REF_LLH[0]), math.radians(REF_LLH[1]), REF_LLH[2]])
+    return res, solution_plot_data(solution_frame(res), ref)
+
+
+def test_dop_panel_is_clipped_with_the_threshold_drawn() -> None:
+    res, data = _solved()
+    assert int(res.status_counts()["high_dop"]) == 5
+    fig = sats_dop_figure(data, max_gdop=30.0)
+    top, bottom = fig.axes
+    assert bottom.get_yscale() == "log"
+    assert bottom.get_ylim() == pytest.approx((0.5, DOP_CLIP * 30.0))
+    threshold = [ln for ln in bottom.get_lines() if "threshold" in str(ln.get_label())]
+    assert len(threshold) == 1
+    np.testing.assert_allclose(threshold[0].get_ydata(), 30.0)
+    ticks = top.get_yticks()
+    np.testing.assert_array_equal(ticks, np.round(ticks))  # satellite counts are integers
+    # a near-singular epoch is drawn at the top edge, marked, not stretching the axis
+    huge = solution_plot_data(
+        {**{k: v for k, v in solution_frame(res).items()}, "gdop": np.full(len(res.t_gps_s), 1e6)},
+        None,
+    )
+    fig = sats_dop_figure(huge, max_gdop=30.0)
+    marks = [ln for ln in fig.axes[1].get_lines() if ln.get_marker() == "^"]
+    assert marks
+    assert np.all(marks[0].get_ydata() == DOP_CLIP * 30.0)
+    assert fig.axes[1].get_ylim()[1] == DOP_CLIP * 30.0
+
+
+def test_error_series_marks_epochs_without_a_solution() -> None:
+    _, data = _solved()
+    fig = enu_error_figure(data)
+    for ax in fig.axes:
+        marks = ax.collections[0].get_segments()
+        np.testing.assert_allclose(sorted(m[0, 0] for m in marks), np.sort(data.t[~data.ok]))
+    assert "no valid position (5)" in [t.get_text() for t in fig.axes[0].get_legend().texts]
+
+
+def test_skyplot_legend_mask_ring_and_labels_apart() -> None:
+    res, _ = _solved()
+    tracks = skyplot_tracks(res.azel_rad, list(res.sats))
+    fig = skyplot_figure(tracks, elmask_deg=15.0)
+    ax = fig.axes[0]
+    legend = [t.get_text() for t in ax.get_legend().texts]
+    assert legend == ["GPS", "elevation mask 15°"]
+    ring = next(ln for ln in ax.get_lines() if ln.get_label() == "elevation mask 15°")
+    np.testing.assert_allclose(ring.get_ydata(), 75.0)
+    pts = [
+        (
+            t.get_position()[1] * math.sin(t.get_position()[0]),
+            t.get_position()[1] * math.cos(t.get_position()[0]),
+        )
+        for t in ax.texts
+    ]
+    assert len(pts) == len(tracks)
+    close = [
+        (a, b) for a, b in itertools.combinations(pts, 2) if math.dist(a, b) <= LABEL_SPACING_DEG
+    ]
+    assert close == []
+
+
+def test_smoothing_plot_names_t0_and_the_quantity() -> None:
+    from navtrack.plots.ari import series_figure
+    from navtrack.smoothing.ari import AriConfig, fit_ari, simulate_ari
+
+    y, _ = simulate_ari(np.random.default_rng(4), 80, [-0.4], 1, 0.02, 0.01)
+    t = 1300190400.0 + np.arange(80.0)
+    fig = series_figure(t, fit_ari(y, AriConfig(order=(1, 1))), "z_m", "m", "t_gps_s")
+    assert fig.axes[0].get_ylabel() == "z_m (m)"
+    assert "t0 = first epoch (t_gps_s = 1300190400 s, 2021-03-19T12:00:00 GPST)" in (
+        fig.axes[1].get_xlabel()
+    )
+
+
+def test_track_map_names_its_reference() -> None:
+    from types import SimpleNamespace
+
+    from navtrack.plots.tracks import tracks_figure
+
+    res = SimpleNamespace(
+        track_confirmed=np.array([True, True]), track_id=np.array([1, 1]), track_x=np.zeros((2, 4))
+    )
+    fig = tracks_figure(np.zeros((3, 2)), res, "t", ref_deg=(50.79117, -1.10867))
+    assert "of the reference 50.79117°N 1.10867°W" in fig.axes[0].get_xlabel()
+    fig = tracks_figure(np.zeros((3, 2)), res, "t", ref_deg=(math.nan, math.nan))
+    assert "x_m/y_m frame" in fig.axes[0].get_xlabel()
