@@ -267,6 +267,8 @@ class TrackerCounts:
         or coasting, or diverged)
     jpda_exact_clusters, jpda_kbest_clusters : JPDA clusters (summed over scans) solved exactly
         / by k-best (:class:`~navtrack.tracking.jpda.JpdaMethod`)
+    ambiguous_detections : detections inside the gates of two or more confirmed tracks
+        (gates wide for the spacing of the targets; :mod:`navtrack.tracking.autotune`)
     """
 
     scans: int = 0
@@ -277,6 +279,7 @@ class TrackerCounts:
     deleted_unconfirmed: int = 0
     jpda_exact_clusters: int = 0
     jpda_kbest_clusters: int = 0
+    ambiguous_detections: int = 0
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -297,6 +300,10 @@ class TrackerResult:
         Confirmed tracks predicted to each requested report time (index into
         ``report_times``), for scoring.
     counts : TrackerCounts
+    det_nis : (N,) float
+        Normalised innovation squared ``νᵀ S⁻¹ ν`` of each detection against the track it
+        updated, at the prediction, the smallest over the motion models (NaN for detections
+        that updated no track; :mod:`navtrack.tracking.autotune` reads it).
     """
 
     det_track: IntArray
@@ -310,6 +317,7 @@ class TrackerResult:
     report_id: IntArray
     report_xy: FloatArray
     counts: TrackerCounts
+    det_nis: FloatArray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -1035,6 +1043,7 @@ def run_tracker(
     N = t.size
     det_track = np.full(N, -1, dtype=np.int64)
     det_status = np.full(N, DetStatus.SEED, dtype=np.int8)
+    det_nis = np.full(N, np.nan)
     counts = dict.fromkeys(TrackerCounts.__dataclass_fields__, 0)
     now = t[0] if N else 0.0
     starts, ends = scan_windows(t, Z, cfg.scan_window_s, window_separation_m(model))
@@ -1059,6 +1068,12 @@ def run_tracker(
                 store.confirmed[k[used]], DetStatus.CONFIRMED, DetStatus.TENTATIVE
             )
             det_status[s0 + np.flatnonzero(g.gated & (k < 0))] = DetStatus.UNUSED
+            counts["ambiguous_detections"] += int(
+                np.count_nonzero(g.valid[store.confirmed].sum(axis=0) >= 2)
+            )
+            y = g.innovation[k[used], :, used]  # (h, r, m)
+            w = np.linalg.solve(g.S[k[used]], y[..., None])[..., 0]
+            det_nis[s0 + used] = np.einsum("hri,hri->hr", y, w).min(axis=1)
             m = manage(store, a.hit, tk, cfg)
             log.updates(tk, m, a.hit)
             _add_counts(counts, a, m)
@@ -1073,7 +1088,7 @@ def run_tracker(
         det_status[ini.seed_det] = DetStatus.STARTED
         counts["tracks_started"] += int(np.count_nonzero(ini.track >= 0))
     log.report_until(store, now, now, cfg.motion, inclusive=True)
-    return log.result(det_track, det_status, cfg.motion.dim_x, TrackerCounts(**counts))
+    return log.result(det_track, det_status, det_nis, cfg.motion.dim_x, TrackerCounts(**counts))
 
 
 def window_separation_m(model: TrackerModel) -> float:
@@ -1141,7 +1156,12 @@ class _Log:
             self.r_next += 1
 
     def result(
-        self, det_track: IntArray, det_status: Int8Array, n: int, counts: TrackerCounts
+        self,
+        det_track: IntArray,
+        det_status: Int8Array,
+        det_nis: FloatArray,
+        n: int,
+        counts: TrackerCounts,
     ) -> TrackerResult:
         def cat(parts: list, shape: tuple[int, ...], dtype: type) -> np.ndarray:
             return np.concatenate(parts) if parts else np.zeros(shape, dtype=dtype)
@@ -1158,4 +1178,5 @@ class _Log:
             cat(self.rep_id, (0,), np.int64),
             cat(self.rep_xy, (0, 2), float),
             counts,
+            det_nis,
         )
