@@ -10,8 +10,8 @@ from the ids:
    interval between consecutive detections of a confirmed track; its 95 % point over the
    tracks sets the coast time (``COAST_INTERVALS`` intervals), the confirmation window (1.5 ×
    the coast time) and the seed age of two-point initiation (two intervals); the 10 % point
-   of all intervals sets the scan window (at most 10 s; :func:`~navtrack.tracking.tracker.scan_windows`
-   keeps two reports of one target apart).
+   of all intervals sets the scan window (at most 10 s;
+   :func:`~navtrack.tracking.tracker.scan_windows` keeps two reports of one target apart).
 2. **Speed distribution** (reported speeds where the file has them, else the first-pass track
    speeds) sets the initiation speed limit (1.5 × its 99 % point) and the **motion family**:
    a median speed above ``AIRCRAFT_MPS`` gives the aircraft model (CV, ``q = AIRCRAFT_Q``);
