@@ -74,9 +74,9 @@ def _motmetrics(tf, tid, tpos, hf, hid, hpos, threshold):
     tid = np.unique(tid, return_inverse=True)[1]  # integer ids (the metric does not change)
     for f in np.union1d(tf, hf):
         ti, hi = np.flatnonzero(tf == f), np.flatnonzero(hf == f)
-        D = cdist(tpos[ti], hpos[hi]) if ti.size and hi.size else np.zeros((ti.size, hi.size))
-        D[D > threshold] = np.nan
-        acc.update(list(tid[ti]), list(hid[hi]), D, frameid=int(f))
+        d = cdist(tpos[ti], hpos[hi]) if ti.size and hi.size else np.zeros((ti.size, hi.size))
+        d[d > threshold] = np.nan  # pairs beyond the threshold cannot match
+        acc.update(list(tid[ti]), list(hid[hi]), d, frameid=int(f))
     names = [
         "mota",
         "motp",
@@ -182,7 +182,7 @@ def test_hota_hand_cases() -> None:
     # the hypothesis 5 m off with threshold 10: similarity 1/2, a TP for alpha <= 0.5 only
     # (10 of the 19 alphas); DetA = AssA = HOTA = 10/19 averaged, LocA 1/2 on the TPs and 1
     # (nothing to localise) where there is no TP
-    h = hota(f, ids, pos, f, ids, pos + [5.0, 0.0], 10.0)
+    h = hota(f, ids, pos, f, ids, pos + np.array([5.0, 0.0]), 10.0)
     assert h.hota == pytest.approx(10 / 19)
     assert h.det_a == pytest.approx(10 / 19)
     assert h.loc_a == pytest.approx((10 * 0.5 + 9 * 1.0) / 19)
