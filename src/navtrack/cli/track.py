@@ -2,8 +2,13 @@
 
 Detections are converted to a local east/north frame, tracked with their ids hidden, and the
 confirmed tracks are scored against the ids (CLEAR-MOT MOTA/MOTP, id switches, fragmentation,
-purity) on a regular grid of report times where each id's true position is interpolated
+purity, HOTA) on a regular grid of report times where each id's true position is interpolated
 between its own reports.
+
+The tracker model is ``--preset auto`` unless a preset is named: chosen and tuned from the
+detections without their ids (:mod:`navtrack.tracking.autotune`); the model options override
+single values of the preset. The model as used is printed and written with ``--out`` (a
+``.json`` beside a ``.csv``; the ``navtrack`` key of a ``.parquet`` file's metadata).
 """
 
 from __future__ import annotations
@@ -92,12 +97,13 @@ def register(subparsers: Any) -> None:
 
 
 def run_track(args: argparse.Namespace) -> int:
+    import sys
     import time
 
     import numpy as np
 
     from navtrack.io.tracks import read_tracks, to_local_enu, velocity_local_enu
-    from navtrack.tracking.metrics import clear_mot, interpolate_truth
+    from navtrack.tracking.metrics import clear_mot, hota, interpolate_truth
     from navtrack.tracking.tracker import DET_STATUS_NAMES, run_tracker
 
     for name, value in (
@@ -125,6 +131,7 @@ def run_track(args: argparse.Namespace) -> int:
         vel = None
     for key, value in input_warnings(det, en).items():
         summary[key] = value
+        print(f"navtrack track: {key}: {value}", file=sys.stderr)
     clock = time.perf_counter()
     cfg, tune = model_config(args, det.t_gps_s, en, vel)
     t_tune = time.perf_counter() - clock
@@ -171,7 +178,11 @@ def run_track(args: argparse.Namespace) -> int:
             f"{len(grid)} frames every {report_s:g} s, match within {match_m:g} m, "
             f"truth interpolated over gaps <= {max_gap_s:g} s"
         )
+        hot = hota(tf, tid, tpos, res.report_frame, res.report_id, res.report_xy, match_m)
         summary["MOTA"] = round(mot.mota, 4)
+        summary["HOTA (DetA, AssA)"] = (
+            f"{hot.hota:.4f} ({hot.det_a:.4f}, {hot.ass_a:.4f}; similarity 1 - d / match)"
+        )
         summary["MOTP (m)"] = round(mot.motp, 1)
         summary["truth objects / matches / misses / false"] = (
             f"{mot.n_truth} {mot.n_matches} {mot.n_misses} {mot.n_false}"
@@ -224,13 +235,7 @@ def model_config(args: argparse.Namespace, t_s: Any, en: Any, vel: Any) -> tuple
     else:
         from navtrack.tracking.autotune import auto_config
 
-        try:
-            tune = auto_config(t_s, en, vel, args.associator)
-        except ValueError as exc:
-            raise SystemExit(
-                f"navtrack track: --preset auto cannot tune on {args.file}: {exc}; name a "
-                "--preset (ships or aircraft)"
-            ) from None
+        tune = auto_config(t_s, en, vel, args.associator)
         cfg = tune.config
     over: dict[str, Any] = {}
     motion = args.motion or ("imm" if cfg.imm_q is not None else "cv")
@@ -295,6 +300,8 @@ def _confirm(text: str | None) -> tuple[int, float] | None:
 
 def model_summary(preset: str, cfg: Any, tune: Any) -> dict[str, Any]:
     """The model as used (summary lines; also the output's metadata)."""
+    import numpy as np
+
     q = cfg.imm_q if cfg.imm_q is not None else (cfg.motion.q,)
     out: dict[str, Any] = {
         "preset": preset,
@@ -316,9 +323,13 @@ def model_summary(preset: str, cfg: Any, tune: Any) -> dict[str, Any]:
             f"{tune.speed_p50_mps:.1f} {tune.speed_p99_mps:.1f} {tune.stationary_share:.2f} "
             f"({tune.speed_source})"
         )
+        nf = tune.noise
         out["auto: fitted sigma (m), q (m^2/s^3), residuals"] = (
-            f"{tune.noise.sigma_m:.1f} {tune.noise.q:.3g} {tune.noise.n_triplets} "
-            f"({tune.noise.n_dropped} dropped) on {tune.sample_detections} detections"
+            f"{nf.sigma_m:.1f} {nf.q:.3g} {nf.n_triplets} ({nf.n_dropped} dropped) on "
+            f"{tune.sample_detections} detections"
+            if np.isfinite(nf.sigma_m)
+            else f"not fitted: {nf.n_triplets} three-point residuals in "
+            f"{tune.sample_detections} detections (sigma at its floor)"
         )
     return out
 

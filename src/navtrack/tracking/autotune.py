@@ -73,6 +73,7 @@ AIRCRAFT_MPS = 50.0
 AIRCRAFT_Q = 300.0  # m²/s³, TrackerConfig.for_aircraft
 SHIP_IMM_Q = (1e-5, 1e-2)  # m²/s³, TrackerConfig.for_ships
 SIGMA_FLOOR_M = 25.0
+MIN_TRIPLETS = 20  # fewer three-point residuals than this: no fit, σ at its floor
 
 
 @dataclass(frozen=True, slots=True)
@@ -158,14 +159,14 @@ def fit_noise(triplets: ArrayLike) -> NoiseFit:
     Raises
     ------
     ValueError
-        Fewer than 20 residuals (too few tracks in the sample to tune on).
+        Fewer than ``MIN_TRIPLETS`` residuals.
     """
     from scipy.optimize import minimize
 
     tri = np.asarray(triplets, dtype=float)
-    if tri.ndim != 2 or tri.shape[1] != 5 or tri.shape[0] < 20:
+    if tri.ndim != 2 or tri.shape[1] != 5 or tri.shape[0] < MIN_TRIPLETS:
         raise ValueError(
-            f"need at least 20 three-point residuals (K, 5) to tune on, got shape {tri.shape}"
+            f"need at least {MIN_TRIPLETS} three-point residuals (K, 5), got shape {tri.shape}"
         )
     d1, d2, a = tri[:, 0], tri[:, 1], tri[:, 2]
     c1 = 1 + (1 + a) ** 2 + a**2
@@ -226,7 +227,13 @@ def auto_config(
     Raises
     ------
     ValueError
-        No detections, or too few tracks in the sample to fit the noise (:func:`fit_noise`).
+        No detections.
+
+    Notes
+    -----
+    When the sample holds fewer than ``MIN_TRIPLETS`` three-point residuals the whole file is
+    the sample (up to ``sample_detections``); with still too few, σ takes its floor and
+    ``noise.sigma_m`` is NaN.
     """
     t = np.asarray(t_s, dtype=float)
     Z = np.asarray(z, dtype=float)
@@ -253,7 +260,17 @@ def auto_config(
         scan_window_s=1.0,
     )
     first = run_tracker(ts, zs, boot, velocity=vs)
-    fit = fit_noise(track_triplets(ts, zs, first))
+    tri = track_triplets(ts, zs, first)
+    if tri.shape[0] < MIN_TRIPLETS and k < min(t.size, sample_detections):
+        k = min(t.size, sample_detections)  # a short file: the whole of it (capped)
+        ts, zs = t[:k], Z[:k]
+        vs = None if velocity is None else np.asarray(velocity, dtype=float)[:k]
+        first = run_tracker(ts, zs, boot, velocity=vs)
+        tri = track_triplets(ts, zs, first)
+    if tri.shape[0] >= MIN_TRIPLETS:
+        fit = fit_noise(tri)
+    else:  # too few tracks to fit: the floor below sets σ (NaN shows it in the summary)
+        fit = NoiseFit(float("nan"), float("nan"), int(tri.shape[0]), 0)
     dt_all, dt_track = _track_intervals(ts, first)
     dt50, dt95 = (
         (float(np.quantile(dt_track, 0.5)), float(np.quantile(dt_track, 0.95)))
@@ -277,7 +294,7 @@ def auto_config(
         q, imm_q, family = SHIP_IMM_Q[0], SHIP_IMM_Q, "imm"
     else:
         q, imm_q, family = SHIP_IMM_Q[1], None, "cv"
-    sigma = max(fit.sigma_m, SIGMA_FLOOR_M)
+    sigma = SIGMA_FLOOR_M if not fit.sigma_m > SIGMA_FLOOR_M else fit.sigma_m
     pd, pg = 0.9, 0.9999
     gamma = chi2_threshold(pg, 2)  # (lru-cached, the scipy import is paid once)
     coast = COAST_INTERVALS * dt95
