@@ -178,7 +178,14 @@ def fit_noise(triplets: ArrayLike) -> NoiseFit:
         return float(np.sum(np.log(v) + 0.5 * e2[k] / v))  # per residual, two axes
 
     def fit(k: np.ndarray) -> FloatArray:
-        x0 = np.array([np.log(np.median(e2[k] / (2 * c1[k])) + 1e-6), 0.0])
+        # start from the best point of a log grid below each term's one-term level (the
+        # likelihood has a flat valley where one term explains all: a local search from
+        # an arbitrary start can end at its edge)
+        s0 = np.log(np.median(e2[k] / (2 * c1[k])) + 1e-12)
+        q0 = np.log(np.median(e2[k] / (2 * c2[k])) + 1e-12)
+        steps = np.log(10.0) * np.linspace(-4.0, 0.5, 19)
+        grid = [(s0 + a, q0 + b) for a in steps for b in steps]
+        x0 = np.array(min(grid, key=lambda th: nll(np.array(th), k)))
         return np.asarray(minimize(nll, x0, args=(k,), method="Nelder-Mead").x)
 
     th = fit(np.ones(e2.size, dtype=bool))
