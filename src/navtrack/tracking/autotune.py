@@ -295,6 +295,7 @@ def auto_config(
         else (10.0, BOOT_SPEED_MPS)
     )
     still = float(np.mean(speed < STATIONARY_MPS)) if speed.size else 0.0
+    family: Literal["cv", "imm"]
     if v50 > AIRCRAFT_MPS:
         q, imm_q, family = AIRCRAFT_Q, None, "cv"
     elif min(still, 1 - still) >= IMM_MIN_SHARE:
@@ -322,4 +323,4 @@ def auto_config(
         imm_q=imm_q,
         scan_window_s=min(dt10, 10.0),
     )
-    return AutoTune(cfg, family, fit, dt50, dt95, v50, v99, still, source, k)  # type: ignore[arg-type]
+    return AutoTune(cfg, family, fit, dt50, dt95, v50, v99, still, source, k)
