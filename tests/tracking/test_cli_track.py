@@ -153,6 +153,12 @@ def test_track_model_options_are_used_printed_and_written(
     assert meta["q (m^2/s^3)"] == "0.02"
     assert meta["confirm (M/W s)"] == "4/600"
     assert meta["associator"] == "gnn"
+    pytest.importorskip("pyarrow")
+    import pandas as pd
+
+    pq = tmp_path / "tracks.parquet"
+    assert main([*argv, "--out", str(pq), "--report-s", "10"]) == 0
+    assert json.loads(pd.read_parquet(pq).attrs["navtrack"]) == meta
 
 
 def test_track_auto_is_the_default_and_reports_what_it_chose(

@@ -8,7 +8,8 @@ between its own reports.
 The tracker model is ``--preset auto`` unless a preset is named: chosen and tuned from the
 detections without their ids (:mod:`navtrack.tracking.autotune`); the model options override
 single values of the preset. The model as used is printed and written with ``--out`` (a
-``.json`` beside a ``.csv``; the ``navtrack`` key of a ``.parquet`` file's metadata).
+``.json`` beside a ``.csv``; in a ``.parquet`` file, the frame's ``attrs["navtrack"]``
+as JSON, read back by ``pandas.read_parquet(F).attrs``).
 """
 
 from __future__ import annotations
@@ -391,7 +392,7 @@ def _print(summary: dict[str, Any]) -> None:
 
 def _write(path: Path, res: Any, ref: tuple[float, float], meta: dict[str, Any]) -> None:
     """Track states to ``.csv`` (the model in a ``.json`` beside it) or ``.parquet`` (the
-    model in the file's key-value metadata, key ``navtrack``)."""
+    model as JSON in the frame's ``attrs["navtrack"]``, which pandas keeps in the file)."""
     import json
 
     import numpy as np
