@@ -35,12 +35,12 @@ from the ids:
 
 Why not q from the data as well: the fitted q of step 3 describes the bulk of the motion
 (straight flight, steady courses); what keeps a track is a gate that holds the tail
-(manoeuvres, stale reports). Two tail criteria were tried on the first halves of the shared
-files and rejected: the 99 % point of the NIS of confirmed updates brought to its chi-square
-value (it chose q = 10 m²/s³ for OpenSky, MOTA 0.81 against 0.92 at 300: tracks that lose
-their target leave no innovation to count) and the largest q before gates start to share
-reports (not monotone in q). So q comes from the family chosen by the speed distribution,
-with the values of the presets (chosen on the Solent and OpenSky files).
+(manoeuvres, stale reports). Two tail criteria were tried on the shared files and rejected:
+the 99 % point of the NIS of confirmed updates brought to its chi-square value (it chose
+q = 10 m²/s³ for OpenSky, MOTA 0.81 with the rules of that trial against 0.92 at 300: tracks
+that lose their target leave no innovation to count) and the largest q before gates start to
+share reports (not monotone in q). So q comes from the family chosen by the speed
+distribution, with the values of the presets (chosen on the Solent and OpenSky files).
 
 The rule constants below were set looking at the first halves (in time) of the Solent AIS
 and OpenSky files; docs/tracking.md judges them on the second halves and on files they were
