@@ -42,9 +42,9 @@ that lose their target leave no innovation to count) and the largest q before ga
 share reports (not monotone in q). So q comes from the family chosen by the speed
 distribution, with the values of the presets (chosen on the Solent and OpenSky files).
 
-The rule constants below were set looking at the first halves (in time) of the Solent AIS
-and OpenSky files; docs/tracking.md judges them on the second halves and on files they were
-not set on.
+The rule constants below were set while looking at runs on the Solent AIS and OpenSky files
+(their first halves in time, and the whole files); docs/tracking.md scores them on the second
+halves and on variants of those files, and says what that leaves untested.
 """
 
 from __future__ import annotations
