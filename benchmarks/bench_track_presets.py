@@ -16,7 +16,8 @@ truth interpolation are the CLI's for the file's format:
 
 Hold-out files built from the shared data: the OpenSky file in the generic csv layout
 (``alt_m``, ``speed_mps``, ``course_deg``, read by the csv reader), its reports thinned to one in
-two (20 s reports) and its west / east halves (split at the median longitude). Times are of
+two (20 s reports) and its west / east halves (split at the median longitude), and the Solent
+file's west / east halves. Times are of
 the tracking alone (the machine may be loaded: compare within a column).
 """
 
@@ -62,11 +63,14 @@ def load_parts() -> dict[str, tuple]:
             ("h2", t >= mid),
         ):
             parts[f"{name} {key}"] = (*_part(t, en, vel, ids, mask), SCORING[fmt])
+        west = det.lon_deg < np.median(det.lon_deg)
+        if name == "solent":
+            parts["solent west"] = (*_part(t, en, vel, ids, west), SCORING[fmt])
+            parts["solent east"] = (*_part(t, en, vel, ids, ~west), SCORING[fmt])
         if name == "opensky":
             epochs = np.unique(t)
             thin = np.isin(t, epochs[::2])
             parts["opensky 20 s"] = (*_part(t, en, vel, ids, thin), (20.0, 120.0, 2000.0))
-            west = det.lon_deg < np.median(det.lon_deg)
             parts["opensky west"] = (*_part(t, en, vel, ids, west), SCORING[fmt])
             parts["opensky east"] = (*_part(t, en, vel, ids, ~west), SCORING[fmt])
             parts["opensky csv"] = (*_csv_layout(det), (60.0, 400.0, 500.0))
@@ -125,6 +129,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--associator", choices=("gnn", "jpda"), default="gnn")
     ap.add_argument("--quick", action="store_true", help="OpenSky parts only")
+    ap.add_argument("--only", help="comma-separated columns, e.g. 'solent west,solent east'")
     a = ap.parse_args(argv)
     parts = load_parts()
     cols = [
@@ -132,6 +137,8 @@ def main(argv: list[str] | None = None) -> int:
         for c in (
             "solent all",
             "solent h2",
+            "solent west",
+            "solent east",
             "opensky all",
             "opensky h2",
             "opensky 20 s",
@@ -139,7 +146,7 @@ def main(argv: list[str] | None = None) -> int:
             "opensky east",
             "opensky csv",
         )
-        if not (a.quick and c.startswith("solent"))
+        if not (a.quick and c.startswith("solent")) and (a.only is None or c in a.only.split(","))
     ]
     presets = {
         "ships": TrackerConfig.for_ships(a.associator),
