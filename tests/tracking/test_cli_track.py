@@ -140,3 +140,122 @@ def test_track_progress_indicator_on_a_terminal(monkeypatch: pytest.MonkeyPatch)
     with _progress(PROGRESS_MIN_DETECTIONS, quiet=True):
         time.sleep(0.6)
     assert quiet.getvalue() == ""
+
+
+def _fleet(n_ids: int = 3, n_reports: int = 40, speed_col: float | None = None) -> str:
+    """Ships 0.05° apart moving north-east, a report every 10 s, generic CSV layout."""
+    rows = ["time,lat,lon,id" + (",speed_mps,course_deg" if speed_col is not None else "")]
+    for k in range(n_reports):
+        t = f"2020-01-01T00:{k // 6:02d}:{(k % 6) * 10:02d}Z"
+        for i in range(n_ids):
+            row = f"{t},{50.0 + 0.05 * i + 1e-4 * k},{-1.0 + 2e-4 * k},s{i}"
+            if speed_col is not None:
+                row += f",{speed_col},54.0"
+            rows.append(row)
+    return "\n".join(rows) + "\n"
+
+
+def test_track_model_options_are_used_printed_and_written(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    f = tmp_path / "fleet.csv"
+    f.write_text(_fleet())
+    out = tmp_path / "tracks.csv"
+    argv = ["track", str(f), "--format", "csv", "--preset", "ships", "--motion", "cv"]
+    argv += ["--q", "0.02", "--sigma-m", "30", "--pd", "0.8", "--clutter-density", "2e-7"]
+    argv += ["--confirm", "4/600", "--max-coast-s", "120", "--gate-prob", "0.999"]
+    assert main([*argv, "--out", str(out), "--report-s", "10"]) == 0
+    text = capsys.readouterr().out
+    lines = dict(re.split(r"\s{2,}", ln, maxsplit=1) for ln in text.splitlines() if "  " in ln)
+    assert lines["preset"] == "ships"
+    assert lines["motion"] == "cv"
+    assert lines["q (m^2/s^3)"] == "0.02"
+    assert lines["sigma (m)"] == "30.0"
+    assert lines["pd"] == "0.8"
+    assert lines["clutter density (1/m^2)"] == "2e-07"
+    assert lines["confirm (M/W s)"] == "4/600"
+    assert lines["max coast (s)"] == "120.0"
+    assert lines["gate probability"] == "0.999"
+    meta = json.loads(Path(f"{out}.json").read_text())
+    assert meta["q (m^2/s^3)"] == "0.02"
+    assert meta["confirm (M/W s)"] == "4/600"
+    assert meta["associator"] == "gnn"
+    pytest.importorskip("pyarrow")
+    import pandas as pd
+
+    pq = tmp_path / "tracks.parquet"
+    assert main([*argv, "--out", str(pq), "--report-s", "10"]) == 0
+    assert json.loads(pd.read_parquet(pq).attrs["navtrack"]) == meta
+
+
+def test_track_auto_is_the_default_and_reports_what_it_chose(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    f = tmp_path / "fleet.csv"
+    f.write_text(_fleet(n_reports=60))
+    assert main(["track", str(f), "--format", "csv", "--report-s", "10"]) == 0
+    text = capsys.readouterr().out
+    assert re.search(r"^preset +auto$", text, re.M)
+    assert re.search(r"^auto: report interval p50/p95 \(s\) +10\.0 10\.0$", text, re.M)
+    assert "HOTA" in text
+    mota = float(next(ln for ln in text.splitlines() if ln.startswith("MOTA")).split()[-1])
+    assert mota > 0.8
+    # imm over a preset's single model: quiet q from the manoeuvring one
+    assert (
+        main(["track", str(f), "--format", "csv", "--preset", "aircraft", "--motion", "imm"]) == 0
+    )
+    assert re.search(r"^q \(m\^2/s\^3\) +0\.3,300$", capsys.readouterr().out, re.M)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--confirm", "three"], "--confirm takes M/W"),
+        (["--confirm", "1/60"], "M >= 2"),
+        (["--motion", "imm", "--q", "1,2,3"], "--motion imm takes --q QUIET,MANOEUVRING"),
+        (["--motion", "cv", "--q", "1,2"], "--motion cv takes one --q value"),
+        (["--q", "fast"], "--q takes numbers"),
+        (["--pd", "1.5"], "--pd must be in \\(0, 1\\)"),
+        (["--gate-prob", "0"], "--gate-prob must be in"),
+        (["--sigma-m", "-3"], "--sigma-m must be a positive number"),
+    ],
+)
+def test_track_refuses_bad_model_options(tmp_path: Path, argv: list[str], message: str) -> None:
+    f = tmp_path / "fleet.csv"
+    f.write_text(_fleet(n_reports=5))
+    with pytest.raises(SystemExit, match=message):
+        main(["track", str(f), "--format", "csv", "--preset", "ships", *argv])
+
+
+def test_track_warns_with_counts_on_suspicious_input(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # every report at one time
+    f = tmp_path / "one_time.csv"
+    rows = ["time,lat,lon,id"] + [
+        f"2020-01-01T00:00:00Z,{50 + 0.01 * i},-1.0,s{i}" for i in range(5)
+    ]
+    f.write_text("\n".join(rows) + "\n")
+    assert main(["track", str(f), "--format", "csv"]) == 0
+    err = capsys.readouterr().err
+    assert "all 5 reports have the same time" in err
+    # one id at one time at two positions (two pairs, ids s0 and s1)
+    f = tmp_path / "dup.csv"
+    text = _fleet(n_reports=30)
+    text += "2020-01-01T00:00:10Z,50.3,-1.0,s0\n2020-01-01T00:01:10Z,50.4,-1.0,s1\n"
+    f.write_text(text)
+    assert main(["track", str(f), "--format", "csv"]) == 0
+    err = capsys.readouterr().err
+    assert "2 report pairs of 2 ids at one time differ in position" in err
+    # a speed column in knots where m/s is expected: the ships move 1.812 m/s (11.12 m north
+    # and 14.31 m east in 10 s), the column says 1.812 kn / (1852/3600) = 3.522 "m/s"
+    f = tmp_path / "knots.csv"
+    f.write_text(_fleet(n_reports=30, speed_col=1.812 * 3600 / 1852))
+    assert main(["track", str(f), "--format", "csv"]) == 0
+    err = capsys.readouterr().err
+    assert "implausible speeds" in err
+    assert "knots read as m/s" in err
+    assert "1.94" in err
+    assert "median of 87 moving reports; 87 differ" in err  # 29 intervals x 3 ids

@@ -2,8 +2,14 @@
 
 Detections are converted to a local east/north frame, tracked with their ids hidden, and the
 confirmed tracks are scored against the ids (CLEAR-MOT MOTA/MOTP, id switches, fragmentation,
-purity) on a regular grid of report times where each id's true position is interpolated
+purity, HOTA) on a regular grid of report times where each id's true position is interpolated
 between its own reports.
+
+The tracker model is ``--preset auto`` unless a preset is named: chosen and tuned from the
+detections without their ids (:mod:`navtrack.tracking.autotune`); the model options override
+single values of the preset. The model as used is printed and written with ``--out`` (a
+``.json`` beside a ``.csv``; in a ``.parquet`` file, the frame's ``attrs["navtrack"]``
+as JSON, read back by ``pandas.read_parquet(F).attrs``).
 """
 
 from __future__ import annotations
@@ -46,6 +52,34 @@ def register(subparsers: Any) -> None:
         default="gnn",
         help="data association: global nearest neighbour or joint probabilistic",
     )
+    m = p.add_argument_group(
+        "tracker model",
+        "--preset auto (the default) chooses and tunes the model from the detections without "
+        "their ids (navtrack.tracking.autotune); ships / aircraft are the presets tuned on the "
+        "Solent AIS / OpenSky files. The options below override the preset's values.",
+    )
+    m.add_argument("--preset", choices=("auto", "ships", "aircraft"), default="auto")
+    m.add_argument(
+        "--motion",
+        choices=("cv", "imm"),
+        help="cv = one nearly-constant-velocity model; imm = IMM of a quiet and a "
+        "manoeuvring CV model",
+    )
+    m.add_argument(
+        "--q",
+        metavar="Q[,Q_HI]",
+        help="process-noise PSD per axis, m^2/s^3 (imm: quiet,manoeuvring)",
+    )
+    m.add_argument("--sigma-m", type=float, help="measurement noise per axis, m")
+    m.add_argument("--pd", type=float, help="detection probability per scan, in (0, 1)")
+    m.add_argument("--clutter-density", type=float, help="competing-report density, 1/m^2")
+    m.add_argument(
+        "--confirm",
+        metavar="M/W",
+        help="confirm a track after M updates within W seconds of its birth (e.g. 3/900)",
+    )
+    m.add_argument("--max-coast-s", type=float, help="delete a track after this long unupdated")
+    m.add_argument("--gate-prob", type=float, help="chi-square gate probability, in (0, 1)")
     p.add_argument("--out", type=Path, help="write track states to this .csv or .parquet file")
     p.add_argument("--plot", type=Path, metavar="DIR", help="write a map of the tracks here")
     p.add_argument(
@@ -87,13 +121,14 @@ def _by_format(k: int) -> str:
 
 
 def run_track(args: argparse.Namespace) -> int:
+    import sys
     import time
 
     import numpy as np
 
     from navtrack.io.tracks import read_tracks, to_local_enu, velocity_local_enu
-    from navtrack.tracking.metrics import clear_mot, interpolate_truth
-    from navtrack.tracking.tracker import DET_STATUS_NAMES, TrackerConfig, run_tracker
+    from navtrack.tracking.metrics import clear_mot, hota, interpolate_truth
+    from navtrack.tracking.tracker import DET_STATUS_NAMES, run_tracker
 
     for name, value in (
         ("--report-s", args.report_s),
@@ -115,12 +150,15 @@ def run_track(args: argparse.Namespace) -> int:
     report_s, max_gap_s, match_m = DEFAULTS[args.fmt]
     report_s = report_s if args.report_s is None else args.report_s
     match_m = match_m if args.match_m is None else args.match_m
-    if args.fmt == "opensky":
-        cfg = TrackerConfig.for_aircraft(args.associator)
-    elif args.fmt == "ais":
-        cfg = TrackerConfig.for_ships(args.associator)
-    else:
-        cfg = TrackerConfig(associator=args.associator)
+    vel = None if args.no_velocity else velocity_local_enu(det, *ref) if det.geodetic else None
+    if vel is not None and not np.isfinite(vel).any():
+        vel = None
+    for key, value in input_warnings(det, en).items():
+        summary[key] = value
+        print(f"navtrack track: {key}: {value}", file=sys.stderr)
+    clock = time.perf_counter()
+    cfg, tune = model_config(args, det.t_gps_s, en, vel)
+    t_tune = time.perf_counter() - clock
     t0 = det.t_gps_s[0]
     n_frames = int((det.t_gps_s[-1] - t0) // report_s) + 1
     if n_frames > MAX_REPORT_FRAMES:
@@ -130,9 +168,6 @@ def run_track(args: argparse.Namespace) -> int:
             "give a larger --report-s (or a smaller --max-time-days)"
         )
     grid = t0 + np.arange(0.0, det.t_gps_s[-1] - t0 + 1e-9, report_s)
-    vel = None if args.no_velocity else velocity_local_enu(det, *ref) if det.geodetic else None
-    if vel is not None and not np.isfinite(vel).any():
-        vel = None
     clock = time.perf_counter()
     with _progress(len(det), quiet=args.quiet):
         res = run_tracker(det.t_gps_s, en, cfg, report_times=grid, velocity=vel)
@@ -140,6 +175,8 @@ def run_track(args: argparse.Namespace) -> int:
     status = np.bincount(res.det_status, minlength=len(DET_STATUS_NAMES))
     summary["reference (lat, lon deg)"] = f"{ref[0]:.6f} {ref[1]:.6f}"
     summary["associator"] = args.associator
+    model = model_summary(args.preset, cfg, tune)
+    summary.update(model)
     summary["reported velocity used for initiation"] = (
         "no" if vel is None else f"yes ({int(np.isfinite(vel).all(axis=1).sum())} rows)"
     )
@@ -166,7 +203,11 @@ def run_track(args: argparse.Namespace) -> int:
             f"{len(grid)} frames every {report_s:g} s, match within {match_m:g} m, "
             f"truth interpolated over gaps <= {max_gap_s:g} s"
         )
+        hot = hota(tf, tid, tpos, res.report_frame, res.report_id, res.report_xy, match_m)
         summary["MOTA"] = round(mot.mota, 4)
+        summary["HOTA (DetA, AssA)"] = (
+            f"{hot.hota:.4f} ({hot.det_a:.4f}, {hot.ass_a:.4f}; similarity 1 - d / match)"
+        )
         summary["MOTP (m)"] = round(mot.motp, 1)
         summary["truth objects / matches / misses / false"] = (
             f"{mot.n_truth} {mot.n_matches} {mot.n_misses} {mot.n_false}"
@@ -177,10 +218,10 @@ def run_track(args: argparse.Namespace) -> int:
         summary["ids / confirmed tracks"] = (
             f"{np.unique(det.id).size} / {res.counts.tracks_confirmed}"
         )
-    summary["time read / track (s)"] = f"{t_read:.2f} {t_track:.2f}"
+    summary["time read / tune / track (s)"] = f"{t_read:.2f} {t_tune:.2f} {t_track:.2f}"
     _print(summary)
     if args.out:
-        _write(args.out, res, ref)
+        _write(args.out, res, ref, {"associator": args.associator, **model})
         print(f"tracks written to {args.out}")
     if args.plot:
         from navtrack.plots.tracks import plot_tracks
@@ -234,6 +275,179 @@ def _progress(n_detections: int, *, quiet: bool) -> Iterator[None]:
             ticker.join()
 
 
+def _positive(name: str, value: float | None, upper: float | None = None) -> None:
+    if value is not None and not (value > 0 and (upper is None or value < upper)):
+        bound = f"in (0, {upper:g})" if upper is not None else "a positive number"
+        raise SystemExit(f"navtrack track: {name} must be {bound}, got {value:g}")
+
+
+def model_config(args: argparse.Namespace, t_s: Any, en: Any, vel: Any) -> tuple[Any, Any]:
+    """The tracker config of ``--preset`` with the model options applied over it, and the
+    :class:`~navtrack.tracking.autotune.AutoTune` when the preset is ``auto`` (else None)."""
+    import dataclasses
+
+    from navtrack.tracking.models import constant_velocity
+    from navtrack.tracking.tracker import TrackerConfig
+
+    _positive("--sigma-m", args.sigma_m)
+    _positive("--pd", args.pd, 1.0)
+    _positive("--clutter-density", args.clutter_density)
+    _positive("--max-coast-s", args.max_coast_s)
+    _positive("--gate-prob", args.gate_prob, 1.0)
+    q = _floats("--q", args.q)
+    confirm = _confirm(args.confirm)
+    tune = None
+    if args.preset == "ships":
+        cfg = TrackerConfig.for_ships(args.associator)
+    elif args.preset == "aircraft":
+        cfg = TrackerConfig.for_aircraft(args.associator)
+    else:
+        from navtrack.tracking.autotune import auto_config
+
+        tune = auto_config(t_s, en, vel, args.associator)
+        cfg = tune.config
+    over: dict[str, Any] = {}
+    motion = args.motion or ("imm" if cfg.imm_q is not None else "cv")
+    qs = q or ((cfg.imm_q[-1],) if cfg.imm_q is not None else (cfg.motion.q,))
+    if motion == "imm":
+        if len(qs) == 1:
+            qs = (qs[0] * 1e-3, qs[0])  # the ship preset's ratio of quiet to manoeuvring
+        if len(qs) != 2:
+            raise SystemExit(
+                f"navtrack track: --motion imm takes --q QUIET,MANOEUVRING, got {args.q}"
+            )
+        over["imm_q"] = tuple(qs)
+        over["motion"] = constant_velocity(2, qs[0], "continuous")
+    else:
+        if len(qs) != 1:
+            raise SystemExit(f"navtrack track: --motion cv takes one --q value, got {args.q}")
+        over["imm_q"] = None
+        over["motion"] = constant_velocity(2, qs[0], "continuous")
+    for key, value in (
+        ("sigma_m", args.sigma_m),
+        ("pd", args.pd),
+        ("clutter_density", args.clutter_density),
+        ("max_coast_s", args.max_coast_s),
+        ("gate_probability", args.gate_prob),
+    ):
+        if value is not None:
+            over[key] = value
+    if confirm is not None:
+        over["confirm_hits"], over["confirm_window_s"] = confirm
+    try:
+        return dataclasses.replace(cfg, **over), tune
+    except ValueError as exc:
+        raise SystemExit(f"navtrack track: {exc}") from None
+
+
+def _floats(name: str, text: str | None) -> tuple[float, ...] | None:
+    if text is None:
+        return None
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise SystemExit(f"navtrack track: {name} takes numbers, got {text!r}") from None
+    if not all(v >= 0 and v < float("inf") for v in values):
+        raise SystemExit(f"navtrack track: {name} values must be finite and >= 0, got {text!r}")
+    return values
+
+
+def _confirm(text: str | None) -> tuple[int, float] | None:
+    if text is None:
+        return None
+    m, _, w = text.partition("/")
+    try:
+        hits, window = int(m), float(w)
+    except ValueError:
+        raise SystemExit(
+            f"navtrack track: --confirm takes M/W (M updates within W s), got {text!r}"
+        ) from None
+    if hits < 2 or not window > 0:
+        raise SystemExit(f"navtrack track: --confirm needs M >= 2 and W > 0, got {text!r}")
+    return hits, window
+
+
+def model_summary(preset: str, cfg: Any, tune: Any) -> dict[str, Any]:
+    """The model as used (summary lines; also the output's metadata)."""
+    import numpy as np
+
+    q = cfg.imm_q if cfg.imm_q is not None else (cfg.motion.q,)
+    out: dict[str, Any] = {
+        "preset": preset,
+        "motion": "imm" if cfg.imm_q is not None else "cv",
+        "q (m^2/s^3)": ",".join(f"{v:.3g}" for v in q),
+        "sigma (m)": round(cfg.sigma_m, 2),
+        "pd": cfg.pd,
+        "clutter density (1/m^2)": float(f"{cfg.clutter_density:.3g}"),
+        "confirm (M/W s)": f"{cfg.confirm_hits}/{cfg.confirm_window_s:.0f}",
+        "max coast (s)": round(cfg.max_coast_s, 1),
+        "gate probability": cfg.gate_probability,
+        "scan window (s)": round(cfg.scan_window_s, 2),
+    }
+    if tune is not None:
+        out["auto: report interval p50/p95 (s)"] = (
+            f"{tune.report_interval_p50_s:.1f} {tune.report_interval_p95_s:.1f}"
+        )
+        out["auto: speed p50/p99 (m/s), still share"] = (
+            f"{tune.speed_p50_mps:.1f} {tune.speed_p99_mps:.1f} {tune.stationary_share:.2f} "
+            f"({tune.speed_source})"
+        )
+        nf = tune.noise
+        out["auto: fitted sigma (m), q (m^2/s^3), residuals"] = (
+            f"{nf.sigma_m:.1f} {nf.q:.3g} {nf.n_triplets} ({nf.n_dropped} dropped) on "
+            f"{tune.sample_detections} detections"
+            if np.isfinite(nf.sigma_m)
+            else f"not fitted: {nf.n_triplets} three-point residuals in "
+            f"{tune.sample_detections} detections (sigma at its floor)"
+        )
+    return out
+
+
+def input_warnings(det: Any, en: Any) -> dict[str, str]:
+    """Summary lines (``warning: ...``) for input the tracker can run on but that is likely
+    wrong: all reports at one time, one id reported at one time at two positions, reported
+    speeds that disagree with the positions (a knots column read as m/s)."""
+    import numpy as np
+
+    out: dict[str, str] = {}
+    t = det.t_gps_s
+    n_times = np.unique(t).size
+    if n_times == 1 and t.size > 1:
+        out["warning: one time"] = (
+            f"all {t.size} reports have the same time; nothing can be tracked over time"
+        )
+    if not np.any(det.id != ""):
+        return out
+    order = np.lexsort((t, det.id))
+    ids, ts, p = det.id[order], t[order], en[order]
+    same_id = ids[1:] == ids[:-1]
+    dt = np.diff(ts)
+    dist = np.hypot(*np.diff(p, axis=0).T)
+    dup = same_id & (dt == 0) & (dist > 1.0)
+    if dup.any():
+        out["warning: one id, one time, two positions"] = (
+            f"{int(dup.sum())} report pairs of {np.unique(ids[1:][dup]).size} ids at one time "
+            f"differ in position (up to {dist[dup].max():.0f} m, lines "
+            f"{', '.join(str(v) for v in det.line[order][1:][dup][:5])}...)"
+        )
+    speed = det.speed_mps[order]
+    ok = same_id & (dt >= 1.0) & np.isfinite(speed[1:]) & (dist > 0)
+    if ok.sum() >= 20:
+        derived = dist[ok] / dt[ok]
+        ratio = float(np.median(speed[1:][ok] / np.maximum(derived, 1e-3)))
+        moving = derived > 1.0
+        if moving.sum() >= 20:
+            ratio = float(np.median(speed[1:][ok][moving] / derived[moving]))
+            off = int(np.sum(np.abs(speed[1:][ok][moving] / derived[moving] - 1) > 0.5))
+            if not 0.67 < ratio < 1.5:
+                hint = " (1.94: knots read as m/s)" if 1.7 < ratio < 2.2 else ""
+                out["warning: implausible speeds"] = (
+                    f"reported speed / speed between positions is {ratio:.2f} (median of "
+                    f"{int(moving.sum())} moving reports; {off} differ by > 50 %){hint}"
+                )
+    return out
+
+
 def _print(summary: dict[str, Any]) -> None:
     width = max(len(k) for k in summary)
     for k, v in summary.items():
@@ -244,7 +458,11 @@ def _print(summary: dict[str, Any]) -> None:
         print(f"{k:<{width}}  {v}")
 
 
-def _write(path: Path, res: Any, ref: tuple[float, float]) -> None:
+def _write(path: Path, res: Any, ref: tuple[float, float], meta: dict[str, Any]) -> None:
+    """Track states to ``.csv`` (the model in a ``.json`` beside it) or ``.parquet`` (the
+    model as JSON in the frame's ``attrs["navtrack"]``, which pandas keeps in the file)."""
+    import json
+
     import numpy as np
     import pandas as pd
 
@@ -270,6 +488,8 @@ def _write(path: Path, res: Any, ref: tuple[float, float]) -> None:
         df["lat_deg"] = latlon[:, 0]
         df["lon_deg"] = latlon[:, 1]
     if path.suffix == ".parquet":
+        df.attrs["navtrack"] = json.dumps(meta)
         df.to_parquet(path, index=False)
     else:
         df.to_csv(path, index=False)
+        Path(f"{path}.json").write_text(json.dumps(meta, indent=1) + "\n")

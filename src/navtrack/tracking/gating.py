@@ -85,6 +85,7 @@ def gate(
     *,
     angle_mask: ArrayLike | None = None,
     candidates: BoolArray | None = None,
+    pair_offset: ArrayLike | None = None,
 ) -> Gate:
     """Chi-square gate of every track against every measurement.
 
@@ -98,6 +99,10 @@ def gate(
     angle_mask : bool (m,) or None
     candidates : bool (..., T, M) or None
         Pairs to evaluate (from :func:`kdtree_pregate`); others get ``d2 = inf``.
+    pair_offset : (..., T, M, m) or None
+        Added to the prediction of each pair: the innovation is ``z_j - ẑ_t - offset_tj``
+        (the tracker's time windows: the motion of track ``t`` between its prediction time
+        and the time of detection ``j``).
 
     Raises
     ------
@@ -116,6 +121,8 @@ def gate(
         raise ValueError("z: measurements must be finite")
     T, M = zp.shape[-2], Z.shape[-2]
     y = Z[..., None, :, :] - zp[..., :, None, :]
+    if pair_offset is not None:
+        y = y - np.asarray(pair_offset, dtype=float)
     if angle_mask is not None and np.any(angle_mask):
         am = np.flatnonzero(angle_mask)
         y[..., am] = wrap_angle(y[..., am])
@@ -128,21 +135,24 @@ def gate(
     if T == 0 or M == 0:
         d2 = np.zeros(y.shape[:-1])
     else:
-        # whitened innovations: solve L w = y for every (t, j)
-        w = np.linalg.solve(L[..., :, None, :, :], y[..., None])[..., 0]
+        # whitened innovations w = L⁻¹ y for every (t, j): one inverse per track
+        w = np.einsum("...tik,...tjk->...tji", np.linalg.inv(L), y)
         d2 = np.einsum("...i,...i->...", w, w)
     if candidates is not None:
         d2 = np.where(candidates, d2, np.inf)
     return Gate(y, d2, d2 <= gamma, log_norm)
 
 
-def kdtree_pregate(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, gamma: float) -> BoolArray:
+def kdtree_pregate(
+    z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, gamma: float, margin: ArrayLike = 0.0
+) -> BoolArray:
     """Coarse spatial pre-gate: pairs within the ball enclosing each track's gate ellipsoid.
 
-    The ball radius is ``sqrt(gamma · λ_max(S_t))``, so every pair inside the chi-square gate
-    is a candidate (no false rejections). Measurements are put in a ``scipy.spatial.cKDTree``;
-    the cost is ``O((T + M) log M)`` instead of ``O(T·M)`` Mahalanobis distances. Only for
-    measurement spaces without angles (Cartesian positions).
+    The ball radius is ``sqrt(gamma · λ_max(S_t)) + margin_t`` (``margin``: scalar or (T,),
+    the largest ``|pair_offset|`` of the track given to :func:`gate`), so every pair inside the
+    chi-square gate is a candidate (no false rejections). Measurements are put in a
+    ``scipy.spatial.cKDTree``; the cost is ``O((T + M) log M)`` instead of ``O(T·M)``
+    Mahalanobis distances. Only for measurement spaces without angles (Cartesian positions).
 
     Returns
     -------
@@ -157,7 +167,7 @@ def kdtree_pregate(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, gamma: float) 
     out = np.zeros((T, M), dtype=bool)
     if T == 0 or M == 0:
         return out
-    radius = np.sqrt(gamma * np.linalg.eigvalsh(S)[:, -1])
+    radius = np.sqrt(gamma * np.linalg.eigvalsh(S)[:, -1]) + np.asarray(margin, dtype=float)
     tree = cKDTree(Z)
     for t, idx in enumerate(tree.query_ball_point(zp, radius)):
         out[t, idx] = True

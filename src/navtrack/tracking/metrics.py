@@ -11,6 +11,8 @@ References
    (switching cost).
 .. [4] K. Bernardin, R. Stiefelhagen, "Evaluating multiple object tracking performance: the
    CLEAR MOT metrics", EURASIP J. Image and Video Processing, 2008.
+.. [5] J. Luiten, A. Ošep, P. Dendorfer, P. Torr, A. Geiger, L. Leal-Taixé, B. Leibe, "HOTA: a
+   higher order metric for evaluating multi-object tracking", IJCV 129, 2021.
 """
 
 from __future__ import annotations
@@ -24,9 +26,11 @@ from navtrack._typing import ArrayLike, FloatArray, IntArray
 __all__ = [
     "ClearMot",
     "GospaResult",
+    "Hota",
     "clear_mot",
     "gospa",
     "gospa_sequence",
+    "hota",
     "interpolate_truth",
     "ospa",
     "rmse",
@@ -198,11 +202,13 @@ def clear_mot(
 ) -> ClearMot:
     """CLEAR-MOT over frames given as flat arrays.
 
-    Per frame: correspondences of the previous frame are kept while their distance stays
-    below ``threshold``; the remaining objects and hypotheses are matched by a minimum-distance
-    assignment with the same threshold. A truth object matched to a hypothesis different from
-    its last one counts an id switch; a truth trajectory going from matched to unmatched and
-    back counts a fragmentation.
+    Per frame: each object's last correspondence (made in the latest frame where the object
+    was matched, so also across frames where it was missed) is kept while its hypothesis is
+    present within ``threshold``; the remaining objects and hypotheses are matched by a
+    minimum-distance assignment with the same threshold. This is the reading of py-motmetrics
+    (``MOTAccumulator.update``), which the tests check equal counts against. A truth object
+    matched to a hypothesis different from its last one counts an id switch; a truth
+    trajectory going from matched to unmatched and back counts a fragmentation.
 
     Parameters
     ----------
@@ -230,7 +236,6 @@ def clear_mot(
         np.searchsorted(hf[h_order], frames, side="right"),
     )
     last_match: dict[object, object] = {}
-    prev_frame_match: dict[object, object] = {}
     was_tracked: dict[object, bool] = {}
     pair_counts: dict[tuple[object, object], int] = {}
     n_truth = n_match = n_miss = n_false = n_sw = n_frag = 0
@@ -244,8 +249,8 @@ def clear_mot(
         match: dict[int, int] = {}
         h_pos = {h: k for k, h in enumerate(H_ids)}
         used_h: set[int] = set()
-        for a, t in enumerate(T_ids):  # keep last frame's correspondences
-            h = prev_frame_match.get(t)
+        for a, t in enumerate(T_ids):  # keep each object's last correspondence
+            h = last_match.get(t)
             if h is not None and h in h_pos and h_pos[h] not in used_h:
                 b = h_pos[h]
                 if D[a, b] <= threshold:
@@ -260,7 +265,6 @@ def clear_mot(
             for i, j in zip(r, c, strict=True):
                 if sub[i, j] <= threshold:
                     match[free_t[i]] = free_h[j]
-        cur: dict[object, object] = {}
         for a, t in enumerate(T_ids):
             if a in match:
                 h = H_ids[match[a]]
@@ -270,13 +274,11 @@ def clear_mot(
                     n_frag += 1
                 last_match[t] = h
                 was_tracked[t] = True
-                cur[t] = h
                 dist_sum += float(D[a, match[a]])
                 pair_counts[(t, h)] = pair_counts.get((t, h), 0) + 1
             else:
                 if t in was_tracked:
                     was_tracked[t] = False
-        prev_frame_match = cur
         n_truth += len(T_ids)
         n_match += len(match)
         n_miss += len(T_ids) - len(match)
@@ -299,6 +301,124 @@ def clear_mot(
         n_frag,
         purity,
         len(np.unique(hid)) if len(hid) else 0,
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class Hota:
+    """HOTA and its parts (Luiten et al. 2021), averaged over the localisation thresholds.
+
+    Attributes
+    ----------
+    hota : mean over ``alpha`` of ``sqrt(DetA_alpha · AssA_alpha)``
+    det_a, ass_a, loc_a : detection accuracy ``TP / (TP + FN + FP)``, association accuracy
+        (mean over true positives of ``TPA / (TPA + FNA + FPA)`` of their pair of ids),
+        localisation accuracy (mean similarity of the true positives), each averaged over
+        ``alpha``
+    alphas : (A,) thresholds; hota_alpha, det_a_alpha, ass_a_alpha : (A,) per threshold
+    """
+
+    hota: float
+    det_a: float
+    ass_a: float
+    loc_a: float
+    alphas: tuple[float, ...]
+    hota_alpha: tuple[float, ...]
+    det_a_alpha: tuple[float, ...]
+    ass_a_alpha: tuple[float, ...]
+
+
+def hota(
+    truth_frame: ArrayLike,
+    truth_id: ArrayLike,
+    truth_pos: ArrayLike,
+    hyp_frame: ArrayLike,
+    hyp_id: ArrayLike,
+    hyp_pos: ArrayLike,
+    threshold: float,
+) -> Hota:
+    """HOTA over frames given as flat arrays (as :func:`clear_mot`), for point objects.
+
+    The similarity of a truth and a hypothesis at distance ``d`` is ``max(0, 1 - d /
+    threshold)`` (1 at the same point, 0 from ``threshold`` on), the point analogue of the
+    paper's IoU. For each ``alpha`` in 0.05, 0.10, ..., 0.95 a pair is a true positive when it
+    is matched in its frame with similarity ``>= alpha``. The matching in a frame maximises
+    the similarity weighted by the ids' global alignment (the paper's section 6: pairs whose
+    ids are often together are preferred), where the global alignment of a truth id ``g`` and
+    a hypothesis id ``k`` is ``P / (n_g + n_k - P)``, ``n`` the frames each is present in and
+    ``P`` their summed frame-wise soft overlap ``S_gk / (Σ_k' S_gk' + Σ_g' S_g'k - S_gk)``.
+    The association accuracy of a true positive of ``(g, k)`` is ``TPA / (TPA + FNA + FPA)``
+    with ``TPA`` the true positives of that pair over the sequence and ``FNA``, ``FPA`` the
+    other frames of ``g`` and of ``k`` (eq. 9-10 of the paper).
+
+    Parameters
+    ----------
+    truth_frame (N,), truth_id (N,), truth_pos (N, d)
+    hyp_frame (H,), hyp_id (H,), hyp_pos (H, d)
+    threshold : float, m
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    if not threshold > 0:
+        raise ValueError(f"threshold must be > 0, got {threshold}")
+    tf = np.asarray(truth_frame)
+    hf = np.asarray(hyp_frame)
+    tp = _points(truth_pos)
+    hp = _points(hyp_pos)
+    g_names, g = np.unique(np.asarray(truth_id), return_inverse=True)
+    k_names, k = np.unique(np.asarray(hyp_id), return_inverse=True)
+    G, K = g_names.size, k_names.size
+    alphas = np.arange(1, 20) / 20.0
+    frames = np.union1d(tf, hf)
+    per_frame = []
+    for f in frames:
+        ti = np.flatnonzero(tf == f)
+        hi = np.flatnonzero(hf == f)
+        S = (
+            np.maximum(0.0, 1.0 - _dist(tp[ti], hp[hi]) / threshold)
+            if ti.size and hi.size
+            else np.zeros((ti.size, hi.size))
+        )
+        per_frame.append((g[ti], k[hi], S))
+    n_g = np.bincount(g, minlength=G).astype(float)
+    n_k = np.bincount(k, minlength=K).astype(float)
+    P = np.zeros((G, K))
+    for gi, ki, S in per_frame:
+        if S.size:
+            denom = S.sum(axis=1, keepdims=True) + S.sum(axis=0, keepdims=True) - S
+            soft = np.divide(S, denom, out=np.zeros_like(S), where=denom > np.finfo(float).eps)
+            np.add.at(P, (gi[:, None], ki[None, :]), soft)
+    align = P / np.maximum(n_g[:, None] + n_k[None, :] - P, np.finfo(float).eps)
+    A = alphas.size
+    TP = np.zeros(A)
+    loc = np.zeros(A)
+    pair_tp = np.zeros((A, G, K))
+    for gi, ki, S in per_frame:
+        if not S.size:
+            continue
+        r, c = linear_sum_assignment(-(align[np.ix_(gi, ki)] * S))
+        s_rc = S[r, c]
+        for a, alpha in enumerate(alphas):
+            ok = s_rc >= alpha - np.finfo(float).eps
+            TP[a] += ok.sum()
+            loc[a] += s_rc[ok].sum()
+            np.add.at(pair_tp[a], (gi[r[ok]], ki[c[ok]]), 1.0)
+    n_truth, n_hyp = float(tf.size), float(hf.size)
+    FN, FP = n_truth - TP, n_hyp - TP
+    det_a = TP / np.maximum(TP + FN + FP, 1.0)
+    ass = pair_tp / np.maximum(n_g[None, :, None] + n_k[None, None, :] - pair_tp, 1.0)
+    ass_a = (pair_tp * ass).sum(axis=(1, 2)) / np.maximum(TP, 1.0)
+    loc_a = np.where(TP > 0, loc / np.maximum(TP, 1.0), 1.0)
+    h = np.sqrt(det_a * ass_a)
+    return Hota(
+        float(h.mean()),
+        float(det_a.mean()),
+        float(ass_a.mean()),
+        float(loc_a.mean()),
+        tuple(float(a) for a in alphas),
+        tuple(float(v) for v in h),
+        tuple(float(v) for v in det_a),
+        tuple(float(v) for v in ass_a),
     )
 
 

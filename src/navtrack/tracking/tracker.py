@@ -79,8 +79,10 @@ __all__ = [
     "predict",
     "report",
     "run_tracker",
+    "scan_windows",
     "two_point_state",
     "update",
+    "window_separation_m",
 ]
 
 
@@ -110,6 +112,9 @@ class TrackerConfig:
     left with probability ``1 - exp(-dt / imm_sojourn_s)`` (a continuous-time Markov chain, so
     irregular report times switch models at the same rate as regular scans).
 
+    ``scan_window_s``: reports at distinct times within this span are processed as one scan
+    (:func:`scan_windows`); 0 = one scan per distinct time.
+
     The defaults suit ships (AIS); :meth:`for_aircraft` gives ADS-B values.
     """
 
@@ -132,6 +137,7 @@ class TrackerConfig:
     init_velocity_std_mps: float = 1.0
     imm_q: tuple[float, ...] | None = None
     imm_sojourn_s: float = 300.0
+    scan_window_s: float = 0.0
 
     def __post_init__(self) -> None:
         if self.motion.ndim != 2:
@@ -161,6 +167,8 @@ class TrackerConfig:
             raise ValueError(f"imm_q must hold >= 2 values >= 0, got {self.imm_q}")
         if not (np.isfinite(self.imm_sojourn_s) and self.imm_sojourn_s > 0):
             raise ValueError(f"imm_sojourn_s must be finite and > 0, got {self.imm_sojourn_s}")
+        if not (np.isfinite(self.scan_window_s) and self.scan_window_s >= 0):
+            raise ValueError(f"scan_window_s must be finite and >= 0, got {self.scan_window_s}")
         if self.confirm_hits < 2:
             raise ValueError(f"confirm_hits must be >= 2, got {self.confirm_hits}")
 
@@ -259,6 +267,8 @@ class TrackerCounts:
         or coasting, or diverged)
     jpda_exact_clusters, jpda_kbest_clusters : JPDA clusters (summed over scans) solved exactly
         / by k-best (:class:`~navtrack.tracking.jpda.JpdaMethod`)
+    ambiguous_detections : detections inside the gates of two or more confirmed tracks
+        (gates wide for the spacing of the targets; :mod:`navtrack.tracking.autotune`)
     """
 
     scans: int = 0
@@ -269,6 +279,7 @@ class TrackerCounts:
     deleted_unconfirmed: int = 0
     jpda_exact_clusters: int = 0
     jpda_kbest_clusters: int = 0
+    ambiguous_detections: int = 0
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -289,6 +300,10 @@ class TrackerResult:
         Confirmed tracks predicted to each requested report time (index into
         ``report_times``), for scoring.
     counts : TrackerCounts
+    det_nis : (N,) float
+        Normalised innovation squared ``νᵀ S⁻¹ ν`` of each detection against the track it
+        updated, at the prediction, the smallest over the motion models (NaN for detections
+        that updated no track; :mod:`navtrack.tracking.autotune` reads it).
     """
 
     det_track: IntArray
@@ -302,6 +317,7 @@ class TrackerResult:
     report_id: IntArray
     report_xy: FloatArray
     counts: TrackerCounts
+    det_nis: FloatArray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -526,13 +542,21 @@ class ScanGate:
         return np.asarray(self.valid.any(axis=0), dtype=bool)
 
 
-def gate_scan(store: TrackStore, z: FloatArray, model: TrackerModel) -> ScanGate:
+def gate_scan(
+    store: TrackStore, z: FloatArray, model: TrackerModel, dt_s: FloatArray | None = None
+) -> ScanGate:
     """Stage 2: innovation covariances and gains, chi-square gate and likelihoods.
 
     Every model of every track is gated against ``z (M, m)`` with ``model.measurement``
     (linearised at the prediction: its Jacobian is ``H`` for a linear model) and
     ``model.gamma``; a k-d tree pre-gate cuts the pairs when there are more than
     ``config.pregate_pairs`` and the measurement has no angle.
+
+    ``dt_s (M,)``: time of each detection minus the prediction time (a window of reports,
+    :func:`scan_windows`; ``dt_s <= 0``). The predicted position of a pair is moved along the
+    track's velocity, ``H x + dt_j v`` (the position measurement of the tracker); ``S`` and
+    ``K`` stay those of the prediction time. The neglected terms, ``dt² P_vv`` and the process
+    noise over ``dt``, are small beside ``R`` for windows a fraction of the report interval.
     """
     from navtrack.tracking.gating import gate, kdtree_pregate
     from navtrack.tracking.kalman import innovation_gain
@@ -543,9 +567,18 @@ def gate_scan(store: TrackStore, z: FloatArray, model: TrackerModel) -> ScanGate
     xf = store.x.reshape(T * r, n)
     S, K = innovation_gain(store.P.reshape(T * r, n, n), meas.jacobian(xf), meas.R)
     zp = meas.h(xf)
+    offset = margin = None
+    if dt_s is not None and np.any(dt_s != 0):
+        v = xf[:, list(model.config.motion.velocity_index)]  # (T r, 2)
+        offset = dt_s[None, :, None] * v[:, None, :]
+        margin = np.abs(dt_s).max() * np.hypot(v[:, 0], v[:, 1])
     pregate = model.config.pregate_pairs < T * r * M and not np.any(meas.angle_mask)
-    cand = kdtree_pregate(zp, S, z, model.gamma) if pregate else None
-    g = gate(zp, S, z, model.gamma, angle_mask=meas.angle_mask, candidates=cand)
+    cand = (
+        kdtree_pregate(zp, S, z, model.gamma, 0.0 if margin is None else margin)
+        if pregate
+        else None
+    )
+    g = gate(zp, S, z, model.gamma, angle_mask=meas.angle_mask, candidates=cand, pair_offset=offset)
     valid = np.asarray(g.valid.reshape(T, r, M).any(axis=1), dtype=bool)
     ll_rm = g.log_likelihood().reshape(T, r, M)
     ll_rm = np.where(np.isfinite(ll_rm), ll_rm, -1e300)
@@ -840,6 +873,7 @@ def initiate(
     velocity: FloatArray,
     det: IntArray,
     config: TrackerConfig,
+    det_t_s: FloatArray | None = None,
 ) -> Initiation:
     """Stage 6: start tracks from the detections ``z (k, 2)`` that no track claimed.
 
@@ -848,26 +882,39 @@ def initiate(
     start a track (two hits), or it becomes a seed. Seeds older than ``init_max_dt_s`` are
     forgotten first. ``det (k,)`` are the detections' indices, kept with the seeds. ``store``
     and ``seeds`` change in place.
+
+    ``det_t_s (k,)``: the detections' own times when they are a window of reports before
+    ``t_s`` (default ``t_s``); seeds keep their own time, and a new state is predicted from
+    its detection's time to ``t_s`` (without process noise).
     """
     seeds.prune(t_s, config.init_max_dt_s)
     k = z.shape[0]
+    tj = np.full(k, t_s) if det_t_s is None else np.asarray(det_t_s, dtype=float)
     track = np.full(k, -1, dtype=np.int64)
     status = np.full(k, DetStatus.SEED, dtype=np.int8)
     seed_det: list[int] = []
     seed_track: list[int] = []
+    F = config.motion.F
+
+    def born(x0: FloatArray, P0: FloatArray, t0: float, hits: int) -> int:
+        if t0 != t_s:
+            Fk = F(t_s - t0)
+            x0, P0 = Fk @ x0, Fk @ P0 @ Fk.T
+        return store.add(x0, P0, t_s, hits=hits)
+
     for j in range(k):
         if np.all(np.isfinite(velocity[j])):
             x0, P0 = one_point_state(z[j], velocity[j], config)
-            track[j] = store.add(x0, P0, t_s, hits=1)
+            track[j] = born(x0, P0, tj[j], 1)
             status[j] = DetStatus.STARTED
             continue
-        best = seeds.nearest(t_s, z[j], config.init_max_speed_mps, 3 * config.sigma_m)
+        best = seeds.nearest(tj[j], z[j], config.init_max_speed_mps, 3 * config.sigma_m)
         if best < 0:
-            seeds.add(t_s, z[j], int(det[j]))
+            seeds.add(tj[j], z[j], int(det[j]))
             continue
         ts, zs, dj = seeds.pop(best)
-        x0, P0 = two_point_state(z[j], zs, t_s - ts, config)
-        track[j] = store.add(x0, P0, t_s, hits=2)
+        x0, P0 = two_point_state(z[j], zs, tj[j] - ts, config)
+        track[j] = born(x0, P0, tj[j], 2)
         status[j] = DetStatus.STARTED
         seed_det.append(dj)
         seed_track.append(int(track[j]))
@@ -888,6 +935,59 @@ def report(
 
 
 # ---------------------------------------------------------------------------------- driver
+
+
+def scan_windows(
+    t_s: FloatArray, z: FloatArray, window_s: float, separation_m: float
+) -> tuple[IntArray, IntArray]:
+    """Group time-ordered detections into scans: first and one-past-last index of each.
+
+    Detections sharing a time are always one scan. With ``window_s > 0`` the following
+    distinct times join the scan while they stay within ``window_s`` of its first time and
+    none of their detections lies within ``separation_m`` of a detection already in the scan
+    (two such reports may come from one target, and a scan gives a track at most one
+    detection). ``window_s = 0`` gives one scan per distinct time.
+
+    Parameters
+    ----------
+    t_s : (N,) non-decreasing times, s
+    z : (N, 2) positions, m
+    window_s, separation_m : float
+
+    Returns
+    -------
+    starts, ends : (W,) int
+    """
+    N = t_s.size
+    if not N:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    g0 = np.flatnonzero(np.r_[True, np.diff(t_s) > 0])
+    g1 = np.r_[g0[1:], N]
+    if window_s <= 0:
+        return g0.astype(np.int64), g1.astype(np.int64)
+    from scipy.spatial import cKDTree
+
+    # the closest earlier detection within window_s of each detection, found in one k-d tree
+    # query of (time, position) points scaled so that window_s and separation_m both map to 1
+    # (the max norm, p = inf): a neighbour closer in both senses can end a window
+    pts = np.column_stack([t_s / window_s, z / separation_m])
+    pairs = cKDTree(pts).query_pairs(1.0, p=np.inf, output_type="ndarray")
+    # for each detection, the latest earlier detection (distinct time) it conflicts with
+    later = np.maximum(pairs[:, 0], pairs[:, 1])
+    earlier = np.minimum(pairs[:, 0], pairs[:, 1])
+    diff_t = t_s[later] > t_s[earlier]
+    conflict = np.full(N, -1, dtype=np.int64)
+    np.maximum.at(conflict, later[diff_t], earlier[diff_t])
+    group_conflict = np.maximum.reduceat(conflict, g0)  # per distinct time
+    starts = [0]
+    first_t = t_s[0]
+    for k in range(1, g0.size):
+        s = g0[k]
+        if t_s[s] - first_t > window_s or group_conflict[k] >= g0[starts[-1]]:
+            starts.append(k)
+            first_t = t_s[s]
+    st = g0[np.asarray(starts)]
+    return st.astype(np.int64), np.r_[st[1:], N].astype(np.int64)
 
 
 def run_tracker(
@@ -943,12 +1043,13 @@ def run_tracker(
     N = t.size
     det_track = np.full(N, -1, dtype=np.int64)
     det_status = np.full(N, DetStatus.SEED, dtype=np.int8)
+    det_nis = np.full(N, np.nan)
     counts = dict.fromkeys(TrackerCounts.__dataclass_fields__, 0)
     now = t[0] if N else 0.0
-    starts = np.flatnonzero(np.r_[True, np.diff(t) > 0]) if N else np.zeros(0, dtype=np.int64)
-    ends = np.r_[starts[1:], N].astype(np.int64) if N else np.zeros(0, dtype=np.int64)
+    starts, ends = scan_windows(t, Z, cfg.scan_window_s, window_separation_m(model))
     for s0, s1 in zip(starts, ends, strict=True):
-        tk = t[s0]
+        tk = t[s1 - 1]  # a window of reports is processed at its last time
+        dt_k = t[s0:s1] - tk
         log.report_until(store, now, tk, cfg.motion, inclusive=False)
         counts["scans"] += 1
         Zk = Z[s0:s1]
@@ -956,7 +1057,7 @@ def run_tracker(
         now = tk
         claimed = np.zeros(Zk.shape[0], dtype=bool)  # detections not available for initiation
         if store.size:
-            g = gate_scan(store, Zk, model)
+            g = gate_scan(store, Zk, model, dt_k)
             a = associate(g, model)
             update(store, g, a)
             # fates of the associated detections, by the status of their track before manage
@@ -967,6 +1068,12 @@ def run_tracker(
                 store.confirmed[k[used]], DetStatus.CONFIRMED, DetStatus.TENTATIVE
             )
             det_status[s0 + np.flatnonzero(g.gated & (k < 0))] = DetStatus.UNUSED
+            counts["ambiguous_detections"] += int(
+                np.count_nonzero(g.valid[store.confirmed].sum(axis=0) >= 2)
+            )
+            y = g.innovation[k[used], :, used]  # (h, r, m)
+            w = np.linalg.solve(g.S[k[used]], y[..., None])[..., 0]
+            det_nis[s0 + used] = np.einsum("hri,hri->hr", y, w).min(axis=1)
             m = manage(store, a.hit, tk, cfg)
             log.updates(tk, m, a.hit)
             _add_counts(counts, a, m)
@@ -974,14 +1081,24 @@ def run_tracker(
         free = np.flatnonzero(~claimed)
         if not free.size:  # (seeds are pruned by age when next used: same result)
             continue
-        ini = initiate(store, seeds, tk, Zk[free], V[s0 + free], s0 + free, cfg)
+        ini = initiate(store, seeds, tk, Zk[free], V[s0 + free], s0 + free, cfg, t[s0 + free])
         det_track[s0 + free] = ini.track
         det_status[s0 + free] = ini.status
         det_track[ini.seed_det] = ini.seed_track
         det_status[ini.seed_det] = DetStatus.STARTED
         counts["tracks_started"] += int(np.count_nonzero(ini.track >= 0))
     log.report_until(store, now, now, cfg.motion, inclusive=True)
-    return log.result(det_track, det_status, cfg.motion.dim_x, TrackerCounts(**counts))
+    return log.result(det_track, det_status, det_nis, cfg.motion.dim_x, TrackerCounts(**counts))
+
+
+def window_separation_m(model: TrackerModel) -> float:
+    """Distance within which two reports at distinct times may not share a scan window: how
+    far two reports of one target can lie apart, the largest initiation speed over the window
+    plus the gate radius of the difference of two measurement errors, ``sqrt(2 γ) σ``."""
+    cfg = model.config
+    return float(
+        np.sqrt(2 * model.gamma) * cfg.sigma_m + cfg.init_max_speed_mps * cfg.scan_window_s
+    )
 
 
 def _add_counts(counts: dict[str, int], a: ScanAssociation, m: Management) -> None:
@@ -1039,7 +1156,12 @@ class _Log:
             self.r_next += 1
 
     def result(
-        self, det_track: IntArray, det_status: Int8Array, n: int, counts: TrackerCounts
+        self,
+        det_track: IntArray,
+        det_status: Int8Array,
+        det_nis: FloatArray,
+        n: int,
+        counts: TrackerCounts,
     ) -> TrackerResult:
         def cat(parts: list, shape: tuple[int, ...], dtype: type) -> np.ndarray:
             return np.concatenate(parts) if parts else np.zeros(shape, dtype=dtype)
@@ -1056,4 +1178,5 @@ class _Log:
             cat(self.rep_id, (0,), np.int64),
             cat(self.rep_xy, (0, 2), float),
             counts,
+            det_nis,
         )

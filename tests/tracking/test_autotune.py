@@ -1,0 +1,151 @@
+"""Self-tuning (``tracking.autotune``) and scan windows, on simulated tracks with known noise."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from navtrack.tracking.autotune import AIRCRAFT_Q, SHIP_IMM_Q, auto_config, fit_noise
+from navtrack.tracking.gating import gate
+from navtrack.tracking.models import constant_velocity
+from navtrack.tracking.tracker import TrackerConfig, run_tracker, scan_windows
+
+
+def _cv_tracks(rng, n_targets, q, sigma, t_end, mean_dt, speed, spacing_m=5000.0):
+    """Asynchronous reports of CV targets (white acceleration PSD q, per-axis noise sigma):
+    times, positions, ids, sorted by time."""
+    mot = constant_velocity(2, q, "continuous")
+    T, Z, I = [], [], []
+    for i in range(n_targets):
+        t = np.cumsum(rng.uniform(0.5, 1.5, int(3 * t_end / mean_dt)) * mean_dt)
+        t = t[t < t_end]
+        heading = rng.uniform(0, 2 * np.pi)
+        x = np.array([spacing_m * i, speed * np.cos(heading), 0.0, speed * np.sin(heading)])
+        prev = 0.0
+        for tk in t:
+            dt = tk - prev
+            x = mot.F(dt) @ x + rng.multivariate_normal(np.zeros(4), mot.Q(dt))
+            prev = tk
+            T.append(tk)
+            Z.append(x[[0, 2]] + rng.normal(0, sigma, 2))
+            I.append(i)
+    o = np.argsort(T, kind="stable")
+    return np.asarray(T)[o], np.asarray(Z)[o], np.asarray(I)[o]
+
+
+def _triplets_by_id(t, z, ids):
+    rows = []
+    for i in np.unique(ids):
+        k = np.flatnonzero(ids == i)
+        tk, zk = t[k], z[k]
+        d1, d2 = np.diff(tk)[:-1], np.diff(tk)[1:]
+        a = d2 / d1
+        e = zk[2:] - zk[1:-1] - a[:, None] * (zk[1:-1] - zk[:-2])
+        rows.append(np.column_stack([d1, d2, a, e]))
+    return np.concatenate(rows)
+
+
+@pytest.mark.parametrize(("q", "sigma", "mean_dt"), [(0.5, 20.0, 10.0), (1e-3, 5.0, 30.0)])
+def test_fit_noise_recovers_the_simulated_sigma_and_q(q, sigma, mean_dt) -> None:
+    # oracle: the simulation's own parameters; ~2000 residuals give a few % standard error
+    rng = np.random.default_rng(7)
+    t, z, ids = _cv_tracks(rng, 10, q, sigma, 200 * mean_dt, mean_dt, 5.0)
+    fit = fit_noise(_triplets_by_id(t, z, ids))
+    assert fit.sigma_m == pytest.approx(sigma, rel=0.1)
+    assert fit.q == pytest.approx(q, rel=0.3)
+
+
+def test_fit_noise_refuses_too_few_residuals() -> None:
+    with pytest.raises(ValueError, match="three-point residuals"):
+        fit_noise(np.zeros((3, 5)))
+
+
+def test_auto_config_picks_the_family_from_the_speeds() -> None:
+    rng = np.random.default_rng(3)
+    # aircraft-like: 150 m/s at 10 s, every report with its velocity
+    t, z, _ = _cv_tracks(rng, 8, 50.0, 30.0, 900.0, 10.0, 150.0, spacing_m=50_000.0)
+    v = np.full(z.shape, 150.0 / np.sqrt(2))
+    air = auto_config(t, z, v)
+    assert air.motion == "cv"
+    assert air.config.motion.q == AIRCRAFT_Q
+    assert air.report_interval_p50_s == pytest.approx(10.0, rel=0.2)
+    # ships: half moored (reported speed 0), half moving at 5 m/s
+    t, z, ids = _cv_tracks(rng, 8, 1e-3, 10.0, 1800.0, 20.0, 5.0)
+    v = np.where((ids % 2 == 0)[:, None], 0.0, 5.0 / np.sqrt(2)) * np.ones((1, 2))
+    ships = auto_config(t, z, v)
+    assert ships.motion == "imm"
+    assert ships.config.imm_q == SHIP_IMM_Q
+    assert ships.stationary_share == pytest.approx(0.5, abs=0.1)
+    assert ships.config.sigma_m >= 25.0
+
+
+def test_scan_windows_keep_times_together_and_reports_of_one_target_apart() -> None:
+    t = np.array([0.0, 0.0, 0.5, 1.0, 1.2, 5.0])
+    z = np.array([[0, 0], [1000, 0], [5000, 0], [10, 0], [9000, 0], [0, 0]], dtype=float)
+    s, e = scan_windows(t, z, 0.0, 100.0)
+    assert s.tolist() == [0, 2, 3, 4, 5]  # one scan per distinct time
+    s, e = scan_windows(t, z, 2.0, 100.0)
+    # t = 1.0 lies 10 m from the first report of the window (one target?): a new window;
+    # t = 5.0 is beyond the window's 2 s
+    assert s.tolist() == [0, 3, 5]
+    assert e.tolist() == [3, 5, 6]
+
+
+def test_gate_pair_offset_equals_gating_against_shifted_predictions() -> None:
+    rng = np.random.default_rng(1)
+    zp = rng.normal(0, 100, (3, 2))
+    A = rng.normal(0, 1, (3, 2, 2))
+    S = A @ A.transpose(0, 2, 1) * 100 + np.eye(2) * 50
+    z = rng.normal(0, 100, (4, 2))
+    off = rng.normal(0, 30, (3, 4, 2))
+    g = gate(zp, S, z, 9.2, pair_offset=off)
+    for t in range(3):
+        for j in range(4):
+            ref = gate(zp[t : t + 1] + off[t, j], S[t : t + 1], z[j : j + 1], 9.2)
+            assert g.d2[t, j] == pytest.approx(ref.d2[0, 0], rel=1e-12)
+
+
+def test_windowed_scans_track_asynchronous_reports_like_one_scan_per_time() -> None:
+    rng = np.random.default_rng(5)
+    t, z, ids = _cv_tracks(rng, 6, 1e-2, 10.0, 1200.0, 10.0, 8.0)
+    cfg = dataclasses.replace(TrackerConfig(), sigma_m=10.0, confirm_window_s=300.0)
+    one = run_tracker(t, z, cfg)
+    win = run_tracker(t, z, dataclasses.replace(cfg, scan_window_s=5.0))
+    assert win.counts.scans < one.counts.scans / 2
+    # the same partition of the reports into tracks (ids renumbered)
+    for res in (one, win):
+        pairs = {(int(a), int(b)) for a, b in zip(ids, res.det_track, strict=True) if b >= 0}
+        assert len(pairs) == 6
+
+
+def test_auto_on_opensky_meets_the_bars(shared_data) -> None:
+    """Issue 11 bars on the OpenSky file (the Solent file takes too long for CI; its numbers
+    are in docs/tracking.md): auto within 0.05 MOTA of the aircraft preset, tuned on the first
+    half and scored on the second within 0.10 of auto tuned on the second half itself, and
+    never more than 2x confirmed tracks against ids."""
+    from navtrack.io.tracks import read_tracks, to_local_enu, velocity_local_enu
+    from navtrack.tracking.metrics import clear_mot, interpolate_truth
+
+    det = read_tracks(shared_data / "tracking" / "OpenSky_Plane_States.csv", "opensky")
+    en, ref = to_local_enu(det)
+    vel = velocity_local_enu(det, *ref)
+    t = det.t_gps_s
+
+    def mota(mask, cfg):
+        ts, zs, ids = t[mask], en[mask], det.id[mask]
+        grid = ts[0] + np.arange(0.0, ts[-1] - ts[0] + 1e-9, 10.0)
+        res = run_tracker(ts, zs, cfg, report_times=grid, velocity=vel[mask])
+        tf, tid, tp = interpolate_truth(grid, ts, ids, zs, 60.0)
+        m = clear_mot(tf, tid, tp, res.report_frame, res.report_id, res.report_xy, 2000.0)
+        assert res.counts.tracks_confirmed <= 2 * np.unique(ids).size
+        return m.mota
+
+    every = np.ones(t.size, dtype=bool)
+    auto = auto_config(t, en, vel).config
+    assert mota(every, auto) >= mota(every, TrackerConfig.for_aircraft()) - 0.05
+    h2 = t >= 0.5 * (t[0] + t[-1])
+    on_h1 = auto_config(t[~h2], en[~h2], vel[~h2]).config
+    in_sample = auto_config(t[h2], en[h2], vel[h2]).config
+    assert mota(h2, on_h1) >= mota(h2, in_sample) - 0.10
