@@ -56,6 +56,7 @@ __all__ = [
 #: Experiment name -> module holding its ``EXPERIMENT``. Later reproductions add one line each.
 EXPERIMENTS: dict[str, str] = {
     "ari": "navtrack.experiments.ari",
+    "sdcmsjpda": "navtrack.experiments.sdcmsjpda",
 }
 
 
