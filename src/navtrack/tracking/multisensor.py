@@ -386,14 +386,18 @@ def _sd_gnn_tuples(terms: _SensorTerms, max_tuples: int) -> tuple[IntArray, bool
     """
     S_, T = terms.log_w.shape[:2]
     sizes = np.r_[T, terms.n_meas].astype(np.int64)
+    # a certain detection (P_D P_G = 1) makes "missed" impossible; the S-D problem still needs
+    # each target's singleton, so it gets the cost of a weight of 1e-300 instead of +inf
+    log_w = terms.log_w.copy()
+    log_w[..., 0] = np.maximum(log_w[..., 0], np.log(1e-300))
     rows, costs = [], []
     for t in range(T):
-        opts = [np.flatnonzero(np.isfinite(terms.log_w[s, t])) for s in range(S_)]
+        opts = [np.flatnonzero(np.isfinite(log_w[s, t])) for s in range(S_)]
         grids = np.meshgrid(*opts, indexing="ij")
         L = np.stack([g.reshape(-1) for g in grids], axis=-1)
         if len(L) > max_tuples:
             raise ValueError(f"target {t}: {len(L)} gated S-tuples > max_tuples")
-        c = -terms.log_w[np.arange(S_), t, L].sum(axis=1)
+        c = -log_w[np.arange(S_), t, L].sum(axis=1)
         rows.append(np.column_stack([np.full(len(L), t + 1), L]))
         costs.append(c)
     for s in range(S_):  # false alarms: each measurement alone, cost 0
