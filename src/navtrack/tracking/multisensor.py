@@ -49,11 +49,13 @@ Reading of the paper's equations (the extraction lost their layout):
   parametric form scaled by ``λ |2πS|^{1/2} / P_D``: ``e_s = P_D,s N(ν_s; 0, S_s) / λ_s`` and
   ``b = 1 - P̄_D P_G`` (``P̄_D`` the mean detection probability of the sensors). So within a
   tuple the sensors' corrections are PDA-style alternatives, and
-* eqs. 31-32 are the covariance of that mixture: ``P_L = X̂``-component ``β_0 P̂`` plus
-  ``w_s (P̂ - K_s S_s K_sᵀ)`` plus the spread of the corrections, then the spread over tuples.
-  Flattened, the posterior is the moment-matched mixture of the prediction (weight
-  ``Σ_L β_L β_0(L)``) and the single-sensor updates ``(s, j)`` (weight ``Σ_{L: l_s = j} β_L
-  w_s(L)``).
+* eqs. 31-32 are the covariance of that mixture: ``P_L = β_0 P̂ + Σ_s w_s (P̂ - K_s S_s K_sᵀ)``
+  plus the spread of the corrections ``K_s ν_s`` about their mean, then the spread of the
+  ``X_L`` over the tuples. Flattened, the posterior is the moment-matched mixture of the
+  prediction (weight ``Σ_L β_L β_0(L)``) and the single-sensor updates ``(s, j)`` (weight
+  ``Σ_{L: l_s = j} β_L w_s(L)``). This reading does not fuse the sensors of a tuple into one
+  update (each component uses one sensor's gain), so it gains less from three sensors than the
+  stacked update of ``parallel``; the reproduction shows the effect.
 * The S-D GNN tuple cost is ``-log`` of the same event weight; it is additive over sensors, so
   the (S+1)-D problem is the union of per-sensor 2-D problems and the relaxation closes its gap
   (the tests check the solution against per-sensor :func:`~navtrack.tracking.assignment.assign2d`).
