@@ -60,9 +60,10 @@ def _with_fault(obs: Observations, sat: str, epochs: slice, bias_m: float) -> Ob
 # --------------------------------------------------------------------------- the chain
 def test_chain_reproduces_the_single_function_solver() -> None:
     """Positions, clocks, satellites used, iterations and chi-square of the bundled sample as
-    the single-function ``solve_spp`` of commit 8d888b4 gave them (printed to 0.1 mm)."""
+    the single-function ``solve_spp`` of commit 8d888b4 gave them (printed to 0.1 mm), with
+    that commit's default of no QZSS group delay."""
     obs, nav = _sample()
-    res = solve_spp(obs, [nav], config=GEJ)
+    res = solve_spp(obs, [nav], config=replace(GEJ, tgd_systems="GECIR"))
     expected = {
         0: ([-3962108.1457, 3381308.8644, 3668678.0399], -138137.4401, -0.1605, 1.894),
         60: ([-3962108.1224, 3381308.7226, 3668677.7205], -136559.2812, -0.1285, 1.3727),
@@ -125,7 +126,15 @@ def test_satellite_states_group_delays_follow_the_config() -> None:
     assert np.all(sv.group_delay_s[:, j] != 0.0)
     qzss = [k for k, s in enumerate(pr.sats) if s[0] == "J"]
     assert qzss
-    assert np.all(sv.group_delay_s[:, qzss] == 0.0)  # "J" is not in tgd_systems
+    ref_j = eph.broadcast_states(
+        tables, [pr.sats[k] for k in qzss], pr.t_gps_s, t_tx[:, None].repeat(len(qzss), 1)
+    )
+    np.testing.assert_array_equal(  # QZSS TGD applied (IS-QZSS-PNT), from the record in use
+        sv.group_delay_s[:, qzss], eph.group_delay_s(tables["J"], ref_j.eph_index)
+    )
+    assert np.any(sv.group_delay_s[:, qzss] != 0.0)
+    no_j = satellite_states(pr, [nav], config=replace(GEJ, tgd_systems="GECIR"))
+    assert np.all(no_j.group_delay_s[:, qzss] == 0.0)
     np.testing.assert_allclose(sv.iono_scale[sv.valid], 1.0)  # L1 / E1 only
     no_tgd = satellite_states(pr, [nav], config=replace(GEJ, tgd_systems=""))
     assert np.all(no_tgd.group_delay_s == 0.0)

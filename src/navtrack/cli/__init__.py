@@ -22,6 +22,9 @@ COMMAND_MODULES = (
     "navtrack.cli.track",
     "navtrack.cli.smooth",
     "navtrack.cli.reproduce",
+    "navtrack.cli.rtk",
+    "navtrack.cli.agps",
+    "navtrack.cli.attitude",
 )
 
 

@@ -89,7 +89,52 @@ def register(subparsers: Any) -> None:
         help=f"run on the bundled {EXAMPLE_OBS} + {EXAMPLE_NAV} with its reference",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    # --- integrity monitoring (navtrack.integrity.raim)
+    p.add_argument(
+        "--raim",
+        choices=("off", "chi2", "loo", "fde", "ss", "fcm"),
+        default="off",
+        help="integrity monitoring: chi-square test only, leave-one-out (RTKLIB-like), "
+        "iterative exclusion, solution separation (up to 2 faults), fuzzy c-means (default off)",
+    )
+    p.add_argument("--pfa", type=float, default=1e-3, help="false-alarm probability (1e-3)")
+    p.add_argument("--pmd", type=float, default=1e-3, help="missed-detection probability (1e-3)")
     p.set_defaults(func=run_pos)
+
+
+def _raim_config(args: argparse.Namespace) -> Any:
+    """The RaimConfig of ``--raim/--pfa/--pmd`` (None for ``off``)."""
+    if args.raim == "off":
+        return None
+    from navtrack.integrity.raim import RaimConfig
+
+    try:
+        return RaimConfig(method=args.raim, pfa=args.pfa, pmd=args.pmd)
+    except ValueError as exc:
+        raise SystemExit(f"navtrack pos: --raim {args.raim}: {exc}") from None
+
+
+def _print_raim_summary(result: SppResult) -> None:
+    """Integrity lines of the summary: epochs per RAIM status, exclusions per satellite,
+    median protection levels."""
+    import numpy as np
+
+    integ = result.integrity
+    if integ is None:
+        return
+    counts = integ.status_counts()
+    print(f"integrity      {integ.method}: " + ", ".join(f"{k} {v}" for k, v in counts.items()))
+    per_sat = integ.excluded.sum(axis=0)
+    if per_sat.any():
+        print(
+            "  excluded     "
+            + " ".join(f"{result.sats[j]}:{per_sat[j]}" for j in np.flatnonzero(per_sat))
+        )
+    if np.isfinite(integ.hpl_m).any():
+        print(
+            f"  HPL/VPL      median {np.nanmedian(integ.hpl_m):.2f} / "
+            f"{np.nanmedian(integ.vpl_m):.2f} m"
+        )
 
 
 def _reference(args: argparse.Namespace) -> tuple[float, float, float] | None:
@@ -229,7 +274,8 @@ def run_pos(args: argparse.Namespace) -> int:
     if sp3 is None and not any(nav.tables for nav in navs):
         print(f"navtrack pos: {', '.join(map(str, args.nav))}: no ephemerides", file=sys.stderr)
         return 1
-    result = _solve(obs, navs, sp3, config, progress=not args.no_progress)
+    raim = _raim_config(args)
+    result = _solve(obs, navs, sp3, config, progress=not args.no_progress, raim=raim)
     counts = result.status_counts()
     solved = counts["ok"]
     used_systems = "".join(s for s in "GRECJI" if any(sat[0] == s for sat in result.sats))
@@ -267,6 +313,7 @@ def run_pos(args: argparse.Namespace) -> int:
             print(f"  {name:<12} {st[key].mean_m:8.3f}  {st[key].rms_m:8.3f}  {st[key].p95_m:8.3f}")
         e, n, u = (st[k].mean_m for k in ("east", "north", "up"))
         print(f"  mean ENU     {e:8.3f}  {n:8.3f}  {u:8.3f}")
+    _print_raim_summary(result)
     if solved == 0:
         cause = max(((v, k) for k, v in counts.items() if k != "ok"), default=(0, "?"))[1]
         hint = ""
@@ -307,14 +354,20 @@ def run_pos(args: argparse.Namespace) -> int:
 
 
 def _solve(
-    obs: Observations, navs: list[NavData], sp3: Sp3 | None, config: SppConfig, *, progress: bool
+    obs: Observations,
+    navs: list[NavData],
+    sp3: Sp3 | None,
+    config: SppConfig,
+    *,
+    progress: bool,
+    raim: Any = None,
 ) -> SppResult:
     """Solve all epochs, with a progress bar on files of more than one block."""
     from navtrack.gnss.spp import CHUNK_EPOCHS, solve_spp
 
     n = len(obs.t_gps_s)
     if not progress or n <= CHUNK_EPOCHS:
-        return solve_spp(obs, navs, sp3=sp3, config=config, chunk_epochs=CHUNK_EPOCHS)
+        return solve_spp(obs, navs, sp3=sp3, config=config, chunk_epochs=CHUNK_EPOCHS, raim=raim)
     from tqdm import tqdm
 
     with tqdm(total=n, unit="epoch", desc="solving", file=sys.stderr, disable=None) as bar:
@@ -325,4 +378,5 @@ def _solve(
             config=config,
             chunk_epochs=CHUNK_EPOCHS,
             progress=lambda done, _: bar.update(done - bar.n),
+            raim=raim,
         )

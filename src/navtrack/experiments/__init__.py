@@ -55,7 +55,11 @@ __all__ = [
 
 #: Experiment name -> module holding its ``EXPERIMENT``. Later reproductions add one line each.
 EXPERIMENTS: dict[str, str] = {
+    "foveal": "navtrack.experiments.foveal",
     "ari": "navtrack.experiments.ari",
+    "agps": "navtrack.experiments.agps",
+    "alhat": "navtrack.experiments.alhat",
+    "raim-fcm": "navtrack.experiments.raim_fcm",
     "sdcmsjpda": "navtrack.experiments.sdcmsjpda",
 }
 

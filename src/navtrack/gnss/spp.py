@@ -64,6 +64,7 @@ if TYPE_CHECKING:
     from navtrack.gnss.observations import Observations
     from navtrack.gnss.rinex.nav import NavData
     from navtrack.gnss.sp3 import Sp3
+    from navtrack.integrity.raim import IntegrityResult, RaimConfig
 
 
 class SppStatus(IntEnum):
@@ -167,11 +168,15 @@ class SppConfig:
         Satellites with a larger broadcast URA are not used (RTKLIB: 300 m).
     tgd_systems : str
         Systems whose broadcast group delay (TGD/BGD) is applied to single-frequency
-        pseudoranges. QZSS is left out by default: RTKLIB 2.4.3 b34's solutions of the shared
-        SEPT file behave as if the QZSS TGD were zero (median distance to RTKLIB 0.16 m without,
-        0.70 m with it; 3D RMS against the reference 1.43 m without, 2.03 m with), although
-        IS-QZSS-PNT specifies it for L1C/A like GPS's. Add ``"J"`` to follow the ICD.
-    sp3_needs_broadcast : bool
+        pseudoranges: all by default, as the ICDs specify (IS-GPS-200 20.3.3.3.3.2; IS-QZSS-PNT
+        5.7.3, TGD for L1C/A like GPS's; Galileo OS SIS ICD 5.1.5; BDS-SIS-ICD 5.2.4.10).
+        RTKLIB 2.4.3 b34 applies them too, but its ``gettgd`` (``pntpos.c``) takes the group
+        delay of the *first* record of the satellite in the navigation data (sorted by
+        transmission time by ``uniqnav``), not of the ephemeris ``seleph`` chose for the
+        epoch: where that first record is a Galileo F/NAV one, its ``BGD(E5b,E1)`` field is 0
+        and RTKLIB applies no group delay to the E1 pseudorange (SEPT078M.21P: E03, E08, E15 and
+        others). Leaving QZSS out had matched RTKLIB's SEPT solution by compensating that error.
+        sp3_needs_broadcast : bool
         With SP3 orbits, use only satellites that also have a valid broadcast ephemeris (RTKLIB
         2.4.3 removes the satellite clock with the broadcast clock before interpolating SP3 and
         drops satellites without one; navtrack uses the SP3 clock and keeps them by default).
@@ -192,7 +197,7 @@ class SppConfig:
     clock_groups: Mapping[str, str] = field(default_factory=lambda: dict(DEFAULT_CLOCK_GROUP))
     sigma0_m: float = 1.5
     max_ura_m: float = 300.0
-    tgd_systems: str = "GECIR"
+    tgd_systems: str = "GECIRJ"
     sp3_needs_broadcast: bool = False
 
     def __post_init__(self) -> None:
@@ -259,6 +264,9 @@ class SppResult:
     dof : ndarray of int, shape (E,)
         Redundancy.
     iterations : ndarray of int, shape (E,)
+    integrity : IntegrityResult, optional
+        Integrity monitoring of every epoch (:func:`navtrack.integrity.raim.monitor`) when
+        :func:`solve_spp` ran with ``raim``.
     """
 
     t_gps_s: FloatArray
@@ -280,6 +288,7 @@ class SppResult:
     chi2: FloatArray
     dof: IntArray
     iterations: IntArray
+    integrity: IntegrityResult | None = None
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -1213,10 +1222,16 @@ def validate(estimate: Estimate, config: SppConfig | None = None) -> Int8Array:
 
 
 # --------------------------------------------------------------------------- result, driver
-def spp_result(meas: Measurements, estimate: Estimate, status: Int8Array) -> SppResult:
+def spp_result(
+    meas: Measurements,
+    estimate: Estimate,
+    status: Int8Array,
+    integrity: IntegrityResult | None = None,
+) -> SppResult:
     """Assemble the :class:`SppResult` of an estimate of all measurement epochs and the
-    statuses of its validation: positions, clocks and covariances of the epochs whose status is
-    ``ok``, ``rejected_validity`` or ``high_dop``, NaN elsewhere."""
+    statuses of its validation (and its integrity monitoring): positions, clocks and
+    covariances of the epochs whose status is ``ok``, ``rejected_validity`` or ``high_dop``,
+    NaN elsewhere."""
     n_e = meas.t_gps_s.size
     if not np.array_equal(estimate.epochs, np.arange(n_e)) or np.shape(status) != (n_e,):
         raise ValueError("estimate, status: need all measurement epochs in order")
@@ -1246,6 +1261,7 @@ def spp_result(meas: Measurements, estimate: Estimate, status: Int8Array) -> Spp
         chi2=estimate.chi2,
         dof=estimate.dof,
         iterations=estimate.iterations,
+        integrity=integrity,
     )
 
 
@@ -1259,6 +1275,7 @@ def solve_spp(
     ephemeris: Mapping[str, EphemerisTable] | None = None,
     chunk_epochs: int = CHUNK_EPOCHS,
     progress: ProgressFn | None = None,
+    raim: RaimConfig | None = None,
 ) -> SppResult:
     """Single point positions of every epoch of an observation set.
 
@@ -1288,6 +1305,9 @@ def solve_spp(
         elsewhere).
     progress : callable, optional
         ``progress(epochs_done, epochs_total)``, called after each block.
+    raim : RaimConfig, optional
+        Integrity monitoring (:func:`navtrack.integrity.raim.monitor`) in place of
+        :func:`validate`: detection, exclusion, protection levels (``SppResult.integrity``).
 
     Returns
     -------
@@ -1305,7 +1325,12 @@ def solve_spp(
         sv = satellite_states(pr, nav, sp3=sp3, config=cfg, ephemeris=tables)
         meas = corrected_measurements(pr, sv, cfg)
         est = estimate_position(meas, cfg, x0_m=x0_m)
-        parts.append(spp_result(meas, est, validate(est, cfg)))
+        if raim is None:
+            parts.append(spp_result(meas, est, validate(est, cfg)))
+        else:
+            from navtrack.integrity.raim import monitor
+
+            parts.append(spp_result(meas, *monitor(meas, est, cfg, raim)))
         if progress is not None:
             progress(min(a + chunk_epochs, n), n)
     return parts[0] if len(parts) == 1 else concatenate_results(parts)
@@ -1415,6 +1440,11 @@ def concatenate_results(parts: list[SppResult]) -> SppResult:
     def cat(name: str) -> np.ndarray:
         return np.concatenate([getattr(p, name) for p in parts])
 
+    integrity = None
+    if all(p.integrity is not None for p in parts):
+        from navtrack.integrity.raim import concatenate_integrity
+
+        integrity = concatenate_integrity([p.integrity for p in parts if p.integrity])
     return SppResult(
         t_gps_s=cat("t_gps_s"),
         sats=parts[0].sats,
@@ -1435,6 +1465,7 @@ def concatenate_results(parts: list[SppResult]) -> SppResult:
         chi2=cat("chi2"),
         dof=cat("dof"),
         iterations=cat("iterations"),
+        integrity=integrity,
     )
 
 
@@ -1446,9 +1477,11 @@ def solution_frame(result: SppResult) -> dict[str, np.ndarray]:
 
     Columns: ``t_gps_s`` (GPS s), ``x_m``, ``y_m``, ``z_m`` (ECEF, m; NaN where no estimate
     exists), ``clock_m``, ``sd_e_m``, ``sd_n_m``, ``sd_u_m`` (formal standard deviations, m),
-    ``n_sats`` (used), ``pdop``, ``status`` (name), ``excluded`` (space-separated ids; empty
-    until RAIM lands), ``gdop``, ``hdop``, ``vdop`` and one ``isb_<sys>_m`` per further clock
-    group.
+    ``n_sats`` (used), ``pdop``, ``status`` (name), ``excluded`` (space-separated ids of the
+    satellites integrity monitoring excluded; empty without it), ``gdop``, ``hdop``, ``vdop``
+    and one ``isb_<sys>_m`` per further clock group; with integrity monitoring also
+    ``raim_status`` (name), ``hpl_m``, ``vpl_m``, ``test_stat`` and ``threshold``
+    (:class:`navtrack.integrity.raim.IntegrityResult`).
     """
     sd = np.sqrt(np.einsum("eii->ei", result.cov_enu_m2))
     n = result.t_gps_s.size
@@ -1471,4 +1504,8 @@ def solution_frame(result: SppResult) -> dict[str, np.ndarray]:
     }
     for k, g in enumerate(result.clock_groups[1:]):
         cols[f"isb_{g}_m"] = result.isb_m[:, k]
+    if result.integrity is not None:
+        from navtrack.integrity.raim import integrity_columns
+
+        cols.update(integrity_columns(result.integrity, result.sats))
     return cols

@@ -249,8 +249,11 @@ def _frame(cols: dict[str, np.ndarray]) -> pd.DataFrame:
 
 def ok_mask(status: Any, ok_status: object = "ok") -> BoolArray:
     """Epochs whose ``status`` marks a valid fix: equal to ``ok_status`` or, for strings and
-    enumerations, named like it regardless of case. Returns a bool array of the length of
-    ``status``."""
+    enumerations, named like it regardless of case (a tuple: any of its statuses). Returns a
+    bool array of the length of ``status``."""
+    if isinstance(ok_status, tuple):  # any of several statuses (RTK: fix, float, dgnss, ...)
+        masks = [ok_mask(status, s) for s in ok_status]
+        return np.logical_or.reduce(masks) if masks else np.zeros(len(status), dtype=bool)
     target = str(ok_status).lower()
     arr = np.asarray(status)
     if arr.dtype.kind == "U":
@@ -316,7 +319,8 @@ def write_solution(
         ``.nmea``
             One ``$..GGA`` sentence per epoch: UTC time (GPST minus leap seconds) to 0.01 s,
             latitude/longitude as ``ddmm.mmmmmm``/``dddmm.mmmmmm``, fix quality 1 for valid
-            epochs (or mapped from RTKLIB's ``q`` column: 1->4, 2->5, 3/4->2, 5->1, 6->5), 0 and
+            epochs (or mapped from RTKLIB's ``q`` or navtrack's ``quality`` column: 1->4, 2->5,
+            3/4->2, 5->1, 6->5), 0 and
             empty position fields otherwise, satellites used, HDOP from a ``hdop`` column when
             there is one, **otherwise PDOP** in the HDOP field, altitude = ellipsoidal height
             with geoid separation 0. GGA carries no date (``nmea_rmc=True`` adds RMC).
@@ -330,7 +334,8 @@ def write_solution(
         KML and GPX cannot hold an epoch without a position; the document's description states
         how many epochs were left out.
     ok_status : object, default "ok"
-        ``status`` value marking a valid fix (compared as is and, case-insensitively, by name).
+        ``status`` value marking a valid fix (compared as is and, case-insensitively, by name);
+        a tuple of values: any of them.
     talker : str, default "GP"
         NMEA talker id (two letters; ``"GN"`` for multi-GNSS).
     nmea_rmc : bool, default False
@@ -518,8 +523,8 @@ def nmea_gga(
     lat = _float(cols["lat_deg"])
     lon = _float(cols["lon_deg"])
     h = _float(cols["h_m"])
-    if "q" in cols:
-        q = np.asarray(cols["q"])
+    if "q" in cols or "quality" in cols:  # RTKLIB's Q, or navtrack's quality column (same codes)
+        q = np.asarray(cols["quality"] if "quality" in cols else cols["q"])
         quality = np.array([_RTKLIB_Q_TO_GGA.get(int(v), 0) for v in q], dtype=np.int64)
     else:
         quality = np.ones(n, dtype=np.int64)

@@ -26,11 +26,13 @@ from typing import Literal, Protocol
 
 import numpy as np
 
-from navtrack._frozen import readonly_copy
-from navtrack._typing import ArrayLike, BoolArray, FloatArray
+from navtrack._frozen import freeze_arrays, readonly_copy
+from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
 
 __all__ = [
     "CoordinatedTurn",
+    "FovealScan",
+    "FovealSensor",
     "FunctionMeasurement",
     "LinearMeasurement",
     "LinearMotion",
@@ -473,6 +475,168 @@ class FunctionMeasurement:
             dz = np.where(self.angle_mask, wrap_angle(dz), dz)
             cols.append(dz / (2 * step[..., None]))
         return np.stack(cols, axis=-1)
+
+
+# --------------------------------------------------------------------------------------------
+# Foveal sensor (paper 4)
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class FovealScan:
+    """One scan of the foveal sensor, batched over leading axes ``B`` (runs or filters).
+
+    Attributes
+    ----------
+    z : (B..., M) float
+        Measurements, rad; entries where ``valid`` is False are padding (0).
+    valid : (B..., M) bool
+        Which entries of ``z`` are measurements.
+    origin : (B..., M) int
+        Target index that produced each measurement, ``-1`` for clutter and padding (truth, for
+        tests and diagnostics; the filters never read it).
+    """
+
+    z: FloatArray
+    valid: BoolArray
+    origin: IntArray
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+
+@dataclass(frozen=True, slots=True)
+class FovealSensor:
+    """Foveal sensor ``z = arctan(c_k (X - d_k)) + v``, ``v ~ N(0, R)`` (Xi & Morrell, sec. II).
+
+    Each target is detected with probability ``pd``; the number of false alarms is Poisson with
+    mean ``clutter_rate`` (= λV) and they are uniform over the measurement space
+    ``(-pi/2, pi/2)``, so the volume is ``V = pi`` rad and the spatial density
+    ``λ = clutter_rate / pi`` per rad.
+
+    Parameters
+    ----------
+    R : float
+        Measurement-noise variance, rad² (paper: 0.05). Must be > 0.
+    pd : float
+        Detection probability in ``(0, 1]`` (paper: 1 without clutter, 0.9 with).
+    clutter_rate : float
+        Expected false alarms per scan λV >= 0 (paper: 0 or 0.5).
+    position_index : int
+        Index of the position ``X`` in a target's state (``[X, Xdot]``: 0).
+    dim_x : int
+        Size of one target's state.
+
+    Notes
+    -----
+    The paper clutters "the surveillance region volume V"; the measurement space of the arctan
+    is the open interval ``(-pi/2, pi/2)``, which is the region read here (a measurement with
+    noise may fall slightly outside it; the clutter density is not applied there differently).
+    """
+
+    R: float
+    pd: float = 1.0
+    clutter_rate: float = 0.0
+    position_index: int = 0
+    dim_x: int = 2
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.R) and self.R > 0):
+            raise ValueError(
+                f"R (foveal measurement-noise variance, rad²) must be > 0, got {self.R}"
+            )
+        if not (np.isfinite(self.pd) and 0.0 < self.pd <= 1.0):
+            raise ValueError(f"pd (detection probability) must be in (0, 1], got {self.pd}")
+        if not (np.isfinite(self.clutter_rate) and self.clutter_rate >= 0):
+            raise ValueError(
+                f"clutter_rate (expected false alarms per scan, λV) must be >= 0, got "
+                f"{self.clutter_rate}"
+            )
+        if not 0 <= self.position_index < self.dim_x:
+            raise ValueError(
+                f"position_index must be in [0, dim_x={self.dim_x}), got {self.position_index}"
+            )
+
+    @property
+    def volume(self) -> float:
+        """Measurement-space volume ``V = pi`` rad (the interval ``(-pi/2, pi/2)``)."""
+        return float(np.pi)
+
+    @property
+    def clutter_density(self) -> float:
+        """Spatial false-alarm density ``λ = clutter_rate / V``, per rad."""
+        return self.clutter_rate / self.volume
+
+    def h(self, x: ArrayLike, c: ArrayLike, d: ArrayLike) -> FloatArray:
+        """Noise-free measurement ``arctan(c (X - d))`` of states ``x (..., dim_x)``, rad.
+
+        ``c`` (gain, 1/m) and ``d`` (foveal centre, m) broadcast against ``x.shape[:-1]``.
+        """
+        X = np.asarray(x, dtype=float)[..., self.position_index]
+        return np.asarray(np.arctan(np.asarray(c, dtype=float) * (X - np.asarray(d, dtype=float))))
+
+    def log_likelihood(self, z: ArrayLike, x: ArrayLike, c: ArrayLike, d: ArrayLike) -> FloatArray:
+        """``log N(z; arctan(c (X - d)), R)``; ``z`` broadcasts against ``x.shape[:-1]``."""
+        r = np.asarray(z, dtype=float) - self.h(x, c, d)
+        return np.asarray(-0.5 * (r * r / self.R + np.log(2.0 * np.pi * self.R)))
+
+    def measurement(self, c: float, d: float) -> FunctionMeasurement:
+        """This sensor at gain ``c`` and centre ``d`` as a :class:`FunctionMeasurement` (EKF/UKF).
+
+        The Jacobian is ``dz/dX = c / (1 + c² (X - d)²)`` on the position component.
+        """
+        i = self.position_index
+
+        def jac(x: FloatArray) -> FloatArray:
+            J = np.zeros((*x.shape[:-1], 1, self.dim_x))
+            J[..., 0, i] = c / (1.0 + (c * (x[..., i] - d)) ** 2)
+            return J
+
+        return FunctionMeasurement(
+            lambda x: self.h(x, c, d)[..., None], np.array([[self.R]]), self.dim_x, jac
+        )
+
+    def scan(
+        self, positions: ArrayLike, c: ArrayLike, d: ArrayLike, rng: np.random.Generator
+    ) -> FovealScan:
+        """Simulate one scan: detections of the targets plus Poisson clutter.
+
+        Parameters
+        ----------
+        positions : (B..., T) float
+            True target positions X, m.
+        c, d : (B...) float
+            Gain (1/m) and foveal centre (m) of each batch element.
+        rng : numpy.random.Generator
+
+        Returns
+        -------
+        FovealScan
+            Measurements in random order (detections, then clutter, shuffled per batch element)
+            padded to the largest count in the batch.
+        """
+        X = np.asarray(positions, dtype=float)
+        batch, T = X.shape[:-1], X.shape[-1]
+        c = np.broadcast_to(np.asarray(c, dtype=float), batch)[..., None]
+        d = np.broadcast_to(np.asarray(d, dtype=float), batch)[..., None]
+        z_t = np.arctan(c * (X - d)) + rng.normal(0.0, np.sqrt(self.R), X.shape)
+        detected = rng.random(X.shape) < self.pd
+        n_clutter = rng.poisson(self.clutter_rate, batch)
+        m_c = int(n_clutter.max(initial=0))
+        z_c = rng.uniform(-0.5 * np.pi, 0.5 * np.pi, (*batch, m_c))
+        z = np.concatenate([z_t, z_c], axis=-1)
+        valid = np.concatenate([detected, np.arange(m_c) < n_clutter[..., None]], axis=-1)
+        origin = np.concatenate(
+            [np.broadcast_to(np.arange(T), X.shape), np.full((*batch, m_c), -1)], axis=-1
+        )
+        # valid entries first in a random order, padding last
+        key = np.where(valid, rng.random(valid.shape), 2.0)
+        order = np.argsort(key, axis=-1)
+        valid = np.take_along_axis(valid, order, axis=-1)
+        m = int(valid.sum(axis=-1).max(initial=0))
+        z = np.where(valid, np.take_along_axis(z, order, axis=-1), 0.0)[..., :m]
+        origin = np.where(valid, np.take_along_axis(origin, order, axis=-1), -1)[..., :m]
+        return FovealScan(z, valid[..., :m], origin.astype(np.int64))
 
 
 def _check_spd(name: str, M: FloatArray) -> None:

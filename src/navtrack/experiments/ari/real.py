@@ -79,12 +79,13 @@ def broad_series(path: Path, *, decimate: int = 1) -> RealSeries:
     decimate : int
         Keep every ``decimate``-th sample.
     """
-    import scipy.io
     from scipy.spatial.transform import Rotation
 
-    mat = scipy.io.loadmat(path, squeeze_me=True)
-    quat = np.asarray(mat["opt_quat"], dtype=float)[::decimate]
-    rate = float(mat["sampling_rate"])
+    from navtrack.io.broad import read_broad
+
+    trial = read_broad(path)
+    quat = trial.opt_quat_wxyz[::decimate]
+    rate = trial.rate_hz
     n = quat.shape[0]
     ok = np.all(np.isfinite(quat), axis=1)
     angles = np.full((n, 3), np.nan)

@@ -1,0 +1,388 @@
+"""``navtrack rtk ROVER BASE NAV...`` and ``navtrack ppp OBS NAV... --sp3 FILE``: precise positions.
+
+``rtk``: carrier-phase relative positions of a rover against a base.
+
+Reads the rover and base observations (RINEX), the navigation file(s) and optionally an SP3
+file, solves every rover epoch with double-differenced code and carrier phase and integer
+ambiguities (:func:`navtrack.gnss.relative.solve_relative`), prints a summary (epochs of each
+receiver and in common, count of each status, fix rate, slips per detector, ratio-test values,
+input warnings, and with ``--ref``/``--ref-pos`` the error statistics), and writes the solution
+with ``--out`` (CSV, Parquet, NMEA GGA, KML, GPX by suffix) with RTKLIB's ``quality`` column.
+The exit code is 1 when no epoch has a relative solution or the input cannot be read.
+
+``ppp``: static precise point positioning (:func:`navtrack.gnss.ppp.solve_ppp`) with the
+convergence of the position against ``--ref`` over time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from navtrack._typing import FloatArray
+    from navtrack.gnss.relative import RtkResult
+
+
+def register(subparsers: Any) -> None:
+    p = subparsers.add_parser(
+        "rtk",
+        help="carrier-phase relative positioning (RTK) of a rover against a base",
+        description="Double-differenced code and carrier phase, Kalman filter (kinematic) or "
+        "least squares (static), integer ambiguities by LAMBDA with the ratio test.",
+    )
+    p.add_argument("rover", type=Path, help="rover RINEX observation file")
+    p.add_argument("base", type=Path, help="base RINEX observation file")
+    p.add_argument("nav", nargs="+", type=Path, help="RINEX navigation file(s)")
+    base = p.add_mutually_exclusive_group()
+    base.add_argument(
+        "--base-pos", nargs=3, type=float, metavar=("X", "Y", "Z"), help="base ECEF metres"
+    )
+    base.add_argument(
+        "--base-llh",
+        nargs=3,
+        type=float,
+        metavar=("LAT", "LON", "H"),
+        help="base position, degrees and ellipsoidal metres",
+    )
+    p.add_argument("--static", action="store_true", help="static rover (default kinematic)")
+    p.add_argument(
+        "--direction",
+        choices=("forward", "backward", "combined"),
+        default="forward",
+        help="filter direction; combined = forward and backward joined (RTKLIB -c)",
+    )
+    p.add_argument("--systems", default="GECJ", help="systems to use (default GECJ)")
+    p.add_argument(
+        "--freq", type=int, choices=(1, 2), default=1, help="frequencies: 1 (L1) or 2 (L1+L2)"
+    )
+    p.add_argument("--elmask", type=float, default=15.0, metavar="DEG", help="elevation mask")
+    p.add_argument("--ratio", type=float, default=3.0, help="ratio-test threshold (default 3)")
+    p.add_argument("--partial", action="store_true", help="partial ambiguity fixing")
+    p.add_argument("--float", action="store_true", help="no integer fixing (float solution)")
+    p.add_argument("--sp3", type=Path, help="precise orbits/clocks (SP3) instead of broadcast")
+    _add_reference(p)
+    p.add_argument(
+        "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
+    )
+    p.add_argument("--plot", type=Path, metavar="DIR", help="write figures into this directory")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run_rtk)
+
+    q = subparsers.add_parser(
+        "ppp",
+        help="static precise point positioning with SP3 orbits and clocks",
+        description="Dual-frequency ionosphere-free code and phase, Saastamoinen + estimated "
+        "zenith wet delay, float ambiguities, static position (convergence over time).",
+    )
+    q.add_argument("obs", type=Path, help="RINEX observation file (dual frequency)")
+    q.add_argument("nav", nargs="*", type=Path, help="RINEX navigation file(s) (optional)")
+    q.add_argument("--sp3", type=Path, required=True, help="precise orbits and clocks (SP3)")
+    q.add_argument(
+        "--clk", type=Path, help="clock RINEX (not read yet: refused rather than ignored)"
+    )
+    q.add_argument("--systems", default="G", help="systems to use (default G)")
+    q.add_argument("--elmask", type=float, default=15.0, metavar="DEG", help="elevation mask")
+    _add_reference(q)
+    q.add_argument(
+        "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
+    )
+    q.set_defaults(func=run_ppp)
+
+
+def _add_reference(p: argparse.ArgumentParser) -> None:
+    ref = p.add_mutually_exclusive_group()
+    ref.add_argument(
+        "--ref", nargs=3, type=float, metavar=("X", "Y", "Z"), help="reference point, ECEF m"
+    )
+    ref.add_argument(
+        "--ref-llh",
+        nargs=3,
+        type=float,
+        metavar=("LAT", "LON", "H"),
+        help="reference point, degrees and ellipsoidal metres",
+    )
+    ref.add_argument(
+        "--ref-pos",
+        type=Path,
+        metavar="FILE",
+        help="reference trajectory: an RTKLIB .pos file, compared epoch by epoch",
+    )
+
+
+def _base_position(args: argparse.Namespace) -> tuple[FloatArray, str]:
+    import numpy as np
+
+    from navtrack.geodesy import geodetic_to_ecef
+
+    if args.base_pos is not None:
+        return np.asarray(args.base_pos, dtype=float), "--base-pos"
+    if args.base_llh is not None:
+        lat, lon, h = args.base_llh
+        if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 360.0):
+            raise SystemExit(f"navtrack rtk: --base-llh {lat:g} {lon:g} {h:g} is not in degrees")
+        return geodetic_to_ecef([math.radians(lat), math.radians(lon), h]), "--base-llh"
+    return np.full(3, np.nan), "header"
+
+
+def reference_errors(
+    t_gps_s: FloatArray, pos_m: FloatArray, args: argparse.Namespace
+) -> tuple[FloatArray, str] | None:
+    """Per-epoch 3-D error (m, NaN where not compared) against ``--ref``/``--ref-llh`` or the
+    epochs of ``--ref-pos`` (same time tags to 1 ms), and a label; None without a reference."""
+    import numpy as np
+
+    if args.ref_pos is not None:
+        from navtrack.io.rtklib import read_pos
+
+        ref = read_pos(args.ref_pos)
+        kr = np.round(ref["t_gps_s"].to_numpy() * 1e3).astype(np.int64)
+        kn = np.round(t_gps_s * 1e3).astype(np.int64)
+        _, a, b = np.intersect1d(kn, kr, return_indices=True)
+        err = np.full(t_gps_s.size, np.nan)
+        xyz = ref[["x_m", "y_m", "z_m"]].to_numpy()[b]
+        err[a] = np.linalg.norm(pos_m[a] - xyz, axis=1)
+        return err, f"{args.ref_pos} ({a.size} epochs in common)"
+    from navtrack.cli.pos import _reference
+
+    point = _reference(args)
+    if point is None:
+        return None
+    return np.linalg.norm(pos_m - np.asarray(point), axis=1), "reference point"
+
+
+def run_rtk(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from navtrack.gnss.ambiguity import AmbiguityConfig
+    from navtrack.gnss.relative import STATUS_NAMES, RtkConfig, solution_frame, solve_relative
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+
+    for path in [args.rover, args.base, *args.nav, *([args.sp3] if args.sp3 else [])]:
+        if not path.is_file():
+            raise SystemExit(f"navtrack rtk: file {str(path)!r} not found")
+    from navtrack.cli.pos import _check_output
+
+    out_problem = _check_output(args.out)
+    if out_problem:
+        print(f"navtrack rtk: cannot write --out: {out_problem}; solving anyway", file=sys.stderr)
+    try:
+        config = RtkConfig(
+            mode="static" if args.static else "kinematic",
+            systems="".join(dict.fromkeys(args.systems.upper())),
+            frequencies=args.freq,
+            elmask_deg=args.elmask,
+            ambiguity=AmbiguityConfig(ratio_threshold=args.ratio, partial=args.partial),
+            fix=not args.float,
+            direction=args.direction,
+        )
+    except ValueError as exc:
+        raise SystemExit(f"navtrack rtk: {exc}") from None
+    base_xyz, base_src = _base_position(args)
+    rover = read_obs(args.rover)
+    base = read_obs(args.base)
+    if base_src == "header":
+        if base.header.approx_xyz_m is None:
+            raise SystemExit(
+                f"navtrack rtk: {args.base} has no APPROX POSITION XYZ: give --base-pos"
+            )
+        base_xyz = np.asarray(base.header.approx_xyz_m, dtype=float)
+        base_src = f"header APPROX POSITION of {args.base} (give --base-pos for a surveyed one)"
+    navs = [read_nav(p) for p in args.nav]
+    sp3 = None
+    if args.sp3 is not None:
+        from navtrack.gnss.sp3 import read_sp3
+
+        sp3 = read_sp3(args.sp3)
+    from tqdm import tqdm
+
+    n_common = min(len(rover.t_gps_s), len(base.t_gps_s))
+    n_total = (2 if args.direction == "combined" else 1) * n_common
+    disable = True if args.no_progress else None  # None: only on a terminal
+    with tqdm(
+        total=n_total, unit="epoch", desc="filtering", file=sys.stderr, disable=disable
+    ) as bar:
+        state = {"done_passes": 0, "last": 0}
+
+        def progress(done: int, total: int) -> None:
+            if done < state["last"]:  # the next filter pass started
+                state["done_passes"] += state["last"]
+            state["last"] = done
+            bar.n = min(state["done_passes"] + done, n_total)
+            bar.refresh()
+
+        try:
+            result = solve_relative(rover, base, navs, base_xyz, config, sp3=sp3, progress=progress)
+        except ValueError as exc:
+            raise SystemExit(f"navtrack rtk: {exc}") from None
+        bar.n = n_total
+        bar.refresh()
+    _print_summary(args, result, config, base_xyz, base_src, STATUS_NAMES)
+    counts = result.status_counts()
+    relative = counts["fix"] + counts["float"] + counts["dgnss"]
+    code = 0 if relative else 1
+    if not relative:
+        print("navtrack rtk: no epoch has a relative solution", file=sys.stderr)
+    if args.plot is not None:
+        from navtrack.plots.rtk import plot_rtk
+
+        errs = reference_errors(result.t_gps_s, result.pos_m, args)
+        paths = plot_rtk(
+            result,
+            args.plot,
+            error_m=None if errs is None else errs[0],
+            ratio_threshold=config.ambiguity.ratio_threshold,
+        )
+        print(f"figures        {', '.join(str(p) for p in paths)}")
+    if args.out is not None:
+        if out_problem:
+            print(f"navtrack rtk: solution NOT written: {out_problem}", file=sys.stderr)
+            return 1
+        from navtrack.io.solution import write_solution
+
+        try:
+            path = write_solution(
+                solution_frame(result),
+                args.out,
+                ok_status=("fix", "float", "dgnss", "single", "no_base"),
+            )
+            print(f"written        {path}")
+        except OSError as exc:
+            print(f"navtrack rtk: solution NOT written: {exc}", file=sys.stderr)
+            code = 1
+    return code
+
+
+def _print_summary(
+    args: argparse.Namespace,
+    result: RtkResult,
+    config: Any,
+    base_xyz: FloatArray,
+    base_src: str,
+    status_names: tuple[str, ...],
+) -> None:
+    import numpy as np
+
+    counts = result.status_counts()
+    print(f"rover          {args.rover}")
+    print(f"base           {args.base}")
+    x, y, z = (float(v) for v in base_xyz)
+    print(f"base position  {x:.4f} {y:.4f} {z:.4f}  ({base_src})")
+    print(
+        f"navigation     {', '.join(str(p) for p in args.nav)}"
+        + (f"  sp3 {args.sp3}" if args.sp3 else "")
+    )
+    systems = "".join(dict.fromkeys(s[0] for s in result.sats))
+    bands = "L1+L2" if config.frequencies == 2 else "L1"
+    print(
+        f"mode           {config.mode}, {config.direction}, {bands}, "
+        f"systems {systems or '-'}, elevation mask {config.elmask_deg:g} deg, ratio "
+        f"{config.ambiguity.ratio_threshold:g}{', partial' if config.ambiguity.partial else ''}"
+    )
+    print(
+        f"epochs         rover {result.n_rover_epochs}, base {result.n_base_epochs}, "
+        f"common {result.n_common_epochs}"
+    )
+    for name in status_names:
+        if counts[name]:
+            print(f"  {name:<12} {counts[name]}")
+    n_c = max(result.n_common_epochs, 1)
+    print(f"fix rate       {100.0 * counts['fix'] / n_c:.1f} % of the common epochs")
+    s = result.slips
+    print(
+        f"slips          lli {s['lli']}, doppler {s['doppler']}, geometry-free "
+        f"{s['geometry_free']}; ambiguities restarted by a slip {s['ambiguity_resets']}"
+    )
+    ratio = result.ratio[np.isfinite(result.ratio)]
+    if ratio.size:
+        print(
+            f"ratio test     median {np.median(ratio):.2f}, max {np.max(ratio):.2f} over "
+            f"{ratio.size} searches"
+        )
+    print(f"base vs SPP    {result.base_spp_distance_m:.2f} m (base position minus its own SPP)")
+    for w in result.warnings:
+        print(f"warning        {w}", file=sys.stderr)
+    errs = reference_errors(result.t_gps_s, result.pos_m, args)
+    if errs is not None:
+        err, label = errs
+        print(f"error vs ref   {label}: median / 95 % / max 3-D (m)")
+        for name in ("fix", "float", "dgnss", "single"):
+            sel = (result.status == status_names.index(name)) & np.isfinite(err)
+            if sel.any():
+                e = err[sel]
+                print(
+                    f"  {name:<12} {np.median(e):8.3f}  {np.percentile(e, 95):8.3f}  "
+                    f"{e.max():8.3f}  ({sel.sum()} epochs)"
+                )
+
+
+def run_ppp(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from navtrack.gnss.ppp import PppConfig, convergence, solution_frame, solve_ppp
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.sp3 import read_sp3
+
+    if args.clk is not None:
+        raise SystemExit(
+            "navtrack ppp: --clk: clock RINEX files are not read yet; the SP3 clocks are used "
+            "when --clk is left out"
+        )
+    for path in [args.obs, *args.nav, args.sp3]:
+        if not path.is_file():
+            raise SystemExit(f"navtrack ppp: file {str(path)!r} not found")
+    from navtrack.cli.pos import _check_output
+
+    out_problem = _check_output(args.out)
+    try:
+        config = PppConfig(systems=args.systems.upper(), elmask_deg=args.elmask)
+    except ValueError as exc:
+        raise SystemExit(f"navtrack ppp: {exc}") from None
+    obs = read_obs(args.obs)
+    navs = [read_nav(p) for p in args.nav]
+    sp3 = read_sp3(args.sp3)
+    try:
+        result = solve_ppp(obs, navs, sp3, config)
+    except ValueError as exc:
+        raise SystemExit(f"navtrack ppp: {exc}") from None
+    n = result.t_gps_s.size
+    print(f"observations   {args.obs}")
+    print(f"orbits/clocks  {args.sp3}")
+    print(f"systems        {config.systems}, elevation mask {config.elmask_deg:g} deg, static")
+    print(f"epochs         {n}, updated {int(result.updated.sum())}")
+    s = result.slips
+    print(
+        f"slips          lli {s['lli']}, doppler {s['doppler']}, geometry-free {s['geometry_free']}"
+    )
+    last = np.flatnonzero(result.updated)
+    if last.size:
+        x, y, z = result.pos_m[last[-1]]
+        e, nn, u = result.sd_enu_m[last[-1]]
+        print(f"final position {x:.4f} {y:.4f} {z:.4f}  (sd E/N/U {e:.3f} {nn:.3f} {u:.3f} m)")
+        print(f"final ZWD      {result.zwd_m[last[-1]]:.3f} m")
+    from navtrack.cli.pos import _reference
+
+    ref = _reference(args) if args.ref_pos is None else None
+    if ref is not None and last.size:
+        print("convergence    time (s)  horizontal  up      3D   (m, error vs ref)")
+        for t, h, u, d in convergence(result, np.asarray(ref)):
+            print(f"  {t:14.0f}  {h:10.3f}  {u:7.3f}  {d:7.3f}")
+    code = 0 if last.size else 1
+    if args.out is not None:
+        if out_problem:
+            print(f"navtrack ppp: solution NOT written: {out_problem}", file=sys.stderr)
+            return 1
+        from navtrack.io.solution import write_solution
+
+        try:
+            path = write_solution(solution_frame(result), args.out, ok_status="ppp")
+            print(f"written        {path}")
+        except OSError as exc:
+            print(f"navtrack ppp: solution NOT written: {exc}", file=sys.stderr)
+            code = 1
+    return code

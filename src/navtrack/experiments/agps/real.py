@@ -1,0 +1,265 @@
+"""Real-data study of the AGPS reproduction: two satellites of real pseudoranges, twice.
+
+For each shared data set (:data:`REAL_DATA_SETS`: the static stations 0759, ARL1, SEPT, the
+yamatogawa master and the Android GnssLogger phone), the SPP stages of
+:mod:`navtrack.gnss.spp` give corrected GPS L1 C/A pseudoranges and satellite states; the
+assistance corrections (ionosphere, troposphere) are evaluated at a base station placed
+``base_distance_m`` from the reference position (:func:`navtrack.gnss.agps.assisted_pseudoranges`).
+Fixes are sampled without replacement from all (epoch pair at the interval, satellite pair
+usable at both epochs) combinations, then solved at the reference height plus the paper's
+height offsets (its heights minus its true 56 m) with every solver, and compared with the
+reference position.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from navtrack.geodesy import ecef_to_geodetic, enu_rotation
+
+if TYPE_CHECKING:
+    from navtrack.gnss.agps import AgpsConfig
+
+__all__ = ["REAL_DATA_SETS", "RealDataSet", "real_data_study"]
+
+
+@dataclass(frozen=True, slots=True)
+class RealDataSet:
+    """One shared data set with its reference position.
+
+    Attributes
+    ----------
+    name : str
+    obs : str
+        Observation file (RINEX, or Android GnssLogger ``.txt``), relative to the shared
+        ``gnss`` folder.
+    nav : str
+        GPS navigation file, same.
+    ref_xyz_m : tuple of float
+        Reference position (ECEF, m), from ``shared/data/gnss/README.md``.
+    """
+
+    name: str
+    obs: str
+    nav: str
+    ref_xyz_m: tuple[float, float, float]
+
+
+REAL_DATA_SETS: tuple[RealDataSet, ...] = (
+    RealDataSet(
+        "0759",
+        "rtklib_gsi0759/07590920.05o",
+        "rtklib_gsi0759/07590920.05n",
+        (-3976219.188, 3382371.606, 3652511.143),
+    ),
+    RealDataSet(
+        "ARL1",
+        "gpstk_arl1/arlm200a.15o",
+        "gpstk_arl1/arlm2000.15n",
+        (-740289.9180, -5457071.7340, 3207245.5420),
+    ),
+    RealDataSet(
+        "SEPT",
+        "cssrlib_sept/SEPT078M.21O",
+        "cssrlib_sept/SEPT078M.21P",
+        (-3962108.673, 3381309.574, 3668678.638),
+    ),
+    RealDataSet(
+        "yamatogawa_master",
+        "gogps_yamatogawa/yamatogawa_master.obs",
+        "gogps_yamatogawa/brdc0060.10n",
+        (-3749943.5172, 3683398.2394, 3600629.5295),
+    ),
+    RealDataSet(
+        "android",
+        "google_gnsslogger/pseudoranges_log_2016_08_22_14_45_50.txt",
+        "google_gnsslogger/hour2350.16n",
+        (-2693671.749, -4297132.643, 3854726.439),
+    ),
+)
+
+
+def _read(gnss_dir: Path, ds: RealDataSet) -> tuple[Any, Any]:
+    from navtrack.gnss.rinex.nav import read_nav
+
+    obs_path = gnss_dir / ds.obs
+    if obs_path.suffix == ".txt":
+        from navtrack.gnss.android import read_gnsslogger
+
+        obs = read_gnsslogger(obs_path)
+    else:
+        from navtrack.gnss.rinex.obs import read_obs
+
+        obs = read_obs(obs_path)
+    return obs, read_nav(gnss_dir / ds.nav)
+
+
+def _pairs(
+    t_gps_s: np.ndarray, usable: np.ndarray, interval_s: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """All (epoch pair, satellite pair) combinations at ``interval_s`` (within 0.5 s)."""
+    ep: list[tuple[int, int]] = []
+    sv: list[tuple[int, int]] = []
+    j = np.searchsorted(t_gps_s, t_gps_s + interval_s - 0.5)
+    for i, jj in enumerate(j):
+        if jj >= t_gps_s.size or abs(t_gps_s[jj] - t_gps_s[i] - interval_s) > 0.5:
+            continue
+        both = np.flatnonzero(usable[i] & usable[jj])
+        for a in range(both.size):
+            for b in range(a + 1, both.size):
+                ep.append((i, int(jj)))
+                sv.append((int(both[a]), int(both[b])))
+    return np.array(ep, dtype=np.int64).reshape(-1, 2), np.array(sv, dtype=np.int64).reshape(-1, 2)
+
+
+def real_data_study(
+    gnss_dir: Path,
+    rng: np.random.Generator,
+    *,
+    height_offsets_m: tuple[float, ...],
+    intervals_min: tuple[float, ...],
+    fixes: int,
+    base_distance_m: tuple[float, float],
+    config: AgpsConfig,
+    elmask_deg: float = 15.0,
+) -> tuple[dict[str, Any], list[str]]:
+    """Solve sampled two-satellite fixes of every shared data set found.
+
+    Parameters
+    ----------
+    gnss_dir : Path
+        The shared ``gnss`` folder.
+    rng : numpy.random.Generator
+        Sampling of the fixes and base stations.
+    height_offsets_m : tuple of float
+        Assumed height minus the reference height (m).
+    intervals_min : tuple of float
+    fixes : int
+        Fixes per data set and interval (fewer when fewer combinations exist).
+    base_distance_m : (float, float)
+        Base-station distance range (m).
+    config : AgpsConfig
+        Solver options.
+    elmask_deg : float
+
+    Returns
+    -------
+    arrays : dict
+        ``error_m``, ``iterations``, ``status`` of shape (n, solvers, intervals, heights),
+        padded with NaN / 0 / status -1 where an interval has fewer fixes, and ``set`` (n,)
+        the data set of each
+        row; ``lm_cell_clock`` the (error, iterations, status) arrays (n, intervals) of
+        Marquardt with the clocks started from the cell (``clock_start="cell"``) at the height
+        offset nearest 0; ``n_fixes[name][interval]`` counts.
+    skipped : list of str
+        Data sets not run, with the reason.
+    """
+    from navtrack.experiments.agps.simulation import SOLVER_NAMES
+    from navtrack.gnss.agps import (
+        AgpsStatus,
+        assisted_pseudoranges,
+        problem_from_measurements,
+        solve_agps,
+    )
+    from navtrack.gnss.spp import (
+        SppConfig,
+        code_pseudoranges,
+        corrected_measurements,
+        satellite_states,
+    )
+
+    cfg = SppConfig(systems="G", elmask_deg=elmask_deg)
+    n_s, n_i, n_h = len(SOLVER_NAMES), len(intervals_min), len(height_offsets_m)
+    rows_err, rows_it, rows_st, rows_set = [], [], [], []
+    rows_cc: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    zero_h = int(np.argmin(np.abs(np.asarray(height_offsets_m))))
+    cell_clock = dataclasses.replace(config, clock_start="cell")
+    counts: dict[str, dict[str, int]] = {}
+    skipped: list[str] = []
+    for ds in REAL_DATA_SETS:
+        if not (gnss_dir / ds.obs).is_file() or not (gnss_dir / ds.nav).is_file():
+            skipped.append(f"{ds.name}: {ds.obs} or {ds.nav} not found under {gnss_dir}")
+            continue
+        obs, nav = _read(gnss_dir, ds)
+        pr = code_pseudoranges(obs, cfg)
+        meas = corrected_measurements(pr, satellite_states(pr, nav, config=cfg), cfg)
+        ref = np.asarray(ds.ref_xyz_m)
+        lat, lon, h_ref = ecef_to_geodetic(ref)
+        rot = enu_rotation(lat, lon)
+        counts[ds.name] = {}
+        per_interval = []
+        for ii, interval in enumerate(intervals_min):
+            # cells are drawn per fix; the atmosphere is evaluated at the data set's first cell
+            az = rng.uniform(0.0, 2.0 * np.pi)
+            dist = rng.uniform(*base_distance_m)
+            cell = ref + rot.T @ (dist * np.array([math.sin(az), math.cos(az), 0.0]))
+            y = assisted_pseudoranges(meas, cell, cfg)
+            ep, sv = _pairs(meas.t_gps_s, np.isfinite(y), 60.0 * interval)
+            take = rng.permutation(ep.shape[0])[:fixes]
+            ep, sv = ep[take], sv[take]
+            counts[ds.name][f"{interval:g}"] = int(ep.shape[0])
+            per_interval.append((ii, ep, sv, y))
+        n_max = max((p[1].shape[0] for p in per_interval), default=0)
+        if n_max == 0:
+            skipped.append(f"{ds.name}: no satellite pair usable at two epochs at any interval")
+            continue
+        err = np.full((n_max, n_s, n_i, n_h), np.nan)
+        its = np.zeros((n_max, n_s, n_i, n_h), dtype=np.int64)
+        sts = np.full((n_max, n_s, n_i, n_h), -1, dtype=np.int8)  # -1: padding, no fix
+        cc = (
+            np.full((n_max, n_i), np.nan),
+            np.zeros((n_max, n_i), dtype=np.int64),
+            np.full((n_max, n_i), -1, dtype=np.int8),
+        )
+        for ii, ep, sv, y in per_interval:
+            n = ep.shape[0]
+            if n == 0:
+                continue
+            az = rng.uniform(0.0, 2.0 * np.pi, n)
+            dist = rng.uniform(*base_distance_m, n)
+            enu = np.stack([dist * np.sin(az), dist * np.cos(az), np.zeros(n)], axis=1)
+            cells = ref + enu @ rot
+            for hh, dh in enumerate(height_offsets_m):
+                prob = problem_from_measurements(meas, y, ep, sv, h_ref + dh, cells)
+                for j, solver in enumerate(SOLVER_NAMES):
+                    res = solve_agps(prob, solver, config)  # type: ignore[arg-type]
+                    ok = res.status == AgpsStatus.OK
+                    d = np.linalg.norm(res.pos_m - ref, axis=1)
+                    err[:n, j, ii, hh] = np.where(ok, d, np.nan)
+                    its[:n, j, ii, hh] = res.iterations
+                    sts[:n, j, ii, hh] = res.status
+                if hh == zero_h:  # Marquardt with the clocks started from the cell
+                    res = solve_agps(prob, "lm", cell_clock)
+                    d = np.linalg.norm(res.pos_m - ref, axis=1)
+                    cc[0][:n, ii] = np.where(res.status == AgpsStatus.OK, d, np.nan)
+                    cc[1][:n, ii] = res.iterations
+                    cc[2][:n, ii] = res.status
+        rows_cc.append(cc)
+        rows_err.append(err)
+        rows_it.append(its)
+        rows_st.append(sts)
+        rows_set += [ds.name] * n_max
+    if not rows_err:
+        empty = np.zeros((0, n_s, n_i, n_h))
+        return {
+            "error_m": empty,
+            "iterations": empty.astype(np.int64),
+            "status": empty.astype(np.int8),
+            "set": np.array([], dtype=str),
+            "lm_cell_clock": tuple(np.zeros((0, n_i)) for _ in range(3)),
+            "n_fixes": counts,
+        }, skipped
+    return {
+        "error_m": np.concatenate(rows_err),
+        "iterations": np.concatenate(rows_it),
+        "status": np.concatenate(rows_st),
+        "set": np.array(rows_set),
+        "lm_cell_clock": tuple(np.concatenate([c[k] for c in rows_cc]) for k in range(3)),
+        "n_fixes": counts,
+    }, skipped

@@ -1,0 +1,601 @@
+"""Two-satellite AGPS positioning with two receiver clock biases (method 1, Li 2010).
+
+A phone that sees only two satellites, twice, a few minutes apart, is positioned with assistance
+data from a server (ephemerides, ionosphere, the serving cell's position). Per fix, the unknowns
+are ``X = (x, y, z, c dt1, c dt2)`` — ECEF position (m) and one receiver clock bias per epoch (m)
+— and the five equations are (Li 2010, section III)::
+
+    f_i = |X_S,i - R| + c dt_k(i) - P_i            i = 1..4 (2 satellites x 2 epochs)
+    f_5 = (x^2 + y^2) / (a + h)^2 + z^2 / (b + h)^2 - 1
+
+with ``P_i`` the pseudorange corrected for satellite clock, group delay, ionosphere and
+troposphere, ``|.|`` the geometric range with the Sagnac term
+(:func:`navtrack.gnss.corrections.geometric_range`), ``a, b`` the WGS-84 semi-axes and ``h`` the
+assumed height. Each fix starts at the base-station (cell) position with zero clock biases.
+
+Solvers (:func:`solve_agps`), all on the shared batched kernels of :mod:`navtrack.gnss.solve`:
+
+``gn``
+    Gauss–Newton, the paper's eq. (7): :func:`~navtrack.gnss.solve.gauss_newton` with the
+    paper's stopping rule ``||A^T f|| <= epsilon`` (``gtol``).
+``lm``
+    Marquardt, the paper's steps 1–6 with ``mu_1 = 0.1``, ``beta = 10``, ``epsilon = 0.1``:
+    :func:`~navtrack.gnss.solve.marquardt`.
+``map``
+    Beyond the paper: maximum a posteriori with the cell position as a Gaussian prior of stated
+    standard deviation (``AgpsConfig.prior_sigma_m``), pseudoranges and the height equation
+    weighted by their standard deviations — Gauss–Newton on the five equations plus three
+    pseudo-observations ``R - R_cell = 0``. The damping ``mu I`` of Marquardt acts like such a
+    prior on the step; this is the principled form, with a variance one can state.
+
+Per-fix outcome: :class:`AgpsStatus`; positions are NaN wherever no estimate exists, so that a
+NaN is never reported as a fix.
+
+References
+----------
+J.-z. Li, "Two satellites positioning algorithm based on AGPS system with two clock bias",
+ICCET 2010, V2-416..419 (equations f1..f5, Marquardt steps 1–6, Tables I–III);
+B. Chen, *Optimization theory and algorithms*, 2nd ed., Tsinghua Univ. Press 2005 (the paper's
+ref. [8]: the Levenberg–Marquardt steps the paper follows);
+NIMA TR8350.2 (WGS-84 semi-axes).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import IntEnum
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+
+from navtrack._frozen import freeze_arrays
+from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
+from navtrack.geodesy import NEAR_SURFACE_NORM_M, WGS84_A_M, WGS84_F, ecef_to_geodetic
+
+if TYPE_CHECKING:
+    from navtrack.gnss.spp import Measurements, SppConfig
+
+__all__ = [
+    "HEIGHT_RANGE_M",
+    "SOLVERS",
+    "STATUS_NAMES",
+    "XTOL_M",
+    "AgpsConfig",
+    "AgpsProblem",
+    "AgpsResult",
+    "AgpsStatus",
+    "Solver",
+    "assisted_pseudoranges",
+    "ellipsoid_residual",
+    "problem_from_measurements",
+    "solve_agps",
+]
+
+WGS84_B_M = WGS84_A_M * (1.0 - WGS84_F)
+
+HEIGHT_RANGE_M = (-1000.0, 20000.0)
+"""Accepted assumed heights (m above the ellipsoid): the lowest land (Dead Sea, about -430 m
+ellipsoidal) to above airliner cruise; anything else is a wrong unit or a mistake."""
+
+Solver = Literal["gn", "lm", "map"]
+SOLVERS: tuple[Solver, ...] = ("gn", "lm", "map")
+
+
+class AgpsStatus(IntEnum):
+    """Per-fix outcome of :func:`solve_agps` (printed by lower-case name)."""
+
+    OK = 0
+    MISSING_MEASUREMENT = 1
+    SINGULAR = 2
+    NO_CONVERGENCE = 3
+    DIVERGED = 4
+
+
+STATUS_NAMES = tuple(s.name.lower() for s in AgpsStatus)
+
+
+@dataclass(frozen=True, slots=True)
+class AgpsConfig:
+    """Options of :func:`solve_agps`.
+
+    Attributes
+    ----------
+    mu1 : float
+        Initial Marquardt damping ``mu_1`` (paper: 0.1).
+    beta : float
+        Growth factor ``beta`` (paper: 10).
+    eps : float
+        Gradient tolerance ``epsilon`` on ``||A^T f||`` (paper: 0.1, units of ``A^T f``: m for
+        the pseudorange rows), the stopping rule of both ``gn`` and ``lm``.
+    max_iter : int
+        Maximum linear solves per fix (the paper gives none).
+    lm_ellipsoid_scale : float
+        Factor on ``f_5`` in Marquardt's objective. The paper writes ``f_5`` dimensionless and
+        ``F = sum f_i^2`` unweighted (1, the default): then the height equation weighs about
+        ``(2 / a)^2 ~ 1e-13`` per m^2 against 1 per m^2 of a pseudorange and the damping, not
+        the height, fixes the weak directions. ``(a + h) / 2`` puts ``f_5`` in metres of
+        height. Gauss–Newton on the square system is invariant to it (``f_5`` in metres is used
+        for its conditioning).
+    prior_sigma_m : float
+        ``map``: standard deviation (m, per ECEF axis) of the cell position as a prior of the
+        phone's position: about the cell radius. Default 3000 m, the base-station distance of
+        the simulation (a few km, issue 12).
+    sigma_pr_m : float
+        ``map``: standard deviation (m) of a corrected pseudorange.
+    sigma_height_m : float
+        ``map``: standard deviation (m) of the assumed height.
+    clock_start : {"zero", "cell"}
+        Start of the clock biases: ``zero`` (the paper's step 1) or ``cell``, beyond the paper,
+        the mean over the epoch's two satellites of ``P - |X_S - R_cell|`` (what a receiver
+        knows before any iteration; it matters to Marquardt, whose damping also slows the
+        clock steps, when the receiver clock is kilometres off).
+    """
+
+    mu1: float = 0.1
+    beta: float = 10.0
+    eps: float = 0.1
+    max_iter: int = 50
+    lm_ellipsoid_scale: float = 1.0
+    prior_sigma_m: float = 3000.0
+    sigma_pr_m: float = 5.0
+    sigma_height_m: float = 20.0
+    clock_start: Literal["zero", "cell"] = "zero"
+
+    def __post_init__(self) -> None:
+        for name in ("mu1", "eps", "prior_sigma_m", "sigma_pr_m", "sigma_height_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"{name}: expected a finite positive number, got {value}")
+        if not self.beta > 1.0:
+            raise ValueError(f"beta: growth factor must be > 1, got {self.beta}")
+        if self.clock_start not in ("zero", "cell"):
+            raise ValueError(f"clock_start: expected 'zero' or 'cell', got {self.clock_start!r}")
+        if self.max_iter < 1:
+            raise ValueError(f"max_iter: expected >= 1, got {self.max_iter}")
+        if not (math.isfinite(self.lm_ellipsoid_scale) and self.lm_ellipsoid_scale > 0.0):
+            raise ValueError(
+                f"lm_ellipsoid_scale: expected a finite positive number, got "
+                f"{self.lm_ellipsoid_scale}"
+            )
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class AgpsProblem:
+    """A batch of two-satellite, two-epoch fixes.
+
+    Row order of the measurement axis: (epoch 1, satellite 1), (epoch 1, satellite 2),
+    (epoch 2, satellite 1), (epoch 2, satellite 2).
+
+    Attributes
+    ----------
+    t_gps_s : ndarray, shape (B, 2)
+        Reception times of the two epochs (GPS s).
+    sat_pos_m : ndarray, shape (B, 4, 3)
+        Satellite ECEF positions at transmission (m), earth-fixed frame of transmission.
+    y_m : ndarray, shape (B, 4)
+        Pseudoranges corrected for satellite clock, group delay, ionosphere and troposphere (m).
+    height_m : ndarray, shape (B,)
+        Assumed ellipsoidal height ``h`` (m).
+    start_xyz_m : ndarray, shape (B, 3)
+        Start position: the base-station (cell) position (ECEF, m); also the ``map`` prior.
+    usable : ndarray of bool, shape (B, 4)
+        Measurement present with a satellite state; a fix with a missing one is not solved
+        (status ``missing_measurement``).
+
+    Raises
+    ------
+    ValueError
+        Shapes disagree, a fix uses the same epoch twice, a height outside
+        :data:`HEIGHT_RANGE_M`, a non-finite start.
+    """
+
+    t_gps_s: FloatArray
+    sat_pos_m: FloatArray
+    y_m: FloatArray
+    height_m: FloatArray
+    start_xyz_m: FloatArray
+    usable: BoolArray
+
+    def __post_init__(self) -> None:
+        for name in ("t_gps_s", "sat_pos_m", "y_m", "height_m", "start_xyz_m"):
+            object.__setattr__(self, name, np.array(getattr(self, name), dtype=float))
+        b = self.y_m.shape[0] if self.y_m.ndim == 2 else -1
+        shapes = {
+            "t_gps_s": (b, 2),
+            "sat_pos_m": (b, 4, 3),
+            "y_m": (b, 4),
+            "height_m": (b,),
+            "start_xyz_m": (b, 3),
+            "usable": (b, 4),
+        }
+        for name, shape in shapes.items():
+            value = np.asarray(getattr(self, name))
+            if value.shape != shape:
+                raise ValueError(f"{name}: expected shape {shape} (B = fixes), got {value.shape}")
+        t = np.asarray(self.t_gps_s, dtype=float)
+        same = np.flatnonzero(~(np.abs(t[:, 1] - t[:, 0]) > 0.0))
+        if same.size:
+            raise ValueError(
+                f"t_gps_s: fix {same[0]} uses the same epoch twice ({t[same[0], 0]} s); the two "
+                "measurements must be at different times"
+            )
+        h = np.asarray(self.height_m, dtype=float)
+        lo, hi = HEIGHT_RANGE_M
+        bad = np.flatnonzero(~((h >= lo) & (h <= hi)))
+        if bad.size:
+            raise ValueError(
+                f"height_m: assumed height {h[bad[0]]} m of fix {bad[0]} is outside the earth's "
+                f"range {lo:g}..{hi:g} m (ellipsoidal height in metres)"
+            )
+        if not np.isfinite(np.asarray(self.start_xyz_m, dtype=float)).all():
+            raise ValueError("start_xyz_m: expected finite ECEF start positions (m)")
+        usable = np.asarray(self.usable, dtype=bool) & np.isfinite(self.y_m)
+        usable &= np.isfinite(self.sat_pos_m).all(axis=-1)
+        object.__setattr__(self, "usable", usable)
+        freeze_arrays(self)
+
+    @property
+    def size(self) -> int:
+        """Number of fixes ``B``."""
+        return int(self.y_m.shape[0])
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class AgpsResult:
+    """Fixes of :func:`solve_agps`.
+
+    Attributes
+    ----------
+    solver : str
+        ``gn``, ``lm`` or ``map``.
+    pos_m : ndarray, shape (B, 3)
+        ECEF position (m): the solution for ``ok``, the last iterate for ``no_convergence``,
+        NaN for the other statuses.
+    clock_m : ndarray, shape (B, 2)
+        ``c dt1, c dt2`` (m), NaN where ``pos_m`` is.
+    iterations : ndarray of int, shape (B,)
+        Linear solves (Gauss–Newton steps; Marquardt trial steps, accepted or not).
+    status : ndarray of int8, shape (B,)
+        :class:`AgpsStatus`.
+    cost : ndarray, shape (B,)
+        Objective at the estimate (the solver's weighting).
+    height_residual_m : ndarray, shape (B,)
+        Ellipsoidal height of the estimate minus the assumed height (m).
+    """
+
+    solver: str
+    pos_m: FloatArray
+    clock_m: FloatArray
+    iterations: IntArray
+    status: np.ndarray
+    cost: FloatArray
+    height_residual_m: FloatArray
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+    @property
+    def ok(self) -> BoolArray:
+        return np.asarray(self.status == AgpsStatus.OK)
+
+    def status_counts(self) -> dict[str, int]:
+        """Number of fixes per status name (all statuses, zeros included)."""
+        counts = np.bincount(self.status.astype(np.int64), minlength=len(AgpsStatus))
+        return {name: int(counts[i]) for i, name in enumerate(STATUS_NAMES)}
+
+
+def ellipsoid_residual(xyz_m: ArrayLike, height_m: ArrayLike) -> FloatArray:
+    """The paper's height equation ``f_5 = (x^2 + y^2)/(a + h)^2 + z^2/(b + h)^2 - 1``.
+
+    Parameters
+    ----------
+    xyz_m : array-like, shape (..., 3)
+        ECEF position (m).
+    height_m : array-like, shape (...)
+        Assumed height ``h`` (m).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Dimensionless; about ``2 dh / a`` for a point ``dh`` above the surface.
+
+    Notes
+    -----
+    The surface ``f_5 = 0`` has semi-axes ``a + h`` and ``b + h``; it is not the surface of
+    geodetic height ``h`` but departs from it by less than ``h e^2`` (0.4 m at 56 m).
+    """
+    xyz = np.asarray(xyz_m, dtype=float)
+    h = np.asarray(height_m, dtype=float)
+    ah, bh = WGS84_A_M + h, WGS84_B_M + h
+    return np.asarray((xyz[..., 0] ** 2 + xyz[..., 1] ** 2) / ah**2 + xyz[..., 2] ** 2 / bh**2 - 1)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _AgpsModel:
+    """The five (``map``: eight) equations of a batch of fixes as a
+    :data:`navtrack.gnss.solve.ModelFn`: ``v = y - h(X)``, ``J = dh/dX``.
+
+    Rows 0..3 pseudoranges (weight ``w_pr``), row 4 the height equation times ``scale``
+    (weight ``w_h``), rows 5..7 (``prior``) the pseudo-observations ``R = R_cell``.
+    """
+
+    problem: AgpsProblem
+    scale: FloatArray  # (B,) factor on f5
+    w_pr: float
+    w_h: float
+    w_prior: float | None
+
+    def __call__(
+        self, x: FloatArray, idx: IntArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray]:
+        from navtrack.gnss.corrections import geometric_range
+
+        p = self.problem
+        rcv = x[:, :3]
+        rho, los = geometric_range(p.sat_pos_m[idx], rcv[:, None, :])
+        n_rows = 5 if self.w_prior is None else 8
+        b = idx.size
+        v = np.zeros((b, n_rows))
+        J = np.zeros((b, n_rows, 5))
+        w = np.zeros((b, n_rows))
+        valid = np.ones((b, n_rows), dtype=bool)
+        usable = p.usable[idx]
+        clock = np.stack([x[:, 3], x[:, 3], x[:, 4], x[:, 4]], axis=1)
+        v[:, :4] = np.where(usable, p.y_m[idx] - rho - clock, 0.0)
+        J[:, :4, :3] = np.where(usable[..., None], -los, 0.0)
+        J[:, 0:2, 3] = 1.0
+        J[:, 2:4, 4] = 1.0
+        w[:, :4] = self.w_pr
+        valid[:, :4] = usable
+        h = p.height_m[idx]
+        s = self.scale[idx]
+        ah2, bh2 = (WGS84_A_M + h) ** 2, (WGS84_B_M + h) ** 2
+        v[:, 4] = -s * ellipsoid_residual(rcv, h)
+        J[:, 4, 0] = s * 2.0 * rcv[:, 0] / ah2
+        J[:, 4, 1] = s * 2.0 * rcv[:, 1] / ah2
+        J[:, 4, 2] = s * 2.0 * rcv[:, 2] / bh2
+        w[:, 4] = self.w_h
+        if self.w_prior is not None:
+            v[:, 5:8] = p.start_xyz_m[idx] - rcv
+            J[:, 5:8, :3] = np.eye(3)
+            w[:, 5:8] = self.w_prior
+        return v, J, w, valid
+
+
+XTOL_M = 1e-4
+"""Safeguard of ``gn`` and ``map`` beyond the paper: a step shorter than this (m, RTKLIB's
+``estpos`` threshold) also ends the iteration, where rounding keeps ``||A^T f||`` above a tiny
+``epsilon``."""
+
+
+def _singular_start(problem: AgpsProblem, x0: FloatArray) -> BoolArray:
+    """Fixes whose five equations (height equation in metres) are singular at the start — the
+    same satellite twice, a start at the earth's centre, two epochs of the same geometry — by
+    the singularity test of the Gauss–Newton kernel (``rcond = 1e-12`` on the scaled normal
+    matrix)."""
+    from navtrack.gnss.solve import _singular
+
+    metric = (WGS84_A_M + problem.height_m) / 2.0
+    model = _AgpsModel(problem, metric, 1.0, 1.0, None)
+    _, J, _, valid = model(x0, np.arange(problem.size))
+    J = np.where(valid[..., None], J, 0.0)
+    return np.asarray(_singular(np.einsum("bmp,bmq->bpq", J, J), 1e-12) & valid.all(axis=1))
+
+
+def solve_agps(
+    problem: AgpsProblem, solver: Solver = "lm", config: AgpsConfig | None = None
+) -> AgpsResult:
+    """Solve a batch of two-satellite fixes in one vectorised call.
+
+    Parameters
+    ----------
+    problem : AgpsProblem
+    solver : {"gn", "lm", "map"}
+        Gauss–Newton, Marquardt (paper), or maximum a posteriori with the cell prior.
+    config : AgpsConfig, optional
+
+    Returns
+    -------
+    AgpsResult
+
+    Notes
+    -----
+    Readings of the paper (its text lost the symbols of steps 2, 5 and 6; filled from its
+    ref. [8], Chen 2005): step 2 sets ``mu_k <- mu_k / beta`` before each linear solve of a new
+    iterate, step 5 ``mu_k <- beta mu_k`` after a rejected trial; step 5 stops at ``X_k``,
+    step 6 at ``X_{k+1}``, both when ``||A_k^T f_k|| <= epsilon``. The first trial step
+    therefore uses ``mu_1 / beta``; :func:`~navtrack.gnss.solve.marquardt` (which divides
+    after an accepted step) runs with ``mu0 = mu_1 / beta``. Gauss–Newton is eq. (7) with the
+    same stopping rule. Iterations count linear solves (the paper's measure of computation).
+    A fix ends ``diverged`` when its estimate is not finite or not within
+    :data:`navtrack.geodesy.NEAR_SURFACE_NORM_M` of the earth's centre.
+    """
+    from navtrack.gnss.solve import LsqStatus, gauss_newton, marquardt
+
+    cfg = config or AgpsConfig()
+    if solver not in SOLVERS:
+        raise ValueError(f"solver: expected one of {', '.join(SOLVERS)}, got {solver!r}")
+    p = problem
+    n = p.size
+    x0 = np.zeros((n, 5))
+    x0[:, :3] = p.start_xyz_m
+    if cfg.clock_start == "cell":
+        from navtrack.gnss.corrections import geometric_range
+
+        rho, _ = geometric_range(p.sat_pos_m, p.start_xyz_m[:, None, :])
+        offset = np.where(p.usable, p.y_m - rho, 0.0)
+        x0[:, 3] = 0.5 * (offset[:, 0] + offset[:, 1])
+        x0[:, 4] = 0.5 * (offset[:, 2] + offset[:, 3])
+    metric = (WGS84_A_M + p.height_m) / 2.0  # f5 in metres of height
+    if solver == "gn":
+        model = _AgpsModel(p, metric, 1.0, 1.0, None)
+        lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=XTOL_M, gtol=cfg.eps)
+    elif solver == "lm":
+        scale = np.full(n, cfg.lm_ellipsoid_scale)
+        model = _AgpsModel(p, scale, 1.0, 1.0, None)
+        # The damped matrix is regular; the undamped one of the paper's dimensionless f5 has
+        # eigenvalues near 1e-13 of its largest: only rank deficiency to rounding is singular.
+        lsq = marquardt(
+            model,
+            x0,
+            mu0=cfg.mu1 / cfg.beta,
+            beta=cfg.beta,
+            eps=cfg.eps,
+            max_iter=cfg.max_iter,
+            rcond=1e-15,
+        )
+    else:
+        model = _AgpsModel(
+            p,
+            metric,
+            cfg.sigma_pr_m**-2,
+            cfg.sigma_height_m**-2,
+            cfg.prior_sigma_m**-2,
+        )
+        grad_tol = cfg.eps * cfg.sigma_pr_m**-2  # epsilon in metres of pseudorange
+        lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=XTOL_M, gtol=grad_tol)
+
+    status = np.full(n, AgpsStatus.OK, dtype=np.int8)
+    status[lsq.status == LsqStatus.NO_CONVERGENCE] = AgpsStatus.NO_CONVERGENCE
+    if solver != "lm":  # Marquardt's damped steps exist; its final covariance is not used
+        status[lsq.status == LsqStatus.SINGULAR] = AgpsStatus.SINGULAR
+    status[_singular_start(p, x0)] = AgpsStatus.SINGULAR
+    x = lsq.x
+    finite = np.asarray(np.isfinite(x).all(axis=1))
+    norm = np.linalg.norm(np.where(finite[:, None], x[:, :3], 0.0), axis=1)
+    lo, hi = NEAR_SURFACE_NORM_M
+    off = ~finite | (norm < lo) | (norm > hi)
+    status[off & (status != AgpsStatus.SINGULAR)] = AgpsStatus.DIVERGED
+    status[~p.usable.all(axis=1)] = AgpsStatus.MISSING_MEASUREMENT
+    keep = (status == AgpsStatus.OK) | (status == AgpsStatus.NO_CONVERGENCE)
+    pos = np.where(keep[:, None], x[:, :3], np.nan)
+    clock = np.where(keep[:, None], x[:, 3:5], np.nan)
+    height = np.full(n, np.nan)
+    if keep.any():
+        height[keep] = ecef_to_geodetic(pos[keep])[:, 2] - p.height_m[keep]
+    return AgpsResult(
+        solver=solver,
+        pos_m=pos,
+        clock_m=clock,
+        iterations=lsq.iterations,
+        status=status,
+        cost=np.where(keep, lsq.cost, np.nan),
+        height_residual_m=height,
+    )
+
+
+def assisted_pseudoranges(
+    meas: Measurements, start_xyz_m: ArrayLike, config: SppConfig | None = None
+) -> FloatArray:
+    """Pseudoranges corrected as an AGPS server's assistance allows: satellite clock and group
+    delay (:func:`navtrack.gnss.spp.corrected_measurements`), then the broadcast ionosphere and
+    the troposphere of the SPP model evaluated at the cell position.
+
+    Parameters
+    ----------
+    meas : Measurements
+        Stage 3 of single point positioning.
+    start_xyz_m : array-like, shape (3,)
+        Cell (base-station) position (ECEF, m), where the atmosphere is evaluated.
+    config : SppConfig, optional
+        ``iono`` (``klobuchar``, ``ionofree`` or ``off``), ``tropo`` and ``elmask_deg``.
+
+    Returns
+    -------
+    ndarray, shape (E, S)
+        Corrected pseudoranges (m); NaN where not usable or below the elevation mask seen from
+        the cell.
+
+    Notes
+    -----
+    Evaluating the atmosphere at the cell rather than at each iterate changes it by
+    millimetres over a few kilometres; it keeps the model of the solvers the paper's f1..f4.
+    """
+    from navtrack.geodesy import azimuth_elevation, check_near_surface
+    from navtrack.gnss.corrections import klobuchar_delay_m, saastamoinen_delay_m
+    from navtrack.gnss.spp import SppConfig
+
+    cfg = config or SppConfig()
+    start = check_near_surface(start_xyz_m, "start_xyz_m")
+    lat, lon, h = ecef_to_geodetic(start)
+    sat = np.where(np.isfinite(meas.sat_pos_m), meas.sat_pos_m, 0.0)
+    azel = azimuth_elevation(sat, start)
+    az, el = azel[..., 0], azel[..., 1]
+    if cfg.iono == "klobuchar":
+        t = meas.t_gps_s[:, None]
+        iono = klobuchar_delay_m(t, lat, lon, az, el, meas.klobuchar) * meas.iono_scale
+    else:
+        iono = np.zeros_like(el)
+    trop = saastamoinen_delay_m(lat, h, el) if cfg.tropo == "saastamoinen" else 0.0 * el
+    use = meas.usable & (el >= math.radians(cfg.elmask_deg))
+    return np.where(use, meas.y_m - iono - trop, np.nan)
+
+
+def problem_from_measurements(
+    meas: Measurements,
+    y_m: FloatArray,
+    epochs: ArrayLike,
+    sats: ArrayLike,
+    height_m: ArrayLike,
+    start_xyz_m: ArrayLike,
+) -> AgpsProblem:
+    """Gather two-satellite fixes from SPP measurements.
+
+    Parameters
+    ----------
+    meas : Measurements
+        Stage 3 of single point positioning (satellite positions, time tags).
+    y_m : ndarray, shape (E, S)
+        Corrected pseudoranges (:func:`assisted_pseudoranges`).
+    epochs : array-like of int, shape (B, 2)
+        The two epochs of each fix (indices into ``meas.t_gps_s``).
+    sats : array-like of int, shape (B, 2)
+        The two satellites of each fix (indices into ``meas.sats``).
+    height_m : array-like, shape (B,) or scalar
+        Assumed heights (m).
+    start_xyz_m : array-like, shape (3,) or (B, 3)
+        Cell positions (ECEF, m).
+
+    Returns
+    -------
+    AgpsProblem
+        Fixes whose satellites lack a corrected pseudorange at one of the epochs are marked not
+        usable (status ``missing_measurement`` when solved).
+
+    Raises
+    ------
+    ValueError
+        Indices of the wrong shape or outside the arrays, the same epoch or satellite twice in
+        a fix, a bad height (:class:`AgpsProblem`).
+    """
+    ep = np.asarray(epochs)
+    sv = np.asarray(sats)
+    n_e, n_s = y_m.shape
+    for name, arr, size in (("epochs", ep, n_e), ("sats", sv, n_s)):
+        if arr.ndim != 2 or arr.shape[1] != 2 or arr.dtype.kind not in "iu":
+            raise ValueError(f"{name}: expected an integer array of shape (B, 2), got {arr.shape}")
+        if arr.size and (arr.min() < 0 or arr.max() >= size):
+            raise ValueError(f"{name}: indices outside 0..{size - 1}")
+    if ep.shape != sv.shape:
+        raise ValueError(f"sats: expected shape {ep.shape} like epochs, got {sv.shape}")
+    twice = np.flatnonzero(sv[:, 0] == sv[:, 1])
+    if twice.size:
+        raise ValueError(
+            f"sats: fix {twice[0]} uses satellite {meas.sats[sv[twice[0], 0]]} twice; "
+            "two different satellites are needed"
+        )
+    n = ep.shape[0]
+    e4 = np.stack([ep[:, 0], ep[:, 0], ep[:, 1], ep[:, 1]], axis=1)
+    s4 = np.stack([sv[:, 0], sv[:, 1], sv[:, 0], sv[:, 1]], axis=1)
+    y = y_m[e4, s4]
+    pos = meas.sat_pos_m[e4, s4]
+    start = np.broadcast_to(np.asarray(start_xyz_m, dtype=float), (n, 3))
+    return AgpsProblem(
+        t_gps_s=meas.t_gps_s[ep],
+        sat_pos_m=pos,
+        y_m=y,
+        height_m=np.broadcast_to(np.asarray(height_m, dtype=float), (n,)).copy(),
+        start_xyz_m=start.copy(),
+        usable=np.isfinite(y),
+    )

@@ -1,0 +1,106 @@
+"""Figures of integrity monitoring: FCM memberships (paper 2, Figs. 2 and 4) and Stanford
+diagrams (position error against protection level).
+
+matplotlib (extra ``plot``) is imported only when a figure is drawn, on its own Agg canvas.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from navtrack._typing import ArrayLike
+from navtrack.plots.canvas import figure_dir, new_figure, save_figure
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+__all__ = [
+    "membership_figure",
+    "membership_figure_file",
+    "stanford_axes",
+    "stanford_figure_files",
+]
+
+
+def membership_figure(example: Mapping[str, Any]) -> Figure:
+    """Memberships of the columns of the paper's full design matrices in the three FCM
+    classes (one panel per case; column 10 is the parity vector ``t``).
+
+    Parameters
+    ----------
+    example : mapping
+        :func:`navtrack.experiments.raim_fcm.example.paper_example`.
+    """
+    fig = new_figure((9.0, 3.6))
+    axes = fig.subplots(1, 2, sharey=True)
+    for ax, case in zip(axes, ("single", "double"), strict=True):
+        u = np.asarray(example[case]["memberships"])
+        cols = np.arange(1, u.shape[1] + 1)
+        for k in range(u.shape[0]):
+            ax.bar(cols + (k - 1) * 0.27, u[k], width=0.27, label=f"class {k + 1}")
+        ax.set_xticks(cols, [str(c) for c in cols[:-1]] + ["t"])
+        named = example[case]["fcm_gross_errors"]
+        ax.set_title(f"{case} fault {example[case]['injected']}: FCM names {named}")
+        ax.set_xlabel("column of the full design matrix (satellite)")
+    axes[0].set_ylabel("membership")
+    axes[0].legend(fontsize=8)
+    return fig
+
+
+def membership_figure_file(example: Mapping[str, Any], out_dir: Path) -> Path:
+    """:func:`membership_figure` written to ``out_dir/fcm_memberships.png``."""
+    return save_figure(membership_figure(example), figure_dir(out_dir) / "fcm_memberships.png")
+
+
+def stanford_axes(ax: Axes, error_m: ArrayLike, pl_m: ArrayLike, label: str = "") -> None:
+    """A Stanford diagram: 2-D histogram of (error, protection level), the diagonal, and the
+    count of epochs with error above the protection level (misleading information).
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    error_m, pl_m : array_like, shape (n,)
+        Actual position error and protection level (m); epochs without a level are left out.
+    label : str
+    """
+    e = np.asarray(error_m, dtype=float)
+    p = np.asarray(pl_m, dtype=float)
+    ok = np.isfinite(e) & np.isfinite(p)
+    e, p = e[ok], p[ok]
+    top = float(max(np.max(e, initial=1.0), np.max(p, initial=1.0))) * 1.05
+    bins = np.linspace(0.0, top, 60)
+    h, xe, ye = np.histogram2d(e, p, bins=[bins, bins])
+    ax.pcolormesh(xe, ye, np.where(h.T > 0, h.T, np.nan), cmap="viridis", norm="log")
+    ax.plot([0, top], [0, top], "k-", lw=0.8)
+    mi = int(np.sum(e > p))
+    ax.set_title(f"{label}: {e.size} epochs, error > PL {mi}", fontsize=9)
+    ax.set_xlabel("position error (m)")
+    ax.set_ylabel("protection level (m)")
+
+
+def stanford_figure_files(
+    artifacts: Mapping[str, Mapping[str, tuple[Any, Any, Any, Any]]], out_dir: Path
+) -> list[Path]:
+    """One Stanford diagram per station (horizontal and vertical, one column per method).
+
+    Parameters
+    ----------
+    artifacts : mapping
+        ``{station: {method: (err_h, hpl, err_v, vpl)}}`` of
+        :func:`navtrack.experiments.raim_fcm.experiment.clean_protection`.
+    out_dir : Path
+    """
+    paths = []
+    for name, methods in artifacts.items():
+        fig = new_figure((3.0 * len(methods), 5.6))
+        axes = np.atleast_2d(fig.subplots(2, len(methods), squeeze=False))
+        for j, (m, (eh, hpl, ev, vpl)) in enumerate(methods.items()):
+            stanford_axes(axes[0, j], eh, hpl, f"{name} {m} H")
+            stanford_axes(axes[1, j], ev, vpl, f"{name} {m} V")
+        paths.append(save_figure(fig, figure_dir(out_dir) / f"stanford_{name}.png"))
+    return paths

@@ -1,0 +1,57 @@
+"""``navtrack reproduce alhat`` on a shortened BROAD trial 07 (the full run is the CLI's)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from navtrack.cli import main
+from navtrack.experiments import ReproduceOptions, get_experiment, reproduce
+from navtrack.experiments import alhat as exp
+from navtrack.experiments.runner import run_generator
+
+
+def test_registered_experiment_is_alhat() -> None:
+    assert get_experiment("alhat") is exp.EXPERIMENT
+    assert exp.EXPERIMENT.default_params() == exp.AlhatParams()
+    assert exp.AlhatParams().trials[0].startswith("07")
+
+
+def test_ransac_scenes_reject_every_outlier() -> None:
+    params = exp.AlhatParams()
+    runs = [exp.ransac_scene(params, run_generator(3, i)) for i in range(20)]
+    s = exp.summarize_scenes(params, runs)
+    assert s["all_outliers_rejected"] == 20
+    assert s["outliers_accepted"] == 0
+    assert s["from_oracle_max_rad"] < 1e-6  # refit on the true inliers = the oracle
+    assert s["error_mean_rad"] < 2 * params.ray_sigma_rad
+
+
+def test_reproduction_on_broad_trial_07(shared_data: Path, tmp_path: Path) -> None:
+    """60 s of trial 07 (movement from 26.5 s): the bars' ordering of the four estimates."""
+    params = exp.AlhatParams(trials=(exp.AlhatParams().trials[0],), duration_s=60.0)
+    out = tmp_path / "alhat"
+    res = reproduce("alhat", ReproduceOptions(out, runs=3, params=params, progress=False))
+    saved = json.loads((out / "results.json").read_text())
+    for key in ("propagation", "paper_correction", "calibrated", "smoother"):
+        assert set(saved[key]) >= {"mean_deg", "max_deg"}
+    assert saved["paper_correction"]["mean_deg"] < saved["propagation"]["mean_deg"]
+    assert saved["calibrated"]["mean_deg"] < saved["paper_correction"]["mean_deg"]
+    assert saved["smoother"]["mean_deg"] < saved["calibrated"]["mean_deg"]
+    trial = saved["trials"][params.trials[0]]
+    assert trial["fixes"]["outliers_accepted"] == 0
+    assert trial["fixes"]["outlier_rays"] > 0
+    assert trial["series"]["order3_max_rad"] <= trial["series"]["order3_bound_rad"]
+    # the calibrated timing offset agrees with the gyro/optical rate lag (independent)
+    check = trial["timing_offset_check"]
+    assert check["calibrated_s"] == pytest.approx(check["expected_s"], abs=1.5e-3)
+    assert (out / "tables.md").read_text().count("07_undisturbed") >= 5
+    assert Path(res["pose_trajectory"]).exists()
+    assert any(f.endswith(".png") for f in res.get("figures", []))
+
+
+def test_cli_lists_alhat(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["reproduce", "--list"]) == 0
+    assert "alhat:" in capsys.readouterr().out

@@ -1,0 +1,66 @@
+"""``navtrack rtk`` and ``navtrack ppp`` on the shared data: summary, output columns, refusals."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from navtrack.cli import main
+
+BASE = ["-3749943.5172", "3683398.2394", "3600629.5295"]
+
+
+def _yama(gnss_data: Path) -> list[str]:
+    d = gnss_data / "gogps_yamatogawa"
+    return [
+        str(d / "yamatogawa_rover.obs"),
+        str(d / "yamatogawa_master.obs"),
+        str(d / "brdc0060.10n"),
+    ]
+
+
+def test_rtk_summary_and_csv(
+    gnss_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    from navtrack.io.solution import read_solution
+
+    d = gnss_data / "gogps_yamatogawa"
+    out = tmp_path / "rtk.csv"
+    ref = str(d / "yamatogawa_rover_ref_rtklib_rtk_combined.pos")
+    args = ["--base-pos", *BASE, "--direction", "combined", "--ref-pos", ref, "--out", str(out)]
+    code = main(["rtk", *_yama(gnss_data), *args])
+    text = capsys.readouterr()
+    assert code == 0
+    assert "common 193" in text.out
+    assert "fix rate" in text.out
+    assert "slips          lli" in text.out
+    assert "193 common epochs used" in text.err
+    table = read_solution(out)
+    assert {"quality", "ratio", "n_fixed", "status"} <= set(table.columns)
+    q = table["quality"].to_numpy()
+    assert set(q.tolist()) <= {1, 2, 5}
+    assert (q == 1).sum() == (table["status"] == "fix").sum() >= 22
+
+
+def test_rtk_nmea_quality_and_plots(gnss_data: Path, tmp_path: Path) -> None:
+    out = tmp_path / "rtk.nmea"
+    args = ["--base-pos", *BASE, "--out", str(out), "--plot", str(tmp_path / "fig")]
+    assert main(["rtk", *_yama(gnss_data), *args]) == 0
+    for name in ("rtk_error.png", "rtk_ratio.png", "rtk_sats.png"):
+        assert (tmp_path / "fig" / name).stat().st_size > 1000
+    fields = [line.split(",") for line in out.read_text().splitlines()]
+    gga_quality = {f[6] for f in fields}
+    assert gga_quality <= {"1", "4", "5"}
+    assert "5" in gga_quality  # float epochs are GGA quality 5
+
+
+def test_rtk_refuses_missing_file(tmp_path: Path) -> None:
+    with pytest.raises(SystemExit, match="not found"):
+        main(["rtk", str(tmp_path / "r.obs"), str(tmp_path / "b.obs"), str(tmp_path / "n")])
+
+
+def test_ppp_refuses_clock_rinex(gnss_data: Path, tmp_path: Path) -> None:
+    d = gnss_data / "cssrlib_sept"
+    with pytest.raises(SystemExit, match="--clk"):
+        main(["ppp", str(d / "SEPT078M.21O"), "--sp3", str(tmp_path / "x.sp3"), "--clk", "c.clk"])

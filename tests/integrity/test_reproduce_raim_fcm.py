@@ -1,0 +1,60 @@
+"""``navtrack reproduce raim-fcm`` on reduced parameters (the full study is run by the CLI)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from navtrack.experiments import ReproduceOptions, get_experiment, reproduce
+from navtrack.experiments import raim_fcm as exp
+from navtrack.experiments.runner import run_generator
+
+
+def test_registered_and_validated() -> None:
+    assert get_experiment("raim-fcm") is exp.EXPERIMENT
+    with pytest.raises(ValueError, match="stations"):
+        exp.RaimFcmParams(stations=("NOWHERE",))
+    with pytest.raises(ValueError, match="methods"):
+        exp.RaimFcmParams(methods=("magic",))
+
+
+def test_injection_on_arl1_detects_and_identifies_single_faults(gnss_data: Path) -> None:
+    params = exp.RaimFcmParams(
+        stations=("ARL1",), biases_m=(30.0,), fault_counts=(1,), trials_per_run=15,
+        methods=("rtklib", "fde", "fcm"),
+    )  # fmt: skip
+    runs = [exp.injection_run(params, run_generator(3, i), str(gnss_data)) for i in range(2)]
+    s = exp.summarize_study(params, runs)["ARL1"]
+    assert 0.0 < s["variance_factor"] < 1.0
+    fault = s["cases"]["k1_b30"]
+    assert fault["fde"]["trials"] == 30
+    assert fault["fde"]["identification"] >= 0.9
+    assert s["cases"]["clean"]["fde"]["wrong_exclusion"] == 0.0
+    for m in ("rtklib", "fde", "fcm"):
+        for key in ("detection", "identification", "wrong_exclusion", "misleading_h"):
+            assert 0.0 <= fault[m][key] <= 1.0
+
+
+def test_reproduce_writes_results_and_figures(tmp_path: Path, gnss_data: Path) -> None:
+    pytest.importorskip("matplotlib")
+    params = exp.RaimFcmParams(
+        stations=("ARL1",), biases_m=(20.0,), fault_counts=(2,), trials_per_run=5,
+        methods=("fde", "fcm"),
+    )  # fmt: skip
+    reproduce(
+        "raim-fcm",
+        ReproduceOptions(out_dir=tmp_path, runs=1, params=params, progress=False, backend="loop"),
+    )
+    res = json.loads((tmp_path / "results.json").read_text())
+    assert res["example"]["double"]["fcm_gross_errors"] == [4, 7]
+    assert set(res["injection"]["ARL1"]["cases"]) == {"clean", "k2_b20"}
+    prot = res["clean_protection"]["ARL1"]["fde"]
+    assert prot["epochs"] == 120
+    assert prot["bounded_h"] == 1.0
+    assert (tmp_path / "fcm_memberships.png").stat().st_size > 0
+    assert (tmp_path / "stanford_ARL1.png").stat().st_size > 0
+    assert "Paper example" in (tmp_path / "tables.md").read_text()
+    assert np.isfinite(prot["hpl_median_m"])

@@ -1,0 +1,84 @@
+"""Foveal gain rules of paper 4 and the quadrature of the expected posterior variance.
+
+Oracles: the linear-Gaussian (Kalman) posterior variance ``P R / (c² P + R)`` where the arctan is
+linear (small gain); the scale invariance of the one-scan problem (the optimal ``c sqrt(P)`` does
+not depend on ``P``); the published numbers of rule (1) (branch point 0.0146, exponent -0.630).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from navtrack.tracking.sensor_control import (
+    configure,
+    expected_posterior_variance,
+    foveal_gain,
+    gain_exponent,
+    optimal_gain,
+    so_gain,
+)
+
+
+def test_rule1_branches_meet_at_the_published_switch():
+    assert gain_exponent(0.0146) == pytest.approx(-0.630, abs=2e-3)
+    assert gain_exponent(0.01) == -0.630
+    assert gain_exponent(0.05) == pytest.approx(math.log10(0.05) / 8 - 0.4)
+    assert float(foveal_gain(0.1, 0.05)) == pytest.approx(0.1 ** (math.log10(0.05) / 8 - 0.4))
+
+
+def test_posterior_variance_quadrature_matches_kalman_in_the_linear_regime():
+    P, R, c = 1.0, 0.05, 0.02  # |c u| < 0.15: arctan linear to 0.7 %
+    v = expected_posterior_variance([c], P, R)[0]
+    assert v == pytest.approx(P * R / (c * c * P + R), rel=2e-3)
+
+
+def test_optimal_gain_scales_as_inverse_sd():
+    k = [optimal_gain(P, 0.05) * math.sqrt(P) for P in (0.02, 0.5, 4.0)]
+    assert max(k) - min(k) < 2e-3 * k[0]
+
+
+def test_rule1_is_near_optimal_at_the_paper_noise():
+    R = 0.05
+    for P in (0.01, 0.1, 1.0):
+        c_opt = optimal_gain(P, R)
+        v = expected_posterior_variance([c_opt, float(foveal_gain(P, R))], P, R)
+        assert v[0] <= v[1] < 1.05 * v[0]
+
+
+def test_so_gain_reduces_to_spread_law_and_follows_the_optimum():
+    R = 0.05
+    a = gain_exponent(R)
+    assert float(so_gain(2.0, 0.25, 0.25, R)) == pytest.approx((0.12 * (2.0 + 0.9) ** 2) ** a)
+    for D, P in ((1.0, 0.2), (4.0, 0.5)):
+        c_opt = optimal_gain(P, R, offset=[-D / 2, D / 2])
+        assert abs(math.log(float(so_gain(D, P, P, R)) / c_opt)) < 0.3
+
+
+def test_configure_rules():
+    x = np.array([[[0.0, 1.0], [2.0, 1.0], [5.0, 1.0]]])
+    P = np.tile(np.eye(2), (1, 3, 1, 1))
+    P[0, 1, 0, 0] = 3.0
+    c, d, t = configure("wo", x, P, 0.05, 1)
+    assert t[0] == 1
+    assert d[0] == 2.0
+    assert c[0] == pytest.approx(float(foveal_gain(3.0, 0.05)))
+    for k, expect in ((1, 0), (2, 1), (3, 2), (4, 0)):
+        assert configure("to", x, P, 0.05, k)[2][0] == expect
+    c, d, t = configure("so", x, P, 0.05, 1)
+    assert d[0] == 2.5
+    assert t[0] == -1
+    assert c[0] == pytest.approx(float(so_gain(5.0, 1.0, 1.0, 0.05)))
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="R"):
+        gain_exponent(0.0)
+    with pytest.raises(ValueError, match="R"):
+        so_gain(1.0, 1.0, 1.0, -1.0)
+    with pytest.raises(ValueError, match="P"):
+        foveal_gain(0.0, 0.05)
+    with pytest.raises(ValueError, match="rule"):
+        configure("xx", np.zeros((1, 2, 2)), np.tile(np.eye(2), (1, 2, 1, 1)), 0.05, 1)  # type: ignore[arg-type]
