@@ -60,6 +60,7 @@ EXPERIMENTS: dict[str, str] = {
     "agps": "navtrack.experiments.agps",
     "alhat": "navtrack.experiments.alhat",
     "raim-fcm": "navtrack.experiments.raim_fcm",
+    "sdcmsjpda": "navtrack.experiments.sdcmsjpda",
 }
 
 

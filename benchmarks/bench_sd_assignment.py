@@ -1,0 +1,80 @@
+"""S-D assignment: Lagrangian relaxation against the exact integer programme (scipy milp).
+
+Run: ``PYTHONPATH=src python benchmarks/bench_sd_assignment.py [--quick] [--seed N]``.
+
+1. Quality: seeded random problems with dummies (:func:`navtrack.tracking.assignment.
+   random_sd_problem`), S = 3, 4, 5 lists of 5-10 elements; the relaxation's excess over the
+   milp optimum (mean and worst, relative) and how often it is worse than greedy. The default
+   seed (2026) differs from the test suite's (13), which chose the relaxation's defaults.
+2. Speed: for each size, milp and the relaxation timed alternately on the same problems in this
+   run, medians and their ratio.
+
+The machine load (``os.getloadavg``) is printed: under load both timings grow, their ratio less.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+
+import numpy as np
+
+from navtrack.tracking.assignment import random_sd_problem, sd_exact, sd_greedy, sd_lagrangian
+
+QUALITY = [
+    ((5, 5, 5), 1.0),
+    ((7, 8, 9), 1.0),
+    ((10, 10, 10), 1.0),
+    ((5, 6, 5, 6), 1.0),
+    ((8, 8, 8, 8), 0.3),
+    ((5, 5, 5, 5, 5), 0.3),
+    ((7, 7, 7, 7, 7), 0.1),
+]
+SPEED = [((10, 10, 10), 1.0), ((10, 10, 10, 10), 0.3), ((8, 8, 8, 8, 8), 0.3)]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--quick", action="store_true", help="3 problems per size instead of 10")
+    ap.add_argument("--seed", type=int, default=2026)
+    args = ap.parse_args()
+    n = 3 if args.quick else 10
+    rng = np.random.default_rng(args.seed)
+    print(f"load average {os.getloadavg()}")
+    print("size                 tuples  mean_excess  worst_excess  worse_than_greedy  gap_open")
+    allx = []
+    for sizes, density in QUALITY:
+        ex_, worse, open_ = [], 0, 0
+        for _ in range(n):
+            p = random_sd_problem(sizes, rng, density)
+            ex = sd_exact(p)
+            lr = sd_lagrangian(p)
+            if ex is None:
+                continue
+            ex_.append((lr.cost - ex.cost) / abs(ex.cost))
+            worse += lr.cost > sd_greedy(p).cost + 1e-9
+            open_ += lr.status != 0
+        allx += ex_
+        print(
+            f"{sizes!s:20} {len(p.tuples):6d}  {np.mean(ex_):10.4%}  {np.max(ex_):11.4%}"
+            f"  {worse:17d}  {open_:8d}"
+        )
+    print(f"all sizes: mean excess {np.mean(allx):.4%}, worst {np.max(allx):.4%}")
+    print("\nsize                 tuples  milp_s  lagrangian_s  ratio")
+    for sizes, density in SPEED:
+        t_ex, t_lr = [], []
+        for _ in range(max(3, n // 3)):
+            p = random_sd_problem(sizes, rng, density)
+            for solver, store in ((sd_exact, t_ex), (sd_lagrangian, t_lr)):  # alternating
+                t0 = time.perf_counter()
+                solver(p)
+                store.append(time.perf_counter() - t0)
+        me, ml = statistics.median(t_ex), statistics.median(t_lr)
+        print(f"{sizes!s:20} {len(p.tuples):6d}  {me:6.2f}  {ml:12.3f}  {me / ml:5.1f}x")
+    print(f"load average {os.getloadavg()}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,186 @@
+"""``navtrack reproduce sdcmsjpda``: paper 3 (Zhang, Xiong & He) on the experiment contract.
+
+1. Monte Carlo runs of :func:`~navtrack.experiments.sdcmsjpda.scenario.paper3_run` (every
+   ``P_D`` and every fusion algorithm on one truth per run);
+2. :func:`summarize_runs`: divergence counts (Table 1), RMS position / velocity error per step
+   over the converged runs (Figs. 1-6), their means, ms per step;
+3. tables, console lines and figures below.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from navtrack.experiments.contract import Experiment, Outcome
+from navtrack.experiments.sdcmsjpda.scenario import SdCmsjpdaParams, paper3_run
+from navtrack.tracking.multisensor import ALGORITHMS
+
+__all__ = ["EXPERIMENT", "PAPER_TABLE1", "SdCmsjpdaExperiment", "summarize_runs"]
+
+_RunResult = dict[str, Any]
+
+#: Paper 3, Table 1: divergences in 50 runs ("emanative times"), per P_D.
+PAPER_TABLE1 = {
+    "sequential": {"0.97": 2, "0.76": 11, "0.58": 17},
+    "sdcmsjpda": {"0.97": 0, "0.76": 3, "0.58": 5},
+}
+#: Paper 3, section 4: mean time per step on a 2.0 GHz PC, ms.
+PAPER_MS_PER_STEP = {"sequential": 25.1, "sdcmsjpda": 28.2}
+
+
+def summarize_runs(params: SdCmsjpdaParams, runs: Sequence[_RunResult]) -> dict[str, Any]:
+    """Per ``P_D`` and algorithm: ``diverged``, ``failed``, ``runs``, ``rms_pos_m``,
+    ``rms_vel_mps`` (mean over steps of the RMS over converged runs and both targets), the
+    per-step arrays ``rms_pos_per_step_m`` / ``rms_vel_per_step_mps`` and ``ms_per_step``."""
+    by_pd: dict[str, Any] = {}
+    for pd in params.pd_values:
+        key = f"{pd:g}"
+        per: dict[str, Any] = {}
+        for alg in ALGORITHMS:
+            rows = [r[key][alg] for r in runs]
+            div = np.array([row["diverged"] for row in rows], dtype=bool)
+            ok = [row for row, d in zip(rows, div, strict=True) if not d]
+            if ok:
+                pos = np.sqrt(np.mean([row["pos_err2_m2"] for row in ok], axis=0))
+                vel = np.sqrt(np.mean([row["vel_err2_m2ps2"] for row in ok], axis=0))
+            else:
+                pos = vel = np.full(params.n_steps, np.nan)
+            ms = [row["ms_per_step"] for row in rows if np.isfinite(row["ms_per_step"])]
+            per[alg] = {
+                "diverged": int(div.sum()),
+                "failed": sum(bool(row["failed"]) for row in rows),
+                "runs": len(rows),
+                "rms_pos_m": float(np.mean(pos)),
+                "rms_vel_mps": float(np.mean(vel)),
+                "rms_pos_per_step_m": pos,
+                "rms_vel_per_step_mps": vel,
+                "ms_per_step": float(np.mean(ms)) if ms else float("nan"),
+            }
+        by_pd[key] = per
+    return {
+        "paper": "Zhang, Xiong, He, S-D assignment CMSJPDA, ICMLC 2005 (paper 3)",
+        "divergence_rule": (
+            f"a run diverged for an algorithm when the mean position error of either target "
+            f"over the last {params.divergence_window} scans exceeds {params.divergence_m:g} m "
+            "(or the filter failed numerically)"
+        ),
+        "clutter_region": (
+            f"Poisson({params.clutter_rate:g}) false measurements per sensor and scan, each "
+            "uniform in a range-bearing box centred on a randomly chosen target's true "
+            f"measurement, half-widths {params.clutter_halfwidth_sigma:g} sigma_r x "
+            f"{params.clutter_halfwidth_sigma:g} sigma_theta of that sensor"
+        ),
+        "ms_per_step_note": "CPU time of the fusion step (time.thread_time), mean over runs",
+        "by_pd": by_pd,
+        "paper_table1": PAPER_TABLE1,
+        "paper_ms_per_step": PAPER_MS_PER_STEP,
+    }
+
+
+def tables_markdown(results: dict[str, Any]) -> str:
+    """Table 1 (divergences, with the paper's), RMS errors and ms per step."""
+    by_pd = results["by_pd"]
+    pds = list(by_pd)
+    lines = [
+        "# Paper 3 reproduction: SD-CMSJPDA vs sequential / parallel MSJPDA, S-D GNN",
+        "",
+        f"Runs: {results['runs']}. Divergence rule: {results['divergence_rule']}.",
+        f"Clutter: {results['clutter_region']}.",
+        "",
+        "## Table 1: divergences (paper's values in brackets)",
+        "",
+        "| algorithm | " + " | ".join(f"Pd = {p}" for p in pds) + " |",
+        "|---|" + "---|" * len(pds),
+    ]
+    for alg in ALGORITHMS:
+        cells = []
+        for p in pds:
+            c = f"{by_pd[p][alg]['diverged']}/{by_pd[p][alg]['runs']}"
+            if alg in PAPER_TABLE1:
+                c += f" [{PAPER_TABLE1[alg][p]}/50]"
+            cells.append(c)
+        lines.append(f"| {alg} | " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        "## Mean RMS error over steps (converged runs): position m / velocity m/s",
+        "",
+        "| algorithm | " + " | ".join(f"Pd = {p}" for p in pds) + " | ms per step |",
+        "|---|" + "---|" * (len(pds) + 1),
+    ]
+    for alg in ALGORITHMS:
+        cells = [
+            f"{by_pd[p][alg]['rms_pos_m']:.1f} / {by_pd[p][alg]['rms_vel_mps']:.1f}" for p in pds
+        ]
+        ms = np.mean([by_pd[p][alg]["ms_per_step"] for p in pds])
+        paper = PAPER_MS_PER_STEP.get(alg)
+        cells.append(f"{ms:.2f}" + (f" [paper {paper}]" if paper else ""))
+        lines.append(f"| {alg} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def write_figures(outcome: Outcome[SdCmsjpdaParams, _RunResult], out_dir: Path) -> list[Path]:
+    """Figs. 1-6: RMS position and velocity error per step, one pair per ``P_D``."""
+    from navtrack.plots.canvas import figure_dir, new_figure, save_figure
+
+    d = figure_dir(out_dir)
+    paths = []
+    n = 1
+    for p, per in outcome.results["by_pd"].items():
+        for what, unit in (("pos", "m"), ("vel", "m/s")):
+            fig = new_figure((6.4, 3.8))
+            ax = fig.add_subplot()
+            for alg in ALGORITHMS:
+                key = f"rms_{what}_per_step_{'m' if what == 'pos' else 'mps'}"
+                y = np.asarray(per[alg][key], dtype=float)
+                ax.plot(np.arange(1, y.size + 1), y, label=f"{alg} ({per[alg]['diverged']} div.)")
+            ax.set_xlabel("step")
+            ax.set_ylabel(f"RMS {'position' if what == 'pos' else 'velocity'} error, {unit}")
+            ax.set_title(f"Fig. {n}: P_D = {p}")
+            ax.legend(fontsize=8)
+            paths.append(save_figure(fig, d / f"fig{n}_rms_{what}_pd{p}.png"))
+            n += 1
+    return paths
+
+
+def summary_lines(results: dict[str, Any]) -> list[str]:
+    """Console lines: divergences and mean RMS position per P_D and algorithm."""
+    out = []
+    for p, per in results["by_pd"].items():
+        cells = ", ".join(
+            f"{alg} {v['diverged']} div / {v['rms_pos_m']:.0f} m / {v['ms_per_step']:.2f} ms"
+            for alg, v in per.items()
+        )
+        out.append(f"Pd {p}: {cells}")
+    return out
+
+
+class SdCmsjpdaExperiment(Experiment[SdCmsjpdaParams, _RunResult]):
+    """Paper 3: three range-bearing sensors, two crossing targets, four fusion trackers."""
+
+    name = "sdcmsjpda"
+    description = "Paper 3: SD-CMSJPDA vs sequential/parallel MSJPDA and S-D GNN (Zhang et al.)"
+    params_type = SdCmsjpdaParams
+    default_runs = 50
+
+    def run_one(self, params: SdCmsjpdaParams, rng: np.random.Generator) -> _RunResult:
+        return paper3_run(params, rng)
+
+    def summarize(self, params: SdCmsjpdaParams, runs: Sequence[_RunResult]) -> dict[str, Any]:
+        return summarize_runs(params, runs)
+
+    def tables(self, results: dict[str, Any]) -> str:
+        return tables_markdown(results)
+
+    def figures(self, outcome: Outcome[SdCmsjpdaParams, _RunResult], out_dir: Path) -> list[Path]:
+        return write_figures(outcome, out_dir)
+
+    def summary_lines(self, results: dict[str, Any]) -> list[str]:
+        return summary_lines(results)
+
+
+#: The registered instance (``navtrack.experiments.EXPERIMENTS["sdcmsjpda"]``).
+EXPERIMENT = SdCmsjpdaExperiment()

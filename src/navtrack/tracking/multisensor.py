@@ -1,0 +1,568 @@
+"""Centralised multisensor multitarget fusion: sequential / parallel MSJPDA, SD-CMSJPDA, S-D GNN.
+
+``S`` sensors report to a fusion centre; ``T`` targets with known initial estimates are tracked
+by an EKF (linearised at the prediction, e.g. :class:`~navtrack.tracking.models.RangeBearing`).
+All four trackers predict with :func:`~navtrack.tracking.kalman.kf_predict`, gate with
+:func:`~navtrack.tracking.gating.gate`, weight with
+:func:`~navtrack.tracking.jpda.association_weights` and update through
+:func:`~navtrack.tracking.kalman.innovation_gain` / :func:`~navtrack.tracking.kalman.gain_update`
+(the one update path). They differ in how the sensors' measurements are combined:
+
+``sequential`` (Pao & Frei 1995)
+    A single-sensor JPDA step (:func:`~navtrack.tracking.jpda.jpda_step`) per sensor in time
+    order, each starting from the previous sensor's posterior; the only one that accepts sensors
+    with different time stamps (it predicts between them).
+``parallel`` (Pao & Frei 1995)
+    Joint events over all sensors at once: each target takes one *S-tuple* ``L = (l_1..l_S)``
+    (``l_s = 0``: sensor ``s`` has no detection of it); the update of a tuple is the stacked
+    (centralised) EKF update with all its measurements; the posterior is the moment-matched
+    mixture over tuples.
+``sdcmsjpda`` (Zhang, Xiong & He 2005, eqs. 3-32)
+    The same S-tuples and joint events (the S-D assignment rule: each measurement from one
+    source, one measurement per sensor per tuple), with the paper's equivalent measurement of a
+    tuple (eqs. 24-28) and covariance (eqs. 31-32); see Notes.
+``sd_gnn``
+    Hard decision: the best joint event, found as an (S+1)-D assignment of (targets, sensor
+    1..S lists) by :func:`~navtrack.tracking.assignment.sd_assign`, then the stacked update.
+
+Notes
+-----
+Reading of the paper's equations (the extraction lost their layout):
+
+* eqs. 5-10: an S-tuple is in target ``t``'s gate when each of its real measurements is in that
+  sensor's chi-square gate of ``t``.
+* eqs. 11-21: the joint event probability is
+  ``Π_t Π_s [l_s = 0: (1 - P_D,s P_G) ; else P_D,s N(z; ẑ_s^t, S_s^t) / λ_s]``, the parametric
+  (Poisson) form of eq. 21: ``φ! μ_F(φ) / V^φ`` of the false measurements becomes
+  ``Π_s λ_s^-(measurements of sensor s assigned)`` and eq. 19's joint detection probability is
+  the product of the per-sensor ``P_D`` / ``1 - P_D P_G`` factors.
+* eq. 22: the marginal ``β_t(L)``. Because the weight is a product over sensors and the
+  exclusion constraints act within each sensor, the joint events are products of the
+  per-sensor joint events, so ``β_t(L) = Π_s β_t^s(l_s)`` exactly, with ``β^s`` the
+  single-sensor JPDA marginals (:func:`~navtrack.tracking.jpda.jpda_marginals`); the tests
+  check this against the explicit enumeration of eq. 21. ``parallel`` and ``sdcmsjpda`` share
+  these marginals and differ in the tuple update only.
+* eqs. 24-28: the equivalent estimate of tuple ``L`` is ``X_L = X̂ + Σ_s w_s K_s ν_s`` with the
+  per-sensor gains ``K_s`` and innovations ``ν_s``, and
+  ``w_s = e_s / (b + Σ_{i∈L} e_i)``, ``β_0(L) = b / (b + Σ e_i)`` (eqs. 25, 28). eq. 26 is the
+  PDA weight of Bar-Shalom & Fortmann (6.4); with sensors of different ``S_s`` we use its
+  parametric form scaled by ``λ |2πS|^{1/2} / P_D``: ``e_s = P_D,s N(ν_s; 0, S_s) / λ_s`` and
+  ``b = 1 - P̄_D P_G`` (``P̄_D`` the mean detection probability of the sensors). So within a
+  tuple the sensors' corrections are PDA-style alternatives, and
+* eqs. 31-32 are the covariance of that mixture: ``P_L = β_0 P̂ + Σ_s w_s (P̂ - K_s S_s K_sᵀ)``
+  plus the spread of the corrections ``K_s ν_s`` about their mean, then the spread of the
+  ``X_L`` over the tuples. Flattened, the posterior is the moment-matched mixture of the
+  prediction (weight ``Σ_L β_L β_0(L)``) and the single-sensor updates ``(s, j)`` (weight
+  ``Σ_{L: l_s = j} β_L w_s(L)``). This reading does not fuse the sensors of a tuple into one
+  update (each component uses one sensor's gain), so it gains less from three sensors than the
+  stacked update of ``parallel``; the reproduction shows the effect.
+* The S-D GNN tuple cost is ``-log`` of the same event weight; it is additive over sensors, so
+  the (S+1)-D problem is the union of per-sensor 2-D problems and the relaxation closes its gap
+  (the tests check the solution against per-sensor :func:`~navtrack.tracking.assignment.assign2d`).
+
+References
+----------
+.. [1] J.-W. Zhang, W. Xiong, Y. He, "S-D assignment centralized multisensor joint probabilistic
+   data association algorithm", ICMLC 2005, pp. 564-569 (paper 3).
+.. [2] L. Y. Pao, C. W. Frei, "A comparison of parallel and sequential implementations of a
+   multisensor multitarget tracking algorithm", Proc. ACC 1995, pp. 1683-1687.
+.. [3] Y. Bar-Shalom, T. E. Fortmann, *Tracking and Data Association*, Academic Press 1988,
+   sections 6.4 (PDA) and 9 (JPDA).
+.. [4] S. Deb et al., IEEE T-AES 33(2), 1997 (S-D assignment; see
+   :mod:`navtrack.tracking.assignment`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from math import comb, perm
+from typing import Literal
+
+import numpy as np
+
+from navtrack._frozen import freeze_arrays
+from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
+from navtrack.tracking.assignment import SdProblem, SdStatus, sd_assign
+from navtrack.tracking.gating import chi2_threshold, gate
+from navtrack.tracking.jpda import (
+    JpdaConfig,
+    association_weights,
+    joint_events,
+    jpda_marginals,
+    jpda_marginals_batch,
+    jpda_step,
+)
+from navtrack.tracking.kalman import gain_update, innovation_gain, kf_predict
+from navtrack.tracking.models import LinearMotion, MeasurementModel
+
+__all__ = [
+    "ALGORITHMS",
+    "Algorithm",
+    "FusionConfig",
+    "FusionResult",
+    "MultiScans",
+    "fusion_step",
+    "run_fusion",
+    "tuple_marginals",
+]
+
+Algorithm = Literal["sequential", "parallel", "sdcmsjpda", "sd_gnn"]
+#: The fusion trackers, in the order of the reproduction's tables.
+ALGORITHMS: tuple[Algorithm, ...] = ("sequential", "parallel", "sdcmsjpda", "sd_gnn")
+
+
+@dataclass(frozen=True, slots=True)
+class FusionConfig:
+    """Parameters of the fusion trackers.
+
+    Attributes
+    ----------
+    pd : tuple of float
+        Detection probability of each sensor, in (0, 1].
+    clutter_density : tuple of float
+        Spatial density ``λ_s`` of each sensor's false measurements, per m·rad, > 0.
+    gate_probability : float
+        ``P_G`` of the chi-square gates (1 = no gate).
+    time_tolerance_s : float
+        Largest difference of the sensors' time stamps in one scan that the centralised
+        trackers (all but ``sequential``) accept as simultaneous.
+    max_tuples : int
+        Largest number of gated S-tuples of one target (guard against a combinatorial blow-up;
+        more raise ``ValueError`` naming the target and scan).
+    """
+
+    pd: tuple[float, ...]
+    clutter_density: tuple[float, ...]
+    gate_probability: float = 0.99
+    time_tolerance_s: float = 1e-6
+    max_tuples: int = 20_000
+
+    def __post_init__(self) -> None:
+        if len(self.pd) != len(self.clutter_density) or not self.pd:
+            raise ValueError("pd and clutter_density need one value per sensor")
+        for s, (p, lam) in enumerate(zip(self.pd, self.clutter_density, strict=True)):
+            if not 0.0 < p <= 1.0:
+                raise ValueError(f"pd[{s}] must be in (0, 1], got {p}")
+            if not (np.isfinite(lam) and lam > 0):
+                raise ValueError(f"clutter_density[{s}] must be finite and > 0, got {lam}")
+        if not 0.0 < self.gate_probability <= 1.0:
+            raise ValueError(f"gate_probability must be in (0, 1], got {self.gate_probability}")
+        if self.time_tolerance_s < 0 or self.max_tuples < 1:
+            raise ValueError("time_tolerance_s must be >= 0 and max_tuples >= 1")
+
+    def jpda(self, s: int) -> JpdaConfig:
+        """The single-sensor JPDA configuration of sensor ``s``."""
+        return JpdaConfig(self.pd[s], self.clutter_density[s], self.gate_probability)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class MultiScans:
+    """Scans of ``S`` sensors on fixed shapes (arrays read-only).
+
+    Attributes
+    ----------
+    z : (K, S, N, m) measurements (NaN where not valid)
+    valid : (K, S, N) bool
+    t_s : (K, S) time stamp of each sensor's scan, s
+    """
+
+    z: FloatArray
+    valid: BoolArray
+    t_s: FloatArray
+
+    def __post_init__(self) -> None:
+        z = np.asarray(self.z, dtype=float)
+        valid = np.asarray(self.valid, dtype=bool)
+        t = np.asarray(self.t_s, dtype=float)
+        if z.ndim != 4 or valid.shape != z.shape[:3] or t.shape != z.shape[:2]:
+            raise ValueError(
+                f"MultiScans: need z (K, S, N, m), valid (K, S, N), t_s (K, S); got "
+                f"{z.shape}, {valid.shape}, {t.shape}"
+            )
+        bad = valid & ~np.all(np.isfinite(z), axis=-1)
+        if np.any(bad):
+            k, s, j = np.argwhere(bad)[0]
+            raise ValueError(f"z[{k}, {s}, {j}] is marked valid but not finite")
+        if not np.all(np.isfinite(t)):
+            k, s = np.argwhere(~np.isfinite(t))[0]
+            raise ValueError(f"t_s[{k}, {s}] is not finite")
+        object.__setattr__(self, "z", z)
+        object.__setattr__(self, "valid", valid)
+        object.__setattr__(self, "t_s", t)
+        freeze_arrays(self)
+
+    def scan(self, k: int, s: int) -> FloatArray:
+        """Valid measurements of sensor ``s`` in scan ``k``, ``(M, m)``."""
+        return np.asarray(self.z[k, s][self.valid[k, s]])
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class FusionResult:
+    """Output of :func:`run_fusion` (arrays read-only).
+
+    Attributes
+    ----------
+    x : (K, T, n) posterior states per scan
+    P : (K, T, n, n) posterior covariances
+    empty_scans : (S,) int, scans in which a sensor reported nothing
+    longest_silence : (S,) int, longest run of consecutive empty scans per sensor
+    gap_scans : int, ``sd_gnn`` scans whose S-D solution kept a duality gap (0 otherwise)
+    ms_per_step : float, mean CPU time (``time.thread_time``) of one fusion step, ms: the
+        tracker's own cost, not inflated by other processes on a loaded machine
+    """
+
+    x: FloatArray
+    P: FloatArray
+    empty_scans: IntArray
+    longest_silence: IntArray
+    gap_scans: int
+    ms_per_step: float
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+
+# ------------------------------------------------------------------------------- kernels
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _SensorTerms:
+    """Linearisation, gate and weights of one scan of every sensor (sensor axis first)."""
+
+    H: FloatArray  # (S, T, m, n)
+    S: FloatArray  # (S, T, m, m)
+    K: FloatArray  # (S, T, n, m)
+    innovation: FloatArray  # (S, T, M, m), M = the most measurements of a sensor
+    log_w: FloatArray  # (S, T, M+1) log of the eq. 21 factors (-inf outside gate / padding)
+    beta: FloatArray  # (S, T, M+1) single-sensor JPDA marginals
+    n_meas: IntArray  # (S,) measurements of each sensor
+
+
+def _sensor_terms(
+    xp: FloatArray,
+    Pp: FloatArray,
+    z: Sequence[FloatArray],
+    sensors: Sequence[MeasurementModel],
+    config: FusionConfig,
+) -> _SensorTerms:
+    """EKF terms, gates, weights and marginals of all sensors at once (sensors as batch axis).
+
+    Measurements are padded to a common count with a ``valid`` mask, as in
+    :func:`~navtrack.tracking.jpda.jpda_step_batch`.
+    """
+    S_ = len(sensors)
+    m = sensors[0].dim_z
+    M = max(len(zs) for zs in z)
+    Z = np.zeros((S_, M, m))
+    ok = np.zeros((S_, M), dtype=bool)
+    for s, zs in enumerate(z):
+        Z[s, : len(zs)] = zs
+        ok[s, : len(zs)] = True
+    H = np.stack([model.jacobian(xp) for model in sensors])
+    R = np.stack([model.R for model in sensors])[:, None]
+    Sg, K = innovation_gain(Pp, H, R)
+    zp = np.stack([model.h(xp) for model in sensors])
+    pg = config.gate_probability
+    g = gate(zp, Sg, Z, chi2_threshold(pg, m), angle_mask=sensors[0].angle_mask)
+    valid = g.valid & ok[:, None, :]
+    ll = g.log_likelihood()
+    W = np.stack(
+        [
+            association_weights(ll[s], valid[s], config.pd[s], pg, config.clutter_density[s])
+            for s in range(S_)
+        ]
+    )
+    pd = np.asarray(config.pd)[:, None, None]
+    lam = np.asarray(config.clutter_density)[:, None, None]
+    log_w = np.full(W.shape, -np.inf)
+    with np.errstate(divide="ignore"):
+        log_w[..., :1] = np.log1p(-pd * pg)
+    log_w[..., 1:] = np.where(valid, ll + np.log(pd) - np.log(lam), -np.inf)
+    T = xp.shape[0]
+    if _n_events(T, M) <= 20_000:
+        beta = jpda_marginals_batch(W, joint_events(T, M))
+    else:
+        beta = np.stack([jpda_marginals(W[s], config.jpda(s)).beta for s in range(S_)])
+    n_meas = np.array([len(zs) for zs in z], dtype=np.int64)
+    return _SensorTerms(H, Sg, K, g.innovation, log_w, beta, n_meas)
+
+
+def _n_events(T: int, M: int) -> int:
+    return sum(comb(T, k) * perm(M, k) for k in range(min(T, M) + 1))
+
+
+def tuple_marginals(
+    betas: Sequence[FloatArray] | FloatArray, t: int
+) -> tuple[IntArray, FloatArray]:
+    """Gated S-tuples of target ``t`` and their marginals ``β_t(L) = Π_s β_t^s(l_s)``.
+
+    Parameters
+    ----------
+    betas : S arrays ``(T, M_s + 1)`` (or one ``(S, T, M + 1)``), single-sensor JPDA
+        marginals (column 0 = missed)
+    t : int, target
+
+    Returns
+    -------
+    tuples : (n_L, S) int, ``l_s`` (0 = no detection, ``j`` = measurement ``j - 1``)
+    beta : (n_L,) probabilities summing to 1
+    """
+    opts = [np.flatnonzero(b[t] > 0) for b in betas]
+    grids = np.meshgrid(*opts, indexing="ij")
+    L = np.stack([g.reshape(-1) for g in grids], axis=-1).astype(np.int64)
+    p = np.ones(len(L))
+    for s, b in enumerate(betas):
+        p *= b[t, L[:, s]]
+    return L, p / p.sum()
+
+
+def _mixture(w: FloatArray, x: FloatArray, P: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Moment-matched Gaussian mixture: weights ``(C,)``, means ``(C, n)``, covariances."""
+    w = w / w.sum()
+    xm = w @ x
+    d = x - xm
+    Pm = np.einsum("c,cij->ij", w, P) + np.einsum("c,ci,cj->ij", w, d, d)
+    return xm, 0.5 * (Pm + Pm.T)
+
+
+def _stacked(
+    xp: FloatArray,
+    Pp: FloatArray,
+    L: IntArray,
+    terms: _SensorTerms,
+    sensors: Sequence[MeasurementModel],
+    t: int,
+) -> tuple[FloatArray, FloatArray]:
+    """Centralised EKF update of target ``t`` with each tuple of ``L (n_L, S)``.
+
+    The stacked measurement of independent sensors, applied one sensor after the other with
+    every Jacobian taken at the prediction (identical to the stacked update): the innovation
+    of sensor ``s`` is re-referenced to the current estimate, ``ν_s - H_s (x - x̂)``.
+    """
+    n_L = len(L)
+    x = np.broadcast_to(xp[t], (n_L, xp.shape[-1])).copy()
+    P = np.broadcast_to(Pp[t], (n_L, *Pp.shape[-2:])).copy()
+    for s, model in enumerate(sensors):
+        hit = L[:, s] > 0
+        if not np.any(hit):
+            continue
+        H = terms.H[s, t]
+        y = terms.innovation[s, t, L[hit, s] - 1] - (x[hit] - xp[t]) @ H.T
+        S, K = innovation_gain(P[hit], H, model.R)
+        x[hit], P[hit] = gain_update(x[hit], P[hit], y, K, S)
+    return x, P
+
+
+def _paper_update(
+    xp: FloatArray,
+    Pp: FloatArray,
+    L: IntArray,
+    beta: FloatArray,
+    terms: _SensorTerms,
+    config: FusionConfig,
+    t: int,
+) -> tuple[FloatArray, FloatArray]:
+    """SD-CMSJPDA update of target ``t``, eqs. 24-32 as read in the module notes."""
+    S_ = L.shape[1]
+    sidx = np.arange(S_)
+    e = np.where(L > 0, np.exp(terms.log_w[sidx, t, L]), 0.0)  # P_D N / λ per sensor
+    b = 1.0 - float(np.mean(config.pd)) * config.gate_probability
+    den = b + e.sum(axis=1)
+    w = e / den[:, None]  # eq. 25
+    M1 = terms.log_w.shape[-1]
+    a = np.bincount((sidx * M1 + L).ravel(), (beta[:, None] * w).ravel(), S_ * M1)
+    a = a.reshape(S_, M1)[:, 1:]  # weight of the single-sensor update (s, j)
+    s_used, j_used = np.nonzero(a > 0)
+    K = terms.K[s_used, t]
+    xj, Pj = gain_update(xp[t], Pp[t], terms.innovation[s_used, t, j_used], K, terms.S[s_used, t])
+    weights = np.r_[float(beta @ (b / den)), a[s_used, j_used]]  # eq. 28 first
+    return _mixture(weights, np.vstack([xp[t][None], xj]), np.concatenate([Pp[t][None], Pj]))
+
+
+def _sd_gnn_tuples(terms: _SensorTerms, max_tuples: int) -> tuple[IntArray, bool]:
+    """The best joint event as an (S+1)-D assignment.
+
+    Returns ``(L (T, S), gap)``, ``gap`` True when the relaxation stopped with a duality gap.
+    """
+    S_, T = terms.log_w.shape[:2]
+    sizes = np.r_[T, terms.n_meas].astype(np.int64)
+    # a certain detection (P_D P_G = 1) makes "missed" impossible; the S-D problem still needs
+    # each target's singleton, so it gets the cost of a weight of 1e-300 instead of +inf
+    log_w = terms.log_w.copy()
+    log_w[..., 0] = np.maximum(log_w[..., 0], np.log(1e-300))
+    rows, costs = [], []
+    for t in range(T):
+        opts = [np.flatnonzero(np.isfinite(log_w[s, t])) for s in range(S_)]
+        grids = np.meshgrid(*opts, indexing="ij")
+        L = np.stack([g.reshape(-1) for g in grids], axis=-1)
+        if len(L) > max_tuples:
+            raise ValueError(f"target {t}: {len(L)} gated S-tuples > max_tuples")
+        c = -log_w[np.arange(S_), t, L].sum(axis=1)
+        rows.append(np.column_stack([np.full(len(L), t + 1), L]))
+        costs.append(c)
+    for s in range(S_):  # false alarms: each measurement alone, cost 0
+        j = np.arange(1, sizes[s + 1] + 1)
+        r = np.zeros((j.size, S_ + 1), dtype=np.int64)
+        r[:, s + 1] = j
+        rows.append(r)
+        costs.append(np.zeros(j.size))
+    sol = sd_assign(SdProblem(sizes, np.concatenate(rows), np.concatenate(costs)), "lagrangian")
+    out = np.zeros((T, S_), dtype=np.int64)
+    tgt = sol.tuples[:, 0] > 0
+    out[sol.tuples[tgt, 0] - 1] = sol.tuples[tgt, 1:]
+    return out, bool(sol.status != SdStatus.OPTIMAL)
+
+
+def fusion_step(
+    algorithm: Algorithm,
+    x: ArrayLike,
+    P: ArrayLike,
+    z: Sequence[FloatArray],
+    dt: Sequence[float],
+    sensors: Sequence[MeasurementModel],
+    motion: LinearMotion,
+    config: FusionConfig,
+) -> tuple[FloatArray, FloatArray, bool]:
+    """One fusion step of ``T`` targets with one scan of every sensor.
+
+    Parameters
+    ----------
+    algorithm : {"sequential", "parallel", "sdcmsjpda", "sd_gnn"}
+    x : (T, n), P : (T, n, n) estimates at the previous fusion time
+    z : S arrays ``(M_s, m)``, the sensors' measurements, in processing order
+    dt : S time steps, s: ``dt[0]`` from the previous fusion time to sensor 0's scan,
+        ``dt[s]`` from sensor ``s - 1``'s scan to sensor ``s``'s (all 0 but ``dt[0]`` for the
+        centralised trackers)
+    sensors : S measurement models; motion : linear motion model; config : FusionConfig
+
+    Returns
+    -------
+    x : (T, n), P : (T, n, n), gap : bool (``sd_gnn`` only: the S-D solve kept a duality gap)
+    """
+    x = np.asarray(x, dtype=float)
+    P = np.asarray(P, dtype=float)
+    z = [np.asarray(zs, dtype=float).reshape(-1, sensors[0].dim_z) for zs in z]
+    if algorithm == "sequential":
+        for s, model in enumerate(sensors):
+            F, Q = motion.F(dt[s]), motion.Q(dt[s])
+            st = jpda_step(x, P, z[s], F, Q, model, config.jpda(s))
+            x, P = st.x, st.P
+        return x, P, False
+    if algorithm not in ALGORITHMS:
+        raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {algorithm!r}")
+    xp, Pp = kf_predict(x, P, motion.F(dt[0]), motion.Q(dt[0]))
+    terms = _sensor_terms(xp, Pp, z, sensors, config)
+    T = x.shape[0]
+    xn, Pn = np.empty_like(xp), np.empty_like(Pp)
+    if algorithm == "sd_gnn":
+        Lbest, gap = _sd_gnn_tuples(terms, config.max_tuples)
+        for t in range(T):
+            xs, Ps = _stacked(xp, Pp, Lbest[t : t + 1], terms, sensors, t)
+            xn[t], Pn[t] = xs[0], Ps[0]
+        return xn, Pn, gap
+    for t in range(T):
+        L, beta = tuple_marginals(terms.beta, t)
+        if len(L) > config.max_tuples:
+            raise ValueError(f"target {t}: {len(L)} gated S-tuples > max_tuples")
+        if algorithm == "parallel":
+            xs, Ps = _stacked(xp, Pp, L, terms, sensors, t)
+            xn[t], Pn[t] = _mixture(beta, xs, Ps)
+        else:
+            xn[t], Pn[t] = _paper_update(xp, Pp, L, beta, terms, config, t)
+    return xn, Pn, False
+
+
+def _silence(valid: BoolArray) -> tuple[IntArray, IntArray]:
+    """Empty scans and the longest run of them, per sensor, from ``valid (K, S, N)``."""
+    empty = np.logical_not(np.any(valid, axis=-1)).reshape(valid.shape[:2])  # (K, S)
+    longest = np.zeros(empty.shape[1], dtype=np.int64)
+    run = np.zeros(empty.shape[1], dtype=np.int64)
+    for k in range(empty.shape[0]):
+        run = np.where(empty[k], run + 1, 0)
+        longest = np.maximum(longest, run)
+    return empty.sum(axis=0).astype(np.int64), longest
+
+
+def run_fusion(
+    algorithm: Algorithm,
+    scans: MultiScans,
+    sensors: Sequence[MeasurementModel],
+    motion: LinearMotion,
+    x0: ArrayLike,
+    P0: ArrayLike,
+    config: FusionConfig,
+    t0_s: float | None = None,
+) -> FusionResult:
+    """Track ``T`` targets through all scans with one fusion algorithm.
+
+    Parameters
+    ----------
+    algorithm : {"sequential", "parallel", "sdcmsjpda", "sd_gnn"}
+    scans : MultiScans with ``S = len(sensors)`` sensors
+    sensors : measurement models, one per sensor
+    motion : linear motion model (the Kalman prediction)
+    x0 : (T, n), P0 : (T, n, n) estimates at time ``t0_s``
+    config : FusionConfig with one ``pd`` / ``clutter_density`` per sensor
+    t0_s : float or None, time of ``x0`` (None = the first scan's earliest time stamp)
+
+    Raises
+    ------
+    ValueError
+        Sensor count mismatch; time stamps going backwards; for the centralised trackers, a
+        scan whose sensors' time stamps differ by more than ``config.time_tolerance_s``
+        (naming the scan, sensor and times). A sensor that reports nothing is no error: it
+        contributes no measurement and is counted in ``empty_scans`` / ``longest_silence``.
+    """
+    K, S_ = scans.t_s.shape
+    if len(sensors) != S_ or len(config.pd) != S_:
+        raise ValueError(
+            f"scans have {S_} sensors, sensors {len(sensors)}, config {len(config.pd)}"
+        )
+    x = np.array(x0, dtype=float)
+    P = np.array(P0, dtype=float)
+    t_prev = float(scans.t_s[0].min()) if t0_s is None else float(t0_s)
+    centralised = algorithm != "sequential"
+    xs = np.empty((K, *x.shape))
+    Ps = np.empty((K, *P.shape))
+    gaps = 0
+    elapsed = 0.0
+    for k in range(K):
+        ts = scans.t_s[k]
+        if centralised and np.ptp(ts) > config.time_tolerance_s:
+            s = int(np.argmax(np.abs(ts - ts[0])))
+            raise ValueError(
+                f"scan {k}: sensor {s} time stamp {ts[s]:.6f} s differs from sensor 0's "
+                f"{ts[0]:.6f} s; {algorithm} fuses simultaneous scans only (time_tolerance_s = "
+                f"{config.time_tolerance_s}); use 'sequential' for asynchronous sensors"
+            )
+        order = np.argsort(ts, kind="stable") if not centralised else np.arange(S_)
+        times = ts[order]
+        if times[0] < t_prev - config.time_tolerance_s:
+            raise ValueError(f"scan {k}: time stamp {times[0]} s is before {t_prev} s")
+        if centralised:
+            dt = np.r_[ts[0] - t_prev, np.zeros(S_ - 1)]
+        else:
+            dt = np.diff(np.r_[t_prev, times])
+        z = [scans.scan(k, int(s)) for s in order]
+        sens = [sensors[int(s)] for s in order]
+        cfg = (
+            config
+            if centralised
+            else FusionConfig(
+                tuple(config.pd[int(s)] for s in order),
+                tuple(config.clutter_density[int(s)] for s in order),
+                config.gate_probability,
+                config.time_tolerance_s,
+                config.max_tuples,
+            )
+        )
+        c0 = time.thread_time()
+        x, P, gap = fusion_step(algorithm, x, P, z, dt.tolist(), sens, motion, cfg)
+        elapsed += time.thread_time() - c0
+        gaps += int(gap)
+        xs[k], Ps[k] = x, P
+        t_prev = float(times[-1])
+    empty, longest = _silence(scans.valid)
+    return FusionResult(xs, Ps, empty, longest, gaps, 1e3 * elapsed / max(K, 1))

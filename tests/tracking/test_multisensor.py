@@ -1,0 +1,203 @@
+"""Multisensor fusion trackers on constructed cases (paper 3 readings)."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from navtrack.tracking.assignment import assign2d
+from navtrack.tracking.jpda import association_weights, jpda_marginals
+from navtrack.tracking.kalman import ekf_update, gain_update, innovation_gain, kf_predict
+from navtrack.tracking.models import RangeBearing, constant_velocity, wrap_angle
+from navtrack.tracking.multisensor import (
+    ALGORITHMS,
+    FusionConfig,
+    MultiScans,
+    _sd_gnn_tuples,
+    _sensor_terms,
+    run_fusion,
+    tuple_marginals,
+)
+
+SENSORS = [
+    RangeBearing(np.diag([300.0**2, 0.03**2]), np.array([-500.0, -500.0])),
+    RangeBearing(np.diag([200.0**2, 0.02**2]), np.array([0.0, 0.0])),
+    RangeBearing(np.diag([100.0**2, 0.01**2]), np.array([-500.0, 500.0])),
+]
+MOTION = constant_velocity(2, 1.0)
+X0 = np.array([[-29500.0, 400.0, 34500.0, -400.0]])
+P0 = np.diag([300.0**2, 30.0**2, 300.0**2, 30.0**2])[None]
+
+
+def _one_target_scans(K: int, rng: np.random.Generator, t_offset: np.ndarray | None = None):
+    t = np.repeat(np.arange(K, dtype=float)[:, None], 3, axis=1)
+    if t_offset is not None:
+        t = t + t_offset
+    truth = np.stack([MOTION.f(X0[0], float(k)) for k in range(K)])  # (K, 4) at t = k
+    z = np.empty((K, 3, 1, 2))
+    for s, m in enumerate(SENSORS):
+        at = np.stack([MOTION.f(X0[0], tk) for tk in t[:, s]])  # the target at the scan time
+        z[:, s, 0] = m.h(at) + rng.standard_normal((K, 2)) * np.sqrt(np.diag(m.R))
+        z[:, s, 0, 1] = wrap_angle(z[:, s, 0, 1])
+    return truth, MultiScans(z, np.ones((K, 3, 1), bool), t)
+
+
+def _stacked_ekf(x, P, z):
+    """Centralised EKF oracle: one stacked (6-D) measurement, Jacobians at the prediction."""
+    H = np.concatenate([m.jacobian(x) for m in SENSORS])
+    R = np.zeros((6, 6))
+    y = np.empty(6)
+    for s, m in enumerate(SENSORS):
+        R[2 * s : 2 * s + 2, 2 * s : 2 * s + 2] = m.R
+        d = z[s] - m.h(x)
+        y[2 * s : 2 * s + 2] = [d[0], wrap_angle(d[1])]
+    S, K = innovation_gain(P, H, R)
+    return gain_update(x, P, y, K, S)
+
+
+def test_one_target_no_clutter_pd1_matches_centralised_ekf() -> None:
+    """``parallel`` and ``sd_gnn`` equal the stacked EKF, ``sequential`` the per-sensor EKF
+    chain, when every tuple is certain (P_D = 1, no gate, no clutter)."""
+    truth, scans = _one_target_scans(20, np.random.default_rng(0))
+    cfg = FusionConfig((1.0,) * 3, (1e-9,) * 3, gate_probability=1.0)
+    x, P = X0[0].copy(), P0[0].copy()
+    xs_c, xs_q = [], []
+    xq, Pq = x.copy(), P.copy()
+    for k in range(20):
+        dt = 0.0 if k == 0 else 1.0
+        xp, Pp = kf_predict(x, P, MOTION.F(dt), MOTION.Q(dt))
+        x, P = _stacked_ekf(xp, Pp, scans.z[k, :, 0])
+        xs_c.append(x)
+        xq, Pq = kf_predict(xq, Pq, MOTION.F(dt), MOTION.Q(dt))
+        for s, m in enumerate(SENSORS):
+            u = ekf_update(xq, Pq, scans.z[k, s, 0], m)
+            xq, Pq = u.x, u.P
+        xs_q.append(xq)
+    for alg in ("parallel", "sd_gnn"):
+        r = run_fusion(alg, scans, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
+        np.testing.assert_allclose(r.x[:, 0], np.array(xs_c), rtol=1e-9, atol=1e-6)
+    r = run_fusion("sequential", scans, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
+    np.testing.assert_allclose(r.x[:, 0], np.array(xs_q), rtol=1e-9, atol=1e-6)
+    # SD-CMSJPDA (eqs. 24-32) mixes single-sensor corrections: consistent, not identical
+    r = run_fusion("sdcmsjpda", scans, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
+    err = np.hypot(*(r.x[:, 0, [0, 2]] - truth[:, [0, 2]]).T)
+    err_c = np.hypot(*(np.array(xs_c)[:, [0, 2]] - truth[:, [0, 2]]).T)
+    assert np.sqrt(np.mean(err[5:] ** 2)) < 3.0 * np.sqrt(np.mean(err_c[5:] ** 2))
+    assert np.all(np.linalg.eigvalsh(r.P[:, 0]) > 0)
+
+
+def test_single_sensor_sdcmsjpda_is_the_ekf() -> None:
+    """With one sensor, b = 0 (P_D = P_G = 1) and one measurement, eq. 24 is the EKF update."""
+    _, scans = _one_target_scans(5, np.random.default_rng(1))
+    one = MultiScans(scans.z[:, 2:], scans.valid[:, 2:], scans.t_s[:, 2:])
+    cfg = FusionConfig((1.0,), (1e-9,), gate_probability=1.0)
+    r = run_fusion("sdcmsjpda", one, SENSORS[2:], MOTION, X0, P0, cfg, t0_s=0.0)
+    x, P = X0[0], P0[0]
+    for k in range(5):
+        dt = 0.0 if k == 0 else 1.0
+        xp, Pp = kf_predict(x, P, MOTION.F(dt), MOTION.Q(dt))
+        u = ekf_update(xp, Pp, one.z[k, 0, 0], SENSORS[2])
+        x, P = u.x, u.P
+    np.testing.assert_allclose(r.x[-1, 0], x, rtol=1e-9)
+    np.testing.assert_allclose(r.P[-1, 0], P, rtol=1e-7)
+
+
+def _two_target_terms(seed: int):
+    rng = np.random.default_rng(seed)
+    xp = np.array([[-17000.0, 400.0, 22000.0, -400.0], [-16800.0, 296.0, 22100.0, -400.0]])
+    Pp = np.broadcast_to(np.diag([400.0**2, 30.0**2, 400.0**2, 30.0**2]), (2, 4, 4))
+    z = []
+    for m in SENSORS:
+        zt = m.h(xp) + rng.standard_normal((2, 2)) * np.sqrt(np.diag(m.R))
+        zc = m.h(xp[:1]) + rng.uniform(-3, 3, (2, 2)) * np.sqrt(np.diag(m.R))
+        z.append(np.concatenate([zt, zc]))
+    lam = (1e-6, 2e-6, 4e-6)
+    cfg = FusionConfig((0.8, 0.7, 0.9), lam, 0.99)
+    return xp, Pp, z, cfg
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_tuple_marginals_equal_enumeration_of_eq21(seed: int) -> None:
+    """β_t(L) from per-sensor JPDA marginals equals the explicit sum over S-D joint events."""
+    xp, Pp, z, cfg = _two_target_terms(seed)
+    terms = _sensor_terms(xp, Pp, z, SENSORS, cfg)
+    w = np.exp(terms.log_w)  # eq. 21 factors (S, T, M+1)
+    L0, b0 = tuple_marginals(terms.beta, 0)
+    L1, b1 = tuple_marginals(terms.beta, 1)
+    joint = np.zeros((len(L0), len(L1)))
+    for a, b in itertools.product(range(len(L0)), range(len(L1))):
+        if np.any((L0[a] > 0) & (L0[a] == L1[b])):
+            continue  # a measurement of one sensor given to both targets
+        joint[a, b] = np.prod(w[np.arange(3), 0, L0[a]]) * np.prod(w[np.arange(3), 1, L1[b]])
+    joint /= joint.sum()
+    np.testing.assert_allclose(b0, joint.sum(axis=1), atol=1e-12)
+    np.testing.assert_allclose(b1, joint.sum(axis=0), atol=1e-12)
+    # the per-sensor marginals themselves: jpda_marginals on association_weights
+    from navtrack.tracking.gating import chi2_threshold, gate
+
+    m = SENSORS[0]
+    S, _ = innovation_gain(Pp, m.jacobian(xp), m.R)
+    g = gate(m.h(xp), S, z[0], chi2_threshold(0.99, 2), angle_mask=m.angle_mask)
+    W = association_weights(g.log_likelihood(), g.valid, 0.8, 0.99, 1e-6)
+    np.testing.assert_allclose(terms.beta[0], jpda_marginals(W).beta, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_sd_gnn_equals_per_sensor_2d_assignment(seed: int) -> None:
+    """Additive tuple costs: the (S+1)-D optimum is the per-sensor 2-D optimum."""
+    xp, Pp, z, cfg = _two_target_terms(seed)
+    terms = _sensor_terms(xp, Pp, z, SENSORS, cfg)
+    L, _ = _sd_gnn_tuples(terms, 10_000)
+    for s in range(3):
+        lw = terms.log_w[s, :, : len(z[s]) + 1]
+        ref = assign2d(-lw[:, 1:], -lw[:, 0])
+        np.testing.assert_array_equal(L[:, s], ref.track_to_meas + 1)
+
+
+def test_mismatched_time_stamps() -> None:
+    off = np.array([0.0, 0.3, 0.6])
+    _, scans = _one_target_scans(30, np.random.default_rng(2), off)
+    cfg = FusionConfig((0.97,) * 3, (1e-7,) * 3)
+    for alg in ("parallel", "sdcmsjpda", "sd_gnn"):
+        with pytest.raises(ValueError, match=r"scan 0: sensor 2 time stamp 0\.600000 s"):
+            run_fusion(alg, scans, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
+    r = run_fusion("sequential", scans, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
+    # estimates are at the last sensor's time (k + 0.6 s)
+    tr = np.stack([MOTION.f(X0[0], k + 0.6) for k in range(30)])
+    err = np.hypot(*(r.x[:, 0, [0, 2]] - tr[:, [0, 2]]).T)
+    assert np.sqrt(np.mean(err[10:] ** 2)) < 150.0
+    back = MultiScans(scans.z, scans.valid, scans.t_s[::-1])
+    with pytest.raises(ValueError, match="before"):
+        run_fusion("sequential", back, SENSORS, MOTION, X0, P0, cfg)
+
+
+def test_silent_sensor_is_counted_and_tracking_continues() -> None:
+    truth, scans = _one_target_scans(60, np.random.default_rng(3))
+    valid = scans.valid.copy()
+    valid[10:50, 2] = False  # sensor 3 reports nothing for 40 scans
+    silent = MultiScans(np.where(valid[..., None], scans.z, np.nan), valid, scans.t_s)
+    cfg = FusionConfig((0.97,) * 3, (1e-7,) * 3)
+    for alg in ALGORITHMS:
+        r = run_fusion(alg, silent, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
+        np.testing.assert_array_equal(r.empty_scans, [0, 0, 40])
+        np.testing.assert_array_equal(r.longest_silence, [0, 0, 40])
+        err = np.hypot(*(r.x[:, 0, [0, 2]] - truth[:, [0, 2]]).T)
+        assert np.sqrt(np.mean(err[10:] ** 2)) < 250.0, alg
+
+
+def test_bad_configuration() -> None:
+    with pytest.raises(ValueError, match=r"pd\[1\]"):
+        FusionConfig((0.9, 1.5), (1e-6, 1e-6))
+    with pytest.raises(ValueError, match="one value per sensor"):
+        FusionConfig((0.9,), (1e-6, 1e-6))
+    _, scans = _one_target_scans(3, np.random.default_rng(4))
+    with pytest.raises(ValueError, match="3 sensors"):
+        run_fusion(
+            "parallel", scans, SENSORS[:2], MOTION, X0, P0, FusionConfig((0.9,) * 2, (1e-6,) * 2)
+        )
+    z = scans.z.copy()
+    z[1, 0, 0, 0] = np.nan
+    with pytest.raises(ValueError, match=r"z\[1, 0, 0\]"):
+        MultiScans(z, scans.valid, scans.t_s)

@@ -1,0 +1,147 @@
+"""S-D assignment with the dummy index: optimality against brute force and milp, dummies, k-best."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from navtrack.tracking.assignment import (
+    SdMethod,
+    SdProblem,
+    SdStatus,
+    assign2d,
+    random_sd_problem,
+    sd_assign,
+    sd_exact,
+    sd_greedy,
+    sd_kbest,
+    sd_lagrangian,
+)
+
+
+def brute_force(problem: SdProblem) -> list[float]:
+    """Costs of every feasible solution, ascending (oracle for tiny problems)."""
+    t = problem.tuples
+    S = problem.n_lists
+    out: list[float] = []
+
+    def rec(used: list[set[int]], cost: float, start: int) -> None:
+        # the first uncovered real index must be covered by a tuple containing it
+        for s in range(S):
+            free = [i for i in range(1, problem.sizes[s] + 1) if i not in used[s]]
+            if free:
+                i = free[0]
+                for k in np.flatnonzero(t[:, s] == i):
+                    row = t[k]
+                    if any(row[q] > 0 and row[q] in used[q] for q in range(S)):
+                        continue
+                    nu = [u | ({int(row[q])} if row[q] > 0 else set()) for q, u in enumerate(used)]
+                    rec(nu, cost + problem.cost[k], 0)
+                return
+        out.append(cost)
+
+    rec([set() for _ in range(S)], 0.0, 0)
+    return sorted(out)
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("sizes", [(2, 2, 2), (3, 2, 3), (2, 2, 2, 2)])
+def test_exact_and_relaxation_against_brute_force(seed: int, sizes: tuple[int, ...]) -> None:
+    p = random_sd_problem(sizes, np.random.default_rng(seed))
+    costs = brute_force(p)
+    ex = sd_exact(p)
+    assert ex is not None
+    assert p.is_feasible(ex.selected)
+    assert ex.cost == pytest.approx(costs[0], abs=1e-9)
+    lr = sd_lagrangian(p)
+    assert p.is_feasible(lr.selected)
+    assert lr.lower_bound <= costs[0] + 1e-9  # a valid bound
+    assert lr.cost >= costs[0] - 1e-9
+    if lr.status == SdStatus.OPTIMAL:
+        assert lr.cost <= costs[0] + 1e-3 * abs(costs[0]) + 1e-9
+
+
+def test_relaxation_near_exact_on_random_problems() -> None:
+    """Bar of issue 13 on a reduced set: mean excess over the milp optimum < 1 %, never worse
+    than greedy (seeded problems S = 3..5, 5-7 elements per list, with dummies)."""
+    rng = np.random.default_rng(13)
+    excess = []
+    for sizes, density in [((5, 6, 7), 1.0), ((7, 7, 7), 1.0), ((5, 5, 6, 6), 0.5),
+                           ((5, 5, 5, 5, 5), 0.1)]:  # fmt: skip
+        for _ in range(2):
+            p = random_sd_problem(sizes, rng, density)
+            ex = sd_exact(p)
+            assert ex is not None
+            lr = sd_lagrangian(p)
+            assert lr.cost <= sd_greedy(p).cost + 1e-9
+            assert lr.lower_bound <= ex.cost + 1e-9
+            excess.append((lr.cost - ex.cost) / abs(ex.cost))
+    assert min(excess) >= -1e-9
+    assert np.mean(excess) < 0.01
+
+
+def test_dummy_index_used_many_times_and_singletons_required() -> None:
+    # list sizes (1, 1, 1): best is two tuples sharing dummies, not the full triple
+    tup = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1], [1, 1, 0]])
+    cost = np.array([0.0, 0.0, -1.0, -0.5, -2.0])
+    p = SdProblem([1, 1, 1], tup, cost)
+    sol = sd_assign(p, "exact")
+    assert sol.cost == pytest.approx(-3.0)
+    assert sorted(map(tuple, sol.tuples.tolist())) == [(0, 0, 1), (1, 1, 0)]
+    assert sd_lagrangian(p).cost == pytest.approx(-3.0)
+    with pytest.raises(ValueError, match="list 2 element 1 has no singleton"):
+        SdProblem([1, 1, 1], tup[[0, 1, 3]], cost[[0, 1, 3]])
+    with pytest.raises(ValueError, match="all dummy"):
+        SdProblem([1, 1, 1], np.vstack([tup, [0, 0, 0]]), np.r_[cost, 0.0])
+    with pytest.raises(ValueError, match=r"outside 0\.\.1"):
+        SdProblem([1, 1, 1], np.vstack([tup, [2, 0, 0]]), np.r_[cost, 0.0])
+    with pytest.raises(ValueError, match="listed twice"):
+        SdProblem([1, 1, 1], np.vstack([tup, tup[:1]]), np.r_[cost, 0.0])
+
+
+def test_two_lists_match_assign2d() -> None:
+    """S = 2 with the dummy index is the track-oriented 2-D problem when list 1 = tracks whose
+    singleton is the missed cost and list 2's singletons cost 0 (false alarms)."""
+    rng = np.random.default_rng(3)
+    C = rng.normal(-1.0, 1.0, (4, 5))
+    miss = rng.normal(0.0, 0.5, 4)
+    rows = [[t + 1, j + 1] for t in range(4) for j in range(5)]
+    rows += [[t + 1, 0] for t in range(4)] + [[0, j + 1] for j in range(5)]
+    cost = np.r_[C.ravel(), miss, np.zeros(5)]
+    sol = sd_assign(SdProblem([4, 5], np.array(rows), cost))
+    ref = assign2d(C, miss)
+    assert sol.cost == pytest.approx(ref.cost)
+
+
+def test_kbest_against_brute_force() -> None:
+    p = random_sd_problem((2, 2, 2), np.random.default_rng(5))
+    costs = brute_force(p)
+    kb = sd_kbest(p, 6)
+    np.testing.assert_allclose(kb.cost, costs[:6], atol=1e-9)
+    assert all(p.is_feasible(s.selected) for s in kb.solutions)
+    sets = {tuple(s.selected.tolist()) for s in kb.solutions}
+    assert len(sets) == 6
+
+
+def test_too_large_for_exact_falls_back_with_gap() -> None:
+    p = random_sd_problem((6, 6, 6), np.random.default_rng(2))
+    sol = sd_assign(p, "exact", max_exact_tuples=100)
+    assert sol.status == SdStatus.TOO_LARGE
+    assert sol.method == SdMethod.LAGRANGIAN
+    assert "max_exact_tuples = 100" in sol.message
+    assert "duality gap" in sol.message
+    assert sol.gap >= 0
+    assert p.is_feasible(sol.selected)
+
+
+def test_greedy_is_feasible_and_bad_arguments() -> None:
+    p = random_sd_problem((4, 3, 5), np.random.default_rng(1), density=0.5)
+    g = sd_greedy(p)
+    assert p.is_feasible(g.selected)
+    assert g.status == SdStatus.HEURISTIC
+    with pytest.raises(ValueError, match="method"):
+        sd_assign(p, "fast")
+    with pytest.raises(ValueError, match="S >= 3"):
+        sd_lagrangian(SdProblem([1, 1], [[1, 0], [0, 1]], [0.0, 0.0]))
+    with pytest.raises(ValueError, match="cost must be finite"):
+        SdProblem([1, 1, 1], [[1, 0, 0], [0, 1, 0], [0, 0, 1]], [0.0, np.inf, 0.0])
