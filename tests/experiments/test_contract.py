@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -125,6 +125,35 @@ def test_results_json_header(tmp_path: Path) -> None:
     assert data["figures"] == [str(tmp_path / "toy.txt")]
     assert (tmp_path / "toy.txt").read_text() == f"3 {results['extra_draw']}\n"
     assert (tmp_path / "tables.md").read_text() == f"# toy\n\nruns 3, mean {data['mean']}\n"
+
+
+def test_stages_are_logged_and_each_figure_as_it_is_written(tmp_path: Path) -> None:
+    class TwoFigures(ToyExperiment):
+        def figures(self, outcome: Outcome[ToyParams, float], out_dir: Path) -> Iterator[Path]:
+            for name in ("a.txt", "b.txt"):
+                # the line of the figure before must be out before the next one is written
+                assert lines[-1].startswith("figure" if name == "b.txt" else "extra")
+                (out_dir / name).write_text(name)
+                yield out_dir / name
+
+    lines: list[str] = []
+    results = reproduce(TwoFigures(), _options(tmp_path, runs=1, log=lines.append))
+    assert lines[0].startswith("extra      real data")
+    assert lines[1].startswith("extra      done in ")
+    assert lines[2:] == [f"figure     {tmp_path / 'a.txt'}", f"figure     {tmp_path / 'b.txt'}"]
+    assert results["figures"] == [str(tmp_path / "a.txt"), str(tmp_path / "b.txt")]
+
+
+def test_context_progress_bar_goes_to_stderr_only_when_asked(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    rng = np.random.default_rng(0)
+    quiet = ExperimentContext(0, rng, progress=False)
+    assert list(quiet.track([1, 2, 3], "cases")) == [1, 2, 3]
+    assert capsys.readouterr().err == ""
+    shown = ExperimentContext(0, rng, progress=True)
+    assert list(shown.track([1, 2, 3], "cases")) == [1, 2, 3]
+    assert "cases" in capsys.readouterr().err
 
 
 def test_runs_use_their_spawned_generators(tmp_path: Path) -> None:

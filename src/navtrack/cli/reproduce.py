@@ -126,13 +126,12 @@ def run_reproduce(args: argparse.Namespace) -> int:
         progress=not args.no_progress,
         inputs=tuple(args.input),
         figures=not args.no_figures,
+        log=print,
     )
     results = reproduce(exp, options)
     for line in header_lines(results) + exp.summary_lines(results):
         print(line)
     print(f"wrote      {args.out / 'results.json'}, {args.out / 'tables.md'}")
-    for fig in results.get("figures", []):
-        print(f"figure     {fig}")
     if "figures_error" in results:
         print(f"no figures {results['figures_error']}")
     return 0

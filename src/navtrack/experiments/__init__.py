@@ -19,6 +19,7 @@ import json
 import math
 import subprocess
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
@@ -90,6 +91,9 @@ class ReproduceOptions:
         Extra input files the experiment understands (e.g. solution tables for ``ari``).
     figures : bool
         Write PNG figures (needs matplotlib).
+    log : callable or None
+        Receives one line per stage as it starts and ends (the ``extra`` step, each figure as it is
+        written); ``navtrack reproduce`` prints them. ``None``: silent.
     """
 
     out_dir: Path
@@ -102,6 +106,7 @@ class ReproduceOptions:
     progress: bool = True
     inputs: tuple[Path, ...] = ()
     figures: bool = True
+    log: Callable[[str], None] | None = None
 
 
 def get_experiment(name: str) -> Experiment[Any, Any]:
@@ -180,9 +185,16 @@ def reproduce(experiment: Experiment[Any, Any] | str, options: ReproduceOptions)
         backend=options.backend,
         progress=options.progress,
     )
+    log = options.log or (lambda line: None)
     summary = exp.summarize(params, mc.results)
     rng = np.random.default_rng(np.random.SeedSequence(options.seed, spawn_key=(EXTRA_SPAWN_KEY,)))
-    extra = exp.extra(params, ExperimentContext(options.seed, rng, tuple(options.inputs), out))
+    context = ExperimentContext(
+        options.seed, rng, tuple(options.inputs), out, progress=options.progress
+    )
+    t_extra = time.perf_counter()
+    log("extra      real data and cross-checks ...")
+    extra = exp.extra(params, context)
+    log(f"extra      done in {time.perf_counter() - t_extra:.1f} s")
     header: dict[str, Any] = {
         "experiment": exp.name,
         "description": exp.description,
@@ -205,7 +217,10 @@ def reproduce(experiment: Experiment[Any, Any] | str, options: ReproduceOptions)
     if options.figures:
         try:
             outcome = Outcome(params, tuple(mc.results), results, extra.artifacts)
-            results["figures"] = [str(f) for f in exp.figures(outcome, out)]
+            results["figures"] = []
+            for figure in exp.figures(outcome, out):
+                results["figures"].append(str(figure))
+                log(f"figure     {figure}")
         except ImportError as exc:
             results["figures_error"] = str(exc)
     results["wall_time_s"] = time.perf_counter() - t0

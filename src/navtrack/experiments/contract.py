@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import os
 from abc import ABC, abstractmethod
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar, Generic, TypeVar
@@ -42,6 +42,7 @@ __all__ = [
 
 P = TypeVar("P")
 R = TypeVar("R")
+T = TypeVar("T")
 
 #: Spawn key of the generator of the ``extra`` step: the child ``10**6`` of the seed's
 #: ``SeedSequence``, disjoint from the generators of Monte Carlo runs ``0 .. 10**6 - 1``.
@@ -114,12 +115,22 @@ class ExperimentContext:
         Extra input files given by the user (``navtrack reproduce ... --input FILE``).
     out_dir : Path
         Output directory.
+    progress : bool
+        Whether :meth:`track` shows progress bars (``navtrack reproduce --no-progress`` turns
+        them off).
     """
 
     seed: int
     rng: np.random.Generator
     inputs: tuple[Path, ...] = ()
     out_dir: Path = Path(".")
+    progress: bool = False
+
+    def track(self, items: Sequence[T], desc: str) -> Iterator[T]:
+        """Iterate over ``items`` with a progress bar on stderr named ``desc`` (when enabled)."""
+        from tqdm.auto import tqdm
+
+        yield from tqdm(items, desc=desc, disable=not self.progress, leave=False)
 
     def shared_data(self, *, required: bool = False) -> Path:
         """Root of the shared data sets (:func:`shared_data_dir`)."""
@@ -212,10 +223,11 @@ class Experiment(ABC, Generic[P, R]):
     def tables(self, results: dict[str, Any]) -> str:
         """Markdown tables of ``results`` (written to ``tables.md``)."""
 
-    def figures(self, outcome: Outcome[P, R], out_dir: Path) -> list[Path]:
-        """Write the figures into ``out_dir``; return their paths (default: none).
+    def figures(self, outcome: Outcome[P, R], out_dir: Path) -> Iterable[Path]:
+        """Write the figures into ``out_dir``; return or yield their paths (default: none).
 
-        May raise ImportError when matplotlib is missing; the driver records it.
+        A generator lets the driver report each figure as it is written. May raise ImportError
+        when matplotlib is missing; the driver records it.
         """
         return []
 
