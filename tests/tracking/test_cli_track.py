@@ -119,26 +119,40 @@ def test_track_command_skips_a_century_old_row_and_bounds_the_grid(
     assert "navtrack track: error: --report-s 60 " in capsys.readouterr().err
 
 
-def test_track_progress_indicator_on_a_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_track_progress_bar_counts_the_tracked_detections(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     import io
     import sys
-    import time
+
+    import numpy as np
 
     from navtrack.cli.track import PROGRESS_MIN_DETECTIONS, _progress
+    from navtrack.tracking.tracker import TrackerConfig, run_tracker
 
     class Terminal(io.StringIO):
         def isatty(self) -> bool:
             return True
 
+    n = PROGRESS_MIN_DETECTIONS
+    t = np.repeat(np.arange(n // 5, dtype=float), 5)  # five targets reporting every second
+    z = np.column_stack([np.tile(np.arange(5) * 1e4, n // 5) + 10 * t, np.zeros(n)])
+    steps: list[int] = []
+    run_tracker(t, z, TrackerConfig(), progress=steps.append)
+    assert sum(steps) == n
+    assert min(steps) > 0
     err = Terminal()
     monkeypatch.setattr(sys, "stderr", err)
-    with _progress(PROGRESS_MIN_DETECTIONS, quiet=False):
-        time.sleep(1.2)
-    assert f"tracking {PROGRESS_MIN_DETECTIONS} detections: 00:01 elapsed" in err.getvalue()
+    with _progress(n, quiet=False) as progress:
+        assert progress is not None
+        for k in steps:
+            progress(k)
+    assert "tracking: 100%" in err.getvalue()
+    assert f"{n}/{n}" in err.getvalue()
     quiet = Terminal()
     monkeypatch.setattr(sys, "stderr", quiet)
-    with _progress(PROGRESS_MIN_DETECTIONS, quiet=True):
-        time.sleep(0.6)
+    with _progress(n, quiet=True) as progress:
+        assert progress is None
     assert quiet.getvalue() == ""
 
 

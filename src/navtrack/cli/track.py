@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -169,8 +169,8 @@ def run_track(args: argparse.Namespace) -> int:
         )
     grid = t0 + np.arange(0.0, det.t_gps_s[-1] - t0 + 1e-9, report_s)
     clock = time.perf_counter()
-    with _progress(len(det), quiet=args.quiet):
-        res = run_tracker(det.t_gps_s, en, cfg, report_times=grid, velocity=vel)
+    with _progress(len(det), quiet=args.quiet) as progress:
+        res = run_tracker(det.t_gps_s, en, cfg, report_times=grid, velocity=vel, progress=progress)
     t_track = time.perf_counter() - clock
     status = np.bincount(res.det_status, minlength=len(DET_STATUS_NAMES))
     summary["reference (lat, lon deg)"] = f"{ref[0]:.6f} {ref[1]:.6f}"
@@ -237,42 +237,23 @@ PROGRESS_MIN_DETECTIONS = 5000  # files this long take seconds: show that the tr
 
 
 @contextlib.contextmanager
-def _progress(n_detections: int, *, quiet: bool) -> Iterator[None]:
-    """An elapsed-time indicator on stderr while the tracker runs over a long file.
+def _progress(n_detections: int, *, quiet: bool) -> Iterator[Callable[[int], object] | None]:
+    """A progress bar on stderr over the detections tracked, fed by ``run_tracker(progress=)``.
 
-    ``run_tracker`` reports no progress of its own, so the indicator shows the detections
-    being tracked and the seconds elapsed (refreshed twice a second); it is off with
-    ``--quiet``, for files under :data:`PROGRESS_MIN_DETECTIONS` rows and when stderr is not a
-    terminal (tqdm's ``disable=None``).
+    Off (yields ``None``) with ``--quiet`` and for files under :data:`PROGRESS_MIN_DETECTIONS`
+    rows; tqdm hides it when stderr is not a terminal (``disable=None``).
     """
     if quiet or n_detections < PROGRESS_MIN_DETECTIONS:
-        yield
+        yield None
         return
     import sys
-    import threading
 
     from tqdm import tqdm
 
-    done = threading.Event()
     with tqdm(
-        desc=f"tracking {n_detections} detections",
-        bar_format="{desc}: {elapsed} elapsed",
-        file=sys.stderr,
-        disable=None,
-        leave=False,
+        total=n_detections, desc="tracking", unit=" det", file=sys.stderr, disable=None, leave=False
     ) as bar:
-
-        def tick() -> None:
-            while not done.wait(0.5):
-                bar.refresh()
-
-        ticker = threading.Thread(target=tick, daemon=True)
-        ticker.start()
-        try:
-            yield
-        finally:
-            done.set()
-            ticker.join()
+        yield bar.update
 
 
 def _positive(name: str, value: float | None, upper: float | None = None) -> None:

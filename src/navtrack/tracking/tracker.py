@@ -40,6 +40,7 @@ References
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import IntEnum
 from typing import Literal
@@ -996,6 +997,7 @@ def run_tracker(
     config: TrackerConfig | None = None,
     report_times: ArrayLike | None = None,
     velocity: ArrayLike | None = None,
+    progress: Callable[[int], object] | None = None,
 ) -> TrackerResult:
     """Track 2-D position detections: the stages of the module notes, scan by scan.
 
@@ -1012,6 +1014,9 @@ def run_tracker(
         starts a tentative track on its own (one-point initiation, velocity standard deviation
         ``init_velocity_std_mps``) instead of waiting for a second point; the velocity is used
         for initiation only, not in the updates.
+    progress : callable or None
+        Called after each scan with the number of detections that scan held (e.g. a tqdm
+        bar's ``update``).
 
     Raises
     ------
@@ -1047,7 +1052,11 @@ def run_tracker(
     counts = dict.fromkeys(TrackerCounts.__dataclass_fields__, 0)
     now = t[0] if N else 0.0
     starts, ends = scan_windows(t, Z, cfg.scan_window_s, window_separation_m(model))
+    done = 0  # detections reported to ``progress``
     for s0, s1 in zip(starts, ends, strict=True):
+        if progress is not None and s0:
+            progress(s0 - done)
+            done = s0
         tk = t[s1 - 1]  # a window of reports is processed at its last time
         dt_k = t[s0:s1] - tk
         log.report_until(store, now, tk, cfg.motion, inclusive=False)
@@ -1088,6 +1097,8 @@ def run_tracker(
         det_status[ini.seed_det] = DetStatus.STARTED
         counts["tracks_started"] += int(np.count_nonzero(ini.track >= 0))
     log.report_until(store, now, now, cfg.motion, inclusive=True)
+    if progress is not None:
+        progress(N - done)
     return log.result(det_track, det_status, det_nis, cfg.motion.dim_x, TrackerCounts(**counts))
 
 
