@@ -66,7 +66,22 @@ def test_run_is_replayable():
     )
 
 
+def test_truth_q_sets_the_truth_noise_only():
+    # truth_q = 0: constant-velocity truths (x0 + k Xdot), the filter's model keeps q
+    p = FovealParams(n_particles=40, steps=8, last_steps=3, gain_check=False, truth_q=0.0)
+    run = foveal_run(p, np.random.default_rng(5))
+    x0 = np.asarray(p.x0_three).reshape(-1, 2)
+    k = np.arange(1, p.steps + 1)[:, None]
+    np.testing.assert_allclose(run["trajectory"]["truth_m"], x0[:, 0] + k * x0[:, 1])
+    assert p.config("ip_jpda").motion.q == pytest.approx(0.01)
+    # default: the truth has the filter's process noise
+    noisy = foveal_run(SMALL, np.random.default_rng(5))["trajectory"]["truth_m"]
+    assert np.abs(noisy - (x0[:, 0] + k * x0[:, 1])).max() > 0.05
+
+
 def test_bad_parameters():
+    with pytest.raises(ValueError, match="truth_q"):
+        FovealParams(truth_q=-0.01)
     with pytest.raises(ValueError, match="x0_three"):
         FovealParams(x0_three=(0.0, 1.0, 2.0))
     with pytest.raises(ValueError, match="last_steps"):

@@ -57,6 +57,17 @@ def test_so_gain_reduces_to_spread_law_and_follows_the_optimum():
         assert abs(math.log(float(so_gain(D, P, P, R)) / c_opt)) < 0.3
 
 
+def test_so_gain_near_three_target_optimum():
+    # three targets at -D/2, 0, D/2 (the SO case of the reproduction): for spreads up to 4 m the
+    # rule's summed expected posterior variance is within 10 % of the quadrature optimum's
+    R = 0.05
+    for D, P in ((2.0, 0.2), (4.0, 1.0)):
+        off = [-D / 2, 0.0, D / 2]
+        c_opt = optimal_gain(P, R, offset=off)
+        v_opt, v_rule = expected_posterior_variance([c_opt, float(so_gain(D, P, P, R))], P, R, off)
+        assert v_opt <= v_rule < 1.10 * v_opt
+
+
 def test_configure_rules():
     x = np.array([[[0.0, 1.0], [2.0, 1.0], [5.0, 1.0]]])
     P = np.tile(np.eye(2), (1, 3, 1, 1))
