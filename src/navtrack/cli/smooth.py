@@ -50,6 +50,12 @@ def register(subparsers: Any) -> None:
         help="also reweight the process equations (edges, discontinuities)",
     )
     cmd.add_argument(
+        "--estimator",
+        default="exact",
+        choices=("exact", "paper"),
+        help="exact likelihood (default) or the paper's alternating filtering/VCE iteration",
+    )
+    cmd.add_argument(
         "--flag-threshold",
         type=float,
         default=3.29,
@@ -92,6 +98,7 @@ def run_smooth(args: argparse.Namespace) -> int:
             robust=args.robust,
             robust_process=args.robust_process,
             flag_threshold=args.flag_threshold,
+            estimator=args.estimator,
         )
     except ValueError as exc:
         raise SystemExit(f"navtrack smooth: {exc}") from None
