@@ -80,6 +80,7 @@ def run_smooth(args: argparse.Namespace) -> int:
     from navtrack.experiments import write_json
     from navtrack.io.tables import read_table
     from navtrack.smoothing.ari import AriConfig, fit_ari, regularize_time
+    from navtrack.smoothing.identifiability import identifiability_warnings, sigma_bounds
 
     df = read_table(args.file)
     if args.order == "auto":
@@ -161,9 +162,15 @@ def run_smooth(args: argparse.Namespace) -> int:
                 f"sigma_x = {res.sigma_x_rms:.4g} {unit}, r(1..4) = {r}, "
                 f"flagged {res.n_flagged}"
             )
+            crb_n, crb_e = sigma_bounds(res, conditional=cfg.estimator == "paper")
+            print(f"{col}: Cramér–Rao relative sd sigma_n {crb_n:.1%}, sigma_e {crb_e:.1%}")
+            for why in identifiability_warnings(res, crb_n, crb_e):
+                print(f"warning    {col}: {why}")
         else:
             print(f"{col}: status {res.status} ({res.message})")
         summary["columns"][col] = {**res.summary(), "unit": unit}
+        if res.estimated:
+            summary["columns"][col] |= {"crb_rel_sd_sigma_n": crb_n, "crb_rel_sd_sigma_e": crb_e}
         out_cols[col] = grid[:, k]
         out_cols[f"{col}_filtered"] = res.x
         out_cols[f"{col}_sigma_x"] = res.sigma_x
