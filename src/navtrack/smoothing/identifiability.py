@@ -72,7 +72,7 @@ def identifiability_warnings(res: AriResult, crb_n: float, crb_e: float) -> list
     ratio = res.sigma_e / res.sigma_n if res.sigma_n > 0 else math.inf
     if not 1.0 / SAME_ORDER <= ratio <= SAME_ORDER:
         out.append(
-            f"sigma_e/sigma_n = {ratio:.3g} is not of the same order of magnitude (paper §2.2: "
+            f"sigma_e/sigma_n is {ratio:.3g}, not of the same order of magnitude (paper §2.2: "
             f"within a factor {SAME_ORDER:g}); the variance components are weakly separable"
         )
     if res.status == AriStatus.BOUNDARY:
