@@ -411,6 +411,7 @@ def default_real_sources(
         if path.exists():
             src = solution_series(path)
             meta = {
+                **src.meta,
                 "solver": "RTKLIB 2.4.3 b34",
                 "run": run.name,
                 "kinematic": run.kinematic,
