@@ -45,3 +45,21 @@ def test_smooth_warns_when_sigmas_are_not_of_the_same_order(
     assert "Cramér–Rao relative sd sigma_n" in text
     assert "warning    v_m:" in text
     assert "same order of magnitude" in text or "bound" in text
+
+
+def test_smooth_runs_the_paper_estimator(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    rng = np.random.default_rng(9)
+    y, _ = simulate_ari(rng, 500, (-0.5,), 1, 0.02, 0.02)
+    src = tmp_path / "s.csv"
+    pd.DataFrame({"t_s": np.arange(500.0), "v_m": y}).to_csv(src, index=False)
+    out = tmp_path / "o.csv"
+    args = ["smooth", str(src), "--columns", "v_m", "--order", "1,1", "--out", str(out)]
+    assert main([*args, "--estimator", "paper"]) == 0
+    text = capsys.readouterr().out
+    assert "v_m: status ok" in text
+    assert "same order" not in text  # sigma_e = sigma_n here
+    import json
+
+    summary = json.loads(out.with_suffix(".json").read_text())["columns"]["v_m"]
+    assert summary["sigma_n"] == pytest.approx(0.02, rel=0.15)
+    assert summary["crb_rel_sd_sigma_n"] < 0.10
