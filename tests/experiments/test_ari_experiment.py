@@ -158,6 +158,12 @@ def test_reproduce_end_to_end_reduced(tmp_path: Path) -> None:
     assert "## Real data" in tables
     assert "| rover.csv | e_m | 150 | 4 |" in tables
     assert "## SARIMAX cross-check" in tables
+    # both estimators side by side, with the CRB and the paper's estimator on the real rows
+    assert "## Printed values, exact-likelihood and paper estimator" in tables
+    assert set(data["synthetic"]["tiny"]["estimators"]) == {"exact", "paper"}
+    assert all(row["paper"] is not None for row in data["real"])
+    assert all(np.isfinite(row["crb_sigma_n"]) for row in data["real"])
+    assert "sarimax_skipped" not in data
     # figures: the synthetic estimates and recall, one series figure of the input table
     names = sorted(Path(f).name for f in data["figures"])
     assert names == [

@@ -50,6 +50,12 @@ def register(subparsers: Any) -> None:
         help="also reweight the process equations (edges, discontinuities)",
     )
     cmd.add_argument(
+        "--estimator",
+        default="exact",
+        choices=("exact", "paper"),
+        help="exact likelihood (default) or the paper's alternating filtering/VCE iteration",
+    )
+    cmd.add_argument(
         "--flag-threshold",
         type=float,
         default=3.29,
@@ -118,6 +124,7 @@ def run_smooth(args: argparse.Namespace) -> int:
     from navtrack.experiments import write_json
     from navtrack.io.tables import numeric_column, read_table
     from navtrack.smoothing.ari import AriConfig, fit_ari, regularize_time
+    from navtrack.smoothing.identifiability import identifiability_warnings, sigma_bounds
 
     df = read_table(args.file)
     if len(df) == 0:
@@ -140,6 +147,7 @@ def run_smooth(args: argparse.Namespace) -> int:
             robust=args.robust,
             robust_process=args.robust_process,
             flag_threshold=args.flag_threshold,
+            estimator=args.estimator,
         )
     except ValueError as exc:
         raise SystemExit(f"navtrack smooth: {exc}") from None
@@ -200,9 +208,15 @@ def run_smooth(args: argparse.Namespace) -> int:
                 f"sigma_x = {res.sigma_x_rms:.4g} {unit}, r(1..4) = {r}, "
                 f"flagged {res.n_flagged}"
             )
+            crb_n, crb_e = sigma_bounds(res, conditional=cfg.estimator == "paper")
+            print(f"{col}: Cramér–Rao relative sd sigma_n {crb_n:.1%}, sigma_e {crb_e:.1%}")
+            for why in identifiability_warnings(res, crb_n, crb_e):
+                print(f"warning    {col}: {why}")
         else:
             print(f"{col}: status {res.status} ({res.message})")
         summary["columns"][col] = {**res.summary(), "unit": unit}
+        if res.estimated:
+            summary["columns"][col] |= {"crb_rel_sd_sigma_n": crb_n, "crb_rel_sd_sigma_e": crb_e}
         out_cols[col] = grid[:, k]
         out_cols[f"{col}_filtered"] = res.x
         out_cols[f"{col}_sigma_x"] = res.sigma_x

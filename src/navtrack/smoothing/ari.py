@@ -63,6 +63,10 @@ Modules (this one re-exports the public names):
   quasi-Newton search, robust reweighting, the estimator
   (:func:`~navtrack.smoothing.estimation.estimate_exact_likelihood`) and
   :func:`observed_information`;
+* :mod:`navtrack.smoothing.alternation` — the paper's estimator (``AriConfig(estimator=
+  "paper")``): conditional model, alternating filtering / VCE / expected-moment AR step;
+* :mod:`navtrack.smoothing.identifiability` — Cramér–Rao bounds of the sigmas at an estimate
+  and the paper's "same order of magnitude" condition;
 * :mod:`navtrack.smoothing.robust` — weight functions and Baarda's w-test, generic over
   residuals (shared with integrity monitoring);
 * :mod:`navtrack.smoothing.fitting` — input checks, fixed-order fit, order selection,

@@ -65,6 +65,7 @@ __all__ = [
     "min_observations",
     "numerical_hessian",
     "observed_information",
+    "phi_gradient_terms",
     "quasi_newton",
     "robust_reweight",
     "starting_values",
@@ -192,7 +193,7 @@ def make_estimate(
     return Estimate(vec.copy(), evaluation, n_eval, converged, bool(boundary))
 
 
-def _phi_gradient_terms(
+def phi_gradient_terms(
     c: FloatArray, x: FloatArray, v: FloatArray, p: int, d: int, big_s: FloatArray
 ) -> FloatArray:
     """``sum_s v_s E[e_s u_{s-j}]``, ``j = 1..p`` (``u = (1 - B)^d x``, ``E`` under ``N^-1``).
@@ -287,7 +288,7 @@ def evaluate(
     grad[p] = 0.5 * (r_n - fit.omega_n / sn2)
     grad[p + 1] = 0.5 * (r_e - fit.omega_e / se2)
     if p:
-        grad[:p] = _phi_gradient_terms(c, fit.x, v, p, d, big_s) / se2
+        grad[:p] = phi_gradient_terms(c, fit.x, v, p, d, big_s) / se2
     if prior is not None and z_top is not None:
         u0 = prior.d_mat @ fit.x[:m]
         moment = prior.d_mat @ z_top @ prior.d_mat.T + np.outer(u0, u0)

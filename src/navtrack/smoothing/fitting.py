@@ -18,9 +18,11 @@ import numpy as np
 
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
 from navtrack.smoothing._banded import single_threaded_blas
+from navtrack.smoothing.alternation import estimate_alternating
 from navtrack.smoothing.config import AriConfig
 from navtrack.smoothing.estimation import (
     Estimate,
+    Estimator,
     estimate_exact_likelihood,
     min_observations,
     starting_values,
@@ -134,8 +136,11 @@ def _fit_fixed(
     if starts is None:
         starts = starting_values(yc, p, d, cfg.n_starts)
     # the estimator stage: any ``navtrack.smoothing.estimation.Estimator`` fits here
+    estimator: Estimator = (
+        estimate_alternating if cfg.estimator == "paper" else estimate_exact_likelihood
+    )
     try:
-        outcome = estimate_exact_likelihood(problem, cfg, starts, robust=robust)
+        outcome = estimator(problem, cfg, starts, robust=robust)
         if outcome.estimate is None:
             return bad_result(y, AriStatus.SINGULAR, outcome.message, p, d)
         return _finish(y, offset, observed, outcome.problem, outcome.estimate, outcome.n_iter, cfg)
@@ -349,7 +354,8 @@ def _select_and_fit(y_arr: FloatArray, cfg: AriConfig) -> AriResult:
     for p, d in candidates:
         if (p, d) not in found:
             continue
-        ll = _conditional_loglike(found[(p, d)], big_m, cfg.initial)
+        initial = "conditional" if cfg.estimator == "paper" else cfg.initial
+        ll = _conditional_loglike(found[(p, d)], big_m, initial)
         if not np.isfinite(ll):
             continue
         k = p + 2

@@ -11,6 +11,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -23,6 +24,8 @@ from navtrack.experiments.ari.real import (
     real_data_rows,
     solution_series,
     spp_comparison,
+    strip_rows,
+    table2_rows,
 )
 from navtrack.experiments.ari.sarimax import sarimax_comparisons
 from navtrack.experiments.ari.synthetic import (
@@ -70,8 +73,15 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
             "real": rows,
             "real_skipped": skipped,
             "spp_comparison": spp_comparison(rows),
+            "table2": table2_rows(rows),
+            "strips": strip_rows(sources, fits),
             "sarimax": sarimax_comparisons(context.rng, params.cases, sources, fits),
         }
+        if importlib.util.find_spec("statsmodels") is None:
+            results["sarimax_skipped"] = (
+                "statsmodels is not installed: the SARIMAX cross-check was skipped "
+                "(pip install statsmodels, or the 'test' extra)"
+            )
         return ExtraResult(results, (sources, fits))
 
     def tables(self, results: dict[str, Any]) -> str:

@@ -11,6 +11,7 @@ every column; :func:`spp_comparison` puts navtrack's and RTKLIB's rows of a run 
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -23,9 +24,12 @@ from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray
 from navtrack.errors import FileFormatError
 from navtrack.smoothing.ari import AriConfig, AriResult, fit_ari, regularize_time
+from navtrack.smoothing.identifiability import identifiability_warnings, sigma_bounds
 
 __all__ = [
+    "EULER_AMPLIFICATION",
     "SPP_RUNS",
+    "STRIP_EPOCHS",
     "RealSeries",
     "SppRun",
     "broad_series",
@@ -35,7 +39,16 @@ __all__ = [
     "solution_series",
     "spp_comparison",
     "spp_series",
+    "strip_rows",
+    "table2_rows",
 ]
+
+#: Euler increments (|d yaw| + |d roll|) above this multiple of the rotation angle between two
+#: samples are Euler-angle artefacts (model errors), not motion.
+EULER_AMPLIFICATION = 3.0
+
+#: Epochs per strip of :func:`strip_rows`, by unit of the series.
+STRIP_EPOCHS = {"m": 130, "deg": 400}
 
 
 @dataclass(frozen=True, slots=True)
@@ -98,7 +111,24 @@ def broad_series(path: Path, *, decimate: int = 1) -> RealSeries:
         cols[name] = np.degrees(a)
     dt = decimate / rate
     t_s = np.arange(n, dtype=np.float64) * dt
-    return RealSeries(f"BROAD {path.stem}", t_s, cols, "deg", dt)
+    # Euler-angle artefacts: near gimbal lock (|pitch| -> 90 deg) a rotation moves yaw and roll
+    # by up to 1/cos(pitch) times its angle, with opposite-sign jumps — outside the ARI model of
+    # a smooth angle. An increment whose |d yaw| + |d roll| exceeds EULER_AMPLIFICATION times
+    # the rotation angle between the two samples marks both its epochs as model errors.
+    step = np.full(n, np.nan)
+    seen = np.flatnonzero(ok)
+    step[seen[1:]] = np.degrees((rot[1:] * rot[:-1].inv()).magnitude())
+    euler_step = np.full(n, np.nan)
+    euler_step[1:] = np.abs(np.diff(cols["yaw_deg"])) + np.abs(np.diff(cols["roll_deg"]))
+    amplified = euler_step > EULER_AMPLIFICATION * np.maximum(step, 1e-6)
+    artefact = amplified | np.concatenate([amplified[1:], [False]])
+    meta = {
+        "euler_artefact_epochs": int(np.count_nonzero(artefact)),
+        "max_pitch_deg": float(np.nanmax(np.abs(cols["pitch_deg"]))),
+        "rotation_deg_per_sample_p99": float(np.nanpercentile(step, 99)),
+        "model_error": {"yaw_deg": artefact, "roll_deg": artefact},
+    }
+    return RealSeries(f"BROAD {path.stem}", t_s, cols, "deg", dt, meta=meta)
 
 
 def pyins_series(path: Path) -> RealSeries:
@@ -157,9 +187,30 @@ def _table_series(
     enu[ok] = geodesy.ecef_to_enu(xyz[ok], ref)
     t_grid, enu_grid, inserted = regularize_time(t, enu)
     cols = {name: enu_grid[:, k] for k, name in enumerate(("e_m", "n_m", "u_m"))}
-    return RealSeries(
-        source, t_grid, cols, "m", float(np.median(np.diff(t))), inserted, dict(meta or {})
-    )
+    info = dict(meta or {})
+    sd = _single_epoch_sd(df)
+    if sd is not None:
+        # paper Table 2: the accuracy of the single epochs from their least-squares adjustment
+        info["ls_sd_rms_m"] = {
+            name: float(np.sqrt(np.nanmean(sd[ok, k] ** 2)))
+            for k, name in enumerate(("e_m", "n_m", "u_m"))
+        }
+    return RealSeries(source, t_grid, cols, "m", float(np.median(np.diff(t))), inserted, info)
+
+
+def _single_epoch_sd(df: Any) -> FloatArray | None:
+    """Formal standard deviations ``(n, 3)`` (m) of each epoch's solution in east, north, up:
+    a solution table's ``sd_e_m sd_n_m sd_u_m``, or an RTKLIB ``.pos`` frame's ECEF
+    ``sdx..sdzx`` rotated to the local frame (:func:`navtrack.io.rtklib.to_solution_frame`);
+    ``None`` when the table carries neither."""
+    cols = ["sd_e_m", "sd_n_m", "sd_u_m"]
+    if not set(cols) <= set(df.columns) and {"sdx_m", "lat_deg"} <= set(df.columns):
+        from navtrack.io.rtklib import to_solution_frame
+
+        df = to_solution_frame(df)
+    if not set(cols) <= set(df.columns):
+        return None
+    return np.asarray(df[cols].to_numpy(dtype=float))
 
 
 @dataclass(frozen=True, slots=True)
@@ -248,44 +299,89 @@ def spp_series(gnss: Path, run: SppRun) -> RealSeries:
         "spp_seconds": elapsed,
     }
     cols = solution_frame(result)
-    df = pd.DataFrame({k: cols[k] for k in ("t_gps_s", "x_m", "y_m", "z_m", "status")})
+    keep = ("t_gps_s", "x_m", "y_m", "z_m", "status", "sd_e_m", "sd_n_m", "sd_u_m")
+    df = pd.DataFrame({k: cols[k] for k in keep})
     return _table_series(f"navtrack {run.name}", df, meta)
 
 
 def real_data_rows(
     sources: Sequence[RealSeries], config: AriConfig | None = None
 ) -> tuple[list[dict[str, Any]], dict[tuple[str, str], AriResult]]:
-    """Fit every column of every source; one table row per column (paper Tables 1–5)."""
+    """Fit every column of every source; one table row per column (paper Tables 1–5).
+
+    Each column is fitted by the exact-likelihood estimator (order by BIC), then by the
+    paper's estimator at that order (``row["paper"]``); both with the Cramér–Rao bounds of
+    ``sigma_n``, ``sigma_e`` at their estimate
+    (:func:`navtrack.smoothing.identifiability.sigma_bounds`) and the identifiability
+    warnings. Flags at epochs the source marks as outside the model (``meta["model_error"]``:
+    Euler-angle artefacts of attitude near gimbal lock) are counted apart as
+    ``n_model_error``. The paper's estimator gets the series without its leading and trailing
+    missing epochs (its conditional model starts at an observation: a leading gap leaves the
+    first ``p + d`` states pinned only by decayed modes, a numerically singular system).
+    """
     cfg = AriConfig(min_d=1, select_n=10000) if config is None else config
     rows: list[dict[str, Any]] = []
     fits: dict[tuple[str, str], AriResult] = {}
     for src in sources:
+        model_error = src.meta.get("model_error", {})
         for col, values in src.columns.items():
             t0 = time.perf_counter()
             res = fit_ari(values, cfg)
             elapsed = time.perf_counter() - t0
             fits[(src.source, col)] = res
-            rows.append(
-                {
-                    "source": src.source,
-                    "column": col,
-                    "unit": src.unit,
-                    "dt_s": src.dt_s,
-                    "n": int(values.size),
-                    "n_missing": res.n_missing,
-                    "n_inserted": src.n_inserted,
-                    "status": str(res.status),
-                    "order": [res.p, res.d],
-                    "sigma_n": res.sigma_n,
-                    "sigma_e": res.sigma_e,
-                    "sigma_x": res.sigma_x_rms,
-                    "r": [float(v) for v in res.autocorr],
-                    "n_flagged": res.n_flagged,
-                    "seconds": elapsed,
-                    "meta": src.meta,
-                }
-            )
+            crb_n, crb_e = sigma_bounds(res)
+            mask = np.asarray(model_error.get(col, np.zeros(values.size, dtype=bool)))
+            row: dict[str, Any] = {
+                "source": src.source,
+                "column": col,
+                "unit": src.unit,
+                "dt_s": src.dt_s,
+                "n": int(values.size),
+                "n_missing": res.n_missing,
+                "n_inserted": src.n_inserted,
+                "status": str(res.status),
+                "order": [res.p, res.d],
+                "sigma_n": res.sigma_n,
+                "sigma_e": res.sigma_e,
+                "sigma_x": res.sigma_x_rms,
+                "r": [float(v) for v in res.autocorr],
+                "crb_sigma_n": crb_n,
+                "crb_sigma_e": crb_e,
+                "warnings": identifiability_warnings(res, crb_n, crb_e),
+                "n_flagged": res.n_flagged,
+                "n_model_error": int(np.count_nonzero(res.gross_error & mask)),
+                "seconds": elapsed,
+                "meta": {k: v for k, v in src.meta.items() if k != "model_error"},
+                "paper": None,
+            }
+            if res.estimated:
+                row["paper"] = _paper_fit(values, res.p, res.d, cfg)
+            rows.append(row)
     return rows, fits
+
+
+def _paper_fit(values: FloatArray, p: int, d: int, cfg: AriConfig) -> dict[str, Any]:
+    """The paper's estimator on one real column at the order ``(p, d)`` found by the exact one."""
+    seen = np.flatnonzero(np.isfinite(values))
+    t0 = time.perf_counter()
+    res = fit_ari(
+        values[seen[0] : seen[-1] + 1], dataclasses.replace(cfg, order=(p, d), estimator="paper")
+    )
+    elapsed = time.perf_counter() - t0
+    crb_n, crb_e = sigma_bounds(res, conditional=True)
+    return {
+        "status": str(res.status),
+        "sigma_n": res.sigma_n,
+        "sigma_e": res.sigma_e,
+        "sigma_x": res.sigma_x_rms,
+        "r": [float(v) for v in res.autocorr],
+        "crb_sigma_n": crb_n,
+        "crb_sigma_e": crb_e,
+        "n_flagged": res.n_flagged,
+        "n_iter": res.n_iter,
+        "seconds": elapsed,
+        "trimmed_epochs": int(values.size - (seen[-1] + 1 - seen[0])),
+    }
 
 
 def default_real_sources(
@@ -316,6 +412,7 @@ def default_real_sources(
         if path.exists():
             src = solution_series(path)
             meta = {
+                **src.meta,
                 "solver": "RTKLIB 2.4.3 b34",
                 "run": run.name,
                 "kinematic": run.kinematic,
@@ -343,6 +440,73 @@ def default_real_sources(
             except (ValueError, FileFormatError) as exc:  # unreadable file, nothing solved
                 skipped.append(f"navtrack SPP {run.name}: {exc}")
     return sources, skipped
+
+
+def table2_rows(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Paper Table 2 on the GNSS series: ARI ``sigma_n`` (both estimators) beside the RMS of
+    the single-epoch least-squares standard deviations of the same coordinate."""
+    out = []
+    for row in rows:
+        ls = (row.get("meta") or {}).get("ls_sd_rms_m")
+        if not ls or row["column"] not in ls:
+            continue
+        paper = row.get("paper") or {}
+        out.append(
+            {
+                "source": row["source"],
+                "column": row["column"],
+                "sigma_n": row["sigma_n"],
+                "paper_sigma_n": paper.get("sigma_n"),
+                "ls_sd_rms": ls[row["column"]],
+                "ratio": row["sigma_n"] / ls[row["column"]] if ls[row["column"]] > 0 else None,
+            }
+        )
+    return out
+
+
+def strip_rows(
+    sources: Sequence[RealSeries],
+    fits: dict[tuple[str, str], AriResult],
+    config: AriConfig | None = None,
+    max_strips: int = 6,
+) -> list[dict[str, Any]]:
+    """Paper Table 1: each series long enough cut into strips, one fit per strip, rms over
+    strips.
+
+    Strips are consecutive, of :data:`STRIP_EPOCHS` epochs (the paper's 130 GPS registrations;
+    400 for attitude, within the Shuttle's 120–800), at most ``max_strips`` from the start; a
+    strip more than 20 % missing is skipped. Each strip is fitted at the order found on the
+    whole series (robust weights, exact-likelihood estimator).
+    """
+    cfg = AriConfig() if config is None else config
+    out = []
+    for src in sources:
+        length = STRIP_EPOCHS.get(src.unit, 130)
+        for col, values in src.columns.items():
+            whole = fits.get((src.source, col))
+            if whole is None or not whole.estimated or values.size < 2 * length:
+                continue
+            sigmas: list[float] = []
+            for k in range(min(max_strips, values.size // length)):
+                part = values[k * length : (k + 1) * length]
+                if np.count_nonzero(np.isnan(part)) > 0.2 * length:
+                    continue
+                res = fit_ari(part, dataclasses.replace(cfg, order=(whole.p, whole.d)))
+                if res.estimated:
+                    sigmas.append(res.sigma_n)
+            if sigmas:
+                out.append(
+                    {
+                        "source": src.source,
+                        "column": col,
+                        "order": [whole.p, whole.d],
+                        "strip_epochs": length,
+                        "sigma_n_strips": sigmas,
+                        "rms_sigma_n": float(np.sqrt(np.mean(np.square(sigmas)))),
+                        "whole_sigma_n": whole.sigma_n,
+                    }
+                )
+    return out
 
 
 _COMPARED = ("n", "n_missing", "order", "sigma_n", "sigma_e", "sigma_x", "r", "n_flagged", "status")
