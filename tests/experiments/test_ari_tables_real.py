@@ -58,7 +58,9 @@ def test_euler_artefacts_marked_only_near_gimbal_lock(tmp_path: Path) -> None:
     )
     quat = rot.as_quat()[:, [3, 0, 1, 2]]  # scalar first, as BROAD
     path = tmp_path / "lock.mat"
-    scipy_io.savemat(path, {"opt_quat": quat, "sampling_rate": 100.0})
+    trial = {"opt_quat": quat, "sampling_rate": 100.0}
+    trial |= {"imu_gyr": np.zeros((t.size, 3)), "movement": np.ones(t.size)}  # BROAD's keys
+    scipy_io.savemat(path, trial)
     src = broad_series(path)
     mask = src.meta["model_error"]["yaw_deg"]
     pitch = np.abs(src.columns["pitch_deg"])

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import itertools
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -147,8 +147,9 @@ def write_reproduction_figures(
     cases: Sequence[Any],
     sources: Sequence[Any],
     fits: Mapping[tuple[str, str], AriResult],
-) -> list[Path]:
-    """Figures of ``navtrack reproduce ari``: estimates, recall, one series per real source.
+) -> Iterator[Path]:
+    """Figures of ``navtrack reproduce ari``: estimates, recall, one series per real source;
+    yields each path once its file is on disk.
 
     Parameters
     ----------
@@ -160,7 +161,6 @@ def write_reproduction_figures(
     fits : mapping
         ``(source, column) -> AriResult`` of the real series.
     """
-    written: list[Path] = []
     ratios: dict[str, tuple[list[float], list[float]]] = {}
     detections: dict[str, tuple[list[float], list[bool]]] = {}
     for case in cases:
@@ -173,19 +173,14 @@ def write_reproduction_figures(
             [h for r in recs for h in r["detected"]],
         )
     if ratios:
-        written.append(
-            save_figure(estimates_figure(ratios), out_dir / "synthetic_sigma_ratios.png")
-        )
-        written.append(save_figure(recall_figure(detections), out_dir / "gross_error_recall.png"))
+        yield save_figure(estimates_figure(ratios), out_dir / "synthetic_sigma_ratios.png")
+        yield save_figure(recall_figure(detections), out_dir / "gross_error_recall.png")
     for src in sources:
         col = next(iter(src.columns))
         res = fits.get((src.source, col))
         if res is None or not res.estimated:
             continue
         name = _slug(f"real_{src.source}_{col}") + ".png"
-        written.append(
-            save_figure(
-                series_figure(src.t_s, res, f"{src.source} {col}", src.unit), out_dir / name
-            )
+        yield save_figure(
+            series_figure(src.t_s, res, f"{src.source} {col}", src.unit), out_dir / name
         )
-    return written

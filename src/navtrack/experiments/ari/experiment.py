@@ -12,7 +12,7 @@
 from __future__ import annotations
 
 import importlib.util
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -68,7 +68,7 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
         if params.real_data:
             sources, skipped = default_real_sources(context.shared_data())
         sources += [solution_series(Path(path)) for path in context.inputs]
-        rows, fits = real_data_rows(sources)
+        rows, fits = real_data_rows(sources, track=context.track)
         results = {
             "real": rows,
             "real_skipped": skipped,
@@ -89,11 +89,11 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
 
     def figures(
         self, outcome: Outcome[AriExperimentParams, _RunResult], out_dir: Path
-    ) -> list[Path]:
+    ) -> Iterator[Path]:
         from navtrack.plots import ari as ari_plots
 
         sources, fits = outcome.artifacts
-        return ari_plots.write_reproduction_figures(
+        yield from ari_plots.write_reproduction_figures(
             out_dir, outcome.runs, outcome.params.cases, sources, fits
         )
 

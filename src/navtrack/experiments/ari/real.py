@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -305,7 +305,10 @@ def spp_series(gnss: Path, run: SppRun) -> RealSeries:
 
 
 def real_data_rows(
-    sources: Sequence[RealSeries], config: AriConfig | None = None
+    sources: Sequence[RealSeries],
+    config: AriConfig | None = None,
+    *,
+    track: Callable[[Sequence[RealSeries], str], Iterable[RealSeries]] | None = None,
 ) -> tuple[list[dict[str, Any]], dict[tuple[str, str], AriResult]]:
     """Fit every column of every source; one table row per column (paper Tables 1–5).
 
@@ -318,11 +321,13 @@ def real_data_rows(
     ``n_model_error``. The paper's estimator gets the series without its leading and trailing
     missing epochs (its conditional model starts at an observation: a leading gap leaves the
     first ``p + d`` states pinned only by decayed modes, a numerically singular system).
+    ``track(sources, desc)`` wraps the loop over the sources, e.g. in a progress bar
+    (:meth:`~navtrack.experiments.contract.ExperimentContext.track`).
     """
     cfg = AriConfig(min_d=1, select_n=10000) if config is None else config
     rows: list[dict[str, Any]] = []
     fits: dict[tuple[str, str], AriResult] = {}
-    for src in sources:
+    for src in sources if track is None else track(sources, "real series"):
         model_error = src.meta.get("model_error", {})
         for col, values in src.columns.items():
             t0 = time.perf_counter()
