@@ -95,7 +95,7 @@ from navtrack.tracking.jpda import (
     jpda_step,
 )
 from navtrack.tracking.kalman import gain_update, innovation_gain, kf_predict
-from navtrack.tracking.models import LinearMotion, MeasurementModel
+from navtrack.tracking.models import LinearMotion, MeasurementModel, wrap_angle
 
 __all__ = [
     "ALGORITHMS",
@@ -103,14 +103,21 @@ __all__ = [
     "FusionConfig",
     "FusionResult",
     "MultiScans",
+    "equivalent_measurement",
     "fusion_step",
     "run_fusion",
     "tuple_marginals",
 ]
 
-Algorithm = Literal["sequential", "parallel", "sdcmsjpda", "sd_gnn"]
+Algorithm = Literal["sequential", "parallel", "sdcmsjpda", "sd_gnn", "sdcmsjpda_weighted"]
 #: The fusion trackers, in the order of the reproduction's tables.
-ALGORITHMS: tuple[Algorithm, ...] = ("sequential", "parallel", "sdcmsjpda", "sd_gnn")
+ALGORITHMS: tuple[Algorithm, ...] = (
+    "sequential",
+    "parallel",
+    "sdcmsjpda",
+    "sd_gnn",
+    "sdcmsjpda_weighted",
+)
 
 
 @dataclass(frozen=True, slots=True)
@@ -355,7 +362,7 @@ def _stacked(
     return x, P
 
 
-def _paper_update(
+def _weighted_update(
     xp: FloatArray,
     Pp: FloatArray,
     L: IntArray,
@@ -364,7 +371,7 @@ def _paper_update(
     config: FusionConfig,
     t: int,
 ) -> tuple[FloatArray, FloatArray]:
-    """SD-CMSJPDA update of target ``t``, eqs. 24-32 as read in the module notes."""
+    """``sdcmsjpda_weighted`` update of target ``t``: eqs. 24-32 read literally (module notes)."""
     S_ = L.shape[1]
     sidx = np.arange(S_)
     e = np.where(L > 0, np.exp(terms.log_w[sidx, t, L]), 0.0)  # P_D N / λ per sensor
@@ -379,6 +386,101 @@ def _paper_update(
     xj, Pj = gain_update(xp[t], Pp[t], terms.innovation[s_used, t, j_used], K, terms.S[s_used, t])
     weights = np.r_[float(beta @ (b / den)), a[s_used, j_used]]  # eq. 28 first
     return _mixture(weights, np.vstack([xp[t][None], xj]), np.concatenate([Pp[t][None], Pj]))
+
+
+def equivalent_measurement(
+    z: FloatArray,
+    hit: BoolArray,
+    sensors: Sequence[MeasurementModel],
+    x_ref: FloatArray,
+    iterations: int = 10,
+    tol: float = 1e-3,
+) -> tuple[IntArray, FloatArray, FloatArray]:
+    """Equivalent measurements of S-tuples: ML fit of the observed state components.
+
+    The observed components ``o`` are the state components the sensors' Jacobians depend on
+    at ``x_ref`` (the position for range-bearing). For each tuple, Gauss-Newton from
+    ``x_ref[o]`` minimises ``Σ_{s: hit} |z_s - h_s(x)|²_{R_s⁻¹}`` over ``x[o]`` (the other
+    components held at ``x_ref``); the result ``ζ`` with covariance
+    ``R_eq = (Σ_s J_sᵀ R_s⁻¹ J_s)⁻¹`` (``J_s`` the Jacobian columns ``o`` at the last iterate,
+    within ``tol`` of ``ζ``) is the
+    maximum-likelihood fusion of the tuple's measurements, a linear measurement
+    ``ζ = E x + w``, ``w ~ N(0, R_eq)``, ``E`` the rows ``o`` of the identity.
+
+    Parameters
+    ----------
+    z : (n_L, S, m) the tuples' measurements (any value where not ``hit``)
+    hit : (n_L, S) bool, sensor ``s`` has a measurement in the tuple; every tuple needs one
+    sensors : S measurement models, each with ``dim_z >= len(o)`` (alone it fixes ``x[o]``)
+    x_ref : (n,) linearisation point and start (the prediction)
+    iterations : int, most Gauss-Newton steps; tol : float, stop when every step is below it
+        (units of ``x[o]``, m for a position)
+
+    Returns
+    -------
+    o : (n_o,) int, the observed components
+    zeta : (n_L, n_o) equivalent measurements
+    R_eq : (n_L, n_o, n_o) their covariances
+    """
+    x_ref = np.asarray(x_ref, dtype=float)
+    J0 = np.concatenate([model.jacobian(x_ref) for model in sensors])
+    o = np.flatnonzero(np.any(J0 != 0.0, axis=0))
+    if any(model.dim_z < o.size for model in sensors):
+        raise ValueError(
+            f"equivalent_measurement: every sensor must observe the {o.size} state "
+            f"components {o.tolist()} alone (dim_z >= {o.size})"
+        )
+    if not np.all(np.any(hit, axis=1)):
+        raise ValueError("equivalent_measurement: every tuple needs one measurement")
+    Rinv = [np.linalg.inv(model.R) for model in sensors]
+    x = np.broadcast_to(x_ref, (len(z), x_ref.size)).copy()
+    for _ in range(iterations):
+        info = np.zeros((len(z), o.size, o.size))
+        grad = np.zeros((len(z), o.size))
+        for s, model in enumerate(sensors):
+            J = model.jacobian(x)[..., o]  # (n_L, m, n_o)
+            r = z[:, s] - model.h(x)
+            am = model.angle_mask
+            r[:, am] = wrap_angle(r[:, am])
+            JtRi = np.swapaxes(J, -1, -2) @ Rinv[s]
+            w = hit[:, s, None, None]
+            info += np.where(w, JtRi @ J, 0.0)
+            grad += np.where(w[..., 0], (JtRi @ r[..., None])[..., 0], 0.0)
+        step = np.linalg.solve(info, grad[..., None])[..., 0]
+        x[:, o] += step
+        if np.all(np.abs(step) < tol):
+            break
+    R_eq = np.asarray(np.linalg.inv(info), dtype=float)
+    return o.astype(np.int64), x[:, o], 0.5 * (R_eq + np.swapaxes(R_eq, -1, -2))
+
+
+def _equivalent_update(
+    xp: FloatArray,
+    Pp: FloatArray,
+    L: IntArray,
+    z: Sequence[FloatArray],
+    sensors: Sequence[MeasurementModel],
+    t: int,
+) -> tuple[FloatArray, FloatArray]:
+    """``sdcmsjpda`` tuple updates of target ``t``: the EKF update with each tuple's equivalent
+    measurement (:func:`equivalent_measurement`); the empty tuple keeps the prediction."""
+    n_L, S_ = L.shape
+    x = np.broadcast_to(xp[t], (n_L, xp.shape[-1])).copy()
+    P = np.broadcast_to(Pp[t], (n_L, *Pp.shape[-2:])).copy()
+    hit = L > 0
+    some = np.any(hit, axis=1)
+    if not np.any(some):
+        return x, P
+    m = sensors[0].dim_z
+    Z = np.zeros((int(some.sum()), S_, m))
+    for s, zs in enumerate(z):
+        h = hit[some, s]
+        Z[h, s] = zs[L[some, s][h] - 1]
+    o, zeta, R_eq = equivalent_measurement(Z, hit[some], sensors, xp[t])
+    E = np.eye(xp.shape[-1])[o]
+    S, K = innovation_gain(Pp[t], E, R_eq)
+    x[some], P[some] = gain_update(x[some], P[some], zeta - xp[t, o], K, S)
+    return x, P
 
 
 def _sd_gnn_tuples(terms: _SensorTerms, max_tuples: int) -> tuple[IntArray, bool]:
@@ -429,7 +531,7 @@ def fusion_step(
 
     Parameters
     ----------
-    algorithm : {"sequential", "parallel", "sdcmsjpda", "sd_gnn"}
+    algorithm : {"sequential", "parallel", "sdcmsjpda", "sd_gnn", "sdcmsjpda_weighted"}
     x : (T, n), P : (T, n, n) estimates at the previous fusion time
     z : S arrays ``(M_s, m)``, the sensors' measurements, in processing order
     dt : S time steps, s: ``dt[0]`` from the previous fusion time to sensor 0's scan,
@@ -466,11 +568,14 @@ def fusion_step(
         L, beta = tuple_marginals(terms.beta, t)
         if len(L) > config.max_tuples:
             raise ValueError(f"target {t}: {len(L)} gated S-tuples > max_tuples")
+        if algorithm == "sdcmsjpda_weighted":
+            xn[t], Pn[t] = _weighted_update(xp, Pp, L, beta, terms, config, t)
+            continue
         if algorithm == "parallel":
             xs, Ps = _stacked(xp, Pp, L, terms, sensors, t)
-            xn[t], Pn[t] = _mixture(beta, xs, Ps)
         else:
-            xn[t], Pn[t] = _paper_update(xp, Pp, L, beta, terms, config, t)
+            xs, Ps = _equivalent_update(xp, Pp, L, z, sensors, t)
+        xn[t], Pn[t] = _mixture(beta, xs, Ps)
     return xn, Pn, False
 
 
@@ -499,7 +604,7 @@ def run_fusion(
 
     Parameters
     ----------
-    algorithm : {"sequential", "parallel", "sdcmsjpda", "sd_gnn"}
+    algorithm : {"sequential", "parallel", "sdcmsjpda", "sd_gnn", "sdcmsjpda_weighted"}
     scans : MultiScans with ``S = len(sensors)`` sensors
     sensors : measurement models, one per sensor
     motion : linear motion model (the Kalman prediction)
