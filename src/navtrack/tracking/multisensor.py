@@ -19,8 +19,15 @@ All four trackers predict with :func:`~navtrack.tracking.kalman.kf_predict`, gat
     mixture over tuples.
 ``sdcmsjpda`` (Zhang, Xiong & He 2005, eqs. 3-32)
     The same S-tuples and joint events (the S-D assignment rule: each measurement from one
-    source, one measurement per sensor per tuple), with the paper's equivalent measurement of a
-    tuple (eqs. 24-28) and covariance (eqs. 31-32); see Notes.
+    source, one measurement per sensor per tuple); each tuple becomes ONE equivalent
+    measurement, the maximum-likelihood fusion of its detections
+    (:func:`equivalent_measurement`: Gauss-Newton fit of the position to the tuple's
+    range-bearing measurements, covariance ``(Σ_s J_sᵀ R_s⁻¹ J_s)⁻¹``), and JPDA runs on the
+    equivalent measurements: the tuple's update is the (linear) Kalman update with it; see
+    Notes.
+``sdcmsjpda_weighted``
+    The literal reading of eqs. 24-28 as extracted: the tuple estimate is a weighted sum of
+    single-sensor corrections (PDA weights within the tuple); see Notes.
 ``sd_gnn``
     Hard decision: the best joint event, found as an (S+1)-D assignment of (targets, sensor
     1..S lists) by :func:`~navtrack.tracking.assignment.sd_assign`, then the stacked update.
@@ -40,22 +47,35 @@ Reading of the paper's equations (the extraction lost their layout):
   exclusion constraints act within each sensor, the joint events are products of the
   per-sensor joint events, so ``β_t(L) = Π_s β_t^s(l_s)`` exactly, with ``β^s`` the
   single-sensor JPDA marginals (:func:`~navtrack.tracking.jpda.jpda_marginals`); the tests
-  check this against the explicit enumeration of eq. 21. ``parallel`` and ``sdcmsjpda`` share
-  these marginals and differ in the tuple update only.
-* eqs. 24-28: the equivalent estimate of tuple ``L`` is ``X_L = X̂ + Σ_s w_s K_s ν_s`` with the
-  per-sensor gains ``K_s`` and innovations ``ν_s``, and
-  ``w_s = e_s / (b + Σ_{i∈L} e_i)``, ``β_0(L) = b / (b + Σ e_i)`` (eqs. 25, 28). eq. 26 is the
-  PDA weight of Bar-Shalom & Fortmann (6.4); with sensors of different ``S_s`` we use its
-  parametric form scaled by ``λ |2πS|^{1/2} / P_D``: ``e_s = P_D,s N(ν_s; 0, S_s) / λ_s`` and
-  ``b = 1 - P̄_D P_G`` (``P̄_D`` the mean detection probability of the sensors). So within a
-  tuple the sensors' corrections are PDA-style alternatives, and
-* eqs. 31-32 are the covariance of that mixture: ``P_L = β_0 P̂ + Σ_s w_s (P̂ - K_s S_s K_sᵀ)``
-  plus the spread of the corrections ``K_s ν_s`` about their mean, then the spread of the
-  ``X_L`` over the tuples. Flattened, the posterior is the moment-matched mixture of the
-  prediction (weight ``Σ_L β_L β_0(L)``) and the single-sensor updates ``(s, j)`` (weight
-  ``Σ_{L: l_s = j} β_L w_s(L)``). This reading does not fuse the sensors of a tuple into one
-  update (each component uses one sensor's gain), so it gains less from three sensors than the
-  stacked update of ``parallel``; the reproduction shows the effect.
+  check this against the explicit enumeration of eq. 21. ``parallel``, ``sdcmsjpda`` and
+  ``sdcmsjpda_weighted`` share these marginals and differ in the tuple update only.
+* The equivalent measurement (``sdcmsjpda``). The abstract ("all of measurements in each
+  assignment are combined into one equivalent measurement ... the joint association probability
+  of each equivalent measurement is calculated"), section 3.1 ("a equivalent measurement is
+  gained in each combination ... the multisensor joint association probability of each
+  equivalent measurement is calculated according to its joint likelihood value") and eqs. 3-16
+  (events, validation matrix and likelihood are all written over equivalent measurements
+  ``Z_L``; eq. 14's volume uses "the combined innovation covariance of all sensors") say that a
+  tuple is one fused measurement. Its likelihood is eqs. 15-16, the product of the members'
+  ``N(z_s; ẑ_s, S_s)`` at the prediction (the marginals above); its update is the Kalman update
+  with the tuple's ML position ``ζ`` and covariance ``R_eq`` (measurement matrix the rows of the
+  identity at the position). In a linear-Gaussian model this is exactly the stacked update of
+  ``parallel``; with range-bearing sensors the two agree to the linearisation order (the fused
+  update is linearised at the tuple's ML position, the stacked EKF at the prediction; the tests
+  check both facts). A single detection's equivalent measurement is its polar-to-Cartesian
+  conversion with the linearised covariance.
+* The weighted reading (``sdcmsjpda_weighted``). Eqs. 24-28 as extracted write the tuple
+  estimate as ``X_L = X̂ + Σ_s w_s K_s ν_s`` with the single-sensor gains ``K_s`` and
+  innovations ``ν_s``, ``w_s = e_s / (b + Σ_{i∈L} e_i)``, ``β_0(L) = b / (b + Σ e_i)`` (eqs.
+  25, 28); eq. 26 is the PDA weight of Bar-Shalom & Fortmann (6.4), used in its parametric form
+  scaled by ``λ |2πS|^{1/2} / P_D``: ``e_s = P_D,s N(ν_s; 0, S_s) / λ_s`` and
+  ``b = 1 - P̄_D P_G`` (``P̄_D`` the mean detection probability of the sensors). Eqs. 31-32
+  are the covariance of that mixture: ``P_L = β_0 P̂ + Σ_s w_s (P̂ - K_s S_s K_sᵀ)`` plus the
+  spread of the corrections about their mean, then the spread of the ``X_L`` over the tuples.
+  The weights sum to at most 1, so a tuple of three detections moves the state about as far as
+  one sensor would: the sensors of a tuple are alternatives, not fused, which contradicts the
+  prose above; it is kept because it is what the equations' symbols say, and the reproduction
+  reports both.
 * The S-D GNN tuple cost is ``-log`` of the same event weight; it is additive over sensors, so
   the (S+1)-D problem is the union of per-sensor 2-D problems and the relaxation closes its gap
   (the tests check the solution against per-sensor :func:`~navtrack.tracking.assignment.assign2d`).
@@ -412,7 +432,7 @@ def equivalent_measurement(
     z : (n_L, S, m) the tuples' measurements (any value where not ``hit``)
     hit : (n_L, S) bool, sensor ``s`` has a measurement in the tuple; every tuple needs one
     sensors : S measurement models, each with ``dim_z >= len(o)`` (alone it fixes ``x[o]``)
-    x_ref : (n,) linearisation point and start (the prediction)
+    x_ref : (n,) or (n_L, n) linearisation point and start (the prediction)
     iterations : int, most Gauss-Newton steps; tol : float, stop when every step is below it
         (units of ``x[o]``, m for a position)
 
@@ -423,7 +443,8 @@ def equivalent_measurement(
     R_eq : (n_L, n_o, n_o) their covariances
     """
     x_ref = np.asarray(x_ref, dtype=float)
-    J0 = np.concatenate([model.jacobian(x_ref) for model in sensors])
+    n = x_ref.shape[-1]
+    J0 = np.concatenate([model.jacobian(x_ref).reshape(-1, n) for model in sensors])
     o = np.flatnonzero(np.any(J0 != 0.0, axis=0))
     if any(model.dim_z < o.size for model in sensors):
         raise ValueError(
@@ -433,7 +454,7 @@ def equivalent_measurement(
     if not np.all(np.any(hit, axis=1)):
         raise ValueError("equivalent_measurement: every tuple needs one measurement")
     Rinv = [np.linalg.inv(model.R) for model in sensors]
-    x = np.broadcast_to(x_ref, (len(z), x_ref.size)).copy()
+    x = np.broadcast_to(x_ref, (len(z), n)).copy()
     for _ in range(iterations):
         info = np.zeros((len(z), o.size, o.size))
         grad = np.zeros((len(z), o.size))
@@ -454,33 +475,32 @@ def equivalent_measurement(
     return o.astype(np.int64), x[:, o], 0.5 * (R_eq + np.swapaxes(R_eq, -1, -2))
 
 
-def _equivalent_update(
+def _equivalent_updates(
     xp: FloatArray,
     Pp: FloatArray,
-    L: IntArray,
+    Ls: Sequence[IntArray],
     z: Sequence[FloatArray],
     sensors: Sequence[MeasurementModel],
-    t: int,
-) -> tuple[FloatArray, FloatArray]:
-    """``sdcmsjpda`` tuple updates of target ``t``: the EKF update with each tuple's equivalent
-    measurement (:func:`equivalent_measurement`); the empty tuple keeps the prediction."""
-    n_L, S_ = L.shape
-    x = np.broadcast_to(xp[t], (n_L, xp.shape[-1])).copy()
-    P = np.broadcast_to(Pp[t], (n_L, *Pp.shape[-2:])).copy()
+) -> list[tuple[FloatArray, FloatArray]]:
+    """``sdcmsjpda`` tuple updates: for each target ``t`` and tuple of ``Ls[t] (n_L, S)``, the
+    Kalman update with the tuple's equivalent measurement (:func:`equivalent_measurement`,
+    all targets' tuples in one batch); the empty tuple keeps the prediction."""
+    tix = np.repeat(np.arange(len(Ls)), [len(L) for L in Ls])
+    L = np.concatenate(Ls)
+    x, P = xp[tix], Pp[tix]
     hit = L > 0
     some = np.any(hit, axis=1)
-    if not np.any(some):
-        return x, P
-    m = sensors[0].dim_z
-    Z = np.zeros((int(some.sum()), S_, m))
-    for s, zs in enumerate(z):
-        h = hit[some, s]
-        Z[h, s] = zs[L[some, s][h] - 1]
-    o, zeta, R_eq = equivalent_measurement(Z, hit[some], sensors, xp[t])
-    E = np.eye(xp.shape[-1])[o]
-    S, K = innovation_gain(Pp[t], E, R_eq)
-    x[some], P[some] = gain_update(x[some], P[some], zeta - xp[t, o], K, S)
-    return x, P
+    if np.any(some):
+        Z = np.zeros((int(some.sum()), L.shape[1], sensors[0].dim_z))
+        for s, zs in enumerate(z):
+            h = hit[some, s]
+            Z[h, s] = zs[L[some, s][h] - 1]
+        o, zeta, R_eq = equivalent_measurement(Z, hit[some], sensors, x[some])
+        E = np.eye(xp.shape[-1])[o]
+        S, K = innovation_gain(P[some], E, R_eq)
+        x[some], P[some] = gain_update(x[some], P[some], zeta - x[some][:, o], K, S)
+    cut = np.cumsum([len(L) for L in Ls])[:-1]
+    return list(zip(np.split(x, cut), np.split(P, cut), strict=True))
 
 
 def _sd_gnn_tuples(terms: _SensorTerms, max_tuples: int) -> tuple[IntArray, bool]:
@@ -564,17 +584,17 @@ def fusion_step(
             xs, Ps = _stacked(xp, Pp, Lbest[t : t + 1], terms, sensors, t)
             xn[t], Pn[t] = xs[0], Ps[0]
         return xn, Pn, gap
-    for t in range(T):
-        L, beta = tuple_marginals(terms.beta, t)
+    tuples = [tuple_marginals(terms.beta, t) for t in range(T)]
+    for t, (L, _) in enumerate(tuples):
         if len(L) > config.max_tuples:
             raise ValueError(f"target {t}: {len(L)} gated S-tuples > max_tuples")
+    if algorithm == "sdcmsjpda":
+        fused = _equivalent_updates(xp, Pp, [L for L, _ in tuples], z, sensors)
+    for t, (L, beta) in enumerate(tuples):
         if algorithm == "sdcmsjpda_weighted":
             xn[t], Pn[t] = _weighted_update(xp, Pp, L, beta, terms, config, t)
             continue
-        if algorithm == "parallel":
-            xs, Ps = _stacked(xp, Pp, L, terms, sensors, t)
-        else:
-            xs, Ps = _equivalent_update(xp, Pp, L, z, sensors, t)
+        xs, Ps = _stacked(xp, Pp, L, terms, sensors, t) if algorithm == "parallel" else fused[t]
         xn[t], Pn[t] = _mixture(beta, xs, Ps)
     return xn, Pn, False
 
