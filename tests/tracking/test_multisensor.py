@@ -80,20 +80,20 @@ def test_one_target_no_clutter_pd1_matches_centralised_ekf() -> None:
         np.testing.assert_allclose(r.x[:, 0], np.array(xs_c), rtol=1e-9, atol=1e-6)
     r = run_fusion("sequential", scans, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
     np.testing.assert_allclose(r.x[:, 0], np.array(xs_q), rtol=1e-9, atol=1e-6)
-    # SD-CMSJPDA (eqs. 24-32) mixes single-sensor corrections: consistent, not identical
-    r = run_fusion("sdcmsjpda", scans, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
+    # the literal eqs. 24-32 mix single-sensor corrections: consistent, not identical
+    r = run_fusion("sdcmsjpda_weighted", scans, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
     err = np.hypot(*(r.x[:, 0, [0, 2]] - truth[:, [0, 2]]).T)
     err_c = np.hypot(*(np.array(xs_c)[:, [0, 2]] - truth[:, [0, 2]]).T)
     assert np.sqrt(np.mean(err[5:] ** 2)) < 3.0 * np.sqrt(np.mean(err_c[5:] ** 2))
     assert np.all(np.linalg.eigvalsh(r.P[:, 0]) > 0)
 
 
-def test_single_sensor_sdcmsjpda_is_the_ekf() -> None:
+def test_single_sensor_sdcmsjpda_weighted_is_the_ekf() -> None:
     """With one sensor, b = 0 (P_D = P_G = 1) and one measurement, eq. 24 is the EKF update."""
     _, scans = _one_target_scans(5, np.random.default_rng(1))
     one = MultiScans(scans.z[:, 2:], scans.valid[:, 2:], scans.t_s[:, 2:])
     cfg = FusionConfig((1.0,), (1e-9,), gate_probability=1.0)
-    r = run_fusion("sdcmsjpda", one, SENSORS[2:], MOTION, X0, P0, cfg, t0_s=0.0)
+    r = run_fusion("sdcmsjpda_weighted", one, SENSORS[2:], MOTION, X0, P0, cfg, t0_s=0.0)
     x, P = X0[0], P0[0]
     for k in range(5):
         dt = 0.0 if k == 0 else 1.0
@@ -102,6 +102,89 @@ def test_single_sensor_sdcmsjpda_is_the_ekf() -> None:
         x, P = u.x, u.P
     np.testing.assert_allclose(r.x[-1, 0], x, rtol=1e-9)
     np.testing.assert_allclose(r.P[-1, 0], P, rtol=1e-7)
+
+
+def _scaled(eps: float):
+    """The three sensors with noise standard deviations scaled by ``eps``."""
+    return [RangeBearing(eps**2 * m.R, m.sensor_xy) for m in SENSORS]
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_equivalent_measurement_update_is_the_centralised_ekf_to_first_order(seed: int) -> None:
+    """One target, no clutter, P_D = 1, three sensors: ``sdcmsjpda`` (EKF update with the
+    tuple's ML equivalent measurement) equals the stacked EKF (``parallel``, tested above
+    against the oracle) up to the linearisation error, which shrinks with the noise."""
+    cfg = FusionConfig((1.0,) * 3, (1e-9,) * 3, gate_probability=1.0)
+    dev, rel = [], []
+    for eps in (1.0, 0.1):
+        sens = _scaled(eps)
+        rng = np.random.default_rng(seed)
+        K = 20
+        truth = np.stack([MOTION.f(X0[0], float(k)) for k in range(K)])
+        z = np.stack(
+            [
+                m.h(truth) + eps * rng.standard_normal((K, 2)) * np.sqrt(np.diag(SENSORS[s].R))
+                for s, m in enumerate(sens)
+            ],
+            axis=1,
+        )[:, :, None]
+        t = np.repeat(np.arange(K, dtype=float)[:, None], 3, axis=1)
+        scans = MultiScans(z, np.ones((K, 3, 1), bool), t)
+        P0s = eps**2 * P0
+        a = run_fusion("parallel", scans, sens, MOTION, X0, P0s, cfg, t0_s=0.0)
+        b = run_fusion("sdcmsjpda", scans, sens, MOTION, X0, P0s, cfg, t0_s=0.0)
+        sd = np.sqrt(a.P[:, 0, [0, 2], [0, 2]])
+        dev.append(np.max(np.abs(b.x[:, 0, [0, 2]] - a.x[:, 0, [0, 2]]) / sd))
+        dP = np.abs(b.P[:, 0] - a.P[:, 0]).max(axis=(1, 2))
+        rel.append(np.max(dP / np.abs(a.P[:, 0]).max(axis=(1, 2))))
+    assert dev[0] < 0.1  # well inside one posterior standard deviation
+    assert dev[1] < 0.2 * dev[0]  # second-order term: ~eps times smaller
+    assert rel[0] < 0.05
+    assert rel[1] < 0.2 * rel[0]
+
+
+def test_equivalent_measurement_is_the_ml_fusion_of_the_tuple() -> None:
+    """Noise-free tuples give the true position exactly and the Cramér-Rao covariance
+    ``(Σ J_sᵀ R_s⁻¹ J_s)⁻¹`` at it; with noise the fit equals an independent ML solver
+    (``scipy.optimize.least_squares``) on the whitened residuals."""
+    from scipy.optimize import least_squares
+
+    from navtrack.tracking.multisensor import equivalent_measurement
+
+    rng = np.random.default_rng(4)
+    pos = np.array([[-20000.0, 30000.0], [15000.0, 25000.0], [-3000.0, 40000.0]])
+    x_true = np.zeros((3, 4))
+    x_true[:, [0, 2]] = pos
+    hit = np.array([[True, True, True], [True, False, True], [False, True, False]])
+    z = np.stack([m.h(x_true) for m in SENSORS], axis=1)  # (3 tuples, 3 sensors, 2)
+    x_ref = x_true[0] + np.array([800.0, 0.0, -600.0, 0.0])
+    o, zeta, R_eq = equivalent_measurement(z, hit, SENSORS, x_ref)
+    assert o.tolist() == [0, 2]
+    np.testing.assert_allclose(zeta, pos, atol=1e-6)
+    for i in range(3):
+        info = sum(
+            m.jacobian(x_true[i])[:, o].T @ np.linalg.inv(m.R) @ m.jacobian(x_true[i])[:, o]
+            for s, m in enumerate(SENSORS)
+            if hit[i, s]
+        )
+        np.testing.assert_allclose(R_eq[i], np.linalg.inv(info), rtol=1e-6)
+    noisy = z + rng.standard_normal(z.shape) * np.array([200.0, 0.02])
+    _, zeta_n, _ = equivalent_measurement(noisy, hit, SENSORS, x_ref)
+    for i in range(3):
+        used = [s for s in range(3) if hit[i, s]]
+
+        def resid(p, i=i, used=used):
+            x = np.zeros(4)
+            x[[0, 2]] = p
+            out = []
+            for s in used:
+                d = noisy[i, s] - SENSORS[s].h(x)
+                d[1] = wrap_angle(d[1])
+                out.append(np.linalg.cholesky(np.linalg.inv(SENSORS[s].R)).T @ d)
+            return np.concatenate(out)
+
+        ref = least_squares(resid, x_ref[[0, 2]], xtol=1e-12, ftol=1e-12).x
+        np.testing.assert_allclose(zeta_n[i], ref, atol=1e-3)
 
 
 def _two_target_terms(seed: int):

@@ -19,8 +19,15 @@ All four trackers predict with :func:`~navtrack.tracking.kalman.kf_predict`, gat
     mixture over tuples.
 ``sdcmsjpda`` (Zhang, Xiong & He 2005, eqs. 3-32)
     The same S-tuples and joint events (the S-D assignment rule: each measurement from one
-    source, one measurement per sensor per tuple), with the paper's equivalent measurement of a
-    tuple (eqs. 24-28) and covariance (eqs. 31-32); see Notes.
+    source, one measurement per sensor per tuple); each tuple becomes ONE equivalent
+    measurement, the maximum-likelihood fusion of its detections
+    (:func:`equivalent_measurement`: Gauss-Newton fit of the position to the tuple's
+    range-bearing measurements, covariance ``(Σ_s J_sᵀ R_s⁻¹ J_s)⁻¹``), and JPDA runs on the
+    equivalent measurements: the tuple's update is the (linear) Kalman update with it; see
+    Notes.
+``sdcmsjpda_weighted``
+    The literal reading of eqs. 24-28 as extracted: the tuple estimate is a weighted sum of
+    single-sensor corrections (PDA weights within the tuple); see Notes.
 ``sd_gnn``
     Hard decision: the best joint event, found as an (S+1)-D assignment of (targets, sensor
     1..S lists) by :func:`~navtrack.tracking.assignment.sd_assign`, then the stacked update.
@@ -40,22 +47,35 @@ Reading of the paper's equations (the extraction lost their layout):
   exclusion constraints act within each sensor, the joint events are products of the
   per-sensor joint events, so ``β_t(L) = Π_s β_t^s(l_s)`` exactly, with ``β^s`` the
   single-sensor JPDA marginals (:func:`~navtrack.tracking.jpda.jpda_marginals`); the tests
-  check this against the explicit enumeration of eq. 21. ``parallel`` and ``sdcmsjpda`` share
-  these marginals and differ in the tuple update only.
-* eqs. 24-28: the equivalent estimate of tuple ``L`` is ``X_L = X̂ + Σ_s w_s K_s ν_s`` with the
-  per-sensor gains ``K_s`` and innovations ``ν_s``, and
-  ``w_s = e_s / (b + Σ_{i∈L} e_i)``, ``β_0(L) = b / (b + Σ e_i)`` (eqs. 25, 28). eq. 26 is the
-  PDA weight of Bar-Shalom & Fortmann (6.4); with sensors of different ``S_s`` we use its
-  parametric form scaled by ``λ |2πS|^{1/2} / P_D``: ``e_s = P_D,s N(ν_s; 0, S_s) / λ_s`` and
-  ``b = 1 - P̄_D P_G`` (``P̄_D`` the mean detection probability of the sensors). So within a
-  tuple the sensors' corrections are PDA-style alternatives, and
-* eqs. 31-32 are the covariance of that mixture: ``P_L = β_0 P̂ + Σ_s w_s (P̂ - K_s S_s K_sᵀ)``
-  plus the spread of the corrections ``K_s ν_s`` about their mean, then the spread of the
-  ``X_L`` over the tuples. Flattened, the posterior is the moment-matched mixture of the
-  prediction (weight ``Σ_L β_L β_0(L)``) and the single-sensor updates ``(s, j)`` (weight
-  ``Σ_{L: l_s = j} β_L w_s(L)``). This reading does not fuse the sensors of a tuple into one
-  update (each component uses one sensor's gain), so it gains less from three sensors than the
-  stacked update of ``parallel``; the reproduction shows the effect.
+  check this against the explicit enumeration of eq. 21. ``parallel``, ``sdcmsjpda`` and
+  ``sdcmsjpda_weighted`` share these marginals and differ in the tuple update only.
+* The equivalent measurement (``sdcmsjpda``). The abstract ("all of measurements in each
+  assignment are combined into one equivalent measurement ... the joint association probability
+  of each equivalent measurement is calculated"), section 3.1 ("a equivalent measurement is
+  gained in each combination ... the multisensor joint association probability of each
+  equivalent measurement is calculated according to its joint likelihood value") and eqs. 3-16
+  (events, validation matrix and likelihood are all written over equivalent measurements
+  ``Z_L``; eq. 14's volume uses "the combined innovation covariance of all sensors") say that a
+  tuple is one fused measurement. Its likelihood is eqs. 15-16, the product of the members'
+  ``N(z_s; ẑ_s, S_s)`` at the prediction (the marginals above); its update is the Kalman update
+  with the tuple's ML position ``ζ`` and covariance ``R_eq`` (measurement matrix the rows of the
+  identity at the position). In a linear-Gaussian model this is exactly the stacked update of
+  ``parallel``; with range-bearing sensors the two agree to the linearisation order (the fused
+  update is linearised at the tuple's ML position, the stacked EKF at the prediction; the tests
+  check both facts). A single detection's equivalent measurement is its polar-to-Cartesian
+  conversion with the linearised covariance.
+* The weighted reading (``sdcmsjpda_weighted``). Eqs. 24-28 as extracted write the tuple
+  estimate as ``X_L = X̂ + Σ_s w_s K_s ν_s`` with the single-sensor gains ``K_s`` and
+  innovations ``ν_s``, ``w_s = e_s / (b + Σ_{i∈L} e_i)``, ``β_0(L) = b / (b + Σ e_i)`` (eqs.
+  25, 28); eq. 26 is the PDA weight of Bar-Shalom & Fortmann (6.4), used in its parametric form
+  scaled by ``λ |2πS|^{1/2} / P_D``: ``e_s = P_D,s N(ν_s; 0, S_s) / λ_s`` and
+  ``b = 1 - P̄_D P_G`` (``P̄_D`` the mean detection probability of the sensors). Eqs. 31-32
+  are the covariance of that mixture: ``P_L = β_0 P̂ + Σ_s w_s (P̂ - K_s S_s K_sᵀ)`` plus the
+  spread of the corrections about their mean, then the spread of the ``X_L`` over the tuples.
+  The weights sum to at most 1, so a tuple of three detections moves the state about as far as
+  one sensor would: the sensors of a tuple are alternatives, not fused, which contradicts the
+  prose above; it is kept because it is what the equations' symbols say, and the reproduction
+  reports both.
 * The S-D GNN tuple cost is ``-log`` of the same event weight; it is additive over sensors, so
   the (S+1)-D problem is the union of per-sensor 2-D problems and the relaxation closes its gap
   (the tests check the solution against per-sensor :func:`~navtrack.tracking.assignment.assign2d`).
@@ -95,7 +115,7 @@ from navtrack.tracking.jpda import (
     jpda_step,
 )
 from navtrack.tracking.kalman import gain_update, innovation_gain, kf_predict
-from navtrack.tracking.models import LinearMotion, MeasurementModel
+from navtrack.tracking.models import LinearMotion, MeasurementModel, wrap_angle
 
 __all__ = [
     "ALGORITHMS",
@@ -103,14 +123,21 @@ __all__ = [
     "FusionConfig",
     "FusionResult",
     "MultiScans",
+    "equivalent_measurement",
     "fusion_step",
     "run_fusion",
     "tuple_marginals",
 ]
 
-Algorithm = Literal["sequential", "parallel", "sdcmsjpda", "sd_gnn"]
+Algorithm = Literal["sequential", "parallel", "sdcmsjpda", "sd_gnn", "sdcmsjpda_weighted"]
 #: The fusion trackers, in the order of the reproduction's tables.
-ALGORITHMS: tuple[Algorithm, ...] = ("sequential", "parallel", "sdcmsjpda", "sd_gnn")
+ALGORITHMS: tuple[Algorithm, ...] = (
+    "sequential",
+    "parallel",
+    "sdcmsjpda",
+    "sd_gnn",
+    "sdcmsjpda_weighted",
+)
 
 
 @dataclass(frozen=True, slots=True)
@@ -355,7 +382,7 @@ def _stacked(
     return x, P
 
 
-def _paper_update(
+def _weighted_update(
     xp: FloatArray,
     Pp: FloatArray,
     L: IntArray,
@@ -364,7 +391,7 @@ def _paper_update(
     config: FusionConfig,
     t: int,
 ) -> tuple[FloatArray, FloatArray]:
-    """SD-CMSJPDA update of target ``t``, eqs. 24-32 as read in the module notes."""
+    """``sdcmsjpda_weighted`` update of target ``t``: eqs. 24-32 read literally (module notes)."""
     S_ = L.shape[1]
     sidx = np.arange(S_)
     e = np.where(L > 0, np.exp(terms.log_w[sidx, t, L]), 0.0)  # P_D N / λ per sensor
@@ -379,6 +406,101 @@ def _paper_update(
     xj, Pj = gain_update(xp[t], Pp[t], terms.innovation[s_used, t, j_used], K, terms.S[s_used, t])
     weights = np.r_[float(beta @ (b / den)), a[s_used, j_used]]  # eq. 28 first
     return _mixture(weights, np.vstack([xp[t][None], xj]), np.concatenate([Pp[t][None], Pj]))
+
+
+def equivalent_measurement(
+    z: FloatArray,
+    hit: BoolArray,
+    sensors: Sequence[MeasurementModel],
+    x_ref: FloatArray,
+    iterations: int = 10,
+    tol: float = 1e-3,
+) -> tuple[IntArray, FloatArray, FloatArray]:
+    """Equivalent measurements of S-tuples: ML fit of the observed state components.
+
+    The observed components ``o`` are the state components the sensors' Jacobians depend on
+    at ``x_ref`` (the position for range-bearing). For each tuple, Gauss-Newton from
+    ``x_ref[o]`` minimises ``Σ_{s: hit} |z_s - h_s(x)|²_{R_s⁻¹}`` over ``x[o]`` (the other
+    components held at ``x_ref``); the result ``ζ`` with covariance
+    ``R_eq = (Σ_s J_sᵀ R_s⁻¹ J_s)⁻¹`` (``J_s`` the Jacobian columns ``o`` at the last iterate,
+    within ``tol`` of ``ζ``) is the
+    maximum-likelihood fusion of the tuple's measurements, a linear measurement
+    ``ζ = E x + w``, ``w ~ N(0, R_eq)``, ``E`` the rows ``o`` of the identity.
+
+    Parameters
+    ----------
+    z : (n_L, S, m) the tuples' measurements (any value where not ``hit``)
+    hit : (n_L, S) bool, sensor ``s`` has a measurement in the tuple; every tuple needs one
+    sensors : S measurement models, each with ``dim_z >= len(o)`` (alone it fixes ``x[o]``)
+    x_ref : (n,) or (n_L, n) linearisation point and start (the prediction)
+    iterations : int, most Gauss-Newton steps; tol : float, stop when every step is below it
+        (units of ``x[o]``, m for a position)
+
+    Returns
+    -------
+    o : (n_o,) int, the observed components
+    zeta : (n_L, n_o) equivalent measurements
+    R_eq : (n_L, n_o, n_o) their covariances
+    """
+    x_ref = np.asarray(x_ref, dtype=float)
+    n = x_ref.shape[-1]
+    J0 = np.concatenate([model.jacobian(x_ref).reshape(-1, n) for model in sensors])
+    o = np.flatnonzero(np.any(J0 != 0.0, axis=0))
+    if any(model.dim_z < o.size for model in sensors):
+        raise ValueError(
+            f"equivalent_measurement: every sensor must observe the {o.size} state "
+            f"components {o.tolist()} alone (dim_z >= {o.size})"
+        )
+    if not np.all(np.any(hit, axis=1)):
+        raise ValueError("equivalent_measurement: every tuple needs one measurement")
+    Rinv = [np.linalg.inv(model.R) for model in sensors]
+    x = np.broadcast_to(x_ref, (len(z), n)).copy()
+    for _ in range(iterations):
+        info = np.zeros((len(z), o.size, o.size))
+        grad = np.zeros((len(z), o.size))
+        for s, model in enumerate(sensors):
+            J = model.jacobian(x)[..., o]  # (n_L, m, n_o)
+            r = z[:, s] - model.h(x)
+            am = model.angle_mask
+            r[:, am] = wrap_angle(r[:, am])
+            JtRi = np.swapaxes(J, -1, -2) @ Rinv[s]
+            w = hit[:, s, None, None]
+            info += np.where(w, JtRi @ J, 0.0)
+            grad += np.where(w[..., 0], (JtRi @ r[..., None])[..., 0], 0.0)
+        step = np.linalg.solve(info, grad[..., None])[..., 0]
+        x[:, o] += step
+        if np.all(np.abs(step) < tol):
+            break
+    R_eq = np.asarray(np.linalg.inv(info), dtype=float)
+    return o.astype(np.int64), x[:, o], 0.5 * (R_eq + np.swapaxes(R_eq, -1, -2))
+
+
+def _equivalent_updates(
+    xp: FloatArray,
+    Pp: FloatArray,
+    Ls: Sequence[IntArray],
+    z: Sequence[FloatArray],
+    sensors: Sequence[MeasurementModel],
+) -> list[tuple[FloatArray, FloatArray]]:
+    """``sdcmsjpda`` tuple updates: for each target ``t`` and tuple of ``Ls[t] (n_L, S)``, the
+    Kalman update with the tuple's equivalent measurement (:func:`equivalent_measurement`,
+    all targets' tuples in one batch); the empty tuple keeps the prediction."""
+    tix = np.repeat(np.arange(len(Ls)), [len(L) for L in Ls])
+    L = np.concatenate(Ls)
+    x, P = xp[tix], Pp[tix]
+    hit = L > 0
+    some = np.any(hit, axis=1)
+    if np.any(some):
+        Z = np.zeros((int(some.sum()), L.shape[1], sensors[0].dim_z))
+        for s, zs in enumerate(z):
+            h = hit[some, s]
+            Z[h, s] = zs[L[some, s][h] - 1]
+        o, zeta, R_eq = equivalent_measurement(Z, hit[some], sensors, x[some])
+        E = np.eye(xp.shape[-1])[o]
+        S, K = innovation_gain(P[some], E, R_eq)
+        x[some], P[some] = gain_update(x[some], P[some], zeta - x[some][:, o], K, S)
+    cut = np.cumsum([len(L) for L in Ls])[:-1]
+    return list(zip(np.split(x, cut), np.split(P, cut), strict=True))
 
 
 def _sd_gnn_tuples(terms: _SensorTerms, max_tuples: int) -> tuple[IntArray, bool]:
@@ -429,7 +551,7 @@ def fusion_step(
 
     Parameters
     ----------
-    algorithm : {"sequential", "parallel", "sdcmsjpda", "sd_gnn"}
+    algorithm : {"sequential", "parallel", "sdcmsjpda", "sd_gnn", "sdcmsjpda_weighted"}
     x : (T, n), P : (T, n, n) estimates at the previous fusion time
     z : S arrays ``(M_s, m)``, the sensors' measurements, in processing order
     dt : S time steps, s: ``dt[0]`` from the previous fusion time to sensor 0's scan,
@@ -462,15 +584,18 @@ def fusion_step(
             xs, Ps = _stacked(xp, Pp, Lbest[t : t + 1], terms, sensors, t)
             xn[t], Pn[t] = xs[0], Ps[0]
         return xn, Pn, gap
-    for t in range(T):
-        L, beta = tuple_marginals(terms.beta, t)
+    tuples = [tuple_marginals(terms.beta, t) for t in range(T)]
+    for t, (L, _) in enumerate(tuples):
         if len(L) > config.max_tuples:
             raise ValueError(f"target {t}: {len(L)} gated S-tuples > max_tuples")
-        if algorithm == "parallel":
-            xs, Ps = _stacked(xp, Pp, L, terms, sensors, t)
-            xn[t], Pn[t] = _mixture(beta, xs, Ps)
-        else:
-            xn[t], Pn[t] = _paper_update(xp, Pp, L, beta, terms, config, t)
+    if algorithm == "sdcmsjpda":
+        fused = _equivalent_updates(xp, Pp, [L for L, _ in tuples], z, sensors)
+    for t, (L, beta) in enumerate(tuples):
+        if algorithm == "sdcmsjpda_weighted":
+            xn[t], Pn[t] = _weighted_update(xp, Pp, L, beta, terms, config, t)
+            continue
+        xs, Ps = _stacked(xp, Pp, L, terms, sensors, t) if algorithm == "parallel" else fused[t]
+        xn[t], Pn[t] = _mixture(beta, xs, Ps)
     return xn, Pn, False
 
 
@@ -499,7 +624,7 @@ def run_fusion(
 
     Parameters
     ----------
-    algorithm : {"sequential", "parallel", "sdcmsjpda", "sd_gnn"}
+    algorithm : {"sequential", "parallel", "sdcmsjpda", "sd_gnn", "sdcmsjpda_weighted"}
     scans : MultiScans with ``S = len(sensors)`` sensors
     sensors : measurement models, one per sensor
     motion : linear motion model (the Kalman prediction)

@@ -159,7 +159,7 @@ def summary_lines(results: dict[str, Any]) -> list[str]:
 
 
 class SdCmsjpdaExperiment(Experiment[SdCmsjpdaParams, _RunResult]):
-    """Paper 3: three range-bearing sensors, two crossing targets, four fusion trackers."""
+    """Paper 3: three range-bearing sensors, two crossing targets, five fusion trackers."""
 
     name = "sdcmsjpda"
     description = "Paper 3: SD-CMSJPDA vs sequential/parallel MSJPDA and S-D GNN (Zhang et al.)"
