@@ -66,21 +66,7 @@ def register(subparsers: Any) -> None:
         default="klobuchar",
         help="ionosphere: broadcast Klobuchar, dual-frequency iono-free, or none",
     )
-    ref = p.add_mutually_exclusive_group()
-    ref.add_argument(
-        "--ref",
-        nargs=3,
-        type=float,
-        metavar=("X", "Y", "Z"),
-        help="reference position, ECEF metres",
-    )
-    ref.add_argument(
-        "--ref-llh",
-        nargs=3,
-        type=float,
-        metavar=("LAT", "LON", "H"),
-        help="reference position, degrees and ellipsoidal metres",
-    )
+    add_reference_options(p)
     p.add_argument(
         "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
     )
@@ -140,8 +126,36 @@ def _print_raim_summary(result: SppResult) -> None:
         )
 
 
+def add_reference_options(p: argparse.ArgumentParser, *, trajectory: bool = False) -> None:
+    """``--ref X Y Z`` | ``--ref-llh LAT LON H`` (one of them), read by :func:`_reference`;
+    ``trajectory`` adds ``--ref-pos FILE``, an RTKLIB ``.pos`` file compared epoch by epoch."""
+    ref = p.add_mutually_exclusive_group()
+    ref.add_argument(
+        "--ref",
+        nargs=3,
+        type=float,
+        metavar=("X", "Y", "Z"),
+        help="reference position, ECEF metres",
+    )
+    ref.add_argument(
+        "--ref-llh",
+        nargs=3,
+        type=float,
+        metavar=("LAT", "LON", "H"),
+        help="reference position, degrees and ellipsoidal metres",
+    )
+    if trajectory:
+        ref.add_argument(
+            "--ref-pos",
+            type=Path,
+            metavar="FILE",
+            help="reference trajectory: an RTKLIB .pos file, compared epoch by epoch",
+        )
+
+
 def _reference(args: argparse.Namespace) -> tuple[float, float, float] | None:
     """The reference position in ECEF metres, refusing clearly implausible values."""
+    cmd = f"navtrack {getattr(args, 'command', None) or 'pos'}"
     if args.ref is not None:
         from navtrack.geodesy import check_near_surface
 
@@ -151,7 +165,7 @@ def _reference(args: argparse.Namespace) -> tuple[float, float, float] | None:
         except ValueError:
             r = math.sqrt(x * x + y * y + z * z)
             raise SystemExit(
-                f"navtrack pos: --ref {x:g} {y:g} {z:g} is {r:.4g} m from the earth's centre, not "
+                f"{cmd}: --ref {x:g} {y:g} {z:g} is {r:.4g} m from the earth's centre, not "
                 "a point near the surface: give ECEF metres (use --ref-llh for degrees)"
             ) from None
         return (x, y, z)
@@ -159,7 +173,7 @@ def _reference(args: argparse.Namespace) -> tuple[float, float, float] | None:
         lat, lon, h = args.ref_llh
         if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 360.0 and -1000.0 <= h <= 1.0e5):
             raise SystemExit(
-                f"navtrack pos: --ref-llh {lat:g} {lon:g} {h:g} is not latitude/longitude in "
+                f"{cmd}: --ref-llh {lat:g} {lon:g} {h:g} is not latitude/longitude in "
                 "degrees and height in metres (use --ref for ECEF metres)"
             )
         from navtrack.geodesy import geodetic_to_ecef

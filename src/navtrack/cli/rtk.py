@@ -22,6 +22,8 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from navtrack.cli.pos import add_reference_options
+
 if TYPE_CHECKING:
     from navtrack._typing import FloatArray
     from navtrack.gnss.relative import RtkResult
@@ -64,7 +66,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--partial", action="store_true", help="partial ambiguity fixing")
     p.add_argument("--float", action="store_true", help="no integer fixing (float solution)")
     p.add_argument("--sp3", type=Path, help="precise orbits/clocks (SP3) instead of broadcast")
-    _add_reference(p)
+    add_reference_options(p, trajectory=True)
     p.add_argument(
         "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
     )
@@ -86,31 +88,11 @@ def register(subparsers: Any) -> None:
     )
     q.add_argument("--systems", default="G", help="systems to use (default G)")
     q.add_argument("--elmask", type=float, default=15.0, metavar="DEG", help="elevation mask")
-    _add_reference(q)
+    add_reference_options(q, trajectory=True)
     q.add_argument(
         "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
     )
     q.set_defaults(func=run_ppp)
-
-
-def _add_reference(p: argparse.ArgumentParser) -> None:
-    ref = p.add_mutually_exclusive_group()
-    ref.add_argument(
-        "--ref", nargs=3, type=float, metavar=("X", "Y", "Z"), help="reference point, ECEF m"
-    )
-    ref.add_argument(
-        "--ref-llh",
-        nargs=3,
-        type=float,
-        metavar=("LAT", "LON", "H"),
-        help="reference point, degrees and ellipsoidal metres",
-    )
-    ref.add_argument(
-        "--ref-pos",
-        type=Path,
-        metavar="FILE",
-        help="reference trajectory: an RTKLIB .pos file, compared epoch by epoch",
-    )
 
 
 def _base_position(args: argparse.Namespace) -> tuple[FloatArray, str]:
