@@ -523,189 +523,430 @@ def _milp(
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class _Pairs:
-    """Tuples grouped by their (list 1, list 2) pair, sorted once per problem."""
+class _Prep:
+    """Index arrays of one problem, built once per solve; ``K`` tuples, ``G`` (list 1, list 2)
+    pairs ("groups") among them, ``L = Σ_{s >= 3} (n_s + 1)`` multipliers."""
 
-    order: IntArray  # tuple order, grouped by pair key
-    starts: IntArray  # group starts in ``order``
-    group: IntArray  # group number of each sorted tuple
-    key: IntArray  # pair key of each group: i1 * (n2 + 1) + i2
+    tuples: IntArray  # (K, S)
+    cost: FloatArray  # (K,)
+    sizes: IntArray  # (S,)
+    order: IntArray  # (K,) tuples sorted by group
+    starts: IntArray  # (G,) group starts in ``order``
+    group_sorted: IntArray  # (K,) group of each sorted tuple
+    group: IntArray  # (K,) group of each tuple
+    pair: IntArray  # (G, 2) the (i_1, i_2) of each group
+    cells: IntArray  # (G', 2) row, column of the groups other than (0, 0) in the 2-D matrix
+    cell_group: IntArray  # (G',) their group numbers
+    zero_group: int  # group of the pair (0, 0), -1 if none
+    free: IntArray  # tuples of the pair (0, 0)
+    uidx: IntArray  # (K, S - 2) multiplier of each tuple's index in lists 3..S
+    dummies: IntArray  # (S - 2,) positions of the dummies' multipliers (held at 0)
+    radix: IntArray  # (S,) mixed-radix weights of the tuple key Σ_s i_s radix_s
+    keys: IntArray  # (K,) sorted tuple keys
+    key_tuple: IntArray  # (K,) tuple of each sorted key
+    table: IntArray  # (Π (n_s + 1),) tuple of each key, -1 = none; empty when too large
+    singleton: IntArray  # (S, max n + 1) singleton tuple of each element, -1 for the dummy
+    singleton_cost: FloatArray  # (S, max n + 1) its cost, 0 for the dummy
+    split_cost: FloatArray  # (K,) cost of each tuple's elements as singletons
+    gainful: IntArray  # tuples cheaper than their elements as singletons
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
 
 
-def _pairs(problem: SdProblem) -> _Pairs:
-    t = problem.tuples
-    key = t[:, 0] * (problem.sizes[1] + 1) + t[:, 1]
-    order = np.argsort(key, kind="stable")
-    ks = key[order]
-    first = np.r_[True, ks[1:] != ks[:-1]] if len(ks) else np.zeros(0, bool)
+def _run_starts(k: IntArray) -> BoolArray:
+    """Where a run of equal values of the sorted ``k`` starts."""
+    first = np.ones(k.size, dtype=bool)
+    first[1:] = k[1:] != k[:-1]
+    return first
+
+
+def _prep(problem: SdProblem) -> _Prep:
+    t, n, c = problem.tuples, problem.sizes, problem.cost
+    K, S = t.shape
+    n1, n2 = int(n[0]), int(n[1])
+    pkey = t[:, 0] * (n2 + 1) + t[:, 1]
+    order = np.argsort(pkey, kind="stable")
+    ks = pkey[order]
+    first = _run_starts(ks)
     starts = np.flatnonzero(first)
-    return _Pairs(order, starts, np.cumsum(first) - 1, ks[starts])
+    group_sorted = np.cumsum(first) - 1
+    group = np.empty(K, dtype=np.int64)
+    group[order] = group_sorted
+    i1, i2 = np.divmod(ks[starts], n2 + 1)
+    real = (i1 > 0) | (i2 > 0)
+    rows = np.where(i1 > 0, i1 - 1, n1 + i2 - 1)
+    cols = np.where(i2 > 0, i2 - 1, n2 + i1 - 1)
+    zero = np.flatnonzero(~real)
+    off = np.r_[0, np.cumsum(n[2:] + 1)][:-1]
+    radix = np.r_[1, np.cumprod(n[:-1] + 1)]
+    key = t @ radix
+    korder = np.argsort(key)
+    span = int(np.prod(n + 1))
+    table = np.full(span if span <= _TABLE_MAX else 0, -1, dtype=np.int64)
+    if table.size:
+        table[key] = np.arange(K)
+    width = int(n.max()) + 1 if S else 1
+    singleton = np.full((S, width), -1, dtype=np.int64)
+    single = (t > 0).sum(axis=1) == 1
+    for s in range(S):
+        k = np.flatnonzero(single & (t[:, s] > 0))
+        singleton[s, t[k, s]] = k
+    singleton_cost = np.where(singleton >= 0, c[np.maximum(singleton, 0)], 0.0)
+    split_cost = singleton_cost[np.arange(S), t].sum(axis=1)
+    return _Prep(
+        t,
+        c,
+        n,
+        order,
+        starts,
+        group_sorted,
+        group,
+        np.column_stack([i1, i2]),
+        np.column_stack([rows[real], cols[real]]),
+        np.flatnonzero(real),
+        int(zero[0]) if zero.size else -1,
+        np.flatnonzero(pkey == 0),
+        t[:, 2:] + off,
+        off,
+        radix,
+        key[korder],
+        korder,
+        table,
+        singleton,
+        singleton_cost,
+        split_cost,
+        np.flatnonzero(c < split_cost),
+    )
 
 
-def _relaxed(
-    problem: SdProblem, pairs: _Pairs, u: list[FloatArray]
-) -> tuple[float, IntArray, IntArray]:
-    """Optimum of the relaxed problem for multipliers ``u`` of lists 3..S.
-
-    Returns ``(lower bound, selected tuples, chosen pair keys other than (0, 0))``.
-    """
+def _lsa(A: FloatArray) -> tuple[IntArray, IntArray]:
     from scipy.optimize import linear_sum_assignment
 
-    t = problem.tuples
-    n1, n2 = int(problem.sizes[0]), int(problem.sizes[1])
-    red = problem.cost.copy()
-    for s, us in enumerate(u, start=2):
-        red -= us[t[:, s]]
-    rs = red[pairs.order]
-    mins = np.minimum.reduceat(rs, pairs.starts)
-    pos = np.flatnonzero(rs <= mins[pairs.group])
-    first = pos[np.r_[True, pairs.group[pos[1:]] != pairs.group[pos[:-1]]]]
-    best = pairs.order[first]  # best tuple of each group
-    i1, i2 = np.divmod(pairs.key, n2 + 1)
-    # 2-D with dummies: rows = list-1 elements then list-2 "dummy rows", columns likewise
-    A = np.full((n1 + n2, n2 + n1), np.inf)
-    both = (i1 > 0) & (i2 > 0)
-    A[i1[both] - 1, i2[both] - 1] = mins[both]
-    only1 = (i1 > 0) & (i2 == 0)
-    A[i1[only1] - 1, n2 + i1[only1] - 1] = mins[only1]
-    only2 = (i1 == 0) & (i2 > 0)
-    A[n1 + i2[only2] - 1, i2[only2] - 1] = mins[only2]
-    A[n1:, n2:] = 0.0
-    rows, cols = linear_sum_assignment(A)
-    r1 = np.where(rows < n1, rows + 1, 0)
-    c2 = np.where(cols < n2, cols + 1, 0)
-    keys = r1 * (n2 + 1) + c2
-    chosen = np.sort(keys[keys > 0])
-    g = np.searchsorted(pairs.key, chosen)
-    sel = best[g]
-    lb = float(mins[g].sum()) + sum(float(us.sum()) for us in u)
-    if len(pairs.key) and pairs.key[0] == 0:  # free tuples of the (0, 0) pair
-        z = pairs.order[pairs.starts[0] : (pairs.starts[1] if len(pairs.starts) > 1 else None)]
-        neg = z[red[z] < 0]
-        sel = np.concatenate([sel, neg])
-        lb += float(red[neg].sum())
-    return lb, sel, chosen
+    if A.size == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    r, c = linear_sum_assignment(A)
+    return r.astype(np.int64), c.astype(np.int64)
 
 
-def _recover(
-    problem: SdProblem, chosen: IntArray, max_iter: int, tol: float, u: list[FloatArray]
-) -> IntArray:
-    """Feasible solution with the pairs ``chosen`` of lists 1-2 fixed (module notes).
+def _dual(prep: _Prep, u: FloatArray) -> tuple[float, IntArray, IntArray]:
+    """Optimum of the relaxed problem for the multipliers ``u`` (L,) of lists 3..S.
 
-    The recovery problem relaxes lists 4..S; its multipliers start from ``u[1:]``, the
-    outer problem's multipliers of the same lists.
+    Each pair's cost is the least reduced cost ``c - Σ_s u_s[i_s]`` of its tuples (one
+    ``minimum.reduceat`` over the tuples sorted by pair); the 2-D problem with dummies is one
+    ``linear_sum_assignment`` on the ``(n_1 + n_2) × (n_2 + n_1)`` augmented matrix.
+
+    Returns ``(lower bound, selected tuples, chosen groups other than (0, 0))``.
     """
-    t = problem.tuples
-    n2 = int(problem.sizes[1])
-    key = t[:, 0] * (n2 + 1) + t[:, 1]
-    pid = np.zeros(len(t), dtype=np.int64)  # merged index: 0 = pair (0, 0), p = chosen[p-1]
-    inpair = np.isin(key, chosen)
-    pid[inpair] = np.searchsorted(chosen, key[inpair]) + 1
-    keep = inpair | (key == 0)
-    rest = t[:, 2:]
-    single_cost = _singleton_costs(problem)
-    # the split option of pair p: its two singletons (one if the pair has a dummy)
-    ci1, ci2 = np.divmod(chosen, n2 + 1)
-    split = single_cost[0][ci1] + single_cost[1][ci2]
-    sub_t = np.column_stack([pid[keep], rest[keep]])
-    sub_c = problem.cost[keep]
-    origin = np.flatnonzero(keep)  # sub tuple -> original tuple, -1 - p for the split of p
-    is_plain = (sub_t[:, 1:] == 0).all(axis=1)
-    plain = dict(zip(sub_t[is_plain, 0].tolist(), np.flatnonzero(is_plain).tolist(), strict=True))
-    add_t, add_c, add_o = [], [], []
-    for p in range(1, len(chosen) + 1):
-        k = plain.get(p)
-        if k is None:
-            add_t.append(p)
-            add_c.append(split[p - 1])
-            add_o.append(-p)
-        elif split[p - 1] < sub_c[k]:  # splitting beats the pair's own plain tuple
-            sub_c[k] = split[p - 1]
-            origin[k] = -p
-    if add_t:
-        z = np.zeros((len(add_t), sub_t.shape[1] - 1), dtype=np.int64)
-        sub_t = np.concatenate([sub_t, np.column_stack([add_t, z])])
-        sub_c = np.concatenate([sub_c, add_c])
-        origin = np.concatenate([origin, add_o])
-    sub = _unchecked(np.r_[len(chosen), problem.sizes[2:]], sub_t, sub_c)
-    picked = _solve_2d(sub) if sub.n_lists == 2 else _lagrangian(sub, max_iter, tol, u[1:])[1]
-    out = []
-    for o in origin[picked].tolist():
-        if o >= 0:
-            out.append(o)
-        else:  # split pair: its singletons in the original problem
-            i1, i2 = int(ci1[-o - 1]), int(ci2[-o - 1])
-            out += [k for k in (_singleton(problem, 0, i1), _singleton(problem, 1, i2)) if k >= 0]
-    return np.array(out, dtype=np.int64)
+    n1, n2 = int(prep.sizes[0]), int(prep.sizes[1])
+    red = prep.cost - u[prep.uidx].sum(axis=1)
+    rs = red[prep.order]
+    mins = np.minimum.reduceat(rs, prep.starts)
+    pos = np.flatnonzero(rs <= mins[prep.group_sorted])
+    gp = prep.group_sorted[pos]
+    best = prep.order[pos[_run_starts(gp)]]  # least reduced cost per group
+    A = np.full((n1 + n2, n2 + n1), np.inf)
+    A[n1:, n2:] = 0.0
+    A[prep.cells[:, 0], prep.cells[:, 1]] = mins[prep.cell_group]
+    lookup = np.full(A.shape, -1, dtype=np.int64)
+    lookup[prep.cells[:, 0], prep.cells[:, 1]] = prep.cell_group
+    r, c = _lsa(A)
+    chosen = lookup[r, c]
+    chosen = np.sort(chosen[chosen >= 0])
+    sel = best[chosen]
+    lb = float(mins[chosen].sum() + u.sum())
+    neg = prep.free[red[prep.free] < 0]  # tuples of the pair (0, 0) are free in the relaxation
+    return lb + float(red[neg].sum()), np.concatenate([sel, neg]), chosen
+
+
+def _recover(prep: _Prep, chosen: IntArray, u: FloatArray) -> IntArray:
+    """Feasible solution from the pairs ``chosen`` of lists 1-2 (Deb et al. 1997, section IV).
+
+    The pairs are fixed as partial tuples ("prefixes"); list ``k = 3..S`` is then joined to
+    them by one 2-D assignment with dummies whose costs are the least reduced cost over the
+    tuples extending (prefix, ``i_k``), reduced by the multipliers of lists ``k + 1..S`` only
+    (true costs at ``k = S``). A prefix may also be dissolved into its singletons, so every
+    step is feasible.
+    """
+    t, cost, n = prep.tuples, prep.cost, prep.sizes
+    S = t.shape[1]
+    P = chosen.size
+    prefix = np.zeros((P, S), dtype=np.int64)
+    prefix[:, :2] = prep.pair[chosen]
+    lut = np.full(len(prep.starts), -1, dtype=np.int64)
+    lut[chosen] = np.arange(1, P + 1)
+    if prep.zero_group >= 0:
+        lut[prep.zero_group] = 0  # prefix 0: nothing fixed yet
+    pid = lut[prep.group]
+    out: list[IntArray] = []
+    lists = np.arange(S)
+    for k in range(2, S):
+        idx = np.flatnonzero(pid >= 0)
+        red = cost[idx] - u[prep.uidx[idx, k - 1 :]].sum(axis=1)
+        nk = int(n[k])
+        key = pid[idx] * (nk + 1) + t[idx, k]
+        o = np.lexsort((red, key))
+        ko = key[o]
+        head = o[_run_starts(ko)]  # least reduced cost per (prefix, i_k)
+        M = np.full((P + 1) * (nk + 1), np.inf)
+        M[key[head]] = red[head]
+        arg = np.full((P + 1) * (nk + 1), -1, dtype=np.int64)
+        arg[key[head]] = idx[head]
+        M = M.reshape(P + 1, nk + 1)
+        dissolve = prep.singleton_cost[lists, prefix].sum(axis=1)
+        use_dis = dissolve < M[1:, 0]
+        A = np.full((P + nk, nk + P), np.inf)
+        A[:P, :nk] = M[1:, 1:]
+        A[np.arange(P), nk + np.arange(P)] = np.minimum(M[1:, 0], dissolve)
+        A[P + np.arange(nk), np.arange(nk)] = M[0, 1:]
+        A[P:, nk:] = 0.0
+        r, c = _lsa(A)
+        pr, pc = r[r < P], c[r < P]
+        gone = pr[(pc >= nk) & use_dis[pr]]
+        stay = pr[(pc >= nk) & ~use_dis[pr]]
+        new_i = c[(r >= P) & (c < nk)]  # list-k elements starting a prefix of their own
+        ent_r = np.concatenate([pr[pc < nk] + 1, stay + 1, np.zeros(new_i.size, dtype=np.int64)])
+        ent_c = np.concatenate([pc[pc < nk] + 1, np.zeros(stay.size, dtype=np.int64), new_i + 1])
+        dis = prefix[gone]
+        out.append(prep.singleton[np.nonzero(dis)[1], dis[dis > 0]])
+        if k == S - 1:
+            out.append(arg.reshape(P + 1, nk + 1)[ent_r, ent_c])
+            break
+        prefix = np.vstack([np.zeros((1, S), dtype=np.int64), prefix])[ent_r]
+        prefix[:, k] = ent_c
+        P = ent_r.size
+        new = np.full(M.shape, -1, dtype=np.int64)
+        new[0, 0] = 0
+        new[ent_r, ent_c] = np.arange(1, P + 1)
+        pid = np.full(len(t), -1, dtype=np.int64)
+        pid[idx] = new.ravel()[key]
+    return np.concatenate(out)
+
+
+_TABLE_MAX = 1 << 21  # largest key space looked up in a dense table (16 MB)
+
+
+def _lookup(prep: _Prep, key: IntArray) -> IntArray:
+    """Tuple with each key (any shape), -1 where there is none."""
+    if prep.table.size:
+        return prep.table[key]
+    pos = np.minimum(np.searchsorted(prep.keys, key), max(len(prep.keys) - 1, 0))
+    if len(prep.keys) == 0:
+        return np.full(np.shape(key), -1, dtype=np.int64)
+    return np.where(prep.keys[pos] == key, prep.key_tuple[pos], -1)
+
+
+def _improve(prep: _Prep, sel: IntArray, max_rounds: int = 50) -> IntArray:
+    """Local search: best single-tuple insertions, then DV, until neither improves."""
+    for _ in range(max_rounds):
+        sel = _insert(prep, sel)
+        cost = float(prep.cost[sel].sum())
+        sel = _improve_dv(prep, sel, 1)
+        if float(prep.cost[sel].sum()) >= cost - 1e-9 * max(1.0, abs(cost)):
+            break
+    return sel
+
+
+def _insert(prep: _Prep, sel: IntArray, max_moves: int = 1000) -> IntArray:
+    """Best single-tuple insertions while one lowers the cost (module notes)."""
+    t, c, split = prep.tuples, prep.cost, prep.split_cost
+    S = t.shape[1]
+    cand = prep.gainful  # only a tuple cheaper than its singletons can gain
+    tc = t[cand]
+    base = c[cand] - split[cand]
+    lists = np.arange(S)
+    for _ in range(max_moves):
+        cover = np.full(prep.singleton.shape, -1, dtype=np.int64)
+        cover[lists[None, :], t[sel]] = np.arange(len(sel))[:, None]
+        cover[:, 0] = -1
+        conf = cover[lists, tc]  # (candidates, S) chosen tuple holding each element, -1 none
+        w = np.append(c[sel] - split[sel], 0.0)  # gain of dissolving each chosen tuple
+        delta = base - w[conf[:, 0]]
+        for s in range(1, S):
+            again = conf[:, s] == conf[:, 0]
+            for q in range(1, s):
+                again |= conf[:, s] == conf[:, q]
+            delta -= np.where(again, 0.0, w[conf[:, s]])
+        if delta.size == 0:
+            break
+        b = int(np.argmin(delta))
+        if delta[b] >= -1e-9 * max(1.0, abs(float(c[sel].sum()))):
+            break
+        gone = np.unique(conf[b][conf[b] >= 0])
+        rest = t[sel[gone]] * (t[sel[gone]] != tc[b])
+        left = prep.singleton[np.nonzero(rest)[1], rest[rest > 0]]
+        sel = np.concatenate([np.delete(sel, gone), [cand[b]], left])
+    return sel
+
+
+INSERT = True
+
+
+def _improve_dv(prep: _Prep, sel: IntArray, max_rounds: int = 20) -> IntArray:
+    """Local search by dimension-wise variation (Karapetyan & Gutin 2011) from ``sel``.
+
+    For a split of the lists into ``Q`` and the rest, every chosen tuple is cut into its
+    ``Q`` part and its other part; the parts are re-paired by one exact 2-D assignment with
+    dummies (a part may stand alone when that tuple exists), which never costs more than the
+    current pairing. All ``2^(S-1) - 1`` splits in turn, until a round improves nothing.
+    """
+    t, cost, radix = prep.tuples, prep.cost, prep.radix
+    S = t.shape[1]
+    splits = [np.array([(m >> s) & 1 for s in range(S)], dtype=bool) for m in range(1, 2**S, 2)]
+    splits = [q for q in splits if not q.all()]
+    current = float(cost[sel].sum())
+    for _ in range(max_rounds):
+        improved = False
+        for q in splits:
+            rows_t = t[sel]
+            ka = (rows_t * q) @ radix
+            kb = (rows_t * ~q) @ radix
+            a, b = ka[ka > 0], kb[kb > 0]
+            R, C = a.size, b.size
+            if R == 0 or C == 0:
+                continue
+            both = _lookup(prep, a[:, None] + b[None, :])
+            alone_a, alone_b = _lookup(prep, a), _lookup(prep, b)
+            A = np.full((R + C, C + R), np.inf)
+            A[:R, :C] = np.where(both >= 0, cost[both], np.inf)
+            A[np.arange(R), C + np.arange(R)] = np.where(alone_a >= 0, cost[alone_a], np.inf)
+            A[R + np.arange(C), np.arange(C)] = np.where(alone_b >= 0, cost[alone_b], np.inf)
+            A[R:, C:] = 0.0
+            r, c = _lsa(A)
+            total = float(A[r, c].sum())
+            if total < current - 1e-9 * max(1.0, abs(current)):
+                m = r < R
+                pick = np.concatenate(
+                    [
+                        both[r[m & (c < C)], c[m & (c < C)]],
+                        alone_a[r[m & (c >= C)]],
+                        alone_b[c[~m & (c < C)]],
+                    ]
+                )
+                sel, current, improved = pick, float(cost[pick].sum()), True
+        if not improved:
+            break
+    return sel
 
 
 def _unchecked(sizes: IntArray, tuples: IntArray, cost: FloatArray) -> SdProblem:
-    """An :class:`SdProblem` built without its checks (recovery problems are valid by
-    construction: every real index keeps a singleton)."""
+    """An :class:`SdProblem` built without its checks (a valid problem with its lists
+    permuted)."""
     p = object.__new__(SdProblem)
     for name, v in (("sizes", sizes), ("tuples", tuples), ("cost", cost)):
         object.__setattr__(p, name, v)
     return p
 
 
-def _singleton_costs(problem: SdProblem) -> list[FloatArray]:
-    """Cost of the singleton of each index of lists 1 and 2 (entry 0 = 0)."""
-    t = problem.tuples
-    single = (t > 0).sum(axis=1) == 1
-    out = []
-    for s in (0, 1):
-        c = np.zeros(problem.sizes[s] + 1)
-        k = single & (t[:, s] > 0)
-        c[t[k, s]] = problem.cost[k]
-        out.append(c)
-    return out
-
-
-def _singleton(problem: SdProblem, s: int, i: int) -> int:
-    """Index of the singleton tuple of element ``i`` of list ``s`` (-1 for the dummy)."""
-    if i == 0:
-        return -1
-    t = problem.tuples
-    k = np.flatnonzero((t[:, s] == i) & ((t > 0).sum(axis=1) == 1))
-    return int(k[0])
-
-
 def _solve_2d(problem: SdProblem) -> IntArray:
     """Exact 2-D assignment with dummies on both lists (augmented ``linear_sum_assignment``)."""
-    pairs = _pairs(problem)
-    return _relaxed(problem, pairs, [])[1]
+    return _dual(_prep(problem), np.zeros(0))[1]
+
+
+def _merged(prep: _Prep, chosen: IntArray) -> tuple[SdProblem, IntArray]:
+    """The (S - 1)-D recovery problem with the pairs ``chosen`` of lists 1-2 fixed.
+
+    Its first list holds the chosen pairs (index ``p`` = ``chosen[p - 1]``, 0 = pair (0, 0));
+    its tuples are the tuples of those pairs; a pair may also be split back into its two
+    singletons (its "plain" tuple costs the cheaper of the two), so the problem is feasible.
+    Returns the problem and the origin of each of its tuples: a tuple of ``prep``, or
+    ``-p`` for the split of pair ``p``.
+    """
+    t, cost = prep.tuples, prep.cost
+    P = chosen.size
+    lut = np.full(len(prep.starts), -1, dtype=np.int64)
+    lut[chosen] = np.arange(1, P + 1)
+    if prep.zero_group >= 0:
+        lut[prep.zero_group] = 0
+    pid = lut[prep.group]
+    keep = np.flatnonzero(pid >= 0)
+    sub_t = np.column_stack([pid[keep], t[keep, 2:]])
+    sub_c = cost[keep].copy()
+    origin = keep.copy()
+    i12 = prep.pair[chosen]
+    split = prep.singleton_cost[0, i12[:, 0]] + prep.singleton_cost[1, i12[:, 1]]
+    plain = np.flatnonzero((sub_t[:, 0] > 0) & (sub_t[:, 1:] == 0).all(axis=1))
+    pp = sub_t[plain, 0] - 1
+    cheaper = split[pp] < sub_c[plain]
+    sub_c[plain[cheaper]] = split[pp[cheaper]]
+    origin[plain[cheaper]] = -(pp[cheaper] + 1)
+    has = np.zeros(P, dtype=bool)
+    has[pp] = True
+    add = np.flatnonzero(~has)
+    sub_t = np.vstack([sub_t, np.column_stack([add + 1, np.zeros((add.size, sub_t.shape[1] - 1),
+                                                             dtype=np.int64)])])
+    sub_c = np.concatenate([sub_c, split[add]])
+    origin = np.concatenate([origin, -(add + 1)])
+    return _unchecked(np.r_[P, prep.sizes[2:]], sub_t, sub_c), origin
+
+
+def _unmerge(prep: _Prep, chosen: IntArray, origin: IntArray) -> IntArray:
+    """Tuples of ``prep`` for the recovery-problem tuples with the given ``origin``."""
+    split = -origin[origin < 0] - 1
+    i12 = prep.pair[chosen[split]]
+    singles = np.concatenate([prep.singleton[0, i12[:, 0]], prep.singleton[1, i12[:, 1]]])
+    return np.concatenate([origin[origin >= 0], singles[singles >= 0]])
 
 
 def _lagrangian(
     problem: SdProblem,
     max_iter: int,
     tol: float,
-    u0: list[FloatArray] | None = None,
+    u0: FloatArray | None = None,
+    *,
     patience: int = 5,
-    recover_every: int = 3,
     min_alpha: float = 2.0**-7,
+    recover_every: int = 3,
+    sub_share: float = 0.1,
+    polish: bool = True,
+    depth: int = 0,
+    nested: int = 9,
+    polish_margin: float = np.inf,
+    seen: dict[bytes, IntArray] | None = None,
+    start: IntArray | None = None,
 ) -> tuple[float, IntArray, float, int]:
-    """Relaxation loop from multipliers ``u0`` (zeros when None) of lists 3..S.
+    """Relaxation loop from the multipliers ``u0`` (zeros when None) of lists 3..S.
 
     Returns ``(upper bound, best feasible tuples, lower bound, iterations)``.
     """
-    pairs = _pairs(problem)
-    if u0 is None:
-        u = [np.zeros(k + 1) for k in problem.sizes[2:]]
-    else:
-        u = [np.array(us, dtype=float) for us in u0]
-    best_sel = sd_greedy(problem).selected
+    prep = _prep(problem)
+    seen = {} if seen is None else seen
+    u = np.zeros(int((problem.sizes[2:] + 1).sum())) if u0 is None else np.array(u0, dtype=float)
+    if polish:
+        start = sd_greedy(problem).selected if start is None else start
+        key = np.sort(start).tobytes()
+        if key not in seen:
+            seen[key] = _improve(prep, start)
+        best_sel = seen[key]
+    else:  # a recovery problem: all singletons, replaced by the first recovery
+        best_sel = prep.singleton[prep.singleton >= 0]
     ub = float(problem.cost[best_sel].sum())
     lb = -np.inf
     alpha, stall, it = 2.0, 0, 0
-    sub_iter = max(3, max_iter // 10)
+    sub_iter = max(3, int(sub_share * max_iter))
+    S = problem.n_lists
     while it < max_iter:
         it += 1
-        phi, sel, chosen = _relaxed(problem, pairs, u)
+        phi, sel, chosen = _dual(prep, u)
         improved = lb == -np.inf or phi > lb + 1e-12 * max(1.0, abs(lb))
         if improved or it % recover_every == 0:
-            rec = _recover(problem, chosen, sub_iter, tol, u)
+            if S == 3 or depth >= nested:
+                rec = _recover(prep, chosen, u)
+            else:
+                sub, origin = _merged(prep, chosen)
+                n3 = int(problem.sizes[2]) + 1
+                picked = _lagrangian(
+                    sub, sub_iter, tol, u[n3:], polish=False, depth=depth + 1, nested=nested,
+                    recover_every=recover_every, sub_share=sub_share
+                )[1]
+                rec = _unmerge(prep, chosen, origin[picked])
             c = float(problem.cost[rec].sum())
+            if polish and c < ub + polish_margin * abs(ub):
+                key = np.sort(rec).tobytes()
+                if key not in seen:  # the local search is deterministic: once per solution
+                    seen[key] = _improve(prep, rec)
+                rec = seen[key]
+                c = float(problem.cost[rec].sum())
             if c < ub:
                 ub, best_sel = c, rec
         if improved:
@@ -716,22 +957,16 @@ def _lagrangian(
                 alpha, stall = alpha / 2.0, 0
         if ub - lb <= tol * max(abs(ub), 1e-12) or alpha < min_alpha:
             break
-        g = [
-            1.0 - np.bincount(problem.tuples[sel, s], minlength=k + 1)
-            for s, k in enumerate(problem.sizes[2:], start=2)
-        ]
-        for gs in g:
-            gs[0] = 0.0
-        norm2 = sum(float(gs @ gs) for gs in g)
+        g = 1.0 - np.bincount(prep.uidx[sel].ravel(), minlength=u.size)
+        g[prep.dummies] = 0.0
+        norm2 = float(g @ g)
         if norm2 == 0.0:  # relaxed solution is feasible, hence optimal
             c = float(problem.cost[sel].sum())
             if c < ub:
                 ub, best_sel = c, sel
             lb = max(lb, min(ub, phi))
             break
-        step = alpha * max(ub - phi, 1e-9 * max(1.0, abs(ub))) / norm2
-        for us, gs in zip(u, g, strict=True):
-            us += step * gs
+        u += alpha * max(ub - phi, 1e-9 * max(1.0, abs(ub))) / norm2 * g
     return ub, best_sel, min(lb, ub), it
 
 
@@ -765,7 +1000,9 @@ def sd_lagrangian(
         raise ValueError(
             f"max_iter must be >= 1, tol >= 0, restarts >= 0; got {max_iter}, {tol}, {restarts}"
         )
-    ub, sel, lb, it = _lagrangian(problem, max_iter, tol)
+    seen: dict[bytes, IntArray] = {}  # polished solutions, shared by the rotated passes
+    greedy = sd_greedy(problem).selected
+    ub, sel, lb, it = _lagrangian(problem, max_iter, tol, seen=seen, start=greedy)
     closed = ub - lb <= tol * max(abs(ub), 1e-12)
     for shift in range(1, restarts + 1):
         if closed:
@@ -773,7 +1010,7 @@ def sd_lagrangian(
         # the same problem with its lists rotated: other pairs are fixed by the recovery
         order = np.roll(np.arange(problem.n_lists), -shift)
         rot = _unchecked(problem.sizes[order], problem.tuples[:, order], problem.cost)
-        ub2, sel2, lb2, it2 = _lagrangian(rot, max_iter, tol)
+        ub2, sel2, lb2, it2 = _lagrangian(rot, max_iter, tol, seen=seen, start=greedy)
         it += it2
         lb = max(lb, lb2)
         if ub2 < ub:
