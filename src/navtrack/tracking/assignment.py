@@ -241,12 +241,27 @@ def _solve_fixed(B: FloatArray, fixed: np.ndarray, cols: IntArray) -> tuple[IntA
 # ``i_1 = i_2 = 0`` are free (taken when their reduced cost is negative).  Its optimum plus
 # ``Σ u`` is a lower bound; the multipliers climb it by subgradient steps
 # ``u += α (UB - LB) g / |g|²`` (Polyak step, ``α`` halved after ``patience`` iterations without
-# progress, Held, Wolfe & Crowder 1974) with ``g = 1 - (times each index is used)``.  A feasible
-# solution is recovered from the pairs the 2-D solution chose: they become the real elements of
-# a merged list and the (S - 1)-D problem over (pairs, lists 3..S) is solved the same way
-# (exactly when it is 2-D).  A chosen pair also keeps the option of being split back into its
-# two singletons, so the recovery problem is always feasible.  The best feasible cost is the
-# upper bound; ``UB - LB`` is the duality gap reported.
+# progress, Held, Wolfe & Crowder 1974) with ``g = 1 - (times each index is used)``; each
+# iteration is a few vectorised passes over the tuple arrays and one ``linear_sum_assignment``.
+# A feasible solution is recovered (when the bound improved, and every ``recover_every``
+# iterations) from the pairs the 2-D solution chose: they are fixed as partial tuples and list
+# 3, 4, ..., S is joined to them by one 2-D assignment each, costed by the least reduced cost
+# over the lists not yet joined (Deb et al. 1997, section IV, in its sequential form); a
+# partial tuple may also be dissolved into its singletons, so every step is feasible.  Every
+# recovered solution is then improved by a local search: tuple insertions (a tuple displaces
+# the chosen tuples it overlaps, their other elements fall back to singletons; all gains
+# evaluated at once) alternating with dimension-wise variation (Karapetyan & Gutin 2011: cut
+# every chosen tuple at one list and re-pair the two sides by an exact 2-D assignment).  The
+# best feasible cost is the upper bound; ``UB - LB`` is the duality gap reported.  While the
+# gap stays open the problem is solved again with its lists rotated (other lists relaxed,
+# other pairs fixed); the recoveries differ, and that, with the local search, is what brings
+# the sparse S = 4, 5 problems within 1 % of the optimum (``benchmarks/bench_sd_assignment.py``).
+#
+# Defaults (30 multiplier updates per pass, all S - 1 rotations, recovery every 3 iterations)
+# were chosen on the benchmark problems of seed 13 and judged on those of seed 2026.
+#
+# .. [7] D. Karapetyan, G. Gutin, "Local search heuristics for the multidimensional
+#    assignment problem", J. Heuristics 17(3), 2011 (dimension-wise variation).
 
 
 class SdMethod(IntEnum):
@@ -688,11 +703,11 @@ def _recover(prep: _Prep, chosen: IntArray, u: FloatArray) -> IntArray:
         o = np.lexsort((red, key))
         ko = key[o]
         head = o[_run_starts(ko)]  # least reduced cost per (prefix, i_k)
-        M = np.full((P + 1) * (nk + 1), np.inf)
-        M[key[head]] = red[head]
+        flat = np.full((P + 1) * (nk + 1), np.inf)
+        flat[key[head]] = red[head]
         arg = np.full((P + 1) * (nk + 1), -1, dtype=np.int64)
         arg[key[head]] = idx[head]
-        M = M.reshape(P + 1, nk + 1)
+        M = flat.reshape(P + 1, nk + 1)
         dissolve = prep.singleton_cost[lists, prefix].sum(axis=1)
         use_dis = dissolve < M[1:, 0]
         A = np.full((P + nk, nk + P), np.inf)
@@ -737,95 +752,102 @@ def _lookup(prep: _Prep, key: IntArray) -> IntArray:
 
 
 def _improve(prep: _Prep, sel: IntArray, max_rounds: int = 50) -> IntArray:
-    """Local search: best single-tuple insertions, then DV, until neither improves."""
+    """Local search from the feasible ``sel``: insertions (:func:`_insert`), then one round of
+    dimension-wise variation (:func:`_vary`), until a round lowers the cost no more."""
     for _ in range(max_rounds):
         sel = _insert(prep, sel)
         cost = float(prep.cost[sel].sum())
-        sel = _improve_dv(prep, sel, 1)
+        sel = _vary(prep, sel)
         if float(prep.cost[sel].sum()) >= cost - 1e-9 * max(1.0, abs(cost)):
             break
     return sel
 
 
-def _insert(prep: _Prep, sel: IntArray, max_moves: int = 1000) -> IntArray:
-    """Best single-tuple insertions while one lowers the cost (module notes)."""
+def _insert(prep: _Prep, sel: IntArray, max_passes: int = 1000, batch: int = 32) -> IntArray:
+    """Tuple insertions while one lowers the cost.
+
+    Inserting tuple ``σ`` displaces the chosen tuples sharing a real element with it; their
+    other elements fall back to their singletons. Its gain, for all candidate ``σ`` at once:
+    ``c(σ) - s(σ) - Σ_τ (c(τ) - s(τ))`` over the distinct displaced ``τ``, ``s`` = cost of a
+    tuple's elements as singletons. Insertions displacing disjoint sets gain independently,
+    so each pass makes up to ``batch`` of them, best first.
+    """
     t, c, split = prep.tuples, prep.cost, prep.split_cost
     S = t.shape[1]
     cand = prep.gainful  # only a tuple cheaper than its singletons can gain
     tc = t[cand]
     base = c[cand] - split[cand]
     lists = np.arange(S)
-    for _ in range(max_moves):
+    for _ in range(max_passes):
         cover = np.full(prep.singleton.shape, -1, dtype=np.int64)
         cover[lists[None, :], t[sel]] = np.arange(len(sel))[:, None]
         cover[:, 0] = -1
         conf = cover[lists, tc]  # (candidates, S) chosen tuple holding each element, -1 none
-        w = np.append(c[sel] - split[sel], 0.0)  # gain of dissolving each chosen tuple
+        w = np.append(c[sel] - split[sel], 0.0)  # w[-1] = 0 for the dummy
         delta = base - w[conf[:, 0]]
         for s in range(1, S):
             again = conf[:, s] == conf[:, 0]
             for q in range(1, s):
                 again |= conf[:, s] == conf[:, q]
             delta -= np.where(again, 0.0, w[conf[:, s]])
-        if delta.size == 0:
+        good = np.flatnonzero(delta < -1e-9 * max(1.0, abs(float(c[sel].sum()))))
+        if good.size == 0:
             break
-        b = int(np.argmin(delta))
-        if delta[b] >= -1e-9 * max(1.0, abs(float(c[sel].sum()))):
-            break
-        gone = np.unique(conf[b][conf[b] >= 0])
-        rest = t[sel[gone]] * (t[sel[gone]] != tc[b])
+        touched = np.zeros(len(sel) + 1, dtype=bool)  # last slot: the dummy's -1
+        taken = []
+        for b in good[np.argsort(delta[good])][:batch].tolist():
+            if not touched[conf[b]].any():
+                touched[conf[b]] = True
+                taken.append(b)
+        touched[-1] = False
+        gone = np.flatnonzero(touched)
+        covered = np.zeros(prep.singleton.shape, dtype=bool)
+        covered[lists[None, :], tc[taken]] = True
+        rest = t[sel[gone]]
+        rest = rest * ~covered[lists, rest]
         left = prep.singleton[np.nonzero(rest)[1], rest[rest > 0]]
-        sel = np.concatenate([np.delete(sel, gone), [cand[b]], left])
+        sel = np.concatenate([np.delete(sel, gone), cand[taken], left])
     return sel
 
 
-INSERT = True
+def _vary(prep: _Prep, sel: IntArray) -> IntArray:
+    """One round of dimension-wise variation (Karapetyan & Gutin 2011) on ``sel``.
 
-
-def _improve_dv(prep: _Prep, sel: IntArray, max_rounds: int = 20) -> IntArray:
-    """Local search by dimension-wise variation (Karapetyan & Gutin 2011) from ``sel``.
-
-    For a split of the lists into ``Q`` and the rest, every chosen tuple is cut into its
-    ``Q`` part and its other part; the parts are re-paired by one exact 2-D assignment with
-    dummies (a part may stand alone when that tuple exists), which never costs more than the
-    current pairing. All ``2^(S-1) - 1`` splits in turn, until a round improves nothing.
+    For each list ``s`` in turn, every chosen tuple is cut into its list-``s`` element and the
+    rest; the two sides are re-paired by one exact 2-D assignment with dummies (a side may
+    stand alone when that tuple exists), which never costs more than the current pairing.
     """
     t, cost, radix = prep.tuples, prep.cost, prep.radix
     S = t.shape[1]
-    splits = [np.array([(m >> s) & 1 for s in range(S)], dtype=bool) for m in range(1, 2**S, 2)]
-    splits = [q for q in splits if not q.all()]
     current = float(cost[sel].sum())
-    for _ in range(max_rounds):
-        improved = False
-        for q in splits:
-            rows_t = t[sel]
-            ka = (rows_t * q) @ radix
-            kb = (rows_t * ~q) @ radix
-            a, b = ka[ka > 0], kb[kb > 0]
-            R, C = a.size, b.size
-            if R == 0 or C == 0:
-                continue
-            both = _lookup(prep, a[:, None] + b[None, :])
-            alone_a, alone_b = _lookup(prep, a), _lookup(prep, b)
-            A = np.full((R + C, C + R), np.inf)
-            A[:R, :C] = np.where(both >= 0, cost[both], np.inf)
-            A[np.arange(R), C + np.arange(R)] = np.where(alone_a >= 0, cost[alone_a], np.inf)
-            A[R + np.arange(C), np.arange(C)] = np.where(alone_b >= 0, cost[alone_b], np.inf)
-            A[R:, C:] = 0.0
-            r, c = _lsa(A)
-            total = float(A[r, c].sum())
-            if total < current - 1e-9 * max(1.0, abs(current)):
-                m = r < R
-                pick = np.concatenate(
-                    [
-                        both[r[m & (c < C)], c[m & (c < C)]],
-                        alone_a[r[m & (c >= C)]],
-                        alone_b[c[~m & (c < C)]],
-                    ]
-                )
-                sel, current, improved = pick, float(cost[pick].sum()), True
-        if not improved:
-            break
+    for s in range(S):
+        q = np.arange(S) == s
+        rows_t = t[sel]
+        ka = (rows_t * q) @ radix
+        kb = (rows_t * ~q) @ radix
+        a, b = ka[ka > 0], kb[kb > 0]
+        R, C = a.size, b.size
+        if R == 0 or C == 0:
+            continue
+        both = _lookup(prep, a[:, None] + b[None, :])  # keys add: the parts are disjoint
+        alone_a, alone_b = _lookup(prep, a), _lookup(prep, b)
+        A = np.full((R + C, C + R), np.inf)
+        A[:R, :C] = np.where(both >= 0, cost[both], np.inf)
+        A[np.arange(R), C + np.arange(R)] = np.where(alone_a >= 0, cost[alone_a], np.inf)
+        A[R + np.arange(C), np.arange(C)] = np.where(alone_b >= 0, cost[alone_b], np.inf)
+        A[R:, C:] = 0.0
+        r, c = _lsa(A)
+        total = float(A[r, c].sum())
+        if total < current - 1e-9 * max(1.0, abs(current)):
+            m = r < R
+            sel = np.concatenate(
+                [
+                    both[r[m & (c < C)], c[m & (c < C)]],
+                    alone_a[r[m & (c >= C)]],
+                    alone_b[c[~m & (c < C)]],
+                ]
+            )
+            current = float(cost[sel].sum())
     return sel
 
 
@@ -843,110 +865,45 @@ def _solve_2d(problem: SdProblem) -> IntArray:
     return _dual(_prep(problem), np.zeros(0))[1]
 
 
-def _merged(prep: _Prep, chosen: IntArray) -> tuple[SdProblem, IntArray]:
-    """The (S - 1)-D recovery problem with the pairs ``chosen`` of lists 1-2 fixed.
-
-    Its first list holds the chosen pairs (index ``p`` = ``chosen[p - 1]``, 0 = pair (0, 0));
-    its tuples are the tuples of those pairs; a pair may also be split back into its two
-    singletons (its "plain" tuple costs the cheaper of the two), so the problem is feasible.
-    Returns the problem and the origin of each of its tuples: a tuple of ``prep``, or
-    ``-p`` for the split of pair ``p``.
-    """
-    t, cost = prep.tuples, prep.cost
-    P = chosen.size
-    lut = np.full(len(prep.starts), -1, dtype=np.int64)
-    lut[chosen] = np.arange(1, P + 1)
-    if prep.zero_group >= 0:
-        lut[prep.zero_group] = 0
-    pid = lut[prep.group]
-    keep = np.flatnonzero(pid >= 0)
-    sub_t = np.column_stack([pid[keep], t[keep, 2:]])
-    sub_c = cost[keep].copy()
-    origin = keep.copy()
-    i12 = prep.pair[chosen]
-    split = prep.singleton_cost[0, i12[:, 0]] + prep.singleton_cost[1, i12[:, 1]]
-    plain = np.flatnonzero((sub_t[:, 0] > 0) & (sub_t[:, 1:] == 0).all(axis=1))
-    pp = sub_t[plain, 0] - 1
-    cheaper = split[pp] < sub_c[plain]
-    sub_c[plain[cheaper]] = split[pp[cheaper]]
-    origin[plain[cheaper]] = -(pp[cheaper] + 1)
-    has = np.zeros(P, dtype=bool)
-    has[pp] = True
-    add = np.flatnonzero(~has)
-    sub_t = np.vstack([sub_t, np.column_stack([add + 1, np.zeros((add.size, sub_t.shape[1] - 1),
-                                                             dtype=np.int64)])])
-    sub_c = np.concatenate([sub_c, split[add]])
-    origin = np.concatenate([origin, -(add + 1)])
-    return _unchecked(np.r_[P, prep.sizes[2:]], sub_t, sub_c), origin
-
-
-def _unmerge(prep: _Prep, chosen: IntArray, origin: IntArray) -> IntArray:
-    """Tuples of ``prep`` for the recovery-problem tuples with the given ``origin``."""
-    split = -origin[origin < 0] - 1
-    i12 = prep.pair[chosen[split]]
-    singles = np.concatenate([prep.singleton[0, i12[:, 0]], prep.singleton[1, i12[:, 1]]])
-    return np.concatenate([origin[origin >= 0], singles[singles >= 0]])
-
-
 def _lagrangian(
     problem: SdProblem,
     max_iter: int,
     tol: float,
-    u0: FloatArray | None = None,
+    start: IntArray,
+    seen: dict[bytes, IntArray],
     *,
     patience: int = 5,
     min_alpha: float = 2.0**-7,
     recover_every: int = 3,
-    sub_share: float = 0.1,
-    polish: bool = True,
-    depth: int = 0,
-    nested: int = 9,
-    polish_margin: float = np.inf,
-    seen: dict[bytes, IntArray] | None = None,
-    start: IntArray | None = None,
 ) -> tuple[float, IntArray, float, int]:
-    """Relaxation loop from the multipliers ``u0`` (zeros when None) of lists 3..S.
+    """One relaxation pass from zero multipliers, ``start`` the first feasible solution.
+
+    ``seen`` maps each solution already polished by :func:`_improve` (sorted tuple indices)
+    to its result: the local search is deterministic, so it runs once per solution, across
+    the rotated passes too (they share the tuple order).
 
     Returns ``(upper bound, best feasible tuples, lower bound, iterations)``.
     """
     prep = _prep(problem)
-    seen = {} if seen is None else seen
-    u = np.zeros(int((problem.sizes[2:] + 1).sum())) if u0 is None else np.array(u0, dtype=float)
-    if polish:
-        start = sd_greedy(problem).selected if start is None else start
-        key = np.sort(start).tobytes()
+
+    def polished(sel: IntArray) -> IntArray:
+        key = np.sort(sel).tobytes()
         if key not in seen:
-            seen[key] = _improve(prep, start)
-        best_sel = seen[key]
-    else:  # a recovery problem: all singletons, replaced by the first recovery
-        best_sel = prep.singleton[prep.singleton >= 0]
+            seen[key] = _improve(prep, sel)
+        return seen[key]
+
+    u = np.zeros(int((problem.sizes[2:] + 1).sum()))
+    best_sel = polished(start)
     ub = float(problem.cost[best_sel].sum())
     lb = -np.inf
     alpha, stall, it = 2.0, 0, 0
-    sub_iter = max(3, int(sub_share * max_iter))
-    S = problem.n_lists
     while it < max_iter:
         it += 1
         phi, sel, chosen = _dual(prep, u)
         improved = lb == -np.inf or phi > lb + 1e-12 * max(1.0, abs(lb))
         if improved or it % recover_every == 0:
-            if S == 3 or depth >= nested:
-                rec = _recover(prep, chosen, u)
-            else:
-                sub, origin = _merged(prep, chosen)
-                n3 = int(problem.sizes[2]) + 1
-                picked = _lagrangian(
-                    sub, sub_iter, tol, u[n3:], polish=False, depth=depth + 1, nested=nested,
-                    recover_every=recover_every, sub_share=sub_share
-                )[1]
-                rec = _unmerge(prep, chosen, origin[picked])
+            rec = polished(_recover(prep, chosen, u))
             c = float(problem.cost[rec].sum())
-            if polish and c < ub + polish_margin * abs(ub):
-                key = np.sort(rec).tobytes()
-                if key not in seen:  # the local search is deterministic: once per solution
-                    seen[key] = _improve(prep, rec)
-                rec = seen[key]
-                c = float(problem.cost[rec].sum())
             if c < ub:
                 ub, best_sel = c, rec
         if improved:
@@ -971,7 +928,7 @@ def _lagrangian(
 
 
 def sd_lagrangian(
-    problem: SdProblem, max_iter: int = 100, tol: float = 1e-3, restarts: int = 1
+    problem: SdProblem, max_iter: int = 30, tol: float = 1e-3, restarts: int = 4
 ) -> SdSolution:
     """S-D assignment by Lagrangian relaxation of lists 3..S (module notes).
 
@@ -979,20 +936,20 @@ def sd_lagrangian(
     ----------
     problem : SdProblem with ``S >= 3`` lists
     max_iter : int
-        Multiplier updates of the outer problem (the recovery problems get a quarter, >= 5).
+        Multiplier updates per pass. Default 30 (module notes: chosen on seed 13).
     tol : float
         Stop when ``UB - LB <= tol · |UB|`` (relative duality gap).
     restarts : int
         While the gap stays open, solve again with the lists rotated by 1, 2, ... (up to this
-        many times): the recovery then fixes pairs of other lists. The best solution and the
-        best bound of all passes are kept (both stay valid). Default 1, chosen on the seeded
-        problems of ``tests/tracking/test_sd_assignment.py``.
+        many times, at most ``S - 1``): other lists are then kept in the 2-D subproblem and
+        other pairs fixed by the recovery. The best solution and the best bound of all passes
+        are kept (both stay valid). Default 4: every rotation up to ``S = 5``.
 
     Returns
     -------
     SdSolution
         ``status`` OPTIMAL when the gap closed to ``tol``, else GAP; never worse than
-        :func:`sd_greedy` (the greedy solution is the first upper bound).
+        :func:`sd_greedy` (the greedy solution, locally improved, is the first upper bound).
     """
     if problem.n_lists < 3:
         raise ValueError(f"problem: the relaxation needs S >= 3 lists, got {problem.n_lists}")
@@ -1002,15 +959,15 @@ def sd_lagrangian(
         )
     seen: dict[bytes, IntArray] = {}  # polished solutions, shared by the rotated passes
     greedy = sd_greedy(problem).selected
-    ub, sel, lb, it = _lagrangian(problem, max_iter, tol, seen=seen, start=greedy)
+    ub, sel, lb, it = _lagrangian(problem, max_iter, tol, greedy, seen)
     closed = ub - lb <= tol * max(abs(ub), 1e-12)
-    for shift in range(1, restarts + 1):
+    for shift in range(1, min(restarts, problem.n_lists - 1) + 1):
         if closed:
             break
         # the same problem with its lists rotated: other pairs are fixed by the recovery
         order = np.roll(np.arange(problem.n_lists), -shift)
         rot = _unchecked(problem.sizes[order], problem.tuples[:, order], problem.cost)
-        ub2, sel2, lb2, it2 = _lagrangian(rot, max_iter, tol, seen=seen, start=greedy)
+        ub2, sel2, lb2, it2 = _lagrangian(rot, max_iter, tol, greedy, seen)
         it += it2
         lb = max(lb, lb2)
         if ub2 < ub:
@@ -1027,7 +984,7 @@ def sd_assign(
     method: str = "auto",
     *,
     max_exact_tuples: int = 5000,
-    max_iter: int = 100,
+    max_iter: int = 30,
     tol: float = 1e-3,
 ) -> SdSolution:
     """Solve an S-D assignment problem with the dummy index.
