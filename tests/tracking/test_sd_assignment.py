@@ -145,3 +145,55 @@ def test_greedy_is_feasible_and_bad_arguments() -> None:
         sd_lagrangian(SdProblem([1, 1], [[1, 0], [0, 1]], [0.0, 0.0]))
     with pytest.raises(ValueError, match="cost must be finite"):
         SdProblem([1, 1, 1], [[1, 0, 0], [0, 1, 0], [0, 0, 1]], [0.0, np.inf, 0.0])
+
+
+@pytest.mark.parametrize(
+    ("sizes", "density"), [((4, 5, 6), 1.0), ((4, 4, 4, 4), 0.4), ((4, 4, 4, 4, 4), 0.15)]
+)
+def test_recovery_and_local_search_feasible_and_never_worse(
+    sizes: tuple[int, ...], density: float
+) -> None:
+    """The relaxation's parts on any multipliers: the sequential recovery is feasible, and the
+    local search (insertions + dimension-wise variation) keeps feasibility and never raises
+    the cost; with the dense key table and with its sorted-key fallback alike."""
+    from navtrack.tracking import assignment as sd
+
+    rng = np.random.default_rng(21)
+    for _ in range(3):
+        p = random_sd_problem(sizes, rng, density)
+        prep = sd._prep(p)
+        u = rng.normal(0.0, 1.5, int((p.sizes[2:] + 1).sum()))
+        u[prep.dummies] = 0.0
+        lb, _, chosen = sd._dual(prep, u)
+        rec = sd._recover(prep, chosen, u)
+        assert p.is_feasible(rec)
+        assert lb <= sd_exact(p).cost + 1e-9  # any multipliers give a lower bound
+        for start in (rec, sd_greedy(p).selected):
+            better = sd._improve(prep, start)
+            assert p.is_feasible(better)
+            assert p.cost[better].sum() <= p.cost[start].sum() + 1e-9
+        keys = rng.integers(0, int(np.prod(p.sizes + 1)), 50)
+        assert prep.table.size  # small problem: dense table ...
+        i = np.minimum(np.searchsorted(prep.keys, keys), len(prep.keys) - 1)
+        ref = np.where(prep.keys[i] == keys, prep.key_tuple[i], -1)
+        np.testing.assert_array_equal(sd._lookup(prep, keys), ref)
+
+
+def test_sorted_key_lookup_without_table(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Above the table limit the keys are looked up by binary search: same solutions."""
+    from navtrack.tracking import assignment as sd
+
+    p = random_sd_problem((4, 4, 4, 4), np.random.default_rng(8), 0.4)
+    with_table = sd_lagrangian(p)
+    monkeypatch.setattr(sd, "_TABLE_MAX", 0)
+    assert sd._prep(p).table.size == 0
+    without = sd_lagrangian(p)
+    np.testing.assert_array_equal(with_table.selected, without.selected)
+    assert without.cost == with_table.cost
+
+
+def test_rotated_passes_at_most_s_minus_one() -> None:
+    p = random_sd_problem((5, 5, 5), np.random.default_rng(4), 0.5)
+    sol = sd_lagrangian(p, max_iter=7, tol=0.0, restarts=10)
+    assert sol.iterations <= 3 * 7  # three list orders for S = 3, however many restarts
+    assert p.is_feasible(sol.selected)
