@@ -197,3 +197,21 @@ def test_rotated_passes_at_most_s_minus_one() -> None:
     sol = sd_lagrangian(p, max_iter=7, tol=0.0, restarts=10)
     assert sol.iterations <= 3 * 7  # three list orders for S = 3, however many restarts
     assert p.is_feasible(sol.selected)
+
+
+@pytest.mark.parametrize(
+    ("sizes", "tuples", "cost", "best"),
+    [
+        ([0, 0, 0], np.zeros((0, 3), dtype=int), [], 0.0),
+        ([1, 0, 0], [[1, 0, 0]], [0.0], 0.0),
+        ([0, 2, 1], [[0, 1, 0], [0, 2, 0], [0, 0, 1], [0, 1, 1]], [0.0, 0.0, 0.0, -1.0], -1.0),
+        ([2, 1, 0], [[1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0]], [0.0, 0.0, 0.0, -1.0], -1.0),
+    ],
+)
+def test_empty_lists(sizes: list[int], tuples: object, cost: list[float], best: float) -> None:
+    """Lists without real elements (a silent sensor, no target) are valid problems."""
+    p = SdProblem(sizes, tuples, cost)
+    for method in ("lagrangian", "exact"):
+        sol = sd_assign(p, method)
+        assert sol.cost == pytest.approx(best)
+        assert p.is_feasible(sol.selected)

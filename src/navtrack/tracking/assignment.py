@@ -577,6 +577,7 @@ def _run_starts(k: IntArray) -> BoolArray:
 
 
 def _prep(problem: SdProblem) -> _Prep:
+    """The index arrays of ``problem`` (:class:`_Prep`)."""
     t, n, c = problem.tuples, problem.sizes, problem.cost
     K, S = t.shape
     n1, n2 = int(n[0]), int(n[1])
@@ -607,7 +608,7 @@ def _prep(problem: SdProblem) -> _Prep:
     for s in range(S):
         k = np.flatnonzero(single & (t[:, s] > 0))
         singleton[s, t[k, s]] = k
-    singleton_cost = np.where(singleton >= 0, c[np.maximum(singleton, 0)], 0.0)
+    singleton_cost = np.append(c, 0.0)[singleton]  # -1 (the dummy) picks the appended 0
     split_cost = singleton_cost[np.arange(S), t].sum(axis=1)
     return _Prep(
         t,
@@ -636,6 +637,7 @@ def _prep(problem: SdProblem) -> _Prep:
 
 
 def _lsa(A: FloatArray) -> tuple[IntArray, IntArray]:
+    """``linear_sum_assignment`` that also takes an empty matrix."""
     from scipy.optimize import linear_sum_assignment
 
     if A.size == 0:
@@ -956,6 +958,10 @@ def sd_lagrangian(
     if max_iter < 1 or not tol >= 0 or restarts < 0:
         raise ValueError(
             f"max_iter must be >= 1, tol >= 0, restarts >= 0; got {max_iter}, {tol}, {restarts}"
+        )
+    if len(problem.tuples) == 0:  # no real element in any list
+        return _solution(
+            problem, problem.tuples[:0, 0], 0.0, 0, SdMethod.LAGRANGIAN, SdStatus.OPTIMAL, "empty"
         )
     seen: dict[bytes, IntArray] = {}  # polished solutions, shared by the rotated passes
     greedy = sd_greedy(problem).selected
