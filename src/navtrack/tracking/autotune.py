@@ -49,23 +49,43 @@ halves and on variants of those files, and says what that leaves untested.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
 
+from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray
 from navtrack.tracking.gating import chi2_threshold
 from navtrack.tracking.models import constant_velocity
-from navtrack.tracking.tracker import DetStatus, TrackerConfig, TrackerResult, run_tracker
+from navtrack.tracking.tracker import (
+    DetStatus,
+    TrackerConfig,
+    TrackerModel,
+    TrackerResult,
+    run_tracker,
+    scan_windows,
+    window_separation_m,
+)
 
-__all__ = ["AutoTune", "NoiseFit", "auto_config", "fit_noise", "track_triplets"]
+__all__ = [
+    "AutoTune",
+    "NoiseFit",
+    "QTrial",
+    "auto_config",
+    "fit_noise",
+    "fit_q",
+    "q_trial",
+    "select_q",
+    "track_triplets",
+]
 
 SAMPLE_SPAN = 0.3  # first-pass sample: the first 30 % of the time span ...
-SAMPLE_DETECTIONS = 4000  # ... or its first detections if fewer
-BOOT_Q = (1e-4, 1e-1, 1e2)  # m²/s³, first-pass IMM
+SAMPLE_DETECTIONS = 2500  # ... or its first detections if fewer
+BOOT_Q = (1e-4, 1e-1, 1e2)  # m²/s³, first-pass IMM; the last at BOOT_SPEED_MPS (see below)
 BOOT_SIGMA_M = 50.0
 BOOT_SPEED_MPS = 350.0
+BOOT_Q_MIN_TOP = 1.0  # m²/s³, the manoeuvring first-pass model never below this
 COAST_INTERVALS = 6.0
 STATIONARY_MPS = 0.5
 IMM_MIN_SHARE = 0.1
@@ -73,6 +93,11 @@ AIRCRAFT_MPS = 50.0
 AIRCRAFT_Q = 300.0  # m²/s³, TrackerConfig.for_aircraft
 SHIP_IMM_Q = (1e-5, 1e-2)  # m²/s³, TrackerConfig.for_ships
 SIGMA_FLOOR_M = 25.0
+TRIAL_SCANS = 200  # the q trials track the first this many scan windows of the file ...
+TRIAL_DETECTIONS = 2000  # ... or its first detections if fewer
+Q_DECADES = 2  # the q search goes at most this many decades from the family's value
+TIE_SIGMAS = 2.0  # births within this many Poisson σ of the fewest count as as few
+IMM_QUIET_RATIO = 1e-3  # IMM quiet model's q / manoeuvring q (as SHIP_IMM_Q, and --q)
 MIN_TRIPLETS = 20  # fewer three-point residuals than this: no fit, σ at its floor
 
 
@@ -107,6 +132,7 @@ class AutoTune:
     speed_p50_mps, speed_p99_mps : speed quantiles, m/s; stationary_share : share below
         ``STATIONARY_MPS``; speed_source : ``"reported"`` or ``"tracks"``
     sample_detections : detections in the sample
+    q_trials : the runs of the q search (:func:`fit_q`), in increasing q
     """
 
     config: TrackerConfig
@@ -119,6 +145,7 @@ class AutoTune:
     stationary_share: float
     speed_source: str
     sample_detections: int
+    q_trials: tuple[QTrial, ...] = ()
 
 
 def _confirmed_sequences(t_s: FloatArray, result: TrackerResult) -> tuple[np.ndarray, np.ndarray]:
@@ -196,6 +223,104 @@ def fit_noise(triplets: ArrayLike) -> NoiseFit:
     return NoiseFit(float(np.exp(0.5 * th[0])), float(np.exp(th[1])), n, int(e2.size - n))
 
 
+@dataclass(frozen=True, slots=True, eq=False)
+class QTrial:
+    """One run of the q search (:func:`q_trial`).
+
+    Attributes
+    ----------
+    q : manoeuvring process-noise PSD of the run, m²/s³ (the IMM's quiet model has
+        ``IMM_QUIET_RATIO`` of it)
+    births : tracks the run started
+    log_likelihood : (N,) the tracker's log-likelihood of each detection (see :func:`q_trial`)
+    """
+
+    q: float
+    births: int
+    log_likelihood: FloatArray
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+    @property
+    def mean_log_likelihood(self) -> float:
+        """Log-likelihood per detection."""
+        return float(self.log_likelihood.mean())
+
+
+def _with_q(config: TrackerConfig, q: float) -> TrackerConfig:
+    """``config`` with manoeuvring process noise ``q`` (an IMM keeps its quiet ratio)."""
+    return replace(
+        config,
+        motion=constant_velocity(2, q, "continuous"),
+        imm_q=None if config.imm_q is None else (IMM_QUIET_RATIO * q, q),
+    )
+
+
+def q_trial(
+    t_s: FloatArray, z: FloatArray, velocity: FloatArray | None, config: TrackerConfig, q: float
+) -> QTrial:
+    """Track the sample with ``config`` at process noise ``q``: births and likelihoods.
+
+    The log-likelihood of a detection is the tracker's own: one that updated a track scores
+    its Gaussian innovation density (``TrackerResult.det_log_likelihood``, mixed over the
+    IMM's models), any other one (a track start, a seed, a gated loser) the clutter /
+    new-track density ``config.clutter_density``.
+    """
+    res = run_tracker(t_s, z, _with_q(config, q), velocity=velocity)
+    upd = (res.det_status <= DetStatus.TENTATIVE) & np.isfinite(res.det_log_likelihood)
+    ll = np.where(upd, res.det_log_likelihood, np.log(config.clutter_density))
+    return QTrial(float(q), int(res.counts.tracks_started), ll)
+
+
+def select_q(trials: list[QTrial], ref: int) -> int:
+    """Index of the chosen trial (module notes, step 4).
+
+    Trials whose births lie within ``TIE_SIGMAS`` Poisson standard deviations of the fewest
+    are candidates; of those, the one of largest likelihood, unless its paired gain per
+    detection over the candidate ``ref`` (the family's value) is within ``TIE_SIGMAS``
+    standard errors, when ``ref`` stays.
+    """
+    b = min(tr.births for tr in trials)
+    tied = [i for i, tr in enumerate(trials) if tr.births <= b + TIE_SIGMAS * np.sqrt(b)]
+    best = max(tied, key=lambda i: trials[i].mean_log_likelihood)
+    if ref not in tied or best == ref:
+        return best
+    d = trials[best].log_likelihood - trials[ref].log_likelihood
+    return best if d.mean() > TIE_SIGMAS * d.std() / np.sqrt(d.size) else ref
+
+
+def fit_q(
+    t_s: FloatArray,
+    z: FloatArray,
+    velocity: FloatArray | None,
+    config: TrackerConfig,
+    q0: float,
+) -> tuple[float, tuple[QTrial, ...]]:
+    """Process noise of ``config`` searched on decades around ``q0`` (module notes, step 4).
+
+    The trials start at ``q0 / 10, q0, 10 q0``; while the chosen one (:func:`select_q`) is at
+    an end of the trials and within ``Q_DECADES`` decades of ``q0``, one more decade is tried
+    beyond it.
+
+    Returns
+    -------
+    q : the chosen manoeuvring q, m²/s³
+    trials : every trial, in increasing q
+    """
+    runs = {k: q_trial(t_s, z, velocity, config, q0 * 10.0**k) for k in (-1, 0, 1)}
+    while True:
+        ks = sorted(runs)
+        best = ks[select_q([runs[k] for k in ks], ks.index(0))]
+        if best == ks[0] and best > -Q_DECADES:
+            step = best - 1
+        elif best == ks[-1] and best < Q_DECADES:
+            step = best + 1
+        else:
+            return runs[best].q, tuple(runs[k] for k in ks)
+        runs[step] = q_trial(t_s, z, velocity, config, q0 * 10.0**step)
+
+
 def _track_intervals(t_s: FloatArray, result: TrackerResult) -> tuple[FloatArray, FloatArray]:
     """All intervals between consecutive detections of the confirmed tracks, and the median
     interval of each track (s)."""
@@ -253,10 +378,11 @@ def auto_config(
     speed = None if vs is None else np.hypot(vs[:, 0], vs[:, 1])
     speed = None if speed is None or np.isfinite(speed).sum() < 20 else speed[np.isfinite(speed)]
     v_boot = BOOT_SPEED_MPS if speed is None else float(1.5 * np.quantile(speed, 0.99))
+    q_top = float(np.clip(BOOT_Q[2] * (v_boot / BOOT_SPEED_MPS) ** 2, BOOT_Q_MIN_TOP, BOOT_Q[2]))
     boot = TrackerConfig(
         motion=constant_velocity(2, BOOT_Q[0], "continuous"),
         sigma_m=BOOT_SIGMA_M,
-        imm_q=BOOT_Q,
+        imm_q=(BOOT_Q[0], BOOT_Q[1], q_top),
         clutter_density=1e-9,
         init_max_speed_mps=max(v_boot, 1.0),
         init_max_dt_s=400.0,
@@ -323,4 +449,9 @@ def auto_config(
         imm_q=imm_q,
         scan_window_s=min(dt10, 10.0),
     )
-    return AutoTune(cfg, family, fit, dt50, dt95, v50, v99, still, source, k)
+    starts, _ = scan_windows(t, Z, cfg.scan_window_s, window_separation_m(TrackerModel.from_config(cfg)))
+    kq = min(int(starts[TRIAL_SCANS]) if starts.size > TRIAL_SCANS else t.size, TRIAL_DETECTIONS)
+    vq = None if velocity is None else np.asarray(velocity, dtype=float)[:kq]
+    q_fit, trials = fit_q(t[:kq], Z[:kq], vq, cfg, q if imm_q is None else imm_q[1])
+    cfg = _with_q(cfg, q_fit)
+    return AutoTune(cfg, family, fit, dt50, dt95, v50, v99, still, source, k, trials)
