@@ -86,7 +86,7 @@ BOOT_Q = (1e-4, 1e-1, 1e2)  # m²/s³, first-pass IMM; the last at BOOT_SPEED_MP
 BOOT_SIGMA_M = 50.0
 BOOT_SPEED_MPS = 350.0
 BOOT_Q_MIN_TOP = 1.0  # m²/s³, the manoeuvring first-pass model never below this
-COAST_INTERVALS = 6.0
+COAST_INTERVALS = 2.0
 STATIONARY_MPS = 0.5
 IMM_MIN_SHARE = 0.1
 AIRCRAFT_MPS = 50.0
@@ -97,7 +97,6 @@ TRIAL_SCANS = 200  # the q trials track the first this many scan windows of the 
 TRIAL_DETECTIONS = 2000  # ... or its first detections if fewer
 Q_DECADES = 2  # the q search goes at most this many decades from the family's value
 TIE_SIGMAS = 2.0  # births within this many Poisson σ of the fewest count as as few
-IMM_QUIET_RATIO = 1e-3  # IMM quiet model's q / manoeuvring q (as SHIP_IMM_Q, and --q)
 MIN_TRIPLETS = 20  # fewer three-point residuals than this: no fit, σ at its floor
 
 
@@ -229,8 +228,7 @@ class QTrial:
 
     Attributes
     ----------
-    q : manoeuvring process-noise PSD of the run, m²/s³ (the IMM's quiet model has
-        ``IMM_QUIET_RATIO`` of it)
+    q : manoeuvring process-noise PSD of the run, m²/s³ (an IMM's quiet model is kept)
     births : tracks the run started
     log_likelihood : (N,) the tracker's log-likelihood of each detection (see :func:`q_trial`)
     """
@@ -249,12 +247,10 @@ class QTrial:
 
 
 def _with_q(config: TrackerConfig, q: float) -> TrackerConfig:
-    """``config`` with manoeuvring process noise ``q`` (an IMM keeps its quiet ratio)."""
-    return replace(
-        config,
-        motion=constant_velocity(2, q, "continuous"),
-        imm_q=None if config.imm_q is None else (IMM_QUIET_RATIO * q, q),
-    )
+    """``config`` with manoeuvring process noise ``q`` (an IMM keeps its quiet model)."""
+    if config.imm_q is None:
+        return replace(config, motion=constant_velocity(2, q, "continuous"))
+    return replace(config, imm_q=(config.imm_q[0], q))
 
 
 def q_trial(
