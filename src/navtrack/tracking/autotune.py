@@ -58,15 +58,7 @@ from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray
 from navtrack.tracking.gating import chi2_threshold
 from navtrack.tracking.models import constant_velocity
-from navtrack.tracking.tracker import (
-    DetStatus,
-    TrackerConfig,
-    TrackerModel,
-    TrackerResult,
-    run_tracker,
-    scan_windows,
-    window_separation_m,
-)
+from navtrack.tracking.tracker import DetStatus, TrackerConfig, TrackerResult, run_tracker
 
 __all__ = [
     "AutoTune",
@@ -93,8 +85,7 @@ AIRCRAFT_MPS = 50.0
 AIRCRAFT_Q = 300.0  # m²/s³, TrackerConfig.for_aircraft
 SHIP_IMM_Q = (1e-5, 1e-2)  # m²/s³, TrackerConfig.for_ships
 SIGMA_FLOOR_M = 25.0
-TRIAL_SCANS = 200  # the q trials track the first this many scan windows of the file ...
-TRIAL_DETECTIONS = 2000  # ... or its first detections if fewer
+TRIAL_DETECTIONS = 1500  # the q trials track the first this many detections of the file
 Q_DECADES = 2  # the q search goes at most this many decades from the family's value
 TIE_SIGMAS = 2.0  # births within this many Poisson σ of the fewest count as as few
 MIN_TRIPLETS = 20  # fewer three-point residuals than this: no fit, σ at its floor
@@ -445,8 +436,7 @@ def auto_config(
         imm_q=imm_q,
         scan_window_s=min(dt10, 10.0),
     )
-    starts, _ = scan_windows(t, Z, cfg.scan_window_s, window_separation_m(TrackerModel.from_config(cfg)))
-    kq = min(int(starts[TRIAL_SCANS]) if starts.size > TRIAL_SCANS else t.size, TRIAL_DETECTIONS)
+    kq = min(t.size, TRIAL_DETECTIONS)
     vq = None if velocity is None else np.asarray(velocity, dtype=float)[:kq]
     q_fit, trials = fit_q(t[:kq], Z[:kq], vq, cfg, q if imm_q is None else imm_q[1])
     cfg = _with_q(cfg, q_fit)
