@@ -70,7 +70,7 @@ three-point fit of step 3 (the bulk again: 2e-13 m²/s³ on OpenSky, 0.4 on Sole
 is best).
 
 Which data chose the constants: ``COAST_INTERVALS`` (2, from 1.5–6), ``SAMPLE_DETECTIONS``
-(2500, from 4000) and ``TRIAL_DETECTIONS`` (from the run time on the Solent file, and the
+(1500, from 4000) and ``TRIAL_DETECTIONS`` (from the run time on the Solent file, and the
 ≥ 1500 detections the OpenSky trials need to tell q = 30 from 300), ``TIE_SIGMAS`` and
 ``Q_DECADES`` were chosen on the first halves in time of the Solent AIS and OpenSky files; the
 first-pass scaling of step 1 (with ``BOOT_Q_MIN_TOP``) and the detection (rather than
@@ -106,7 +106,7 @@ __all__ = [
 ]
 
 SAMPLE_SPAN = 0.3  # first-pass sample: the first 30 % of the time span ...
-SAMPLE_DETECTIONS = 2500  # ... or its first detections if fewer
+SAMPLE_DETECTIONS = 1500  # ... or its first detections if fewer
 BOOT_Q = (1e-4, 1e-1, 1e2)  # m²/s³, first-pass IMM; the last at BOOT_SPEED_MPS (see below)
 BOOT_SIGMA_M = 50.0
 BOOT_SPEED_MPS = 350.0
