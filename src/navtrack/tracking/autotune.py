@@ -368,7 +368,8 @@ def auto_config(
     velocity : (N, 2) or None
         Reported velocities (m/s, NaN unknown), used for one-point initiation as in
         :func:`~navtrack.tracking.tracker.run_tracker` and for the speed distribution.
-    associator : the associator of the returned config (the first pass uses GNN)
+    associator : the associator of the returned config (the first pass and the q trials
+        use GNN)
     sample_detections : int
         At most this many detections (the first in time) in the first pass.
 
@@ -471,6 +472,7 @@ def auto_config(
     )
     kq = min(t.size, TRIAL_DETECTIONS)
     vq = None if velocity is None else np.asarray(velocity, dtype=float)[:kq]
-    q_fit, trials = fit_q(t[:kq], Z[:kq], vq, cfg, q if imm_q is None else imm_q[1])
+    gnn = replace(cfg, associator="gnn")  # the trials, like the first pass, use GNN
+    q_fit, trials = fit_q(t[:kq], Z[:kq], vq, gnn, q if imm_q is None else imm_q[1])
     cfg = _with_q(cfg, q_fit)
     return AutoTune(cfg, family, fit, dt50, dt95, v50, v99, still, source, k, trials)
