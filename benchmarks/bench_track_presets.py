@@ -10,7 +10,8 @@ truth interpolation are the CLI's for the file's format:
 - ``ships`` and ``aircraft``: the presets (chosen on the whole Solent / OpenSky file: in sample
   on their own file, out of sample on the other);
 - ``auto on h1``: :func:`~navtrack.tracking.autotune.auto_config` run on the first half (its
-  rule constants were set looking at the first halves), the config then tracks the second half;
+  rule constants were chosen on the first halves, two of them on the Solent west half: see
+  the module notes of ``autotune``), the config then tracks the second half;
 - ``auto in sample``: ``auto_config`` on the scored part itself (what ``navtrack track`` does
   with no tuning flags; it never sees the ids).
 

@@ -7,7 +7,14 @@ import dataclasses
 import numpy as np
 import pytest
 
-from navtrack.tracking.autotune import AIRCRAFT_Q, SHIP_IMM_Q, auto_config, fit_noise
+from navtrack.tracking.autotune import (
+    AIRCRAFT_Q,
+    SHIP_IMM_Q,
+    QTrial,
+    auto_config,
+    fit_noise,
+    select_q,
+)
 from navtrack.tracking.gating import gate
 from navtrack.tracking.models import constant_velocity
 from navtrack.tracking.tracker import TrackerConfig, run_tracker, scan_windows
@@ -69,14 +76,17 @@ def test_auto_config_picks_the_family_from_the_speeds() -> None:
     v = np.full(z.shape, 150.0 / np.sqrt(2))
     air = auto_config(t, z, v)
     assert air.motion == "cv"
-    assert air.config.motion.q == AIRCRAFT_Q
+    assert air.config.imm_q is None
+    assert AIRCRAFT_Q in [tr.q for tr in air.q_trials]  # the search starts at the family's q
     assert air.report_interval_p50_s == pytest.approx(10.0, rel=0.2)
     # ships: half moored (reported speed 0), half moving at 5 m/s
     t, z, ids = _cv_tracks(rng, 8, 1e-3, 10.0, 1800.0, 20.0, 5.0)
     v = np.where((ids % 2 == 0)[:, None], 0.0, 5.0 / np.sqrt(2)) * np.ones((1, 2))
     ships = auto_config(t, z, v)
     assert ships.motion == "imm"
-    assert ships.config.imm_q == SHIP_IMM_Q
+    assert ships.config.imm_q is not None
+    assert ships.config.imm_q[0] == SHIP_IMM_Q[0]  # the quiet model is kept
+    assert SHIP_IMM_Q[1] in [tr.q for tr in ships.q_trials]
     assert ships.stationary_share == pytest.approx(0.5, abs=0.1)
     assert ships.config.sigma_m >= 25.0
 
@@ -149,3 +159,33 @@ def test_auto_on_opensky_meets_the_bars(shared_data) -> None:
     on_h1 = auto_config(t[~h2], en[~h2], vel[~h2]).config
     in_sample = auto_config(t[h2], en[h2], vel[h2]).config
     assert mota(h2, on_h1) >= mota(h2, in_sample) - 0.10
+
+
+@pytest.mark.parametrize("q_true", [0.1, 1e-3])
+def test_q_search_recovers_the_simulated_q(q_true) -> None:
+    # oracle: the simulation's own white-acceleration PSD. The search steps in decades, so
+    # "recovered" means the decade of the truth: the chosen q equals q_true (tolerance a
+    # factor 10^0.5 either side, i.e. the nearest grid point). auto starts from the moving-
+    # ship value 1e-2, one decade from either truth, and must find it bracketed.
+    rng = np.random.default_rng(11)
+    t, z, _ = _cv_tracks(rng, 8, q_true, 10.0, 600.0, 5.0, 10.0, spacing_m=20_000.0)
+    tune = auto_config(t, z)
+    assert tune.motion == "cv"
+    assert tune.config.motion.q == pytest.approx(q_true, rel=10**0.5 - 1)
+    chosen = [tr.q for tr in tune.q_trials].index(tune.config.motion.q)
+    assert 0 < chosen < len(tune.q_trials) - 1  # an interior maximum: the truth was bracketed
+
+
+def test_select_q_weighs_births_then_likelihood() -> None:
+    # select_q: among runs with births within 2 Poisson sigma of the fewest, the likeliest
+    ll = np.zeros(100)
+    trials = [
+        QTrial(0.1, 100, ll - 1.0),  # likeliest but loses targets: 100 births
+        QTrial(1.0, 50, ll - 2.0),
+        QTrial(10.0, 55, ll - 2.5),
+    ]
+    assert select_q(trials, 1) == 1
+    # a likelier run with as few births replaces the reference only beyond 2 standard errors
+    noisy = ll - 2.0 + np.r_[np.full(50, 0.05), np.full(50, -0.04)]
+    assert select_q([trials[1], QTrial(10.0, 52, noisy)], 0) == 0
+    assert select_q([trials[1], QTrial(10.0, 52, ll - 1.9)], 0) == 1

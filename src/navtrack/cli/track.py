@@ -381,6 +381,9 @@ def model_summary(preset: str, cfg: Any, tune: Any) -> dict[str, Any]:
             else f"not fitted: {nf.n_triplets} three-point residuals in "
             f"{tune.sample_detections} detections (sigma at its floor)"
         )
+        out["auto: q search (q m^2/s^3: births, log-likelihood per detection)"] = ", ".join(
+            f"{tr.q:.3g}: {tr.births} {tr.mean_log_likelihood:.3f}" for tr in tune.q_trials
+        )
     return out
 
 

@@ -305,6 +305,10 @@ class TrackerResult:
         Normalised innovation squared ``νᵀ S⁻¹ ν`` of each detection against the track it
         updated, at the prediction, the smallest over the motion models (NaN for detections
         that updated no track; :mod:`navtrack.tracking.autotune` reads it).
+    det_log_likelihood : (N,) float
+        ``log N(z; h(x), S)`` of each detection against the track it updated, mixed over the
+        motion models with their predicted probabilities (NaN for detections that updated no
+        track; the likelihood :mod:`navtrack.tracking.autotune` maximises over q).
     """
 
     det_track: IntArray
@@ -319,6 +323,7 @@ class TrackerResult:
     report_xy: FloatArray
     counts: TrackerCounts
     det_nis: FloatArray = field(default_factory=lambda: np.zeros(0))
+    det_log_likelihood: FloatArray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -1049,6 +1054,7 @@ def run_tracker(
     det_track = np.full(N, -1, dtype=np.int64)
     det_status = np.full(N, DetStatus.SEED, dtype=np.int8)
     det_nis = np.full(N, np.nan)
+    det_ll = np.full(N, np.nan)
     counts = dict.fromkeys(TrackerCounts.__dataclass_fields__, 0)
     now = t[0] if N else 0.0
     starts, ends = scan_windows(t, Z, cfg.scan_window_s, window_separation_m(model))
@@ -1083,6 +1089,7 @@ def run_tracker(
             y = g.innovation[k[used], :, used]  # (h, r, m)
             w = np.linalg.solve(g.S[k[used]], y[..., None])[..., 0]
             det_nis[s0 + used] = np.einsum("hri,hri->hr", y, w).min(axis=1)
+            det_ll[s0 + used] = g.log_likelihood_mix[k[used], used]
             m = manage(store, a.hit, tk, cfg)
             log.updates(tk, m, a.hit)
             _add_counts(counts, a, m)
@@ -1099,7 +1106,9 @@ def run_tracker(
     log.report_until(store, now, now, cfg.motion, inclusive=True)
     if progress is not None:
         progress(N - done)
-    return log.result(det_track, det_status, det_nis, cfg.motion.dim_x, TrackerCounts(**counts))
+    return log.result(
+        det_track, det_status, det_nis, cfg.motion.dim_x, TrackerCounts(**counts), det_ll
+    )
 
 
 def window_separation_m(model: TrackerModel) -> float:
@@ -1173,6 +1182,7 @@ class _Log:
         det_nis: FloatArray,
         n: int,
         counts: TrackerCounts,
+        det_ll: FloatArray,
     ) -> TrackerResult:
         def cat(parts: list, shape: tuple[int, ...], dtype: type) -> np.ndarray:
             return np.concatenate(parts) if parts else np.zeros(shape, dtype=dtype)
@@ -1190,4 +1200,5 @@ class _Log:
             cat(self.rep_xy, (0, 2), float),
             counts,
             det_nis,
+            det_ll,
         )
