@@ -184,25 +184,33 @@ def clusters(W: ArrayLike) -> tuple[int, IntArray]:
     T, M = G.shape
     if T == 0:
         return 0, np.zeros(0, dtype=np.int64)
-    if T > 256:
+    # a track gating nothing is alone; the components are found among the gating tracks only
+    # (a scan of real data gates a few of its many tracks)
+    rows = np.flatnonzero(G.any(axis=1))
+    Gr = G[rows]
+    first = np.arange(T)  # first track of each track's component
+    if rows.size > 256:
         from scipy.sparse import coo_matrix
         from scipy.sparse.csgraph import connected_components
 
-        t, j = np.nonzero(G)
-        n = T + M
-        A = coo_matrix((np.ones(t.size), (t, T + j)), shape=(n, n))
+        t, j = np.nonzero(Gr)
+        n = rows.size + M
+        A = coo_matrix((np.ones(t.size), (t, rows.size + j)), shape=(n, n))
         _, lab = connected_components(A, directed=False)
-        _, inv = np.unique(lab[:T], return_index=False, return_inverse=True)
-        return int(inv.max()) + 1, inv.astype(np.int64)
-    Gi = G.astype(np.int64)
-    R = (Gi @ Gi.T > 0) | np.eye(T, dtype=bool)
-    while True:  # transitive closure by repeated squaring
-        Ri = R.astype(np.int64)
-        R2 = (Ri @ Ri) > 0
-        if np.array_equal(R2, R):
-            break
-        R = R2
-    first = np.argmax(R, axis=1)
+        lab = lab[: rows.size]
+        lowest = np.full(lab.max() + 1, rows.size)
+        np.minimum.at(lowest, lab, np.arange(rows.size))
+        first[rows] = rows[lowest[lab]]
+    elif rows.size:
+        Gi = Gr.astype(np.int64)
+        R = (Gi @ Gi.T > 0) | np.eye(rows.size, dtype=bool)
+        while True:  # transitive closure by repeated squaring
+            Ri = R.astype(np.int64)
+            R2 = (Ri @ Ri) > 0
+            if np.array_equal(R2, R):
+                break
+            R = R2
+        first[rows] = rows[np.argmax(R, axis=1)]
     _, inv = np.unique(first, return_inverse=True)
     return int(inv.max()) + 1, inv.astype(np.int64)
 
@@ -239,9 +247,12 @@ def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMargin
         if np.any(s <= 0):
             raise ValueError("a track has all association weights zero")
         beta[single] = W[single] / s
+    done = _one_shared(W, gated, lab, size, beta)
+    method[done] = JpdaMethod.EXACT
     order = np.argsort(lab, kind="stable")
-    bounds = np.searchsorted(lab[order], np.flatnonzero(size > 1))
-    for c, b0 in zip(np.flatnonzero(size > 1), bounds, strict=True):
+    rest = np.flatnonzero((size > 1) & ~np.bincount(lab[done], minlength=n_cl).astype(bool))
+    bounds = np.searchsorted(lab[order], rest)
+    for c, b0 in zip(rest, bounds, strict=True):
         tr = order[b0 : b0 + size[c]]
         cols = np.flatnonzero(gated[tr].any(axis=0))
         Wc = W[np.ix_(tr, np.concatenate([[0], cols + 1]))]
@@ -264,6 +275,46 @@ def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMargin
         beta[tr, 0] = bc[:, 0]
         beta[np.ix_(tr, cols + 1)] = bc[:, 1:]
     return JpdaMarginals(beta, lab, method, err, n_events)
+
+
+def _one_shared(
+    W: FloatArray, gated: BoolArray, lab: IntArray, size: IntArray, beta: FloatArray
+) -> BoolArray:
+    """Exact marginals, all at once, of the clusters that share a single measurement.
+
+    In such a cluster every track gates the shared measurement ``s`` and maybe private ones.
+    With ``w0_t`` the weight of track ``t``'s options that leave ``s`` free (missed and its
+    private measurements) and ``r_t = W[t, s] / w0_t``, the joint events are "nobody takes
+    ``s``" (weight ``prod w0``) and "``t`` takes ``s``" (``r_t prod w0``), so
+    ``beta[t, s] = r_t / (1 + sum r)``, and the rest of track ``t``'s probability is split over
+    its other options in proportion to their weights (no other track competes for them).
+    Harbour scans are mostly such clusters: one report inside the gates of several moored ships.
+    Clusters with a ``w0_t = 0`` (``P_D P_G = 1`` and nothing private) are left to the general
+    method. Writes ``beta``'s rows of the solved tracks; returns them as a (T,) mask.
+    """
+    shared = gated.sum(axis=0) >= 2
+    n_cl = size.size
+    col_cluster = lab[np.argmax(gated[:, shared], axis=0)]
+    one = (size > 1) & (np.bincount(col_cluster, minlength=n_cl) == 1)
+    done = one[lab]
+    if not done.any():
+        return done
+    t = np.flatnonzero(done)
+    other = np.where(shared, 0.0, W[t, 1:])  # private measurements (0 outside the gate)
+    w0 = W[t, 0] + other.sum(axis=1)
+    bad = np.bincount(lab[t], w0 <= 0, minlength=n_cl) > 0
+    if bad.any():
+        keep = ~bad[lab[t]]
+        done[t[~keep]] = False
+        t, other, w0 = t[keep], other[keep], w0[keep]
+    s = np.argmax(gated[t] & shared, axis=1)
+    r = W[t, 1 + s] / w0
+    b = r / (1.0 + np.bincount(lab[t], r, minlength=n_cl))[lab[t]]
+    scale = (1.0 - b) / w0
+    beta[t, 0] = W[t, 0] * scale
+    beta[t, 1:] = other * scale[:, None]
+    beta[t, 1 + s] = b
+    return done
 
 
 # ------------------------------------------------------------------ exact: tensor elimination
