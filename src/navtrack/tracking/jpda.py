@@ -24,6 +24,13 @@ Exact marginals by variable elimination over measurements
     by the efficient hypothesis management of Maskell et al. (2004) and Horridge & Maskell
     (2006), written as dense tensor contractions instead of a tree of nodes.
 
+Small clusters
+    A cluster that shares a single measurement (a report inside the gates of several moored
+    ships) has closed-form marginals, computed for all such clusters of a scan at once
+    (``_one_shared``); a cluster of at most ``DENSE_EVENTS`` joint events is enumerated densely
+    (:func:`jpda_marginals_batch`). Both are exact, like the elimination, and cheaper for these
+    shapes.
+
 k-best approximation
     When ``a`` would exceed ``JpdaConfig.max_exact_bits`` the cluster's events are the ``k`` most
     probable ones from Murty's algorithm (costs ``-log W``). The neglected mass ``R`` is bounded
@@ -71,6 +78,7 @@ __all__ = [
     "jpda_marginals_batch",
     "jpda_step",
     "jpda_step_batch",
+    "n_joint_events",
     "pda_update",
 ]
 
@@ -211,8 +219,8 @@ def clusters(W: ArrayLike) -> tuple[int, IntArray]:
                 break
             R = R2
         first[rows] = rows[np.argmax(R, axis=1)]
-    _, inv = np.unique(first, return_inverse=True)
-    return int(inv.max()) + 1, inv.astype(np.int64)
+    root = first == np.arange(T)  # the first track of its component
+    return int(np.count_nonzero(root)), (np.cumsum(root) - 1)[first].astype(np.int64)
 
 
 def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMarginals:
@@ -256,8 +264,8 @@ def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMargin
         tr = order[b0 : b0 + size[c]]
         cols = np.flatnonzero(gated[tr].any(axis=0))
         Wc = W[np.ix_(tr, np.concatenate([[0], cols + 1]))]
-        if tr.size <= 3 and cols.size <= 8:
-            # tiny cluster: dense enumeration of its joint events is cheapest
+        if n_joint_events(tr.size, cols.size) <= DENSE_EVENTS:
+            # small cluster: dense enumeration of its joint events is cheapest
             bc = jpda_marginals_batch(Wc, joint_events(tr.size, cols.size))
             method[tr] = JpdaMethod.EXACT
             beta[tr, 0] = bc[:, 0]
@@ -319,6 +327,9 @@ def _one_shared(
 
 # ------------------------------------------------------------------ exact: tensor elimination
 
+DENSE_EVENTS = 2500  # joint events up to which a cluster is enumerated (faster than elimination)
+SMALL_ACTIVE = 6  # shared measurements of a cluster up to which its tracks are not reordered
+
 
 def _order_and_sets(G: BoolArray) -> tuple[IntArray, IntArray, list[list[int]]]:
     """Track order, shared-measurement columns and, per ordered track, its shared columns."""
@@ -327,12 +338,14 @@ def _order_and_sets(G: BoolArray) -> tuple[IntArray, IntArray, list[list[int]]]:
 
     shared = np.flatnonzero(G.sum(axis=0) >= 2)
     Gs = G[:, shared]
-    if G.shape[0] <= 4:  # any order is as good for so few tracks
+    if G.shape[0] <= 4 or shared.size <= SMALL_ACTIVE:
+        # any order is as good for so few tracks, and with so few shared measurements no order
+        # makes the messages larger than 2**SMALL_ACTIVE entries
         order = np.arange(G.shape[0])
     else:
         conflict = (Gs.astype(np.int64) @ Gs.T.astype(np.int64)) > 0
         order = np.asarray(reverse_cuthill_mckee(csr_matrix(conflict), symmetric_mode=True))
-    per = [[int(j) for j in np.flatnonzero(Gs[t])] for t in order]
+    per = [[int(j) for j in Gs[t].nonzero()[0]] for t in order]
     return order.astype(np.int64), shared.astype(np.int64), per
 
 
@@ -603,6 +616,12 @@ def _jpda_pipeline(
     return JpdaStep(xn, Pn, xp, Pp, jm)
 
 
+def n_joint_events(n_tracks: int, n_meas: int) -> int:
+    """Number of joint events of ``n_tracks`` tracks and ``n_meas`` measurements,
+    ``sum_k C(T, k) · M! / (M - k)!`` (the rows of :func:`joint_events`)."""
+    return sum(comb(n_tracks, k) * perm(n_meas, k) for k in range(min(n_tracks, n_meas) + 1))
+
+
 @lru_cache(maxsize=256)
 def joint_events(n_tracks: int, n_meas: int) -> IntArray:
     """Every joint event of ``n_tracks`` tracks and ``n_meas`` measurements.
@@ -689,7 +708,7 @@ def jpda_step_batch(
     Zf = np.where(ok[..., None], Z, 0.0)
     if not np.all(np.isfinite(Zf)):
         raise ValueError("z: valid measurements must be finite")
-    n_ev = sum(comb(T, k) * perm(M, k) for k in range(min(T, M) + 1))
+    n_ev = n_joint_events(T, M)
 
     def marginals(W: FloatArray) -> tuple[FloatArray, JpdaMarginals]:
         if n_ev <= max_events:
