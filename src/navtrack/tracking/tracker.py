@@ -591,7 +591,9 @@ def gate_scan(
     angles = bool(meas.angle_mask.any())
     cand = None
     if model.config.pregate_pairs < T * r * M and not angles:
-        margin = 0.0 if v is None else np.abs(dt_s).max() * np.hypot(v[:, 0], v[:, 1])
+        margin = 0.0
+        if v is not None and dt_s is not None:
+            margin = np.abs(dt_s).max() * np.hypot(v[:, 0], v[:, 1])
         cand = kdtree_pregate(zp, S, z, model.gamma, margin)
     g = gate(
         zp,
@@ -602,7 +604,7 @@ def gate_scan(
         candidates=cand,
         pair_offset=offset,
     )
-    valid = g.valid.reshape(T, r, M).any(axis=1)
+    valid = np.asarray(g.valid.reshape(T, r, M).any(axis=1), dtype=bool)
     ll_rm = g.log_likelihood().reshape(T, r, M)
     if cand is not None:  # pairs left out by the pre-gate (d2 = inf)
         ll_rm = np.where(np.isfinite(ll_rm), ll_rm, -1e300)
@@ -804,7 +806,7 @@ def manage(store: TrackStore, hit: BoolArray, t_s: float, config: TrackerConfig)
     store.confirmed |= new_conf
     xc, Pc = store.combined()
     pos = list(config.motion.position_index)
-    std = np.sqrt(0.5 * np.trace(Pc[:, pos][:, :, pos], axis1=-2, axis2=-1))
+    std = np.sqrt(0.5 * Pc[:, pos, pos].sum(axis=-1))  # (the trace of the position block)
     coast = t_s - store.last_s > config.max_coast_s
     cov = std > config.max_position_std_m
     conf = store.confirmed.copy()
