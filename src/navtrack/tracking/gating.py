@@ -135,8 +135,9 @@ def gate(
     if T == 0 or M == 0:
         d2 = np.zeros(y.shape[:-1])
     else:
-        # whitened innovations w = L⁻¹ y for every (t, j): one inverse per track
-        w = np.einsum("...tik,...tjk->...tji", np.linalg.inv(L), y)
+        # whitened innovations w = L⁻¹ y for every (t, j): one inverse per track, applied to
+        # the track's M innovations by one stacked product
+        w = y @ np.swapaxes(np.linalg.inv(L), -1, -2)
         d2 = np.einsum("...i,...i->...", w, w)
     if candidates is not None:
         d2 = np.where(candidates, d2, np.inf)

@@ -50,9 +50,13 @@ def imm_mix(
     Pi = np.asarray(Pi, dtype=float)
     c = mu @ Pi  # (..., r)
     w = mu[..., :, None] * Pi / np.where(c > 0, c, 1.0)[..., None, :]  # w[i, j] = mu_{i|j}
-    x0 = np.einsum("...ij,...in->...jn", w, x)
+    wt = np.swapaxes(w, -1, -2)  # (..., j, i)
+    x0 = wt @ x
     d = x[..., None, :, :] - x0[..., :, None, :]  # (..., j, i, n)
-    P0 = np.einsum("...ij,...inm->...jnm", w, P) + np.einsum("...ij,...jin,...jim->...jnm", w, d, d)
+    # sums over i as stacked products: P0_j = sum_i w_ij (P_i + d_ji d_jiᵀ)
+    n = x.shape[-1]
+    P0 = (wt @ P.reshape(*P.shape[:-2], n * n)).reshape(P.shape)
+    P0 += np.swapaxes(d * wt[..., None], -1, -2) @ d
     return x0, P0, c
 
 
@@ -71,7 +75,10 @@ def imm_combine(x: ArrayLike, P: ArrayLike, mu: ArrayLike) -> tuple[FloatArray, 
     x = np.asarray(x, dtype=float)
     P = np.asarray(P, dtype=float)
     mu = np.asarray(mu, dtype=float)
-    xc = np.einsum("...r,...rn->...n", mu, x)
+    n = x.shape[-1]
+    m = mu[..., None, :]  # (..., 1, r): the sums over the models as stacked products
+    xc = (m @ x)[..., 0, :]
     d = x - xc[..., None, :]
-    Pc = np.einsum("...r,...rnm->...nm", mu, P) + np.einsum("...r,...rn,...rm->...nm", mu, d, d)
+    spread = P + d[..., :, None] * d[..., None, :]
+    Pc = (m @ spread.reshape(*P.shape[:-2], n * n)).reshape(*P.shape[:-3], n, n)
     return xc, Pc

@@ -24,6 +24,13 @@ Exact marginals by variable elimination over measurements
     by the efficient hypothesis management of Maskell et al. (2004) and Horridge & Maskell
     (2006), written as dense tensor contractions instead of a tree of nodes.
 
+Small clusters
+    A cluster that shares a single measurement (a report inside the gates of several moored
+    ships) has closed-form marginals, computed for all such clusters of a scan at once
+    (``_one_shared``); a cluster of at most ``DENSE_EVENTS`` joint events is enumerated densely
+    (:func:`jpda_marginals_batch`). Both are exact, like the elimination, and cheaper for these
+    shapes.
+
 k-best approximation
     When ``a`` would exceed ``JpdaConfig.max_exact_bits`` the cluster's events are the ``k`` most
     probable ones from Murty's algorithm (costs ``-log W``). The neglected mass ``R`` is bounded
@@ -71,6 +78,7 @@ __all__ = [
     "jpda_marginals_batch",
     "jpda_step",
     "jpda_step_batch",
+    "n_joint_events",
     "pda_update",
 ]
 
@@ -184,27 +192,35 @@ def clusters(W: ArrayLike) -> tuple[int, IntArray]:
     T, M = G.shape
     if T == 0:
         return 0, np.zeros(0, dtype=np.int64)
-    if T > 256:
+    # a track gating nothing is alone; the components are found among the gating tracks only
+    # (a scan of real data gates a few of its many tracks)
+    rows = np.flatnonzero(G.any(axis=1))
+    Gr = G[rows]
+    first = np.arange(T)  # first track of each track's component
+    if rows.size > 256:
         from scipy.sparse import coo_matrix
         from scipy.sparse.csgraph import connected_components
 
-        t, j = np.nonzero(G)
-        n = T + M
-        A = coo_matrix((np.ones(t.size), (t, T + j)), shape=(n, n))
+        t, j = np.nonzero(Gr)
+        n = rows.size + M
+        A = coo_matrix((np.ones(t.size), (t, rows.size + j)), shape=(n, n))
         _, lab = connected_components(A, directed=False)
-        _, inv = np.unique(lab[:T], return_index=False, return_inverse=True)
-        return int(inv.max()) + 1, inv.astype(np.int64)
-    Gi = G.astype(np.int64)
-    R = (Gi @ Gi.T > 0) | np.eye(T, dtype=bool)
-    while True:  # transitive closure by repeated squaring
-        Ri = R.astype(np.int64)
-        R2 = (Ri @ Ri) > 0
-        if np.array_equal(R2, R):
-            break
-        R = R2
-    first = np.argmax(R, axis=1)
-    _, inv = np.unique(first, return_inverse=True)
-    return int(inv.max()) + 1, inv.astype(np.int64)
+        lab = lab[: rows.size]
+        lowest = np.full(lab.max() + 1, rows.size)
+        np.minimum.at(lowest, lab, np.arange(rows.size))
+        first[rows] = rows[lowest[lab]]
+    elif rows.size:
+        Gi = Gr.astype(np.int64)
+        R = (Gi @ Gi.T > 0) | np.eye(rows.size, dtype=bool)
+        while True:  # transitive closure by repeated squaring
+            Ri = R.astype(np.int64)
+            R2 = (Ri @ Ri) > 0
+            if np.array_equal(R2, R):
+                break
+            R = R2
+        first[rows] = rows[np.argmax(R, axis=1)]
+    root = first == np.arange(T)  # the first track of its component
+    return int(np.count_nonzero(root)), (np.cumsum(root) - 1)[first].astype(np.int64)
 
 
 def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMarginals:
@@ -239,14 +255,17 @@ def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMargin
         if np.any(s <= 0):
             raise ValueError("a track has all association weights zero")
         beta[single] = W[single] / s
+    done = _one_shared(W, gated, lab, size, beta)
+    method[done] = JpdaMethod.EXACT
     order = np.argsort(lab, kind="stable")
-    bounds = np.searchsorted(lab[order], np.flatnonzero(size > 1))
-    for c, b0 in zip(np.flatnonzero(size > 1), bounds, strict=True):
+    rest = np.flatnonzero((size > 1) & ~np.bincount(lab[done], minlength=n_cl).astype(bool))
+    bounds = np.searchsorted(lab[order], rest)
+    for c, b0 in zip(rest, bounds, strict=True):
         tr = order[b0 : b0 + size[c]]
         cols = np.flatnonzero(gated[tr].any(axis=0))
         Wc = W[np.ix_(tr, np.concatenate([[0], cols + 1]))]
-        if tr.size <= 3 and cols.size <= 8:
-            # tiny cluster: dense enumeration of its joint events is cheapest
+        if n_joint_events(tr.size, cols.size) <= DENSE_EVENTS:
+            # small cluster: dense enumeration of its joint events is cheapest
             bc = jpda_marginals_batch(Wc, joint_events(tr.size, cols.size))
             method[tr] = JpdaMethod.EXACT
             beta[tr, 0] = bc[:, 0]
@@ -266,7 +285,50 @@ def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMargin
     return JpdaMarginals(beta, lab, method, err, n_events)
 
 
+def _one_shared(
+    W: FloatArray, gated: BoolArray, lab: IntArray, size: IntArray, beta: FloatArray
+) -> BoolArray:
+    """Exact marginals, all at once, of the clusters that share a single measurement.
+
+    In such a cluster every track gates the shared measurement ``s`` and maybe private ones.
+    With ``w0_t`` the weight of track ``t``'s options that leave ``s`` free (missed and its
+    private measurements) and ``r_t = W[t, s] / w0_t``, the joint events are "nobody takes
+    ``s``" (weight ``prod w0``) and "``t`` takes ``s``" (``r_t prod w0``), so
+    ``beta[t, s] = r_t / (1 + sum r)``, and the rest of track ``t``'s probability is split over
+    its other options in proportion to their weights (no other track competes for them).
+    Harbour scans are mostly such clusters: one report inside the gates of several moored ships.
+    Clusters with a ``w0_t = 0`` (``P_D P_G = 1`` and nothing private) are left to the general
+    method. Writes ``beta``'s rows of the solved tracks; returns them as a (T,) mask.
+    """
+    shared = gated.sum(axis=0) >= 2
+    n_cl = size.size
+    col_cluster = lab[np.argmax(gated[:, shared], axis=0)]
+    one = (size > 1) & (np.bincount(col_cluster, minlength=n_cl) == 1)
+    done = one[lab]
+    if not done.any():
+        return done
+    t = np.flatnonzero(done)
+    other = np.where(shared, 0.0, W[t, 1:])  # private measurements (0 outside the gate)
+    w0 = W[t, 0] + other.sum(axis=1)
+    bad = np.bincount(lab[t], w0 <= 0, minlength=n_cl) > 0
+    if bad.any():
+        keep = ~bad[lab[t]]
+        done[t[~keep]] = False
+        t, other, w0 = t[keep], other[keep], w0[keep]
+    s = np.argmax(gated[t] & shared, axis=1)
+    r = W[t, 1 + s] / w0
+    b = r / (1.0 + np.bincount(lab[t], r, minlength=n_cl))[lab[t]]
+    scale = (1.0 - b) / w0
+    beta[t, 0] = W[t, 0] * scale
+    beta[t, 1:] = other * scale[:, None]
+    beta[t, 1 + s] = b
+    return done
+
+
 # ------------------------------------------------------------------ exact: tensor elimination
+
+DENSE_EVENTS = 2500  # joint events up to which a cluster is enumerated (faster than elimination)
+SMALL_ACTIVE = 6  # shared measurements of a cluster up to which its tracks are not reordered
 
 
 def _order_and_sets(G: BoolArray) -> tuple[IntArray, IntArray, list[list[int]]]:
@@ -276,12 +338,14 @@ def _order_and_sets(G: BoolArray) -> tuple[IntArray, IntArray, list[list[int]]]:
 
     shared = np.flatnonzero(G.sum(axis=0) >= 2)
     Gs = G[:, shared]
-    if G.shape[0] <= 4:  # any order is as good for so few tracks
+    if G.shape[0] <= 4 or shared.size <= SMALL_ACTIVE:
+        # any order is as good for so few tracks, and with so few shared measurements no order
+        # makes the messages larger than 2**SMALL_ACTIVE entries
         order = np.arange(G.shape[0])
     else:
         conflict = (Gs.astype(np.int64) @ Gs.T.astype(np.int64)) > 0
         order = np.asarray(reverse_cuthill_mckee(csr_matrix(conflict), symmetric_mode=True))
-    per = [[int(j) for j in np.flatnonzero(Gs[t])] for t in order]
+    per = [[int(j) for j in Gs[t].nonzero()[0]] for t in order]
     return order.astype(np.int64), shared.astype(np.int64), per
 
 
@@ -552,6 +616,12 @@ def _jpda_pipeline(
     return JpdaStep(xn, Pn, xp, Pp, jm)
 
 
+def n_joint_events(n_tracks: int, n_meas: int) -> int:
+    """Number of joint events of ``n_tracks`` tracks and ``n_meas`` measurements,
+    ``sum_k C(T, k) · M! / (M - k)!`` (the rows of :func:`joint_events`)."""
+    return sum(comb(n_tracks, k) * perm(n_meas, k) for k in range(min(n_tracks, n_meas) + 1))
+
+
 @lru_cache(maxsize=256)
 def joint_events(n_tracks: int, n_meas: int) -> IntArray:
     """Every joint event of ``n_tracks`` tracks and ``n_meas`` measurements.
@@ -638,7 +708,7 @@ def jpda_step_batch(
     Zf = np.where(ok[..., None], Z, 0.0)
     if not np.all(np.isfinite(Zf)):
         raise ValueError("z: valid measurements must be finite")
-    n_ev = sum(comb(T, k) * perm(M, k) for k in range(min(T, M) + 1))
+    n_ev = n_joint_events(T, M)
 
     def marginals(W: FloatArray) -> tuple[FloatArray, JpdaMarginals]:
         if n_ev <= max_events:

@@ -43,6 +43,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import IntEnum
+from functools import lru_cache
 from typing import Literal
 
 import numpy as np
@@ -230,6 +231,11 @@ class TrackerModel:
     measurement: MeasurementModel
     gamma: float
     jpda: JpdaConfig
+
+    @property
+    def q(self) -> FloatArray:
+        """(r,) process-noise level of each motion model."""
+        return np.array([m.q for m in self.motions])
 
     @staticmethod
     def from_config(config: TrackerConfig) -> TrackerModel:
@@ -513,8 +519,15 @@ def predict(store: TrackStore, dt: float, model: TrackerModel) -> None:
         store.mu[:] = c_pred
     else:
         x0, P0 = store.x, store.P
-    Qm = np.stack([m.Q(dt) for m in model.motions])
+    Qm = model.q[:, None, None] * _unit_motion(model.config.motion).Q(dt)
     store.x[:], store.P[:] = kf_predict(x0, P0, model.config.motion.F(dt), Qm)
+
+
+@lru_cache(maxsize=8)
+def _unit_motion(motion: LinearMotion) -> LinearMotion:
+    """``motion`` with ``q = 1``: ``Q(dt)`` is linear in ``q``, so one evaluation scaled by each
+    model's ``q`` gives the IMM's (the same products as ``Q(dt)`` of each model)."""
+    return LinearMotion(motion.ndim, motion.order, 1.0, motion.noise)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -530,6 +543,8 @@ class ScanGate:
     log_likelihood : (T, r, M) ``log N(z_j; h(x_t), S_t)`` per model (``-1e300`` where the
         pre-gate did not compute it)
     log_likelihood_mix : (T, M) log of the model mixture with the predicted probabilities
+    d2 : (T, r, M) normalised innovation squared ``νᵀ S⁻¹ ν`` per model (``inf`` where the
+        pre-gate did not compute it)
     """
 
     innovation: FloatArray
@@ -538,6 +553,7 @@ class ScanGate:
     valid: BoolArray
     log_likelihood: FloatArray
     log_likelihood_mix: FloatArray
+    d2: FloatArray
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -573,27 +589,37 @@ def gate_scan(
     xf = store.x.reshape(T * r, n)
     S, K = innovation_gain(store.P.reshape(T * r, n, n), meas.jacobian(xf), meas.R)
     zp = meas.h(xf)
-    offset = margin = None
-    if dt_s is not None and np.any(dt_s != 0):
+    v = offset = None
+    if dt_s is not None and (dt_s != 0).any():
         v = xf[:, list(model.config.motion.velocity_index)]  # (T r, 2)
         offset = dt_s[None, :, None] * v[:, None, :]
-        margin = np.abs(dt_s).max() * np.hypot(v[:, 0], v[:, 1])
-    pregate = model.config.pregate_pairs < T * r * M and not np.any(meas.angle_mask)
-    cand = (
-        kdtree_pregate(zp, S, z, model.gamma, 0.0 if margin is None else margin)
-        if pregate
-        else None
+    angles = bool(meas.angle_mask.any())
+    cand = None
+    if model.config.pregate_pairs < T * r * M and not angles:
+        margin = 0.0
+        if v is not None and dt_s is not None:
+            margin = np.abs(dt_s).max() * np.hypot(v[:, 0], v[:, 1])
+        cand = kdtree_pregate(zp, S, z, model.gamma, margin)
+    g = gate(
+        zp,
+        S,
+        z,
+        model.gamma,
+        angle_mask=meas.angle_mask if angles else None,
+        candidates=cand,
+        pair_offset=offset,
     )
-    g = gate(zp, S, z, model.gamma, angle_mask=meas.angle_mask, candidates=cand, pair_offset=offset)
     valid = np.asarray(g.valid.reshape(T, r, M).any(axis=1), dtype=bool)
     ll_rm = g.log_likelihood().reshape(T, r, M)
-    ll_rm = np.where(np.isfinite(ll_rm), ll_rm, -1e300)
-    # mixture likelihood over models with the predicted model probabilities
-    c_pred = store.mu
-    logc = np.log(np.where(c_pred > 0, c_pred, 1e-300))[:, :, None]
-    a = logc + ll_rm
-    amax = a.max(axis=1, keepdims=True)
-    ll_mix = (amax + np.log(np.exp(a - amax).sum(axis=1, keepdims=True)))[:, 0]
+    if cand is not None:  # pairs left out by the pre-gate (d2 = inf)
+        ll_rm = np.where(np.isfinite(ll_rm), ll_rm, -1e300)
+    if r == 1:  # the mixture of one model is the model
+        ll_mix = ll_rm[:, 0]
+    else:  # mixture likelihood over models with the predicted model probabilities
+        c_pred = store.mu
+        a = np.log(np.where(c_pred > 0, c_pred, 1e-300))[:, :, None] + ll_rm
+        amax = a.max(axis=1)
+        ll_mix = amax + np.log(np.exp(a - amax[:, None]).sum(axis=1))
     return ScanGate(
         g.innovation.reshape(T, r, M, m),
         S.reshape(T, r, m, m),
@@ -601,6 +627,7 @@ def gate_scan(
         valid,
         ll_rm,
         ll_mix,
+        g.d2.reshape(T, r, M),
     )
 
 
@@ -784,7 +811,7 @@ def manage(store: TrackStore, hit: BoolArray, t_s: float, config: TrackerConfig)
     store.confirmed |= new_conf
     xc, Pc = store.combined()
     pos = list(config.motion.position_index)
-    std = np.sqrt(0.5 * np.trace(Pc[:, pos][:, :, pos], axis1=-2, axis2=-1))
+    std = np.sqrt(0.5 * Pc[:, pos, pos].sum(axis=-1))  # (the trace of the position block)
     coast = t_s - store.last_s > config.max_coast_s
     cov = std > config.max_position_std_m
     conf = store.confirmed.copy()
@@ -1086,9 +1113,7 @@ def run_tracker(
             counts["ambiguous_detections"] += int(
                 np.count_nonzero(g.valid[store.confirmed].sum(axis=0) >= 2)
             )
-            y = g.innovation[k[used], :, used]  # (h, r, m)
-            w = np.linalg.solve(g.S[k[used]], y[..., None])[..., 0]
-            det_nis[s0 + used] = np.einsum("hri,hri->hr", y, w).min(axis=1)
+            det_nis[s0 + used] = g.d2[k[used], :, used].min(axis=1)
             det_ll[s0 + used] = g.log_likelihood_mix[k[used], used]
             m = manage(store, a.hit, tk, cfg)
             log.updates(tk, m, a.hit)
