@@ -289,10 +289,10 @@ def _sensor_terms(
     for s, zs in enumerate(z):
         Z[s, : len(zs)] = zs
         ok[s, : len(zs)] = True
-    H = np.stack([model.jacobian(xp) for model in sensors])
-    R = np.stack([model.R for model in sensors])[:, None]
+    H = np.array([model.jacobian(xp) for model in sensors])
+    R = np.array([model.R for model in sensors])[:, None]
     Sg, K = innovation_gain(Pp, H, R)
-    zp = np.stack([model.h(xp) for model in sensors])
+    zp = np.array([model.h(xp) for model in sensors])
     pg = config.gate_probability
     g = gate(zp, Sg, Z, chi2_threshold(pg, m), angle_mask=sensors[0].angle_mask)
     valid = g.valid & ok[:, None, :]
@@ -340,14 +340,14 @@ def tuple_marginals(
     """
     bs = [np.asarray(b, dtype=float) for b in betas]
     T = bs[0].shape[0]
-    opts = [np.flatnonzero(np.any(b > 0, axis=0)) for b in bs]
+    opts = [np.flatnonzero((b > 0).any(axis=0)) for b in bs]
     p = np.ones(T)
     for s, (b, o) in enumerate(zip(bs, opts, strict=True)):
         p = p[..., None] * b[:, o].reshape(T, *(1,) * s, o.size)
     idx = np.nonzero(p)
     beta = p[idx]
     target = idx[0].astype(np.int64)
-    L = np.stack([o[i] for o, i in zip(opts, idx[1:], strict=True)], axis=-1).astype(np.int64)
+    L = np.array([o[i] for o, i in zip(opts, idx[1:], strict=True)], dtype=np.int64).T
     return target, L, beta / np.bincount(target, beta, T)[target]
 
 
@@ -383,7 +383,7 @@ def _stacked(
     P = Pp[target]
     for s, model in enumerate(sensors):
         hit = L[:, s] > 0
-        if not np.any(hit):
+        if not hit.any():
             continue
         t = target[hit]
         H = terms.H[s, t]
@@ -448,9 +448,10 @@ def equivalent_measurement(
     rows ``o`` of the identity.
 
     All tuples are solved in one batch: each iteration evaluates every sensor's model once
-    for all tuples, whitens the residuals and Jacobians (``R_s⁻¹ = C_sᵀ C_s``), forms every
-    tuple's normal equations with one ``einsum`` (the sensors' terms masked by ``hit``) and
-    solves the stacked ``n_o x n_o`` systems; a tuple whose step fell below ``tol`` is frozen
+    for all tuples, stacks the sensors' rows (``S m`` per tuple, masked by ``hit``), whitens
+    them with one matrix product (``R_s⁻¹ = C_sᵀ C_s``), forms every tuple's normal equations
+    by a stacked matrix product and solves the stacked ``n_o x n_o`` systems (closed form for
+    ``n_o = 2``); a tuple whose step fell below ``tol`` is frozen
     (convergence mask) and the loop ends when all are.
 
     Parameters
@@ -485,44 +486,64 @@ def equivalent_measurement(
         J0 = np.concatenate([model.jacobian(x_ref).reshape(-1, n) for model in sensors])
     else:
         J0 = np.asarray(linearised[0]).reshape(-1, n)
-    o = np.flatnonzero(np.any(J0 != 0.0, axis=0))
+    o = np.flatnonzero((J0 != 0.0).any(axis=0))
     if any(model.dim_z < o.size for model in sensors):
         raise ValueError(
             f"equivalent_measurement: every sensor must observe the {o.size} state "
             f"components {o.tolist()} alone (dim_z >= {o.size})"
         )
-    if not np.all(np.any(hit, axis=1)):
+    if not np.all(hit.any(axis=1)):
         raise ValueError("equivalent_measurement: every tuple needs one measurement")
-    # whitening C_s (R_s⁻¹ = C_sᵀ C_s), masked where a sensor is not in the tuple
-    C = np.swapaxes(np.linalg.cholesky(np.linalg.inv([model.R for model in sensors])), -1, -2)
-    Cw = C[:, None] * np.swapaxes(hit, 0, 1)[:, :, None, None]  # (S, n_L, m, m)
-    angle = np.stack([model.angle_mask for model in sensors])[:, None, :]  # (S, 1, m)
-    zs = np.swapaxes(z, 0, 1)  # (S, n_L, m)
-    x = np.broadcast_to(x_ref, (len(z), n)).copy()
-    active = np.ones(len(z), dtype=bool)
+    n_L, S_, m = z.shape
+    # the sensors' measurements stacked, k = s m + i: whitening Wᵀ (block diagonal of the
+    # C_sᵀ, R_s⁻¹ = C_sᵀ C_s) on the right of row vectors, the tuples' sensors as a 0/1 mask
+    Wt = np.zeros((S_ * m, S_ * m))
+    for s, model in enumerate(sensors):
+        Wt[s * m : (s + 1) * m, s * m : (s + 1) * m] = np.linalg.cholesky(np.linalg.inv(model.R))
+    mask = np.repeat(hit, m, axis=1).astype(float)  # (n_L, S m)
+    angle = np.concatenate([model.angle_mask for model in sensors])
+    zk = z.reshape(n_L, S_ * m)
+    x = np.broadcast_to(x_ref, (n_L, n)).copy()
+    active = np.ones(n_L, dtype=bool)
     for it in range(iterations):
         if it == 0 and linearised is not None:
-            J = np.swapaxes(linearised[0][..., o], 0, 1)  # (S, n_L, m, n_o)
-            r = np.swapaxes(linearised[1], 0, 1)
+            Jt = np.asarray(linearised[0])[..., o].transpose(0, 3, 1, 2).reshape(n_L, o.size, -1)
+            r = np.asarray(linearised[1]).reshape(n_L, -1)
         else:
-            J = np.stack([model.jacobian(x)[..., o] for model in sensors])
-            r = zs - np.stack([model.h(x) for model in sensors])
+            Jt = np.concatenate(
+                [np.swapaxes(model.jacobian(x)[..., o], -1, -2) for model in sensors], axis=-1
+            )  # (n_L, n_o, S m): the transposed Jacobians
+            r = zk - np.concatenate([model.h(x) for model in sensors], axis=-1)
             r = np.where(angle, wrap_angle(r), r)
-        A = Cw @ J  # whitened Jacobians (S, n_L, m, n_o)
-        info = np.einsum("slai,slaj->lij", A, A)
-        grad = np.einsum("slai,sla->li", A, (Cw @ r[..., None])[..., 0])
-        step = np.linalg.solve(info, grad[..., None])[..., 0]
+        Bt = (Jt.reshape(-1, S_ * m) @ Wt).reshape(Jt.shape) * mask[:, None, :]
+        info = Bt @ np.swapaxes(Bt, -1, -2)
+        cov = _inv_spd(info)
+        step = np.einsum("lij,lj->li", cov, np.einsum("lik,lk->li", Bt, (r @ Wt) * mask))
         step[~active] = 0.0
         x[:, o] += step
         if it == 0:
-            first = x.copy(), info
+            first = x.copy(), cov
         active &= np.einsum("li,lij,lj->l", step, info, step) >= tol * tol
-        if not np.any(active):
+        if not active.any():
             break
-    if np.any(active):  # not converged: the first step, linearised at x_ref
-        x[active], info[active] = first[0][active], first[1][active]
-    R_eq = np.asarray(np.linalg.inv(info), dtype=float)
-    return o.astype(np.int64), x[:, o], 0.5 * (R_eq + np.swapaxes(R_eq, -1, -2))
+    if active.any():  # not converged: the first step, linearised at x_ref
+        x[active], cov[active] = first[0][active], first[1][active]
+    return o.astype(np.int64), x[:, o], cov
+
+
+def _inv_spd(A: FloatArray) -> FloatArray:
+    """Inverses of stacked symmetric positive-definite matrices ``(..., n, n)`` (closed form
+    for ``n = 2``, the position of a planar target; exactly symmetric)."""
+    if A.shape[-1] != 2:
+        inv = np.linalg.inv(A)
+        return np.asarray(0.5 * (inv + np.swapaxes(inv, -1, -2)), dtype=float)
+    a, b, d = A[..., 0, 0], A[..., 0, 1], A[..., 1, 1]
+    det = a * d - b * b
+    out = np.empty_like(A)
+    out[..., 0, 0] = d / det
+    out[..., 1, 1] = a / det
+    out[..., 0, 1] = out[..., 1, 0] = -b / det
+    return out
 
 
 def _equivalent_updates(
@@ -540,8 +561,8 @@ def _equivalent_updates(
     the prediction); the empty tuple keeps the prediction."""
     x, P = xp[target], Pp[target]
     hit = L > 0
-    some = np.any(hit, axis=1)
-    if np.any(some):
+    some = hit.any(axis=1)
+    if some.any():
         Z = np.zeros((int(some.sum()), L.shape[1], sensors[0].dim_z))
         for s, zs in enumerate(z):
             h = hit[some, s]
