@@ -257,6 +257,7 @@ class FusionResult:
 class _SensorTerms:
     """Linearisation, gate and weights of one scan of every sensor (sensor axis first)."""
 
+    z: FloatArray  # (S, M, m) the measurements, padded with zeros
     H: FloatArray  # (S, T, m, n)
     S: FloatArray  # (S, T, m, m)
     K: FloatArray  # (S, T, n, m)
@@ -307,12 +308,22 @@ def _sensor_terms(
     mx = log_w.max(axis=-1, keepdims=True)
     W = np.exp(log_w - np.where(np.isfinite(mx), mx, 0.0))
     T = xp.shape[0]
-    if _n_events(T, M) <= 20_000:
-        beta = jpda_marginals_batch(W, joint_events(T, M))
+    # marginals over the measurements some target gates (the others are certain clutter):
+    # column 0 and the gated columns of each sensor, padded with weight-0 columns
+    cols = [np.r_[0, 1 + np.flatnonzero(valid[s].any(axis=0))] for s in range(S_)]
+    Mc = max(c.size for c in cols) - 1
+    Wc = np.zeros((S_, T, Mc + 1))
+    for s, c in enumerate(cols):
+        Wc[s, :, : c.size] = W[s][:, c]
+    if _n_events(T, Mc) <= 20_000:
+        bc = jpda_marginals_batch(Wc, joint_events(T, Mc))
     else:
-        beta = np.stack([jpda_marginals(W[s], config.jpda(s)).beta for s in range(S_)])
+        bc = np.array([jpda_marginals(Wc[s], config.jpda(s)).beta for s in range(S_)])
+    beta = np.zeros_like(W)
+    for s, c in enumerate(cols):
+        beta[s][:, c] = bc[s, :, : c.size]
     n_meas = np.array([len(zs) for zs in z], dtype=np.int64)
-    return _SensorTerms(H, Sg, K, g.innovation, log_w, beta, n_meas)
+    return _SensorTerms(Z, H, Sg, K, g.innovation, log_w, beta, n_meas)
 
 
 def _n_events(T: int, M: int) -> int:
@@ -551,7 +562,6 @@ def _equivalent_updates(
     Pp: FloatArray,
     target: IntArray,
     L: IntArray,
-    z: Sequence[FloatArray],
     terms: _SensorTerms,
     sensors: Sequence[MeasurementModel],
 ) -> tuple[FloatArray, FloatArray]:
@@ -563,14 +573,12 @@ def _equivalent_updates(
     hit = L > 0
     some = hit.any(axis=1)
     if some.any():
-        Z = np.zeros((int(some.sum()), L.shape[1], sensors[0].dim_z))
-        for s, zs in enumerate(z):
-            h = hit[some, s]
-            Z[h, s] = zs[L[some, s][h] - 1]
         t, Ls = target[some], L[some]
         sidx = np.arange(L.shape[1])
+        j = np.maximum(Ls - 1, 0)  # any measurement where the sensor is not in the tuple
+        Z = terms.z[sidx, j]  # (n, S, m)
         J = np.swapaxes(terms.H[:, t], 0, 1)  # (n, S, m, n_x) at the prediction
-        r = terms.innovation[sidx, t[:, None], np.maximum(Ls - 1, 0)]  # (n, S, m)
+        r = terms.innovation[sidx, t[:, None], j]  # (n, S, m)
         o, zeta, R_eq = equivalent_measurement(Z, hit[some], sensors, x[some], linearised=(J, r))
         E = np.eye(xp.shape[-1])[o]
         S, K = innovation_gain(P[some], E, R_eq)
@@ -670,7 +678,7 @@ def fusion_step(
     if algorithm == "parallel":
         xs, Ps = _stacked(xp, Pp, target, L, terms, sensors)
     else:
-        xs, Ps = _equivalent_updates(xp, Pp, target, L, z, terms, sensors)
+        xs, Ps = _equivalent_updates(xp, Pp, target, L, terms, sensors)
     xn, Pn = _mixtures(target, beta, xs, Ps)
     return xn, Pn, False
 
