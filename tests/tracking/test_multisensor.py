@@ -286,6 +286,54 @@ def test_equivalent_measurement_not_converged_keeps_the_linearised_step() -> Non
     np.testing.assert_allclose(R10, R1)
 
 
+@pytest.mark.parametrize("seed", range(2))
+def test_joint_tuple_likelihood_marginals_equal_enumeration(seed: int) -> None:
+    """``sdcmsjpda_joint``: each joint event of the two targets weighted by the stacked
+    Gaussian of every tuple's innovations (scipy, covariance ``H P Hᵀ + R`` over the tuple's
+    sensors, cross-blocks included) times the detection / clutter factors; and with a tiny
+    prediction covariance (no shared prediction error) the factorised marginals of eq. 15."""
+    from scipy.stats import multivariate_normal
+
+    from navtrack.tracking.multisensor import _joint_tuple_marginals
+
+    xp, Pp, z, cfg = _two_target_terms(seed)
+    terms = _sensor_terms(xp, Pp, z, SENSORS, cfg)
+    target, L, _ = tuple_marginals(terms.beta)
+    beta = _joint_tuple_marginals(Pp, target, L, terms, SENSORS, cfg)
+    pd, lam = np.array(cfg.pd), np.array(cfg.clutter_density)
+
+    def weight(t: int, Lt: np.ndarray) -> float:
+        used = [s for s in range(3) if Lt[s] > 0]
+        w = np.prod([pd[s] / lam[s] if Lt[s] else 1 - pd[s] * 0.99 for s in range(3)])
+        if not used:
+            return float(w)
+        H = np.concatenate([SENSORS[s].jacobian(xp[t]) for s in used])
+        R = np.zeros((2 * len(used),) * 2)
+        nu = []
+        for i, s in enumerate(used):
+            R[2 * i : 2 * i + 2, 2 * i : 2 * i + 2] = SENSORS[s].R
+            d = z[s][Lt[s] - 1] - SENSORS[s].h(xp[t])
+            nu += [d[0], wrap_angle(d[1])]
+        return float(w * multivariate_normal(np.zeros(len(nu)), H @ Pp[t] @ H.T + R).pdf(nu))
+
+    L0, L1 = L[target == 0], L[target == 1]
+    w0, w1 = [weight(0, x) for x in L0], [weight(1, x) for x in L1]
+    joint = np.zeros((len(L0), len(L1)))
+    for a, b in itertools.product(range(len(L0)), range(len(L1))):
+        if not np.any((L0[a] > 0) & (L0[a] == L1[b])):
+            joint[a, b] = w0[a] * w1[b]
+    joint /= joint.sum()
+    np.testing.assert_allclose(beta[target == 0], joint.sum(axis=1), rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(beta[target == 1], joint.sum(axis=0), rtol=1e-6, atol=1e-12)
+    # no common prediction error: the joint likelihood is eq. 15's product
+    tiny = Pp * 1e-8
+    terms_t = _sensor_terms(xp, tiny, z, SENSORS, FusionConfig(cfg.pd, cfg.clutter_density, 1.0))
+    tt, Lt, bt = tuple_marginals(terms_t.beta)
+    cfg1 = FusionConfig(cfg.pd, cfg.clutter_density, 1.0)
+    np.testing.assert_allclose(_joint_tuple_marginals(tiny, tt, Lt, terms_t, SENSORS, cfg1), bt,
+                               rtol=1e-6, atol=1e-12)  # fmt: skip
+
+
 @pytest.mark.parametrize("seed", range(3))
 def test_sd_gnn_equals_per_sensor_2d_assignment(seed: int) -> None:
     """Additive tuple costs: the (S+1)-D optimum is the per-sensor 2-D optimum."""

@@ -28,6 +28,14 @@ All four trackers predict with :func:`~navtrack.tracking.kalman.kf_predict`, gat
 ``sdcmsjpda_weighted``
     The literal reading of eqs. 24-28 as extracted: the tuple estimate is a weighted sum of
     single-sensor corrections (PDA weights within the tuple); see Notes.
+``sdcmsjpda_joint``
+    ``sdcmsjpda`` with the joint likelihood of each S-tuple, ``N(ν_L; 0, S_L)`` with ``S_L``
+    the joint innovation covariance of the tuple's sensors, cross-covariances
+    ``H_i P̂ H_jᵀ`` through the common prediction included (eq. 14's "combined innovation
+    covariance of all sensors"), in place of eq. 15's product of the members' Gaussians; the
+    joint events over targets are enumerated (up to two targets). Not the paper's eq. 15: a
+    diagnostic of why the factorised likelihood loses to sequential processing in clutter
+    (module notes).
 ``sd_gnn``
     Hard decision: the best joint event, found as an (S+1)-D assignment of (targets, sensor
     1..S lists) by :func:`~navtrack.tracking.assignment.sd_assign`, then the stacked update.
@@ -76,6 +84,15 @@ Reading of the paper's equations (the extraction lost their layout):
   one sensor would: the sensors of a tuple are alternatives, not fused, which contradicts the
   prose above; it is kept because it is what the equations' symbols say, and the reproduction
   reports both.
+* The joint tuple likelihood (``sdcmsjpda_joint``). Eq. 15 multiplies the members'
+  ``N(z_s; ẑ_s, S_s)``, each at the prediction: the sensors are taken as independent given
+  the prediction, but their innovations share the prediction error, so they are correlated
+  (``cov(ν_i, ν_j) = H_i P̂ H_jᵀ``). Sequential processing accounts for it by the chain rule
+  (sensor ``s`` is gated and weighted at the posterior of sensors ``1..s-1``); the product
+  does not, and in clutter it over-weights tuples whose members are each plausible but
+  mutually inconsistent. The joint form weights tuple ``L`` by
+  ``Π_{s∈L} (P_D,s / λ_s) · N(ν_L; 0, S_L) · Π_{s∉L} (1 - P_D,s P_G)`` and needs the joint
+  events over targets (no factorisation over sensors).
 * The S-D GNN tuple cost is ``-log`` of the same event weight; it is additive over sensors, so
   the (S+1)-D problem is the union of per-sensor 2-D problems and the relaxation closes its gap
   (the tests check the solution against per-sensor :func:`~navtrack.tracking.assignment.assign2d`).
@@ -128,7 +145,9 @@ __all__ = [
     "tuple_marginals",
 ]
 
-Algorithm = Literal["sequential", "parallel", "sdcmsjpda", "sd_gnn", "sdcmsjpda_weighted"]
+Algorithm = Literal[
+    "sequential", "parallel", "sdcmsjpda", "sd_gnn", "sdcmsjpda_weighted", "sdcmsjpda_joint"
+]
 #: The fusion trackers, in the order of the reproduction's tables.
 ALGORITHMS: tuple[Algorithm, ...] = (
     "sequential",
@@ -136,6 +155,7 @@ ALGORITHMS: tuple[Algorithm, ...] = (
     "sdcmsjpda",
     "sd_gnn",
     "sdcmsjpda_weighted",
+    "sdcmsjpda_joint",
 )
 
 
@@ -586,6 +606,59 @@ def _equivalent_updates(
     return x, P
 
 
+def _joint_tuple_marginals(
+    Pp: FloatArray,
+    target: IntArray,
+    L: IntArray,
+    terms: _SensorTerms,
+    sensors: Sequence[MeasurementModel],
+    config: FusionConfig,
+) -> FloatArray:
+    """``sdcmsjpda_joint`` marginals of the gated tuples ``L[i]`` of ``target[i]`` (module
+    notes): tuple weights with the joint innovation covariance of the tuple's sensors, then
+    the joint events over targets (no two targets share a measurement of a sensor).
+
+    Raises ``ValueError`` for more than two targets (the events are enumerated as pairs).
+    """
+    S_, T, m, n = terms.H.shape
+    if T > 2:
+        raise ValueError(f"sdcmsjpda_joint enumerates joint events of <= 2 targets, got {T}")
+    pd = np.asarray(config.pd)
+    lam = np.asarray(config.clutter_density)
+    hit = L > 0
+    with np.errstate(divide="ignore"):
+        missed = np.log1p(-pd * config.gate_probability)
+    log_w = np.where(hit, np.log(pd) - np.log(lam), missed).sum(axis=1)
+    H = terms.H.transpose(1, 0, 2, 3).reshape(T, S_ * m, n)
+    R = np.zeros((S_ * m, S_ * m))
+    for s, model in enumerate(sensors):
+        R[s * m : (s + 1) * m, s * m : (s + 1) * m] = model.R
+    S_full = H @ Pp @ np.swapaxes(H, -1, -2) + R  # (T, S m, S m)
+    sidx = np.arange(S_)
+    nu = terms.innovation[sidx, target[:, None], np.maximum(L - 1, 0)].reshape(len(L), -1)
+    patterns, which = np.unique(hit, axis=0, return_inverse=True)
+    for p, pattern in enumerate(patterns):
+        k = np.repeat(pattern, m)
+        rows = np.flatnonzero(which.reshape(-1) == p)
+        if not k.any():
+            continue
+        Sk = S_full[:, k][:, :, k][target[rows]]
+        y = nu[rows][:, k]
+        logdet = np.linalg.slogdet(2.0 * np.pi * Sk)[1]
+        d2 = np.einsum("li,li->l", y, np.linalg.solve(Sk, y[..., None])[..., 0])
+        log_w[rows] += -0.5 * (d2 + logdet)
+    w = np.exp(log_w - np.max(log_w))
+    if T == 1:
+        return w / w.sum()
+    a, b = target == 0, target == 1
+    shared = (L[a][:, None, :] == L[b][None, :, :]) & (L[a][:, None, :] > 0)
+    pair = w[a][:, None] * w[b][None, :] * ~shared.any(axis=-1)
+    beta = np.empty(len(L))
+    beta[a] = pair.sum(axis=1)
+    beta[b] = pair.sum(axis=0)
+    return beta / pair.sum()
+
+
 def _sd_gnn_tuples(terms: _SensorTerms, max_tuples: int) -> tuple[IntArray, bool]:
     """The best joint event as an (S+1)-D assignment.
 
@@ -634,7 +707,7 @@ def fusion_step(
 
     Parameters
     ----------
-    algorithm : {"sequential", "parallel", "sdcmsjpda", "sd_gnn", "sdcmsjpda_weighted"}
+    algorithm : one of :data:`ALGORITHMS`
     x : (T, n), P : (T, n, n) estimates at the previous fusion time
     z : S arrays ``(M_s, m)``, the sensors' measurements, in processing order
     dt : S time steps, s: ``dt[0]`` from the previous fusion time to sensor 0's scan,
@@ -679,6 +752,8 @@ def fusion_step(
         xs, Ps = _stacked(xp, Pp, target, L, terms, sensors)
     else:
         xs, Ps = _equivalent_updates(xp, Pp, target, L, terms, sensors)
+    if algorithm == "sdcmsjpda_joint":
+        beta = _joint_tuple_marginals(Pp, target, L, terms, sensors, config)
     xn, Pn = _mixtures(target, beta, xs, Ps)
     return xn, Pn, False
 
@@ -708,7 +783,7 @@ def run_fusion(
 
     Parameters
     ----------
-    algorithm : {"sequential", "parallel", "sdcmsjpda", "sd_gnn", "sdcmsjpda_weighted"}
+    algorithm : one of :data:`ALGORITHMS`
     scans : MultiScans with ``S = len(sensors)`` sensors
     sensors : measurement models, one per sensor
     motion : linear motion model (the Kalman prediction)

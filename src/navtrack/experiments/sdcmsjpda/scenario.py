@@ -73,8 +73,9 @@ class SdCmsjpdaParams:
         mean position error of either target over the last ``divergence_window`` scans exceeds
         this (m) — the track is lost or swapped onto the other target.
     divergence_window : scans of that rule.
-    algorithms : the fusion trackers run (all of :data:`~navtrack.tracking.multisensor.ALGORITHMS`
-        by default; a subset for quick studies of other settings)
+    algorithms : the fusion trackers run: the issue's four and the weighted reading by default;
+        ``sdcmsjpda_joint`` (the joint tuple likelihood, a diagnostic, not eq. 15) on request;
+        a subset for quick studies of other settings
     """
 
     pd_values: tuple[float, ...] = (0.97, 0.76, 0.58)
@@ -95,7 +96,13 @@ class SdCmsjpdaParams:
     gate_probability: float = 0.99
     divergence_m: float = 2000.0
     divergence_window: int = 10
-    algorithms: tuple[Algorithm, ...] = ALGORITHMS
+    algorithms: tuple[Algorithm, ...] = (
+        "sequential",
+        "parallel",
+        "sdcmsjpda",
+        "sd_gnn",
+        "sdcmsjpda_weighted",
+    )
 
     def __post_init__(self) -> None:
         S = len(self.sensor_x_m)
