@@ -29,7 +29,7 @@ def test_reduced_reproduction_writes_results(tmp_path: Path) -> None:
     on_disk = json.loads((tmp_path / "results.json").read_text())
     assert set(on_disk["by_pd"]) == {"0.97", "0.58"}
     for pd in ("0.97", "0.58"):
-        for alg in ALGORITHMS:
+        for alg in params.algorithms:
             row = on_disk["by_pd"][pd][alg]
             assert row["runs"] == 2
             assert len(row["rms_pos_per_step_m"]) == 25
