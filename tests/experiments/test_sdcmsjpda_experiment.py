@@ -29,7 +29,7 @@ def test_reduced_reproduction_writes_results(tmp_path: Path) -> None:
     on_disk = json.loads((tmp_path / "results.json").read_text())
     assert set(on_disk["by_pd"]) == {"0.97", "0.58"}
     for pd in ("0.97", "0.58"):
-        for alg in ALGORITHMS:
+        for alg in params.algorithms:
             row = on_disk["by_pd"][pd][alg]
             assert row["runs"] == 2
             assert len(row["rms_pos_per_step_m"]) == 25
@@ -60,3 +60,36 @@ def test_bad_parameters() -> None:
         SdCmsjpdaParams(sigma_r_m=(300.0, 200.0))
     with pytest.raises(ValueError, match="pd_values"):
         SdCmsjpdaParams(pd_values=(1.2,))
+    with pytest.raises(ValueError, match="algorithms"):
+        SdCmsjpdaParams(algorithms=())
+
+
+def test_gate_clutter_puts_m_false_measurements_in_each_gate() -> None:
+    """The ``"gate"`` reading of the paper's m = 1.8 (eq. 26: "the expected number of false
+    measurements in the gate"): counting the false measurements in the P_G = 0.99 gate of R_s
+    around every target's true measurement, over all scans, sensors and both targets (their
+    boxes overlap before and after the crossing, where a doubled density would show) gives
+    m on average (840 Poisson counts: standard error 0.05)."""
+    from navtrack.experiments.sdcmsjpda import sensors, simulate_scans
+    from navtrack.experiments.sdcmsjpda.experiment import _truth
+    from navtrack.tracking.gating import chi2_threshold
+    from navtrack.tracking.models import wrap_angle
+
+    params = SdCmsjpdaParams()
+    truth = _truth(params)
+    scans = simulate_scans(params, truth, 1e-9, np.random.default_rng(7))  # clutter only
+    gamma = chi2_threshold(params.gate_probability, 2)
+    counts = []
+    for s, model in enumerate(sensors(params)):
+        centre = model.h(truth)  # (K, T, 2)
+        d = scans.z[:, s, None, :, :] - centre[:, :, None, :]  # (K, T, N, 2)
+        d[..., 1] = wrap_angle(d[..., 1])
+        d2 = np.einsum("...i,ij,...j->...", d, np.linalg.inv(model.R), d)
+        inside = (d2 <= gamma) & scans.valid[:, s, None, :]
+        counts.append(inside.sum(axis=-1))
+    mean = float(np.mean(counts))
+    assert abs(mean - params.clutter_rate) < 0.2, mean
+    # the previous reading: m per sensor and scan in total, far fewer in a gate
+    box = SdCmsjpdaParams(clutter_model="box", clutter_halfwidth_sigma=4.0)
+    sb = simulate_scans(box, truth, 1e-9, np.random.default_rng(7))
+    assert abs(sb.valid.sum(axis=-1).mean() - box.clutter_rate) < 0.2

@@ -158,7 +158,7 @@ def test_equivalent_measurement_is_the_ml_fusion_of_the_tuple() -> None:
     hit = np.array([[True, True, True], [True, False, True], [False, True, False]])
     z = np.stack([m.h(x_true) for m in SENSORS], axis=1)  # (3 tuples, 3 sensors, 2)
     x_ref = x_true[0] + np.array([800.0, 0.0, -600.0, 0.0])
-    o, zeta, R_eq = equivalent_measurement(z, hit, SENSORS, x_ref)
+    o, zeta, R_eq = equivalent_measurement(z, hit, SENSORS, x_ref, tol=1e-9)
     assert o.tolist() == [0, 2]
     np.testing.assert_allclose(zeta, pos, atol=1e-6)
     for i in range(3):
@@ -169,7 +169,11 @@ def test_equivalent_measurement_is_the_ml_fusion_of_the_tuple() -> None:
         )
         np.testing.assert_allclose(R_eq[i], np.linalg.inv(info), rtol=1e-6)
     noisy = z + rng.standard_normal(z.shape) * np.array([200.0, 0.02])
-    _, zeta_n, _ = equivalent_measurement(noisy, hit, SENSORS, x_ref)
+    _, zeta_n, _ = equivalent_measurement(noisy, hit, SENSORS, x_ref, tol=1e-9)
+    # the default tolerance (0.02 standard deviations per step) stops within 0.01 of one
+    _, zeta_d, R_d = equivalent_measurement(noisy, hit, SENSORS, x_ref)
+    d = zeta_d - zeta_n
+    assert np.all(np.einsum("li,lij,lj->l", d, np.linalg.inv(R_d), d) < 0.01**2)
     for i in range(3):
         used = [s for s in range(3) if hit[i, s]]
 
@@ -207,8 +211,10 @@ def test_tuple_marginals_equal_enumeration_of_eq21(seed: int) -> None:
     xp, Pp, z, cfg = _two_target_terms(seed)
     terms = _sensor_terms(xp, Pp, z, SENSORS, cfg)
     w = np.exp(terms.log_w)  # eq. 21 factors (S, T, M+1)
-    L0, b0 = tuple_marginals(terms.beta, 0)
-    L1, b1 = tuple_marginals(terms.beta, 1)
+    target, L, beta = tuple_marginals(terms.beta)
+    assert np.all(np.diff(target) >= 0)
+    L0, b0 = L[target == 0], beta[target == 0]
+    L1, b1 = L[target == 1], beta[target == 1]
     joint = np.zeros((len(L0), len(L1)))
     for a, b in itertools.product(range(len(L0)), range(len(L1))):
         if np.any((L0[a] > 0) & (L0[a] == L1[b])):
@@ -225,6 +231,107 @@ def test_tuple_marginals_equal_enumeration_of_eq21(seed: int) -> None:
     g = gate(m.h(xp), S, z[0], chi2_threshold(0.99, 2), angle_mask=m.angle_mask)
     W = association_weights(g.log_likelihood(), g.valid, 0.8, 0.99, 1e-6)
     np.testing.assert_allclose(terms.beta[0], jpda_marginals(W).beta, atol=1e-12)
+
+
+def _subset_ekf(x, P, z, hit):
+    """Stacked EKF oracle over the sensors ``hit`` of one tuple (prediction if none)."""
+    used = [s for s in range(3) if hit[s]]
+    if not used:
+        return x, P
+    H = np.concatenate([SENSORS[s].jacobian(x) for s in used])
+    R = np.zeros((2 * len(used), 2 * len(used)))
+    y = np.empty(2 * len(used))
+    for i, s in enumerate(used):
+        R[2 * i : 2 * i + 2, 2 * i : 2 * i + 2] = SENSORS[s].R
+        d = z[s] - SENSORS[s].h(x)
+        y[2 * i : 2 * i + 2] = [d[0], wrap_angle(d[1])]
+    S, K = innovation_gain(P, H, R)
+    return gain_update(x, P, y, K, S)
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_two_target_parallel_step_is_the_mixture_over_enumerated_events(seed: int) -> None:
+    """All targets' tuples in one batch: each target's posterior equals the moment-matched
+    mixture, over its tuples, of the stacked EKF oracle weighted by the enumerated eq. 21."""
+    xp, Pp, z, cfg = _two_target_terms(seed)
+    x, P = xp.copy(), Pp.copy()  # zero time step: the prediction is the prior
+    from navtrack.tracking.multisensor import fusion_step
+
+    xn, Pn, _ = fusion_step("parallel", x, P, z, [0.0] * 3, SENSORS, MOTION, cfg)
+    terms = _sensor_terms(xp, Pp, z, SENSORS, cfg)
+    target, L, beta = tuple_marginals(terms.beta)
+    for t in range(2):
+        comps = []
+        for Lt, bt in zip(L[target == t], beta[target == t], strict=True):
+            zt = [z[s][Lt[s] - 1] if Lt[s] > 0 else None for s in range(3)]
+            comps.append((bt, *_subset_ekf(xp[t], Pp[t], zt, Lt > 0)))
+        xm = sum(b * xc for b, xc, _ in comps)
+        Pm = sum(b * (Pc + np.outer(xc - xm, xc - xm)) for b, xc, Pc in comps)
+        np.testing.assert_allclose(xn[t], xm, rtol=1e-9, atol=1e-6)
+        np.testing.assert_allclose(Pn[t], Pm, rtol=1e-7, atol=1e-6)
+
+
+def test_equivalent_measurement_not_converged_keeps_the_linearised_step() -> None:
+    """A target passing over sensor 1 (true range 150 m, measured range below zero): the
+    Gauss-Newton fit of that single detection does not settle; the tuple keeps its first,
+    prediction-linearised step."""
+    from navtrack.tracking.multisensor import equivalent_measurement
+
+    x_ref = np.array([-450.0, 300.0, -360.0, -400.0])
+    z = np.array([[[-250.0, 1.2], [0.0, 0.0], [0.0, 0.0]]])
+    hit = np.array([[True, False, False]])
+    _, z10, R10 = equivalent_measurement(z, hit, SENSORS, x_ref, iterations=10)
+    _, z1, R1 = equivalent_measurement(z, hit, SENSORS, x_ref, iterations=1, tol=np.inf)
+    np.testing.assert_allclose(z10, z1)
+    np.testing.assert_allclose(R10, R1)
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_joint_tuple_likelihood_marginals_equal_enumeration(seed: int) -> None:
+    """``sdcmsjpda_joint``: each joint event of the two targets weighted by the stacked
+    Gaussian of every tuple's innovations (scipy, covariance ``H P Hᵀ + R`` over the tuple's
+    sensors, cross-blocks included) times the detection / clutter factors; and with a tiny
+    prediction covariance (no shared prediction error) the factorised marginals of eq. 15."""
+    from scipy.stats import multivariate_normal
+
+    from navtrack.tracking.multisensor import _joint_tuple_marginals
+
+    xp, Pp, z, cfg = _two_target_terms(seed)
+    terms = _sensor_terms(xp, Pp, z, SENSORS, cfg)
+    target, L, _ = tuple_marginals(terms.beta)
+    beta = _joint_tuple_marginals(Pp, target, L, terms, SENSORS, cfg)
+    pd, lam = np.array(cfg.pd), np.array(cfg.clutter_density)
+
+    def weight(t: int, Lt: np.ndarray) -> float:
+        used = [s for s in range(3) if Lt[s] > 0]
+        w = np.prod([pd[s] / lam[s] if Lt[s] else 1 - pd[s] * 0.99 for s in range(3)])
+        if not used:
+            return float(w)
+        H = np.concatenate([SENSORS[s].jacobian(xp[t]) for s in used])
+        R = np.zeros((2 * len(used),) * 2)
+        nu = []
+        for i, s in enumerate(used):
+            R[2 * i : 2 * i + 2, 2 * i : 2 * i + 2] = SENSORS[s].R
+            d = z[s][Lt[s] - 1] - SENSORS[s].h(xp[t])
+            nu += [d[0], wrap_angle(d[1])]
+        return float(w * multivariate_normal(np.zeros(len(nu)), H @ Pp[t] @ H.T + R).pdf(nu))
+
+    L0, L1 = L[target == 0], L[target == 1]
+    w0, w1 = [weight(0, x) for x in L0], [weight(1, x) for x in L1]
+    joint = np.zeros((len(L0), len(L1)))
+    for a, b in itertools.product(range(len(L0)), range(len(L1))):
+        if not np.any((L0[a] > 0) & (L0[a] == L1[b])):
+            joint[a, b] = w0[a] * w1[b]
+    joint /= joint.sum()
+    np.testing.assert_allclose(beta[target == 0], joint.sum(axis=1), rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(beta[target == 1], joint.sum(axis=0), rtol=1e-6, atol=1e-12)
+    # no common prediction error: the joint likelihood is eq. 15's product
+    tiny = Pp * 1e-8
+    terms_t = _sensor_terms(xp, tiny, z, SENSORS, FusionConfig(cfg.pd, cfg.clutter_density, 1.0))
+    tt, Lt, bt = tuple_marginals(terms_t.beta)
+    cfg1 = FusionConfig(cfg.pd, cfg.clutter_density, 1.0)
+    np.testing.assert_allclose(_joint_tuple_marginals(tiny, tt, Lt, terms_t, SENSORS, cfg1), bt,
+                               rtol=1e-6, atol=1e-12)  # fmt: skip
 
 
 @pytest.mark.parametrize("seed", range(3))

@@ -15,9 +15,11 @@ from typing import Any
 
 import numpy as np
 
+from navtrack._typing import FloatArray
 from navtrack.experiments.contract import Experiment, Outcome
-from navtrack.experiments.sdcmsjpda.scenario import SdCmsjpdaParams, paper3_run
-from navtrack.tracking.multisensor import ALGORITHMS
+from navtrack.experiments.sdcmsjpda.scenario import SdCmsjpdaParams, clutter_density, paper3_run
+from navtrack.tracking.models import constant_velocity
+from navtrack.tracking.simulate import simulate_truth
 
 __all__ = ["EXPERIMENT", "PAPER_TABLE1", "SdCmsjpdaExperiment", "summarize_runs"]
 
@@ -40,7 +42,7 @@ def summarize_runs(params: SdCmsjpdaParams, runs: Sequence[_RunResult]) -> dict[
     for pd in params.pd_values:
         key = f"{pd:g}"
         per: dict[str, Any] = {}
-        for alg in ALGORITHMS:
+        for alg in params.algorithms:
             rows = [r[key][alg] for r in runs]
             div = np.array([row["diverged"] for row in rows], dtype=bool)
             ok = [row for row, d in zip(rows, div, strict=True) if not d]
@@ -68,17 +70,40 @@ def summarize_runs(params: SdCmsjpdaParams, runs: Sequence[_RunResult]) -> dict[
             f"over the last {params.divergence_window} scans exceeds {params.divergence_m:g} m "
             "(or the filter failed numerically)"
         ),
-        "clutter_region": (
-            f"Poisson({params.clutter_rate:g}) false measurements per sensor and scan, each "
-            "uniform in a range-bearing box centred on a randomly chosen target's true "
-            f"measurement, half-widths {params.clutter_halfwidth_sigma:g} sigma_r x "
-            f"{params.clutter_halfwidth_sigma:g} sigma_theta of that sensor"
-        ),
+        "clutter_region": clutter_description(params),
+        "clutter_density_per_m_rad": list(clutter_density(params, 2, _truth(params))),
         "ms_per_step_note": "CPU time of the fusion step (time.thread_time), mean over runs",
         "by_pd": by_pd,
         "paper_table1": PAPER_TABLE1,
         "paper_ms_per_step": PAPER_MS_PER_STEP,
     }
+
+
+def _truth(params: SdCmsjpdaParams) -> FloatArray:
+    motion = constant_velocity(2, params.accel_sigma_mps2**2)
+    x0 = np.array([params.x1, params.x2], dtype=float)
+    return simulate_truth(motion, x0, params.n_steps, params.dt_s)
+
+
+def clutter_description(params: SdCmsjpdaParams) -> str:
+    """One sentence: the clutter reading of ``params`` (for the tables and results)."""
+    m, c = params.clutter_rate, params.clutter_halfwidth_sigma
+    if params.clutter_model == "gate":
+        return (
+            f"{m:g} false measurements expected in each validation gate (eq. 26's m): density "
+            f"m / (pi gamma |R_s|^1/2) of sensor s, uniform over the union of the boxes "
+            f"+-{c:g} sigma_r x +-{c:g} sigma_theta around the targets' true measurements"
+        )
+    if params.clutter_model == "box":
+        return (
+            f"Poisson({m:g}) false measurements per sensor and scan, each uniform in the box "
+            f"+-{c:g} sigma_r x +-{c:g} sigma_theta around a randomly chosen target's true "
+            "measurement"
+        )
+    return (
+        f"Poisson({m:g}) false measurements per sensor and scan, uniform over ranges 0 to the "
+        f"largest true range + {c:g} sigma_r and all bearings"
+    )
 
 
 def tables_markdown(results: dict[str, Any]) -> str:
@@ -96,7 +121,8 @@ def tables_markdown(results: dict[str, Any]) -> str:
         "| algorithm | " + " | ".join(f"Pd = {p}" for p in pds) + " |",
         "|---|" + "---|" * len(pds),
     ]
-    for alg in ALGORITHMS:
+    algs = list(by_pd[pds[0]])
+    for alg in algs:
         cells = []
         for p in pds:
             c = f"{by_pd[p][alg]['diverged']}/{by_pd[p][alg]['runs']}"
@@ -111,7 +137,7 @@ def tables_markdown(results: dict[str, Any]) -> str:
         "| algorithm | " + " | ".join(f"Pd = {p}" for p in pds) + " | ms per step |",
         "|---|" + "---|" * (len(pds) + 1),
     ]
-    for alg in ALGORITHMS:
+    for alg in algs:
         cells = [
             f"{by_pd[p][alg]['rms_pos_m']:.1f} / {by_pd[p][alg]['rms_vel_mps']:.1f}" for p in pds
         ]
@@ -133,7 +159,7 @@ def write_figures(outcome: Outcome[SdCmsjpdaParams, _RunResult], out_dir: Path) 
         for what, unit in (("pos", "m"), ("vel", "m/s")):
             fig = new_figure((6.4, 3.8))
             ax = fig.add_subplot()
-            for alg in ALGORITHMS:
+            for alg in per:
                 key = f"rms_{what}_per_step_{'m' if what == 'pos' else 'mps'}"
                 y = np.asarray(per[alg][key], dtype=float)
                 ax.plot(np.arange(1, y.size + 1), y, label=f"{alg} ({per[alg]['diverged']} div.)")
