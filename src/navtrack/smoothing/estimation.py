@@ -341,7 +341,9 @@ def quasi_newton(
     problem : AriProblem
     tol : float
         Stopping rule: the expected gain ``g^T H^-1 g / 2`` of the next step is below ``tol``
-        (log-likelihood units).
+        (log-likelihood units), or no step along the search direction that could still gain
+        ``tol`` raises the likelihood (then converged when the expected gain is below
+        ``1e3 tol``).
     max_iter : int
         Step limit.
     start : Estimate, optional
@@ -392,6 +394,10 @@ def quasi_newton(
                     accepted = (trial, new)
                     break
             t *= 0.25
+            # backtrack only while the shortened step can still gain the tolerance (predicted
+            # gain about 2 t gain / cap for small t): shorter trials probe rounding noise
+            if 2.0 * t * gain / cap < tol:
+                break
         if accepted is None:
             converged = gain < 1e3 * tol
             break
