@@ -185,11 +185,10 @@ def _solve_refined_py(ab: FloatArray, ut: FloatArray, rhs: FloatArray, refine: i
         if step:
             for j in range(n):
                 acc = ab[m, j] * x[j]
-                for lag in range(1, m + 1):
-                    if j >= lag:
-                        acc += ab[m - lag, j] * x[j - lag]
-                    if j + lag < n:
-                        acc += ab[m - lag, j + lag] * x[j + lag]
+                for lag in range(1, min(j, m) + 1):
+                    acc += ab[m - lag, j] * x[j - lag]
+                for lag in range(1, min(n - 1 - j, m) + 1):
+                    acc += ab[m - lag, j + lag] * x[j + lag]
                 r[j] = rhs[j] - acc
         for j in range(n):
             acc = r[j]
@@ -323,15 +322,15 @@ _band_sums: Any = _numba.njit(cache=True, nogil=True)(_band_sums_py) if _numba i
 
 
 def _add_convolution_band_py(ab: FloatArray, c: FloatArray, vs: FloatArray) -> None:
-    # one pass over the equations s; an entry receives its terms in the order of ascending
-    # i as in the NumPy path (for a fixed lag, a later i means a later equation)
     m = c.size - 1
     ns = vs.size
-    for s in range(ns):
-        v = vs[s]
-        for i in range(m + 1):
-            for i2 in range(i + 1):
-                ab[m - (i - i2), m - i2 + s] += v * (c[i] * c[i2])
+    for i in range(m + 1):
+        for i2 in range(i + 1):
+            cc = c[i] * c[i2]
+            row = m - (i - i2)
+            off = m - i2
+            for s in range(ns):
+                ab[row, off + s] += vs[s] * cc
 
 
 _add_convolution_band: Any = (
