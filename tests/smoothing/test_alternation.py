@@ -7,10 +7,16 @@ estimator (an independent search over the same function), Förstner's VCE fixed-
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
+from navtrack.smoothing._banded import weighted_band_sums
+from navtrack.smoothing.alternation import alternate, ar_step
 from navtrack.smoothing.ari import AriConfig, AriStatus, fit_ari, simulate_ari
+from navtrack.smoothing.estimation import evaluate, phi_gradient_terms, starting_values
+from navtrack.smoothing.model import AriProblem, ari_polynomial
 
 
 def test_alternation_reaches_the_conditional_likelihood_maximum() -> None:
@@ -44,3 +50,58 @@ def test_alternation_recovers_known_truth_and_flags_gross_errors() -> None:
 def test_estimator_name_is_checked() -> None:
     with pytest.raises(ValueError, match="estimator"):
         AriConfig(estimator="sarimax")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("phi", "d", "n", "seed"), [((-0.5, 0.2), 1, 600, 3), ((-0.73, 0.38), 2, 600, 5)]
+)
+def test_squarem_reaches_the_fixed_point_of_the_plain_iteration(
+    phi: tuple[float, ...], d: int, n: int, seed: int
+) -> None:
+    # Oracle: the plain iteration of the scheme run to a tight tolerance; the accelerated
+    # iteration must stop at the same fixed point, in fewer model evaluations.
+    y, _ = simulate_ari(np.random.default_rng(seed), n, phi, d, 0.02, 0.01)
+    p, m = len(phi), len(phi) + d
+    yc = y - y.mean()
+    scale = float(np.std(np.diff(yc, d)))
+    problem = AriProblem(
+        yc,
+        np.ones(n),
+        np.ones(n - m),
+        p,
+        d,
+        False,
+        2 * math.log(1e-6 * scale),
+        2 * math.log(1e3 * scale),
+    )
+    start = starting_values(yc, p, d, 3)[1]
+    plain = alternate(start, problem, 1e-8, 20000, accelerate=False)
+    fast = alternate(start, problem, 1e-8, 20000)
+    assert plain is not None
+    assert fast is not None
+    assert plain.converged
+    assert fast.converged
+    np.testing.assert_allclose(fast.vec, plain.vec, atol=1e-6)
+    assert fast.fit.loglike == pytest.approx(plain.fit.loglike, abs=1e-6)
+    assert fast.n_iter < plain.n_iter / 2
+
+
+def test_ar_step_solves_the_expected_moment_equations() -> None:
+    # Oracle: the phi part of the likelihood gradient (estimation.phi_gradient_terms, the same
+    # expected moments summed term by term) vanishes at the step's coefficients.
+    y, _ = simulate_ari(np.random.default_rng(9), 500, (-0.9, 0.3, 0.1), 1, 0.02, 0.01)
+    p, d = 3, 1
+    m = p + d
+    yc = y - y.mean()
+    v = np.random.default_rng(1).uniform(0.5, 1.0, y.size - m)
+    problem = AriProblem(yc, np.ones(y.size), v, p, d, False)
+    vec = np.array([-0.5, 0.1, 0.0, math.log(4e-4), math.log(1e-4)])
+    out = evaluate(vec, problem)
+    assert out is not None
+    assert out.fit.zb is not None
+    phi = ar_step(vec[:p], problem, out.fit.x, out.fit.zb)
+    big_s = weighted_band_sums(out.fit.zb, v, m)
+    c = ari_polynomial(phi, d)
+    resid = phi_gradient_terms(c, out.fit.x, v, p, d, big_s)
+    scale = phi_gradient_terms(ari_polynomial(np.zeros(p), d), out.fit.x, v, p, d, big_s)
+    assert np.max(np.abs(resid)) < 1e-9 * np.max(np.abs(scale))

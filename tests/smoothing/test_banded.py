@@ -40,12 +40,27 @@ def _random_band(rng: np.random.Generator, n: int, m: int) -> tuple[np.ndarray, 
         (300, 1, 4),
     ],
 )
-def test_banded_solve_and_selected_inverse_match_dense(n: int, m: int, width: int) -> None:
+def test_banded_solve_and_selected_inverse_match_dense(
+    n: int, m: int, width: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
     rng = np.random.default_rng(n * 10 + m)
     ab, dense = _random_band(rng, n, m)
     np.testing.assert_allclose(band_to_dense(ab), dense)
     rhs = rng.normal(size=n)
     x, logdet, factor = cholesky_solve_banded(ab, rhs)
+    with monkeypatch.context() as patch:  # LAPACK path (numba not installed)
+        patch.setattr(_banded, "_cholesky", None)
+        x_lapack, logdet_lapack, factor_lapack = cholesky_solve_banded(ab, rhs)
+    # same factor to rounding (the compiled loops sum in LAPACK's order), same solution
+    np.testing.assert_allclose(factor, factor_lapack, rtol=1e-13, atol=1e-14)
+    np.testing.assert_allclose(x, x_lapack, rtol=1e-11, atol=1e-12)
+    assert logdet == pytest.approx(logdet_lapack, rel=1e-13)
+    uncompiled, failed = _banded._cholesky_py(ab)
+    assert failed == -1
+    np.testing.assert_allclose(uncompiled.T, factor_lapack, rtol=1e-13, atol=1e-14)
+    np.testing.assert_allclose(
+        _banded._solve_refined_py(ab, uncompiled, rhs, 1), x_lapack, rtol=1e-11, atol=1e-12
+    )
     np.testing.assert_allclose(x, np.linalg.solve(dense, rhs), rtol=1e-9, atol=1e-10)
     assert logdet == pytest.approx(np.linalg.slogdet(dense)[1], rel=1e-10, abs=1e-9)
     # the factor is the upper Cholesky factor: N = U^T U

@@ -5,13 +5,14 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import warnings
 
 import numpy as np
 import pytest
 
 from navtrack.smoothing.ari import AriConfig, AriEpochStatus, AriStatus, fit_ari, simulate_ari
-from navtrack.smoothing.estimation import evaluate, observed_information
-from navtrack.smoothing.model import AriProblem, stationary_prior
+from navtrack.smoothing.estimation import MIN_WEIGHT, evaluate, observed_information
+from navtrack.smoothing.model import AriProblem, gauss_markov_filter, stationary_prior
 
 
 def _problem(n: int = 50, p: int = 2, d: int = 1, stationary: bool = True) -> AriProblem:
@@ -116,3 +117,40 @@ def test_result_status_and_summary() -> None:
     assert bad.status == AriStatus.CONSTANT
     assert not bad.estimated
     assert bad.summary()["status"] == "constant"
+
+
+def test_likelihood_of_a_near_zero_weight_is_finite() -> None:
+    # A weight in the subnormal range (a Danish weight of a 67-sigma outlier) once made
+    # sigma_n^2 / w overflow and the log-likelihood -inf. Oracle: the weight enters the
+    # likelihood only through -log(sigma_n^2 / w) / 2 once its epoch carries no information.
+    y, _ = simulate_ari(np.random.default_rng(2), 300, [-0.5], 1, 0.02, 0.01)
+    weights = []
+    for tiny in (1e-320, 1e-310):
+        w = np.ones(y.size)
+        w[100] = tiny
+        weights.append(w)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        ll = [gauss_markov_filter(y, [-0.5], 1, 0.02, 0.01, weight=w)[2] for w in weights]
+    assert np.all(np.isfinite(ll))
+    expected = 0.5 * (math.log(weights[0][100]) - math.log(weights[1][100]))
+    assert ll[0] - ll[1] == pytest.approx(expected, abs=1e-6)
+
+
+def test_robust_fit_with_huge_outliers_leaves_them_out() -> None:
+    # Outliers of 55-80 sigma: Danish weights from exp(-480) to exp(-1000), through the
+    # subnormal range. Weights below MIN_WEIGHT are 0 (the epoch leaves the fit, as it did
+    # when its weight underflowed); no RuntimeWarning; every outlier flagged.
+    rng = np.random.default_rng(5)
+    y, _ = simulate_ari(rng, 3000, [-0.7318, 0.3832], 2, 0.0023, 0.0005)
+    idx = np.arange(50, 3000, 60)
+    y[idx] += np.linspace(55, 80, idx.size) * 0.0023
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        res = fit_ari(y, AriConfig(order=(2, 2)))
+    assert res.status == AriStatus.OK
+    assert np.all(res.weight[idx] == 0.0)
+    assert np.all((res.weight == 0.0) | (res.weight >= MIN_WEIGHT))
+    assert np.all(res.gross_error[idx])
+    assert np.isfinite(res.loglike)
+    assert res.sigma_n == pytest.approx(0.0023, rel=0.1)

@@ -2,9 +2,11 @@
 
 Kernels, each O(n) in time and memory for a fixed half-bandwidth ``m``:
 
-* :func:`cholesky_solve_banded` — banded Cholesky (LAPACK ``pbtrf``/``pbtrs`` via
-  :func:`scipy.linalg.cholesky_banded` / :func:`scipy.linalg.cho_solve_banded`) with the
-  log-determinant of the matrix and the factor.
+* :func:`cholesky_solve_banded` — banded Cholesky with the log-determinant of the matrix and
+  the factor: compiled loops with numba (about twice LAPACK's speed for these narrow bands,
+  where ``pbtrf`` runs its unblocked code, two BLAS calls per column), else LAPACK
+  ``pbtrf``/``pbtrs`` via :func:`scipy.linalg.cholesky_banded` /
+  :func:`scipy.linalg.cho_solve_banded`.
 * :func:`inverse_band_from_factor` — the band of the inverse ("selected inversion") without
   forming it: Takahashi's recursion on the factor, or :func:`inverse_band` (odd–even block
   recursion on the matrix).
@@ -124,14 +126,89 @@ def cholesky_solve_banded(
     numpy.linalg.LinAlgError
         When ``N`` is not numerically positive definite.
     """
-    cb = scipy.linalg.cholesky_banded(ab, lower=False, check_finite=False)
-    x = scipy.linalg.cho_solve_banded((cb, False), rhs, check_finite=False)
-    for _ in range(refine):
-        x = x + scipy.linalg.cho_solve_banded(
-            (cb, False), rhs - band_matvec(ab, x), check_finite=False
-        )
+    if _cholesky is not None:
+        ut, failed = _cholesky(np.ascontiguousarray(ab))
+        if failed >= 0:
+            raise np.linalg.LinAlgError(f"{failed + 1}-th leading minor not positive definite")
+        x = _solve_refined(ab, ut, np.ascontiguousarray(rhs, dtype=np.float64), int(refine))
+        cb = ut.T  # (m + 1, n) in Fortran order, as LAPACK returns it
+    else:
+        cb = scipy.linalg.cholesky_banded(ab, lower=False, check_finite=False)
+        x = scipy.linalg.cho_solve_banded((cb, False), rhs, check_finite=False)
+        for _ in range(refine):
+            x = x + scipy.linalg.cho_solve_banded(
+                (cb, False), rhs - band_matvec(ab, x), check_finite=False
+            )
     logdet = 2.0 * float(np.sum(np.log(cb[-1])))
     return x, logdet, cb
+
+
+def _cholesky_py(ab: FloatArray) -> tuple[FloatArray, int]:
+    # U^T U = N column by column; ut[j, m + i - j] = U[i, j] (the transpose of LAPACK's upper
+    # band, so that a column of U is contiguous). Within column j the entries follow each
+    # other: U[i, j] is final once the updates of the rows above it are in, and then updates
+    # the rows below (right-looking inside the column: m short independent updates instead of
+    # one long dependent sum per entry). Every entry still receives its updates in the order
+    # of ascending row, as in LAPACK's pbtf2, and is scaled by the reciprocal of the pivot.
+    m = ab.shape[0] - 1
+    n = ab.shape[1]
+    ut = np.zeros((n, m + 1))
+    rinv = np.empty(n)
+    col = np.empty(m + 1)
+    for j in range(n):
+        t0 = max(0, m - j)
+        for t in range(t0, m + 1):
+            col[t] = ab[t, j]
+        for t in range(t0, m):
+            i = j - m + t
+            u = col[t] * rinv[i]
+            ut[j, t] = u
+            for t2 in range(t + 1, m):
+                col[t2] -= ut[j - m + t2, m - t2 + t] * u
+            col[m] -= u * u
+        if not col[m] > 0.0:
+            return ut, j
+        diag = np.sqrt(col[m])
+        ut[j, m] = diag
+        rinv[j] = 1.0 / diag
+    return ut, -1
+
+
+def _solve_refined_py(ab: FloatArray, ut: FloatArray, rhs: FloatArray, refine: int) -> FloatArray:
+    # U^T z = r forwards, U dx = z backwards, x += dx; r = rhs - N x for the refinement steps
+    n = ut.shape[0]
+    m = ut.shape[1] - 1
+    x = np.zeros(n)
+    r = rhs.copy()
+    z = np.empty(n)
+    for step in range(refine + 1):
+        if step:
+            for j in range(n):
+                acc = ab[m, j] * x[j]
+                for lag in range(1, min(j, m) + 1):
+                    acc += ab[m - lag, j] * x[j - lag]
+                for lag in range(1, min(n - 1 - j, m) + 1):
+                    acc += ab[m - lag, j + lag] * x[j + lag]
+                r[j] = rhs[j] - acc
+        for j in range(n):
+            acc = r[j]
+            for k in range(max(0, j - m), j):
+                acc -= ut[j, m + k - j] * z[k]
+            z[j] = acc / ut[j, m]
+        for i in range(n - 1, -1, -1):
+            acc = z[i]
+            for j in range(min(n - 1, i + m), i, -1):
+                acc -= ut[j, m + i - j] * z[j]
+            z[i] = acc / ut[i, m]
+        for i in range(n):
+            x[i] += z[i]
+    return x
+
+
+_cholesky: Any = _numba.njit(cache=True, nogil=True)(_cholesky_py) if _numba is not None else None
+_solve_refined: Any = (
+    _numba.njit(cache=True, nogil=True)(_solve_refined_py) if _numba is not None else None
+)
 
 
 def inverse_band_from_factor(
@@ -225,17 +302,19 @@ _takahashi: Any = (
 
 
 def _band_sums_py(zb: FloatArray, v: FloatArray, m: int) -> FloatArray:
+    # one pass over the band (all (m + 1)(m + 2)/2 sums together); each sum still runs over s
+    # ascending, so the rounding is that of one sum at a time
     ns = v.size
     out = np.zeros((m + 1, m + 1))
+    for s in range(ns):
+        vs = v[s]
+        for b in range(m + 1):
+            start = m - b + s
+            for a in range(b + 1):
+                out[a, b] += vs * zb[b - a, start]
     for b in range(m + 1):
-        start = m - b
-        for a in range(b + 1):
-            row = b - a
-            acc = 0.0
-            for s in range(ns):
-                acc += v[s] * zb[row, start + s]
-            out[a, b] = acc
-            out[b, a] = acc
+        for a in range(b):
+            out[b, a] = out[a, b]
     return out
 
 

@@ -54,6 +54,7 @@ from navtrack.smoothing.model import (
 from navtrack.smoothing.robust import deletion_statistic, robust_weight
 
 __all__ = [
+    "MIN_WEIGHT",
     "Estimate",
     "Estimator",
     "EstimatorOutcome",
@@ -340,7 +341,9 @@ def quasi_newton(
     problem : AriProblem
     tol : float
         Stopping rule: the expected gain ``g^T H^-1 g / 2`` of the next step is below ``tol``
-        (log-likelihood units).
+        (log-likelihood units), or no step along the search direction that could still gain
+        ``tol`` raises the likelihood (then converged when the expected gain is below
+        ``1e3 tol``).
     max_iter : int
         Step limit.
     start : Estimate, optional
@@ -391,6 +394,10 @@ def quasi_newton(
                     accepted = (trial, new)
                     break
             t *= 0.25
+            # backtrack only while the shortened step can still gain the tolerance (predicted
+            # gain about 2 t gain / cap for small t): shorter trials probe rounding noise
+            if 2.0 * t * gain / cap < tol:
+                break
         if accepted is None:
             converged = gain < 1e3 * tol
             break
@@ -481,25 +488,39 @@ def choose_estimate(found: list[Estimate], margin: float) -> Estimate:
     return best
 
 
+#: Robust weights below this leave the fit (weight 0, as a missing epoch). Such an equation adds
+#: less than rounding to every sum it enters beside one of full weight, yet it would count as a
+#: whole observation in the redundancy ``r_k`` while adding nothing to ``Omega_k``; and Danish
+#: weights of 66–68-sigma outliers are subnormal numbers whose ``sigma^2 / w`` overflows. Below
+#: it an epoch is treated as it already was when its weight underflowed to 0 (beyond ~68
+#: sigma): for the Danish function with ``c = 2.5`` this is ``|T| > 15.2``.
+MIN_WEIGHT = float(np.finfo(float).eps)
+
+
+def _cut_small(weight: FloatArray) -> FloatArray:
+    return np.where(weight >= MIN_WEIGHT, weight, 0.0)
+
+
 def robust_reweight(
     est: Estimate, problem: AriProblem, observed: BoolArray, config: AriConfig
 ) -> tuple[FloatArray, FloatArray]:
     """New observation ``(n,)`` and process ``(n - m,)`` weights from the studentized deletion
-    residuals at ``est`` (the process ones only with ``config.robust_process``)."""
+    residuals at ``est`` (the process ones only with ``config.robust_process``); weights below
+    :data:`MIN_WEIGHT` are set to 0 (the equation leaves the fit)."""
     zb = est.fit.zb
     if zb is None:
         return problem.w, problem.v
     sn2 = math.exp(est.log_sn2)
     se2 = math.exp(est.log_se2)
     t_obs = deletion_statistic(problem.y0 - est.fit.x, zb[0], problem.w, sn2)
-    w_new = np.where(observed, robust_weight(t_obs, config.robust, config.tuning), 0.0)
+    w_new = np.where(observed, _cut_small(robust_weight(t_obs, config.robust, config.tuning)), 0.0)
     if not config.robust_process:
         return w_new, problem.v
     c = ari_polynomial(est.phi, problem.d)
     e = process_residuals(c, est.fit.x)
     q = process_variance(c, zb)
     t_proc = deletion_statistic(-e, q, problem.v, se2)
-    return w_new, robust_weight(t_proc, config.robust, config.tuning)
+    return w_new, _cut_small(robust_weight(t_proc, config.robust, config.tuning))
 
 
 def estimate_exact_likelihood(

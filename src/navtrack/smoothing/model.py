@@ -310,6 +310,7 @@ def solve_gauss_markov(
     used_w = w > 0
     used_v = v > 0
     n_used = int(np.count_nonzero(used_w))
+    n_used_v = int(np.count_nonzero(used_v))
     diffuse = m
     extra = 0.0
     if prior is not None:
@@ -320,8 +321,13 @@ def solve_gauss_markov(
         extra = p * math.log(se2) + prior.logdet_gamma
     loglike = -0.5 * (
         (n_used - diffuse) * math.log(2 * math.pi)
-        + float(np.sum(np.log(sn2 / w[used_w])))
-        + float(np.sum(np.log(se2 / v[used_v])))
+        # sum of log(sigma^2 / weight) over the equations in the fit, without the ratio itself:
+        # sigma^2 / w overflows for a weight near the underflow threshold (a Danish weight of
+        # a 67-sigma outlier), log w does not
+        + n_used * math.log(sn2)
+        - float(np.sum(np.log(w[used_w])))
+        + n_used_v * math.log(se2)
+        - float(np.sum(np.log(v[used_v])))
         + extra
         + logdet
         + omega_n / sn2
