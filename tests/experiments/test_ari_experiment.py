@@ -34,11 +34,14 @@ def test_registered_experiment_is_ari() -> None:
 
 
 def test_paper_estimator_and_order_only_in_the_first_runs() -> None:
-    params = exp.AriExperimentParams(cases=(SMALL,), paper_runs=1, order_runs=2)
+    params = exp.AriExperimentParams(
+        cases=(SMALL,), paper_runs=1, order_runs=2, paper_order_cases=("small",)
+    )
     runs = [exp.synthetic_run(params, run_generator(11, i)) for i in range(3)]
     assert [exp.run_index(run_generator(11, i)) for i in range(3)] == [0, 1, 2]
     assert ["paper_status" in r["small"] for r in runs] == [True, False, False]
     assert ["order" in r["small"] for r in runs] == [True, True, False]
+    assert ["paper_order" in r["small"] for r in runs] == [True, True, False]
     # the other results do not depend on whether the paper's estimator ran
     alone = exp.synthetic_run(
         exp.AriExperimentParams(cases=(SMALL,), paper_runs=0), run_generator(11, 0)
@@ -47,6 +50,7 @@ def test_paper_estimator_and_order_only_in_the_first_runs() -> None:
     assert alone["small"]["detected"] == runs[0]["small"]["detected"]
     s = exp.summarize_synthetic(params, runs)["small"]
     assert (s["runs"], s["paper_runs"], s["order_runs"]) == (3, 1, 2)
+    assert sum(s["orders_selected_paper"].values()) == 2
     assert s["estimators"]["paper"]["sigma_n_ratio"]["runs"] == 1
     assert s["estimators"]["exact"]["sigma_n_ratio"]["runs"] == 3
 

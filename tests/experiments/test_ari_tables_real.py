@@ -131,3 +131,35 @@ def test_strips_rms_recovers_sigma_n() -> None:
 def test_sarimax_skip_is_said() -> None:
     lines = tables.summary_lines({"sarimax_skipped": "statsmodels is not installed"})
     assert any("SARIMAX cross-check skipped" in ln for ln in lines)
+
+
+def test_attitude_rows_in_parallel_equal_serial_and_are_tabled(tmp_path: Path) -> None:
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(4)
+    n = 3000  # 300 epochs after decimation by 10
+    t = np.arange(n) / 100.0
+    turn = Rotation.from_rotvec(np.column_stack([0.4 * np.sin(0.5 * t), 0.1 * t, 0.2 * t]))
+    rot = turn * Rotation.from_rotvec(np.radians(0.05) * rng.standard_normal((n, 3)))
+    quat = rot.as_quat()
+    quat[10 * 150] = (rot[10 * 150] * Rotation.from_rotvec([np.radians(3.0), 0, 0])).as_quat()
+    path = tmp_path / "trial.mat"
+    _savemat_trial(path, quat, 100.0)
+    src = broad_series(path, decimate=10)
+    cfg = AriConfig(order=(1, 2))
+    serial, _ = real_data_rows([src], cfg)
+    strips: list[dict] = []
+    parallel, _ = real_data_rows([src], cfg, workers=2, strips=strips)
+    assert [r["sigma_n"] for r in parallel] == [r["sigma_n"] for r in serial]
+    x = serial[0]
+    assert x["column"] == "rotvec_x_deg"
+    # the 3-deg spike about body x is flagged there and explained by the full-rate samples
+    assert x["flags_explained"]["by_cause"]["optical_spike"] >= 1
+    assert x["robust_process"] is not None  # a moving platform
+    euler = broad_series(path, decimate=10, form="euler")
+    before, _ = real_data_rows([euler], cfg, further=False)
+    assert all(r["paper"] is None and r["robust_process"] is None for r in before)
+    text = "\n".join(tables._flags_and_process(serial, before))
+    assert "| BROAD trial | rotvec_x_deg |" in text
+    assert "| BROAD trial | yaw_deg |" in text
+    assert "## Robust treatment of the process equations (3)" in text

@@ -177,6 +177,8 @@ def broad_series(path: Path, *, decimate: int = 1, form: AttitudeForm = "rotvec"
     causes, levels = flag_causes(quat_full, trial.gyr_rad_s, decimate)
     meta: dict[str, Any] = {
         "form": form,
+        "path": str(path),
+        "decimate": decimate,
         "kinematic": True,
         "max_pitch_deg": float(np.degrees(np.nanmax(np.abs(ypr[:, 1])))),
         "rotation_deg_per_sample_p99": float(np.degrees(np.nanpercentile(step, 99))),

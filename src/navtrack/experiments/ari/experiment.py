@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from navtrack.experiments.ari.broad import broad_series
 from navtrack.experiments.ari.real import (
     RealSeries,
     default_real_sources,
@@ -73,8 +74,19 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
         rows, fits = real_data_rows(
             sources, track=context.track, workers=context.workers, strips=strips
         )
+        # the attitude series in the paper's Euler form too, exact estimator only: the flags
+        # before (Euler) and after (rotation-vector path) the change of representation
+        euler = [
+            broad_series(Path(src.meta["path"]), decimate=src.meta["decimate"], form="euler")
+            for src in sources
+            if src.meta.get("form") == "rotvec"
+        ]
+        euler_rows, _ = real_data_rows(
+            euler, track=context.track, workers=context.workers, further=False
+        )
         results = {
             "real": rows,
+            "attitude_euler": euler_rows,
             "real_skipped": skipped,
             "spp_comparison": spp_comparison(rows),
             "table2": table2_rows(rows),

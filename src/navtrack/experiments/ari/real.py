@@ -317,10 +317,11 @@ def _flag_explanation(task: _ColumnTask, res: AriResult) -> dict[str, Any]:
 
 
 def _fit_column(
-    task: _ColumnTask, cfg: AriConfig
+    task: _ColumnTask, cfg: AriConfig, further: bool = True
 ) -> tuple[dict[str, Any], AriResult, dict[str, Any] | None]:
-    """Row (exact estimator, order by BIC; paper's estimator; robust process equations on a
-    moving platform), whole-series fit and strip row of one column."""
+    """Row (exact estimator, order by BIC; with ``further`` also the paper's estimator and the
+    robust process equations on a moving platform), whole-series fit and strip row of one
+    column."""
     t0 = time.perf_counter()
     res = fit_ari(task.values, cfg)
     elapsed = time.perf_counter() - t0
@@ -354,7 +355,7 @@ def _fit_column(
         "robust_process": None,
     }
     strip = None
-    if res.estimated:
+    if res.estimated and further:
         row["paper"] = _paper_fit(task.values, res.p, res.d, cfg)
         if task.kinematic:
             row["robust_process"] = _robust_process_fit(task, res, cfg)
@@ -372,6 +373,7 @@ def real_data_rows(
     track: Callable[[Sequence[Any], str], Iterable[Any]] | None = None,
     workers: int = 1,
     strips: list[dict[str, Any]] | None = None,
+    further: bool = True,
 ) -> tuple[list[dict[str, Any]], dict[tuple[str, str], AriResult]]:
     """Fit every column of every source; one table row per column (paper Tables 1–5).
 
@@ -403,6 +405,9 @@ def real_data_rows(
     strips : list, optional
         When given, the :func:`strip_rows` rows of the columns long enough are appended to it
         (computed in the same task as the column).
+    further : bool
+        Also the paper's estimator and the robust process equations (off: the exact estimator
+        only, e.g. for a comparison of two forms of the same data).
     """
     cfg = AriConfig(min_d=1, select_n=10000) if config is None else config
     if workers < 1:
@@ -413,12 +418,12 @@ def real_data_rows(
     done: dict[int, tuple[dict[str, Any], AriResult, dict[str, Any] | None]] = {}
     if workers == 1 or len(tasks) < 2:
         for k in order if track is None else track(order, "real series"):
-            done[k] = _fit_column(tasks[k], cfg)
+            done[k] = _fit_column(tasks[k], cfg, further)
     else:
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(max_workers=workers) as pool:
-            futures = [(k, pool.submit(_fit_column, tasks[k], cfg)) for k in order]
+            futures = [(k, pool.submit(_fit_column, tasks[k], cfg, further)) for k in order]
             for k, fut in futures if track is None else track(futures, "real series"):
                 done[k] = fut.result()
     rows = [done[k][0] for k in range(len(tasks))]

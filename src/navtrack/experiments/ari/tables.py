@@ -116,7 +116,8 @@ def _printed_vs_estimators(synthetic: dict[str, Any]) -> list[str]:
             f"| | seconds per fit | – | – | {_spread(ex['seconds'])} | {_spread(pa['seconds'])} |",
             f"| | iterations (paper) | – | – | – | {_spread(pa.get('n_iter'), digits=0)} |",
             f"| | order by BIC | ({s['truth']['order'][0]},{s['truth']['order'][1]}) | – | "
-            f"{_counts(s['orders_selected']) or '–'} | – |",
+            f"{_counts(s['orders_selected']) or '–'} | "
+            f"{_counts(s.get('orders_selected_paper') or {}) or '–'} |",
         ]
     return lines
 
@@ -147,11 +148,14 @@ def _explained_cells(expl: dict[str, Any] | None, flagged: int) -> str:
     )
 
 
-def _flags_and_process(real: list[dict[str, Any]]) -> list[str]:
-    """What explains the flags on the attitude series, and the robust treatment of the
-    process equations (3) on the moving platforms."""
+def _flags_and_process(
+    real: list[dict[str, Any]], euler: list[dict[str, Any]] | None = None
+) -> list[str]:
+    """What explains the flags on the attitude series (in the Euler form too when ``euler``
+    holds its rows), and the robust treatment of the process equations (3) on the moving
+    platforms."""
     lines: list[str] = []
-    explained = [r for r in real if r.get("flags_explained")]
+    explained = [r for r in [*(euler or []), *real] if r.get("flags_explained")]
     if explained:
         lines += [
             "",
@@ -162,7 +166,9 @@ def _flags_and_process(real: list[dict[str, Any]]) -> list[str]:
             "neighbours by > 5× the trial's median; *fast* = gyroscope rate change or rotation "
             "per sample in the trial's top 10 %. *explained* = flags with at least one cause; "
             "the share of all epochs that carry one is what chance alone would explain. Model "
-            "errors (Euler form only): Euler-angle artefacts near gimbal lock.",
+            "errors (Euler form only): Euler-angle artefacts near gimbal lock. The Euler rows "
+            "(yaw/pitch/roll: the representation before) are fitted by the exact estimator "
+            "only.",
             "",
             "| source | column | flagged | gap | spike | fast | explained | model errors | "
             "flagged, robust (3) | explained, robust (3) |",
@@ -370,7 +376,7 @@ def tables_markdown(results: dict[str, Any]) -> str:
             + ("; ".join(row.get("warnings", [])) or "–")
             + " |"
         )
-    lines += _flags_and_process(results["real"])
+    lines += _flags_and_process(results["real"], results.get("attitude_euler"))
     if results.get("real_skipped"):
         lines += ["", "Skipped: " + "; ".join(results["real_skipped"])]
     if results.get("spp_comparison"):
@@ -459,6 +465,13 @@ def summary_lines(results: dict[str, Any]) -> list[str]:
     for row in real:
         statuses[row["status"]] = statuses.get(row["status"], 0) + 1
     lines.append(f"real series {len(real)}: " + ", ".join(f"{k} {v}" for k, v in statuses.items()))
+    for row in [*results.get("attitude_euler", []), *real]:
+        expl = row.get("flags_explained")
+        if expl:
+            lines.append(
+                f"flags {row['source']} {row['column']}: {row['n_flagged']} "
+                f"({expl['n_explained']} explained, {row.get('n_model_error', 0)} model errors)"
+            )
     ours = [r for r in real if (r.get("meta") or {}).get("solver") == "navtrack"]
     if ours:
         runs = sorted({r["meta"]["run"] for r in ours})
