@@ -22,11 +22,37 @@ def _small_params() -> exp.AriExperimentParams:
 def test_registered_experiment_is_ari() -> None:
     assert get_experiment("ari") is exp.EXPERIMENT
     assert exp.EXPERIMENT.default_params() == exp.AriExperimentParams()
-    assert exp.EXPERIMENT.default_runs == 50
+    assert exp.EXPERIMENT.default_runs == 20
     with pytest.raises(ValueError, match="outlier_sigma"):
         exp.AriExperimentParams(outlier_sigma=(15.0, 5.0))
     with pytest.raises(ValueError, match="robust"):
         exp.AriExperimentParams(robust="l1")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="attitude_form"):
+        exp.AriExperimentParams(attitude_form="quaternion")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="paper_runs"):
+        exp.AriExperimentParams(paper_runs=-1)
+
+
+def test_paper_estimator_and_order_only_in_the_first_runs() -> None:
+    params = exp.AriExperimentParams(
+        cases=(SMALL,), paper_runs=1, order_runs=2, paper_order_cases=("small",)
+    )
+    runs = [exp.synthetic_run(params, run_generator(11, i)) for i in range(3)]
+    assert [exp.run_index(run_generator(11, i)) for i in range(3)] == [0, 1, 2]
+    assert ["paper_status" in r["small"] for r in runs] == [True, False, False]
+    assert ["order" in r["small"] for r in runs] == [True, True, False]
+    assert ["paper_order" in r["small"] for r in runs] == [True, True, False]
+    # the other results do not depend on whether the paper's estimator ran
+    alone = exp.synthetic_run(
+        exp.AriExperimentParams(cases=(SMALL,), paper_runs=0), run_generator(11, 0)
+    )
+    assert alone["small"]["sigma_n_ratio"] == runs[0]["small"]["sigma_n_ratio"]
+    assert alone["small"]["detected"] == runs[0]["small"]["detected"]
+    s = exp.summarize_synthetic(params, runs)["small"]
+    assert (s["runs"], s["paper_runs"], s["order_runs"]) == (3, 1, 2)
+    assert sum(s["orders_selected_paper"].values()) == 2
+    assert s["estimators"]["paper"]["sigma_n_ratio"]["runs"] == 1
+    assert s["estimators"]["exact"]["sigma_n_ratio"]["runs"] == 3
 
 
 def test_synthetic_runs_recover_truth_and_gross_errors() -> None:

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from navtrack.experiments.ari import tables
+from navtrack.experiments.ari.broad import broad_series, flag_causes
 from navtrack.experiments.ari.real import (
     RealSeries,
-    broad_series,
     real_data_rows,
     solution_series,
     strip_rows,
@@ -61,13 +61,60 @@ def test_euler_artefacts_marked_only_near_gimbal_lock(tmp_path: Path) -> None:
     trial = {"opt_quat": quat, "sampling_rate": 100.0}
     trial |= {"imu_gyr": np.zeros((t.size, 3)), "movement": np.ones(t.size)}  # BROAD's keys
     scipy_io.savemat(path, trial)
-    src = broad_series(path)
+    src = broad_series(path, form="euler")
     mask = src.meta["model_error"]["yaw_deg"]
     pitch = np.abs(src.columns["pitch_deg"])
     assert src.meta["euler_artefact_epochs"] >= 1
     assert np.all(pitch[mask] > 80.0)
     # far from the lock nothing is marked
     assert not np.any(mask[pitch < 70.0])
+    # the rotation-vector path of the same motion has no artefacts: no model errors at all
+    assert "model_error" not in broad_series(path).meta
+
+
+def _savemat_trial(path: Path, quat_xyzw: np.ndarray, rate_hz: float) -> None:
+    scipy_io = pytest.importorskip("scipy.io")
+    n = quat_xyzw.shape[0]
+    trial = {"opt_quat": quat_xyzw[:, [3, 0, 1, 2]], "sampling_rate": rate_hz}
+    trial |= {"imu_gyr": np.zeros((n, 3)), "movement": np.ones(n)}  # BROAD's keys
+    scipy_io.savemat(path, trial)
+
+
+def test_rotvec_path_is_the_angle_through_gimbal_lock(tmp_path: Path) -> None:
+    from scipy.spatial.transform import Rotation
+
+    # a turn about the body y axis from 60 to 120 deg of pitch: the Euler angles pass the
+    # lock (yaw and roll jump by 180 deg), the turn itself is one angle growing linearly
+    angle = np.linspace(60.0, 120.0, 301)
+    rot = Rotation.from_rotvec(np.outer(np.radians(angle), [0.0, 1.0, 0.0]))
+    path = tmp_path / "turn.mat"
+    _savemat_trial(path, rot.as_quat(), 100.0)
+    euler = broad_series(path, form="euler")
+    assert np.nanmax(np.abs(np.diff(euler.columns["yaw_deg"]))) > 90.0
+    src = broad_series(path)
+    assert list(src.columns) == ["rotvec_x_deg", "rotvec_y_deg", "rotvec_z_deg"]
+    np.testing.assert_allclose(src.columns["rotvec_y_deg"], angle - angle[0], atol=1e-9)
+    np.testing.assert_allclose(src.columns["rotvec_x_deg"], 0.0, atol=1e-9)
+    np.testing.assert_allclose(src.columns["rotvec_z_deg"], 0.0, atol=1e-9)
+
+
+def test_flag_causes_find_a_spike_and_a_gap_edge() -> None:
+    from scipy.spatial.transform import Rotation
+
+    big_n, dec = 2000, 10
+    t = np.arange(big_n) / 100.0
+    rng = np.random.default_rng(2)
+    rot = Rotation.from_rotvec(
+        np.column_stack([0.3 * np.sin(t), 0.2 * t, np.zeros(big_n)])
+    ) * Rotation.from_rotvec(np.radians(0.01) * rng.standard_normal((big_n, 3)))
+    quat = rot.as_quat()
+    quat[10 * 50] = (rot[10 * 50] * Rotation.from_rotvec([0.0, 0.0, np.radians(2.0)])).as_quat()
+    quat[10 * 120 : 10 * 123 + 1] = np.nan  # tracking lost for epochs 120..123
+    causes, levels = flag_causes(quat, np.zeros((big_n, 3)), dec)
+    assert causes["optical_spike"][50]
+    assert np.count_nonzero(causes["optical_spike"]) <= 0.15 * big_n / dec
+    assert np.array_equal(np.flatnonzero(causes["gap_edge"]), [118, 119, 124, 125])
+    assert levels["optical_spike_deg"] > 0.0
 
 
 def test_strips_rms_recovers_sigma_n() -> None:
@@ -84,3 +131,35 @@ def test_strips_rms_recovers_sigma_n() -> None:
 def test_sarimax_skip_is_said() -> None:
     lines = tables.summary_lines({"sarimax_skipped": "statsmodels is not installed"})
     assert any("SARIMAX cross-check skipped" in ln for ln in lines)
+
+
+def test_attitude_rows_in_parallel_equal_serial_and_are_tabled(tmp_path: Path) -> None:
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(4)
+    n = 3000  # 300 epochs after decimation by 10
+    t = np.arange(n) / 100.0
+    turn = Rotation.from_rotvec(np.column_stack([0.4 * np.sin(0.5 * t), 0.1 * t, 0.2 * t]))
+    rot = turn * Rotation.from_rotvec(np.radians(0.05) * rng.standard_normal((n, 3)))
+    quat = rot.as_quat()
+    quat[10 * 150] = (rot[10 * 150] * Rotation.from_rotvec([np.radians(3.0), 0, 0])).as_quat()
+    path = tmp_path / "trial.mat"
+    _savemat_trial(path, quat, 100.0)
+    src = broad_series(path, decimate=10)
+    cfg = AriConfig(order=(1, 2))
+    serial, _ = real_data_rows([src], cfg)
+    strips: list[dict] = []
+    parallel, _ = real_data_rows([src], cfg, workers=2, strips=strips)
+    assert [r["sigma_n"] for r in parallel] == [r["sigma_n"] for r in serial]
+    x = serial[0]
+    assert x["column"] == "rotvec_x_deg"
+    # the 3-deg spike about body x is flagged there and explained by the full-rate samples
+    assert x["flags_explained"]["by_cause"]["optical_spike"] >= 1
+    assert x["robust_process"] is not None  # a moving platform
+    euler = broad_series(path, decimate=10, form="euler")
+    before, _ = real_data_rows([euler], cfg, further=False)
+    assert all(r["paper"] is None and r["robust_process"] is None for r in before)
+    text = "\n".join(tables._flags_and_process(serial, before))
+    assert "| BROAD trial | rotvec_x_deg |" in text
+    assert "| BROAD trial | yaw_deg |" in text
+    assert "## Robust treatment of the process equations (3)" in text

@@ -276,7 +276,7 @@ def test_cli_list_prints_experiments_and_parameters(capsys: pytest.CaptureFixtur
     out = capsys.readouterr().out.splitlines()
     start = next(i for i, line in enumerate(out) if line.startswith("ari: "))  # sorted by name
     assert out[start].startswith("ari: Paper 5: ARI(p,d) filtering")
-    assert "(default runs 50)" in out[start]
+    assert "(default runs 20)" in out[start]
     rows: dict[str, list[str]] = {}
     for line in out[start + 1 :]:
         if not line.startswith("  "):  # the next experiment

@@ -293,7 +293,7 @@ def test_order_selection_does_not_depend_on_the_warm_start(
     path = shared_data / "trajectory" / "broad" / "07_undisturbed_fast_rotation_B.mat"
     if not path.exists():
         pytest.skip(f"{path} absent")
-    y = broad_series(path, decimate=10).columns["yaw_deg"][:2000]
+    y = broad_series(path, decimate=10, form="euler").columns["yaw_deg"][:2000]
     cfg = AriConfig(robust="off", min_d=1)
     plain = fit_ari(y, cfg)
     original = fitting._fit_fixed

@@ -189,7 +189,12 @@ def reproduce(experiment: Experiment[Any, Any] | str, options: ReproduceOptions)
     summary = exp.summarize(params, mc.results)
     rng = np.random.default_rng(np.random.SeedSequence(options.seed, spawn_key=(EXTRA_SPAWN_KEY,)))
     context = ExperimentContext(
-        options.seed, rng, tuple(options.inputs), out, progress=options.progress
+        options.seed,
+        rng,
+        tuple(options.inputs),
+        out,
+        progress=options.progress,
+        workers=options.workers or 1,
     )
     t_extra = time.perf_counter()
     log("extra      real data and cross-checks ...")

@@ -118,6 +118,8 @@ class ExperimentContext:
     progress : bool
         Whether :meth:`track` shows progress bars (``navtrack reproduce --no-progress`` turns
         them off).
+    workers : int
+        Processes the step may use (``navtrack reproduce --workers``; 1 when not given).
     """
 
     seed: int
@@ -125,6 +127,7 @@ class ExperimentContext:
     inputs: tuple[Path, ...] = ()
     out_dir: Path = Path(".")
     progress: bool = False
+    workers: int = 1
 
     def track(self, items: Sequence[T], desc: str) -> Iterator[T]:
         """Iterate over ``items`` with a progress bar on stderr named ``desc`` (when enabled)."""

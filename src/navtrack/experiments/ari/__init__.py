@@ -6,6 +6,8 @@
   applications with known truth, and the parameters :class:`AriExperimentParams`;
 * :mod:`~navtrack.experiments.ari.real` — the real data catalogue (BROAD orientation, pyins
   track, RTKLIB and navtrack SPP series, solution tables) and its fits;
+* :mod:`~navtrack.experiments.ari.broad` — BROAD orientation as series (rotation-vector path
+  or Euler angles) and the causes that explain gross-error flags on it;
 * :mod:`~navtrack.experiments.ari.sarimax` — the statsmodels SARIMAX cross-check;
 * :mod:`~navtrack.experiments.ari.tables` — tables, console lines, the paper's published values;
 * :mod:`~navtrack.experiments.ari.experiment` — the :class:`~navtrack.experiments.Experiment`.
@@ -13,12 +15,12 @@
 
 from __future__ import annotations
 
+from navtrack.experiments.ari.broad import FLAG_CAUSES, broad_series, flag_causes
 from navtrack.experiments.ari.experiment import EXPERIMENT, AriExperiment
 from navtrack.experiments.ari.real import (
     SPP_RUNS,
     RealSeries,
     SppRun,
-    broad_series,
     default_real_sources,
     pyins_series,
     real_data_rows,
@@ -36,6 +38,7 @@ from navtrack.experiments.ari.synthetic import (
     SYNTHETIC_CASES,
     AriExperimentParams,
     SyntheticCase,
+    run_index,
     summarize_synthetic,
     synthetic_run,
 )
@@ -43,6 +46,7 @@ from navtrack.experiments.ari.tables import PAPER_TABLES, summary_lines, tables_
 
 __all__ = [
     "EXPERIMENT",
+    "FLAG_CAUSES",
     "IDENTIFIABLE_CRB",
     "PAPER_TABLES",
     "SARIMAX_SPP_SOURCES",
@@ -55,8 +59,10 @@ __all__ = [
     "SyntheticCase",
     "broad_series",
     "default_real_sources",
+    "flag_causes",
     "pyins_series",
     "real_data_rows",
+    "run_index",
     "sarimax_compare",
     "sarimax_comparisons",
     "solution_series",

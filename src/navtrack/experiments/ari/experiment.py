@@ -18,13 +18,13 @@ from typing import Any
 
 import numpy as np
 
+from navtrack.experiments.ari.broad import broad_series
 from navtrack.experiments.ari.real import (
     RealSeries,
     default_real_sources,
     real_data_rows,
     solution_series,
     spp_comparison,
-    strip_rows,
     table2_rows,
 )
 from navtrack.experiments.ari.sarimax import sarimax_comparisons
@@ -48,7 +48,7 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
     name = "ari"
     description = "Paper 5: ARI(p,d) filtering, variance components and gross errors (Lindenberger)"
     params_type = AriExperimentParams
-    default_runs = 50
+    default_runs = 20
 
     def run_one(self, params: AriExperimentParams, rng: np.random.Generator) -> _RunResult:
         return synthetic_run(params, rng)
@@ -66,15 +66,31 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
         sources: list[RealSeries] = []
         skipped: list[str] = []
         if params.real_data:
-            sources, skipped = default_real_sources(context.shared_data())
+            sources, skipped = default_real_sources(
+                context.shared_data(), attitude_form=params.attitude_form
+            )
         sources += [solution_series(Path(path)) for path in context.inputs]
-        rows, fits = real_data_rows(sources, track=context.track)
+        strips: list[dict[str, Any]] = []
+        rows, fits = real_data_rows(
+            sources, track=context.track, workers=context.workers, strips=strips
+        )
+        # the attitude series in the paper's Euler form too, exact estimator only: the flags
+        # before (Euler) and after (rotation-vector path) the change of representation
+        euler = [
+            broad_series(Path(src.meta["path"]), decimate=src.meta["decimate"], form="euler")
+            for src in sources
+            if src.meta.get("form") == "rotvec"
+        ]
+        euler_rows, _ = real_data_rows(
+            euler, track=context.track, workers=context.workers, further=False
+        )
         results = {
             "real": rows,
+            "attitude_euler": euler_rows,
             "real_skipped": skipped,
             "spp_comparison": spp_comparison(rows),
             "table2": table2_rows(rows),
-            "strips": strip_rows(sources, fits),
+            "strips": strips,
             "sarimax": sarimax_comparisons(context.rng, params.cases, sources, fits),
         }
         if importlib.util.find_spec("statsmodels") is None:

@@ -1,12 +1,14 @@
 """Real data of the ARI reproduction: the paper's Tables 1–5 quantities for real series.
 
-The series (:func:`default_real_sources`): BROAD optical orientation as roll/pitch/yaw
-(decimated 285.7 Hz -> 28.6 Hz, near the paper's 10 Hz INS rate, which also keeps the run
-short), the pyins receiver track (ENU), RTKLIB SPP solutions of the shared GNSS stations and the
-walking rover next to navtrack's own SPP solutions of the same files with the same options
-(:data:`SPP_RUNS`, :func:`spp_series`; ENU about their mean), and any further solution tables
-(:func:`solution_series`: navtrack CSV/Parquet or RTKLIB ``.pos``). :func:`real_data_rows` fits
-every column; :func:`spp_comparison` puts navtrack's and RTKLIB's rows of a run side by side.
+The series (:func:`default_real_sources`): BROAD optical orientation as the rotation-vector
+path of its increments (:func:`navtrack.experiments.ari.broad.broad_series`; decimated
+285.7 Hz -> 28.6 Hz, near the paper's 10 Hz INS rate, which also keeps the run short), the
+pyins receiver track (ENU), RTKLIB SPP solutions of the shared GNSS stations and the walking
+rover next to navtrack's own SPP solutions of the same files with the same options
+(:data:`SPP_RUNS`, :func:`spp_series`; ENU about their mean), and any further solution
+tables (:func:`solution_series`: navtrack CSV/Parquet or RTKLIB ``.pos``).
+:func:`real_data_rows` fits every column; :func:`spp_comparison` puts navtrack's and RTKLIB's
+rows of a run side by side.
 """
 
 from __future__ import annotations
@@ -21,18 +23,17 @@ from typing import Any
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
-from navtrack._typing import FloatArray
+from navtrack._typing import BoolArray, FloatArray
 from navtrack.errors import FileFormatError
 from navtrack.smoothing.ari import AriConfig, AriResult, fit_ari, regularize_time
+from navtrack.smoothing.attitude import AttitudeForm
 from navtrack.smoothing.identifiability import identifiability_warnings, sigma_bounds
 
 __all__ = [
-    "EULER_AMPLIFICATION",
     "SPP_RUNS",
     "STRIP_EPOCHS",
     "RealSeries",
     "SppRun",
-    "broad_series",
     "default_real_sources",
     "pyins_series",
     "real_data_rows",
@@ -42,10 +43,6 @@ __all__ = [
     "strip_rows",
     "table2_rows",
 ]
-
-#: Euler increments (|d yaw| + |d roll|) above this multiple of the rotation angle between two
-#: samples are Euler-angle artefacts (model errors), not motion.
-EULER_AMPLIFICATION = 3.0
 
 #: Epochs per strip of :func:`strip_rows`, by unit of the series.
 STRIP_EPOCHS = {"m": 130, "deg": 400}
@@ -82,55 +79,6 @@ class RealSeries:
             values.flags.writeable = False
 
 
-def broad_series(path: Path, *, decimate: int = 1) -> RealSeries:
-    """BROAD optical orientation as yaw/pitch/roll (deg, intrinsic z-y'-x'', unwrapped).
-
-    Parameters
-    ----------
-    path : Path
-        BROAD trial ``.mat`` file (``opt_quat`` scalar-first, NaN where tracking was lost).
-    decimate : int
-        Keep every ``decimate``-th sample.
-    """
-    from scipy.spatial.transform import Rotation
-
-    from navtrack.io.broad import read_broad
-
-    trial = read_broad(path)
-    quat = trial.opt_quat_wxyz[::decimate]
-    rate = trial.rate_hz
-    n = quat.shape[0]
-    ok = np.all(np.isfinite(quat), axis=1)
-    angles = np.full((n, 3), np.nan)
-    rot = Rotation.from_quat(quat[ok][:, [1, 2, 3, 0]])  # scipy is scalar-last
-    angles[ok] = rot.as_euler("ZYX")
-    cols = {}
-    for k, name in enumerate(("yaw_deg", "pitch_deg", "roll_deg")):
-        a = angles[:, k].copy()
-        a[ok] = np.unwrap(a[ok])
-        cols[name] = np.degrees(a)
-    dt = decimate / rate
-    t_s = np.arange(n, dtype=np.float64) * dt
-    # Euler-angle artefacts: near gimbal lock (|pitch| -> 90 deg) a rotation moves yaw and roll
-    # by up to 1/cos(pitch) times its angle, with opposite-sign jumps — outside the ARI model of
-    # a smooth angle. An increment whose |d yaw| + |d roll| exceeds EULER_AMPLIFICATION times
-    # the rotation angle between the two samples marks both its epochs as model errors.
-    step = np.full(n, np.nan)
-    seen = np.flatnonzero(ok)
-    step[seen[1:]] = np.degrees((rot[1:] * rot[:-1].inv()).magnitude())
-    euler_step = np.full(n, np.nan)
-    euler_step[1:] = np.abs(np.diff(cols["yaw_deg"])) + np.abs(np.diff(cols["roll_deg"]))
-    amplified = euler_step > EULER_AMPLIFICATION * np.maximum(step, 1e-6)
-    artefact = amplified | np.concatenate([amplified[1:], [False]])
-    meta = {
-        "euler_artefact_epochs": int(np.count_nonzero(artefact)),
-        "max_pitch_deg": float(np.nanmax(np.abs(cols["pitch_deg"]))),
-        "rotation_deg_per_sample_p99": float(np.nanpercentile(step, 99)),
-        "model_error": {"yaw_deg": artefact, "roll_deg": artefact},
-    }
-    return RealSeries(f"BROAD {path.stem}", t_s, cols, "deg", dt, meta=meta)
-
-
 def pyins_series(path: Path) -> RealSeries:
     """pyins receiver track (``gnss.csv``) as ENU (m) about its first epoch."""
     import pandas as pd
@@ -146,7 +94,8 @@ def pyins_series(path: Path) -> RealSeries:
     t = df["time"].to_numpy(dtype=float)
     t_grid, enu_grid, inserted = regularize_time(t, enu)
     cols = {name: enu_grid[:, k] for k, name in enumerate(("e_m", "n_m", "u_m"))}
-    return RealSeries("pyins gnss.csv", t_grid, cols, "m", float(np.median(np.diff(t))), inserted)
+    dt = float(np.median(np.diff(t)))
+    return RealSeries("pyins gnss.csv", t_grid, cols, "m", dt, inserted, {"kinematic": True})
 
 
 def solution_series(path: Path) -> RealSeries:
@@ -304,11 +253,127 @@ def spp_series(gnss: Path, run: SppRun) -> RealSeries:
     return _table_series(f"navtrack {run.name}", df, meta)
 
 
+@dataclass(frozen=True, slots=True)
+class _ColumnTask:
+    """One real column to fit (the unit of work of :func:`real_data_rows`; picklable)."""
+
+    source: str
+    column: str
+    unit: str
+    dt_s: float
+    values: FloatArray
+    n_inserted: int
+    meta: dict[str, Any]
+    model_error: BoolArray | None
+    causes: dict[str, BoolArray]
+    kinematic: bool
+    strip_epochs: int | None
+
+
+def _column_task(src: RealSeries, col: str, strips: bool) -> _ColumnTask:
+    values = src.columns[col]
+    model_error = src.meta.get("model_error", {}).get(col)
+    length = STRIP_EPOCHS.get(src.unit, 130)
+    return _ColumnTask(
+        src.source,
+        col,
+        src.unit,
+        src.dt_s,
+        np.asarray(values),
+        src.n_inserted,
+        {k: v for k, v in src.meta.items() if k not in _EPOCH_META},
+        None if model_error is None else np.asarray(model_error, dtype=bool),
+        dict(src.meta.get("flag_causes", {})),
+        bool(src.meta.get("kinematic", False)),
+        length if strips and values.size >= 2 * length else None,
+    )
+
+
+#: ``RealSeries.meta`` entries that hold per-epoch arrays (kept out of the rows).
+_EPOCH_META = ("model_error", "flag_causes")
+
+
+def _flag_explanation(task: _ColumnTask, res: AriResult) -> dict[str, Any]:
+    """Flags of ``res`` at the epochs of each cause of ``task.causes``, how many have one, and
+    each cause's share of the observed epochs (what chance alone would explain)."""
+    if not task.causes:
+        return {}
+    flags = res.gross_error
+    observed = np.isfinite(task.values)
+    n_observed = max(int(np.count_nonzero(observed)), 1)
+    any_cause = np.zeros(flags.size, dtype=bool)
+    by_cause, share = {}, {}
+    for cause, mask in task.causes.items():
+        m = np.asarray(mask, dtype=bool)
+        any_cause |= m
+        by_cause[cause] = int(np.count_nonzero(flags & m))
+        share[cause] = np.count_nonzero(m & observed) / n_observed
+    share["any"] = np.count_nonzero(any_cause & observed) / n_observed
+    return {
+        "by_cause": by_cause,
+        "n_explained": int(np.count_nonzero(flags & any_cause)),
+        "epoch_share": share,
+    }
+
+
+def _fit_column(
+    task: _ColumnTask, cfg: AriConfig, further: bool = True
+) -> tuple[dict[str, Any], AriResult, dict[str, Any] | None]:
+    """Row (exact estimator, order by BIC; with ``further`` also the paper's estimator and the
+    robust process equations on a moving platform), whole-series fit and strip row of one
+    column."""
+    t0 = time.perf_counter()
+    res = fit_ari(task.values, cfg)
+    elapsed = time.perf_counter() - t0
+    crb_n, crb_e = sigma_bounds(res)
+    model_error = (
+        np.zeros(task.values.size, dtype=bool) if task.model_error is None else task.model_error
+    )
+    row: dict[str, Any] = {
+        "source": task.source,
+        "column": task.column,
+        "unit": task.unit,
+        "dt_s": task.dt_s,
+        "n": int(task.values.size),
+        "n_missing": res.n_missing,
+        "n_inserted": task.n_inserted,
+        "status": str(res.status),
+        "order": [res.p, res.d],
+        "sigma_n": res.sigma_n,
+        "sigma_e": res.sigma_e,
+        "sigma_x": res.sigma_x_rms,
+        "r": [float(v) for v in res.autocorr],
+        "crb_sigma_n": crb_n,
+        "crb_sigma_e": crb_e,
+        "warnings": identifiability_warnings(res, crb_n, crb_e),
+        "n_flagged": res.n_flagged,
+        "n_model_error": int(np.count_nonzero(res.gross_error & model_error)),
+        "flags_explained": _flag_explanation(task, res),
+        "seconds": elapsed,
+        "meta": task.meta,
+        "paper": None,
+        "robust_process": None,
+    }
+    strip = None
+    if res.estimated and further:
+        row["paper"] = _paper_fit(task.values, res.p, res.d, cfg)
+        if task.kinematic:
+            row["robust_process"] = _robust_process_fit(task, res, cfg)
+        if task.strip_epochs is not None:
+            strip = _strip_row(
+                task.source, task.column, task.values, res, task.strip_epochs, AriConfig()
+            )
+    return row, res, strip
+
+
 def real_data_rows(
     sources: Sequence[RealSeries],
     config: AriConfig | None = None,
     *,
-    track: Callable[[Sequence[RealSeries], str], Iterable[RealSeries]] | None = None,
+    track: Callable[[Sequence[Any], str], Iterable[Any]] | None = None,
+    workers: int = 1,
+    strips: list[dict[str, Any]] | None = None,
+    further: bool = True,
 ) -> tuple[list[dict[str, Any]], dict[tuple[str, str], AriResult]]:
     """Fit every column of every source; one table row per column (paper Tables 1–5).
 
@@ -316,53 +381,77 @@ def real_data_rows(
     paper's estimator at that order (``row["paper"]``); both with the Cramér–Rao bounds of
     ``sigma_n``, ``sigma_e`` at their estimate
     (:func:`navtrack.smoothing.identifiability.sigma_bounds`) and the identifiability
-    warnings. Flags at epochs the source marks as outside the model (``meta["model_error"]``:
+    warnings. On a moving platform (``meta["kinematic"]``: attitude, vehicle tracks, the
+    walking rover — where the paper's edges and discontinuities are) the exact estimator is
+    run again with the process equations (3) reweighted too (``row["robust_process"]``).
+    Flags at epochs the source marks as outside the model (``meta["model_error"]``:
     Euler-angle artefacts of attitude near gimbal lock) are counted apart as
-    ``n_model_error``. The paper's estimator gets the series without its leading and trailing
-    missing epochs (its conditional model starts at an observation: a leading gap leaves the
-    first ``p + d`` states pinned only by decayed modes, a numerically singular system).
-    ``track(sources, desc)`` wraps the loop over the sources, e.g. in a progress bar
-    (:meth:`~navtrack.experiments.contract.ExperimentContext.track`).
+    ``n_model_error``; flags at epochs of each of ``meta["flag_causes"]`` are counted in
+    ``row["flags_explained"]``. The paper's estimator gets the series without its leading and
+    trailing missing epochs (its conditional model starts at an observation: a leading gap
+    leaves the first ``p + d`` states pinned only by decayed modes, a numerically singular
+    system).
+
+    Parameters
+    ----------
+    sources : sequence of RealSeries
+    config : AriConfig, optional
+        Settings of the whole-series fits (default: order by BIC over ``d = 1, 2``).
+    track : callable, optional
+        ``track(items, desc)`` wraps the loop over the columns, e.g. in a progress bar
+        (:meth:`~navtrack.experiments.contract.ExperimentContext.track`).
+    workers : int
+        Columns are fitted in this many processes (1: in this one).
+    strips : list, optional
+        When given, the :func:`strip_rows` rows of the columns long enough are appended to it
+        (computed in the same task as the column).
+    further : bool
+        Also the paper's estimator and the robust process equations (off: the exact estimator
+        only, e.g. for a comparison of two forms of the same data).
     """
     cfg = AriConfig(min_d=1, select_n=10000) if config is None else config
-    rows: list[dict[str, Any]] = []
-    fits: dict[tuple[str, str], AriResult] = {}
-    for src in sources if track is None else track(sources, "real series"):
-        model_error = src.meta.get("model_error", {})
-        for col, values in src.columns.items():
-            t0 = time.perf_counter()
-            res = fit_ari(values, cfg)
-            elapsed = time.perf_counter() - t0
-            fits[(src.source, col)] = res
-            crb_n, crb_e = sigma_bounds(res)
-            mask = np.asarray(model_error.get(col, np.zeros(values.size, dtype=bool)))
-            row: dict[str, Any] = {
-                "source": src.source,
-                "column": col,
-                "unit": src.unit,
-                "dt_s": src.dt_s,
-                "n": int(values.size),
-                "n_missing": res.n_missing,
-                "n_inserted": src.n_inserted,
-                "status": str(res.status),
-                "order": [res.p, res.d],
-                "sigma_n": res.sigma_n,
-                "sigma_e": res.sigma_e,
-                "sigma_x": res.sigma_x_rms,
-                "r": [float(v) for v in res.autocorr],
-                "crb_sigma_n": crb_n,
-                "crb_sigma_e": crb_e,
-                "warnings": identifiability_warnings(res, crb_n, crb_e),
-                "n_flagged": res.n_flagged,
-                "n_model_error": int(np.count_nonzero(res.gross_error & mask)),
-                "seconds": elapsed,
-                "meta": {k: v for k, v in src.meta.items() if k != "model_error"},
-                "paper": None,
-            }
-            if res.estimated:
-                row["paper"] = _paper_fit(values, res.p, res.d, cfg)
-            rows.append(row)
+    if workers < 1:
+        raise ValueError(f"workers: expected >= 1, got {workers}")
+    tasks = [_column_task(src, col, strips is not None) for src in sources for col in src.columns]
+    # longest series first, so that the pool ends together
+    order = sorted(range(len(tasks)), key=lambda k: -tasks[k].values.size)
+    done: dict[int, tuple[dict[str, Any], AriResult, dict[str, Any] | None]] = {}
+    if workers == 1 or len(tasks) < 2:
+        for k in order if track is None else track(order, "real series"):
+            done[k] = _fit_column(tasks[k], cfg, further)
+    else:
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            futures = [(k, pool.submit(_fit_column, tasks[k], cfg, further)) for k in order]
+            for k, fut in futures if track is None else track(futures, "real series"):
+                done[k] = fut.result()
+    rows = [done[k][0] for k in range(len(tasks))]
+    fits = {(t.source, t.column): done[k][1] for k, t in enumerate(tasks)}
+    if strips is not None:
+        strips += [done[k][2] for k in range(len(tasks)) if done[k][2] is not None]  # type: ignore[misc]
     return rows, fits
+
+
+def _robust_process_fit(task: _ColumnTask, whole: AriResult, cfg: AriConfig) -> dict[str, Any]:
+    """The exact estimator at the order of ``whole`` with the process equations (3) reweighted
+    too (the paper's treatment of edges and discontinuities)."""
+    t0 = time.perf_counter()
+    res = fit_ari(
+        task.values, dataclasses.replace(cfg, order=(whole.p, whole.d), robust_process=True)
+    )
+    out = {
+        "status": str(res.status),
+        "sigma_n": res.sigma_n,
+        "sigma_e": res.sigma_e,
+        "sigma_x": res.sigma_x_rms,
+        "n_flagged": res.n_flagged,
+        "n_process_downweighted": int(np.count_nonzero(res.process_weight < 0.5)),
+        "n_process": int(res.process_weight.size),
+        "flags_explained": _flag_explanation(task, res),
+        "seconds": time.perf_counter() - t0,
+    }
+    return out
 
 
 def _paper_fit(values: FloatArray, p: int, d: int, cfg: AriConfig) -> dict[str, Any]:
@@ -390,20 +479,24 @@ def _paper_fit(values: FloatArray, p: int, d: int, cfg: AriConfig) -> dict[str, 
 
 
 def default_real_sources(
-    shared: Path, spp_runs: Sequence[SppRun] = SPP_RUNS
+    shared: Path, spp_runs: Sequence[SppRun] = SPP_RUNS, attitude_form: AttitudeForm = "rotvec"
 ) -> tuple[list[RealSeries], list[str]]:
     """The shared real data sets that are present; also a list of what was skipped and why.
 
-    For every run of ``spp_runs``: RTKLIB's stored solution and navtrack's own SPP solution of
-    the same observation and navigation files (:func:`spp_series`), each as ENU about its mean.
+    BROAD trials 02 and 07 in ``attitude_form``
+    (:func:`navtrack.experiments.ari.broad.broad_series`), the pyins track, and for every run
+    of ``spp_runs``: RTKLIB's stored solution and navtrack's own SPP solution of the same
+    observation and navigation files (:func:`spp_series`), each as ENU about its mean.
     """
+    from navtrack.experiments.ari.broad import broad_series
+
     sources: list[RealSeries] = []
     skipped: list[str] = []
     broad = shared / "trajectory" / "broad"
     for name in ("02_undisturbed_slow_rotation_B.mat", "07_undisturbed_fast_rotation_B.mat"):
         path = broad / name
         if path.exists():
-            sources.append(broad_series(path, decimate=10))
+            sources.append(broad_series(path, decimate=10, form=attitude_form))
         else:
             skipped.append(str(path))
     path = shared / "trajectory" / "pyins_gnss" / "gnss.csv"
@@ -491,27 +584,42 @@ def strip_rows(
             whole = fits.get((src.source, col))
             if whole is None or not whole.estimated or values.size < 2 * length:
                 continue
-            sigmas: list[float] = []
-            for k in range(min(max_strips, values.size // length)):
-                part = values[k * length : (k + 1) * length]
-                if np.count_nonzero(np.isnan(part)) > 0.2 * length:
-                    continue
-                res = fit_ari(part, dataclasses.replace(cfg, order=(whole.p, whole.d)))
-                if res.estimated:
-                    sigmas.append(res.sigma_n)
-            if sigmas:
-                out.append(
-                    {
-                        "source": src.source,
-                        "column": col,
-                        "order": [whole.p, whole.d],
-                        "strip_epochs": length,
-                        "sigma_n_strips": sigmas,
-                        "rms_sigma_n": float(np.sqrt(np.mean(np.square(sigmas)))),
-                        "whole_sigma_n": whole.sigma_n,
-                    }
-                )
+            row = _strip_row(src.source, col, values, whole, length, cfg, max_strips)
+            if row is not None:
+                out.append(row)
     return out
+
+
+def _strip_row(
+    source: str,
+    column: str,
+    values: FloatArray,
+    whole: AriResult,
+    length: int,
+    cfg: AriConfig,
+    max_strips: int = 6,
+) -> dict[str, Any] | None:
+    """One :func:`strip_rows` row: ``values`` cut into strips of ``length`` epochs, each fitted
+    at the order of ``whole``; ``None`` when no strip could be fitted."""
+    sigmas: list[float] = []
+    for k in range(min(max_strips, values.size // length)):
+        part = values[k * length : (k + 1) * length]
+        if np.count_nonzero(np.isnan(part)) > 0.2 * length:
+            continue
+        res = fit_ari(part, dataclasses.replace(cfg, order=(whole.p, whole.d)))
+        if res.estimated:
+            sigmas.append(res.sigma_n)
+    if not sigmas:
+        return None
+    return {
+        "source": source,
+        "column": column,
+        "order": [whole.p, whole.d],
+        "strip_epochs": length,
+        "sigma_n_strips": sigmas,
+        "rms_sigma_n": float(np.sqrt(np.mean(np.square(sigmas)))),
+        "whole_sigma_n": whole.sigma_n,
+    }
 
 
 _COMPARED = ("n", "n_missing", "order", "sigma_n", "sigma_e", "sigma_x", "r", "n_flagged", "status")

@@ -52,9 +52,11 @@ def _pct(value: Any) -> str:
     return f"{value:.1%}"
 
 
-def _spread(entry: dict[str, Any], k: int | None = None, digits: int = 2) -> str:
+def _spread(entry: dict[str, Any] | None, k: int | None = None, digits: int = 2) -> str:
     """``median [q25, q75]`` of a :func:`~navtrack.experiments.ari.synthetic.summarize_synthetic`
-    spread (element ``k`` of a list-valued one)."""
+    spread (element ``k`` of a list-valued one); ``–`` when no run has it."""
+    if entry is None:
+        return "–"
     med, (lo, hi) = entry["median"], entry["iqr"]
     if k is not None:
         med, lo, hi = med[k], lo[k], hi[k]
@@ -73,7 +75,9 @@ def _printed_vs_estimators(synthetic: dict[str, Any]) -> list[str]:
         "printed ones (`navtrack.experiments.ari.truths`). *truth*: theoretical value of the "
         "fitted truth; *exact*: exact-likelihood estimator; *paper*: the paper's conditional "
         "Gauss–Markov model with the alternating filtering/VCE iteration, same clean series, "
-        "true order. Cells: median [25 %, 75 %] over runs.",
+        "true order. Cells: median [25 %, 75 %] over runs; the paper's estimator and the BIC "
+        "order selection run only in the first runs (`paper_runs`, `order_runs`): their run "
+        "counts are given per case.",
         "",
         "| case | quantity | printed | truth | exact | paper |",
         "|---|---|---|---|---|---|",
@@ -83,7 +87,11 @@ def _printed_vs_estimators(synthetic: dict[str, Any]) -> list[str]:
         if not est:
             continue
         printed = s.get("printed", {})
-        label = f"{s['label']} ({printed.get('source') or 'no printed values'})"
+        label = (
+            f"{s['label']} ({printed.get('source') or 'no printed values'}; runs: exact "
+            f"{s['runs']}, paper {s.get('paper_runs', s['runs'])}, BIC "
+            f"{s.get('order_runs', s['runs'])})"
+        )
         ex, pa = est["exact"], est["paper"]
         lines.append(
             f"| {label} | σx/σn | {_fmt(printed.get('sigma_x_over_sigma_n'), 2)} | "
@@ -106,9 +114,10 @@ def _printed_vs_estimators(synthetic: dict[str, Any]) -> list[str]:
             f"{_spread(pa['sigma_e_ratio'], digits=3)} |",
             f"| | status | – | – | {_counts(ex['status'])} | {_counts(pa['status'])} |",
             f"| | seconds per fit | – | – | {_spread(ex['seconds'])} | {_spread(pa['seconds'])} |",
-            f"| | iterations (paper) | – | – | – | {_spread(pa['n_iter'], digits=0)} |",
+            f"| | iterations (paper) | – | – | – | {_spread(pa.get('n_iter'), digits=0)} |",
             f"| | order by BIC | ({s['truth']['order'][0]},{s['truth']['order'][1]}) | – | "
-            f"{_counts(s['orders_selected']) or '–'} | – |",
+            f"{_counts(s['orders_selected']) or '–'} | "
+            f"{_counts(s.get('orders_selected_paper') or {}) or '–'} |",
         ]
     return lines
 
@@ -125,6 +134,81 @@ def _paper_cells(paper: dict[str, Any] | None, unit: str) -> str:
         f"{_fmt(paper['sigma_x'])} {unit} | {_fmt(paper['r'][0], 2)} | "
         f"{paper['status']} ({paper['n_iter']})"
     )
+
+
+def _explained_cells(expl: dict[str, Any] | None, flagged: int) -> str:
+    """``gap | spike | fast | explained (share)`` cells of a ``flags_explained`` entry."""
+    if not expl:
+        return "– | – | – | –"
+    by = expl["by_cause"]
+    share = expl["epoch_share"]["any"]
+    return (
+        f"{by['gap_edge']} | {by['optical_spike']} | {by['fast_motion']} | "
+        f"{expl['n_explained']} of {flagged} ({share:.0%} of epochs)"
+    )
+
+
+def _flags_and_process(
+    real: list[dict[str, Any]], euler: list[dict[str, Any]] | None = None
+) -> list[str]:
+    """What explains the flags on the attitude series (in the Euler form too when ``euler``
+    holds its rows), and the robust treatment of the process equations (3) on the moving
+    platforms."""
+    lines: list[str] = []
+    explained = [r for r in [*(euler or []), *real] if r.get("flags_explained")]
+    if explained:
+        lines += [
+            "",
+            "## Gross-error flags on the attitude series, and what explains them",
+            "",
+            "Causes found from data the fit does not see: *gap* = within 2 epochs of lost "
+            "optical tracking; *spike* = the sample departs from the midpoint of its full-rate "
+            "neighbours by > 5× the trial's median; *fast* = gyroscope rate change or rotation "
+            "per sample in the trial's top 10 %. *explained* = flags with at least one cause; "
+            "the share of all epochs that carry one is what chance alone would explain. Model "
+            "errors (Euler form only): Euler-angle artefacts near gimbal lock. The Euler rows "
+            "(yaw/pitch/roll: the representation before) are fitted by the exact estimator "
+            "only.",
+            "",
+            "| source | column | flagged | gap | spike | fast | explained | model errors | "
+            "flagged, robust (3) | explained, robust (3) |",
+            "|---|---|---|---|---|---|---|---|---|---|",
+        ]
+        for r in explained:
+            rp = r.get("robust_process") or {}
+            rp_expl = rp.get("flags_explained") or {}
+            lines.append(
+                f"| {r['source']} | {r['column']} | {r['n_flagged']} | "
+                + _explained_cells(r["flags_explained"], r["n_flagged"])
+                + f" | {r.get('n_model_error', 0)} | {_fmt(rp.get('n_flagged'))} | "
+                + (f"{rp_expl['n_explained']}" if rp_expl else "–")
+                + " |"
+            )
+    moving = [r for r in real if r.get("robust_process")]
+    if moving:
+        lines += [
+            "",
+            "## Robust treatment of the process equations (3) on moving platforms",
+            "",
+            'The paper reweights eq. (3) to reduce "the influences of edges and '
+            'discontinuities" (§2.2): here on the moving platforms (attitude, vehicle track, '
+            "walking rover), exact estimator at the order of the row above; static stations "
+            "have no edges. *down-weighted*: process equations with weight < 0.5.",
+            "",
+            "| source | column | σn | σn, robust (3) | σe | σe, robust (3) | flagged | "
+            "flagged, robust (3) | down-weighted (3) | status, robust (3) |",
+            "|---|---|---|---|---|---|---|---|---|---|",
+        ]
+        for r in moving:
+            rp = r["robust_process"]
+            u = r["unit"]
+            lines.append(
+                f"| {r['source']} | {r['column']} | {_fmt(r['sigma_n'])} {u} | "
+                f"{_fmt(rp['sigma_n'])} {u} | {_fmt(r['sigma_e'])} {u} | "
+                f"{_fmt(rp['sigma_e'])} {u} | {r['n_flagged']} | {rp['n_flagged']} | "
+                f"{rp['n_process_downweighted']} of {rp['n_process']} | {rp['status']} |"
+            )
+    return lines
 
 
 def _table2_and_strips(results: dict[str, Any]) -> list[str]:
@@ -266,9 +350,11 @@ def tables_markdown(results: dict[str, Any]) -> str:
         "## Real data (paper Tables 1, 3, 4, 5 quantities)",
         "",
         "Exact-likelihood estimate (order by BIC) with its Cramér–Rao relative sd (CRB); the "
-        "paper's estimator at the same order in the *paper* columns. Model errors: flags at "
-        "Euler-angle artefacts (|Δyaw| + |Δroll| > 3× the rotation between the samples, near "
-        "gimbal lock), counted apart from the gross errors.",
+        "paper's estimator at the same order in the *paper* columns. Attitude as the "
+        "rotation-vector path of the body-frame increments (`rotvec_*`; or yaw/pitch/roll with "
+        '`attitude_form="euler"`). Model errors (Euler form only): flags at Euler-angle '
+        "artefacts (|Δyaw| + |Δroll| > 3× the rotation between the samples, near gimbal lock), "
+        "counted apart from the gross errors.",
         "",
         "| source | column | n | missing | order | σn | σe | σx | r(1) | r(2) | r(3) | r(4) "
         "| CRB σn | CRB σe | paper σn | paper σe | paper σx | paper r(1) | paper status "
@@ -290,6 +376,7 @@ def tables_markdown(results: dict[str, Any]) -> str:
             + ("; ".join(row.get("warnings", [])) or "–")
             + " |"
         )
+    lines += _flags_and_process(results["real"], results.get("attitude_euler"))
     if results.get("real_skipped"):
         lines += ["", "Skipped: " + "; ".join(results["real_skipped"])]
     if results.get("spp_comparison"):
@@ -367,7 +454,7 @@ def summary_lines(results: dict[str, Any]) -> list[str]:
             f"recall {s['recall']:.3f}  false flags {s['false_flag_rate']:.4f}"
         )
         est = s.get("estimators")
-        if est:
+        if est and est["paper"]["sigma_n_ratio"] is not None:
             pa = est["paper"]
             lines.append(
                 f"{'  paper estimator':<30} σn ratio {pa['sigma_n_ratio']['median']:.3f}  "
@@ -378,6 +465,13 @@ def summary_lines(results: dict[str, Any]) -> list[str]:
     for row in real:
         statuses[row["status"]] = statuses.get(row["status"], 0) + 1
     lines.append(f"real series {len(real)}: " + ", ".join(f"{k} {v}" for k, v in statuses.items()))
+    for row in [*results.get("attitude_euler", []), *real]:
+        expl = row.get("flags_explained")
+        if expl:
+            lines.append(
+                f"flags {row['source']} {row['column']}: {row['n_flagged']} "
+                f"({expl['n_explained']} explained, {row.get('n_model_error', 0)} model errors)"
+            )
     ours = [r for r in real if (r.get("meta") or {}).get("solver") == "navtrack"]
     if ours:
         runs = sorted({r["meta"]["run"] for r in ours})
