@@ -34,9 +34,7 @@ def test_registered_experiment_is_ari() -> None:
 
 
 def test_paper_estimator_and_order_only_in_the_first_runs() -> None:
-    params = exp.AriExperimentParams(
-        cases=(SMALL,), paper_runs=1, order_runs=2, paper_order_cases=("small",)
-    )
+    params = exp.AriExperimentParams(cases=(SMALL,), paper_runs=1, order_runs=2)
     runs = [exp.synthetic_run(params, run_generator(11, i)) for i in range(3)]
     assert [exp.run_index(run_generator(11, i)) for i in range(3)] == [0, 1, 2]
     assert ["paper_status" in r["small"] for r in runs] == [True, False, False]
@@ -47,12 +45,27 @@ def test_paper_estimator_and_order_only_in_the_first_runs() -> None:
         exp.AriExperimentParams(cases=(SMALL,), paper_runs=0), run_generator(11, 0)
     )
     assert alone["small"]["sigma_n_ratio"] == runs[0]["small"]["sigma_n_ratio"]
-    assert alone["small"]["detected"] == runs[0]["small"]["detected"]
+    assert alone["small"]["robust_detected"] == runs[0]["small"]["robust_detected"]
     s = exp.summarize_synthetic(params, runs)["small"]
     assert (s["runs"], s["paper_runs"], s["order_runs"]) == (3, 1, 2)
     assert sum(s["orders_selected_paper"].values()) == 2
     assert s["estimators"]["paper"]["sigma_n_ratio"]["runs"] == 1
     assert s["estimators"]["exact"]["sigma_n_ratio"]["runs"] == 3
+    # both estimators on the contaminated series too, counted over their own runs
+    rob_paper, rob_exact = s["estimators"]["paper"]["robust"], s["estimators"]["exact"]["robust"]
+    assert (rob_paper["runs"], rob_exact["runs"]) == (1, 3)
+    assert (rob_paper["injected"], rob_exact["injected"]) == (4, 12)
+    assert rob_paper["recall"] >= 0.75
+    assert rob_paper["false_flag_rate"] <= 0.01
+    assert rob_paper["sigma_n_ratio"]["median"] == pytest.approx(1.0, abs=0.2)
+    assert s["estimators"]["paper"]["bars"]["recall_ge_95pct"] == (rob_paper["recall"] >= 0.95)
+    without = exp.AriExperimentParams(cases=(SMALL,), paper_runs=0, paper_order=False)
+    run0 = exp.synthetic_run(without, run_generator(11, 0))
+    rec0 = run0["small"]
+    assert "order" in rec0 and "paper_order" not in rec0 and "paper_robust_status" not in rec0
+    none = exp.summarize_synthetic(without, [run0])["small"]["estimators"]["paper"]
+    assert none["robust"]["runs"] == 0
+    assert none["bars"] == dict.fromkeys(none["bars"])  # no bar judged without runs
 
 
 def test_synthetic_runs_recover_truth_and_gross_errors() -> None:

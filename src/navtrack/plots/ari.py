@@ -170,7 +170,7 @@ def write_reproduction_figures(
         ratios[case.name] = ([r["sigma_n_ratio"] for r in recs], [r["sigma_e_ratio"] for r in recs])
         detections[case.name] = (
             [m for r in recs for m in r["magnitude_sigma"]],
-            [h for r in recs for h in r["detected"]],
+            [h for r in recs for h in r["robust_detected"]],
         )
     if ratios:
         yield save_figure(estimates_figure(ratios), out_dir / "synthetic_sigma_ratios.png")
