@@ -194,8 +194,11 @@ def test_reproduce_end_to_end_reduced(tmp_path: Path) -> None:
     assert [c["series"] for c in data["sarimax"]] == ["synthetic tiny"]
     tables = (out / "tables.md").read_text()
     assert "Runs: 2 (seed 3, backend " in tables
-    assert "## Synthetic series" in tables
-    assert "| tiny ARI(1,1) | 150 | (1,1) |" in tables
+    assert "## Synthetic truths" in tables
+    assert "| tiny ARI(1,1) | 150 | 1 | (1,1) |" in tables
+    # every row of the gross-error and bar tables has both estimators, with their run counts
+    assert "| tiny ARI(1,1) | exact | 2 | 4 |" in tables
+    assert "| | paper | 2 | 4 |" in tables
     assert "## Real data" in tables
     assert "| rover.csv | e_m | 150 | 4 |" in tables
     assert "## SARIMAX cross-check" in tables

@@ -126,11 +126,31 @@ def test_strips_rms_recovers_sigma_n() -> None:
     assert len(strips) == 1
     assert len(strips[0]["sigma_n_strips"]) == 6
     assert strips[0]["rms_sigma_n"] == pytest.approx(0.02, rel=0.25)
+    # the paper's estimator on the same strips
+    assert len(strips[0]["paper_sigma_n_strips"]) == 6
+    assert strips[0]["paper_rms_sigma_n"] == pytest.approx(0.02, rel=0.25)
+    text = "\n".join(tables._table2_and_strips({"strips": strips}))
+    assert "| paper Table 1 (printed) | X | (5,2) | ~130 |" in text  # the printed row first
+    assert "| synthetic | e_m | (1,2) | 130 |" in text
+
+
+def test_table2_has_the_printed_rows_and_both_estimators() -> None:
+    row = {"source": "RTKLIB x", "column": "e_m", "sigma_n": 0.02, "paper_sigma_n": 0.03}
+    row |= {"ls_sd_rms": 0.5, "ratio": 0.04, "paper_ratio": 0.06}
+    text = "\n".join(tables._table2_and_strips({"table2": [row]}))
+    # paper: ARI 0.021 m against the adjustment's 0.022 m (strips 3,4,5, X)
+    assert "| paper, strips 3,4,5 (printed) | X | – | 0.021 | 0.022 | – | 0.955 |" in text
+    assert "| RTKLIB x | e_m | 0.02 | 0.03 | 0.5 | 0.04 | 0.06 |" in text
 
 
 def test_sarimax_skip_is_said() -> None:
-    lines = tables.summary_lines({"sarimax_skipped": "statsmodels is not installed"})
+    results = {"sarimax_skipped": "statsmodels is not installed", "sarimax": []}
+    lines = tables.summary_lines(results)
     assert any("SARIMAX cross-check skipped" in ln for ln in lines)
+    results |= {"runs": 0, "seed": 0, "backend": "serial", "synthetic": {}, "real": []}
+    results["parameters"] = {"identifiable_crb": 0.1, "robust": "danish"}
+    text = tables.tables_markdown(results)
+    assert "**SARIMAX cross-check skipped:** statsmodels is not installed" in text
 
 
 def test_attitude_rows_in_parallel_equal_serial_and_are_tabled(tmp_path: Path) -> None:
@@ -155,7 +175,8 @@ def test_attitude_rows_in_parallel_equal_serial_and_are_tabled(tmp_path: Path) -
     assert x["column"] == "rotvec_x_deg"
     # the 3-deg spike about body x is flagged there and explained by the full-rate samples
     assert x["flags_explained"]["by_cause"]["optical_spike"] >= 1
-    assert x["robust_process"] is not None  # a moving platform
+    assert x["robust_process"] is not None  # a moving platform, both estimators
+    assert x["robust_process"]["paper"]["n_process"] > 0
     euler = broad_series(path, decimate=10, form="euler")
     before, _ = real_data_rows([euler], cfg, further=False)
     assert all(r["paper"] is None and r["robust_process"] is None for r in before)

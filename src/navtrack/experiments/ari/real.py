@@ -14,6 +14,7 @@ rows of a run side by side.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
@@ -434,13 +435,28 @@ def real_data_rows(
 
 
 def _robust_process_fit(task: _ColumnTask, whole: AriResult, cfg: AriConfig) -> dict[str, Any]:
-    """The exact estimator at the order of ``whole`` with the process equations (3) reweighted
-    too (the paper's treatment of edges and discontinuities)."""
+    """Both estimators at the order of ``whole`` with the process equations (3) reweighted
+    too (the paper's treatment of edges and discontinuities); the paper's in ``"paper"``, on
+    the series without its leading and trailing missing epochs (as :func:`_paper_fit`)."""
+    rp_cfg = dataclasses.replace(cfg, order=(whole.p, whole.d), robust_process=True)
     t0 = time.perf_counter()
-    res = fit_ari(
-        task.values, dataclasses.replace(cfg, order=(whole.p, whole.d), robust_process=True)
+    res = fit_ari(task.values, rp_cfg)
+    out = _process_record(res) | {
+        "flags_explained": _flag_explanation(task, res),
+        "seconds": time.perf_counter() - t0,
+    }
+    seen = np.flatnonzero(np.isfinite(task.values))
+    t0 = time.perf_counter()
+    paper = fit_ari(
+        task.values[seen[0] : seen[-1] + 1], dataclasses.replace(rp_cfg, estimator="paper")
     )
-    out = {
+    out["paper"] = _process_record(paper) | {"seconds": time.perf_counter() - t0}
+    return out
+
+
+def _process_record(res: AriResult) -> dict[str, Any]:
+    """Sigmas, flags and down-weighted process equations of a fit with ``robust_process``."""
+    return {
         "status": str(res.status),
         "sigma_n": res.sigma_n,
         "sigma_e": res.sigma_e,
@@ -448,10 +464,7 @@ def _robust_process_fit(task: _ColumnTask, whole: AriResult, cfg: AriConfig) -> 
         "n_flagged": res.n_flagged,
         "n_process_downweighted": int(np.count_nonzero(res.process_weight < 0.5)),
         "n_process": int(res.process_weight.size),
-        "flags_explained": _flag_explanation(task, res),
-        "seconds": time.perf_counter() - t0,
     }
-    return out
 
 
 def _paper_fit(values: FloatArray, p: int, d: int, cfg: AriConfig) -> dict[str, Any]:
@@ -557,6 +570,11 @@ def table2_rows(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
                 "paper_sigma_n": paper.get("sigma_n"),
                 "ls_sd_rms": ls[row["column"]],
                 "ratio": row["sigma_n"] / ls[row["column"]] if ls[row["column"]] > 0 else None,
+                "paper_ratio": (
+                    paper["sigma_n"] / ls[row["column"]]
+                    if paper.get("sigma_n") is not None and ls[row["column"]] > 0
+                    else None
+                ),
             }
         )
     return out
@@ -574,7 +592,8 @@ def strip_rows(
     Strips are consecutive, of :data:`STRIP_EPOCHS` epochs (the paper's 130 GPS registrations;
     400 for attitude, within the Shuttle's 120–800), at most ``max_strips`` from the start; a
     strip more than 20 % missing is skipped. Each strip is fitted at the order found on the
-    whole series (robust weights, exact-likelihood estimator).
+    whole series (robust weights) by both estimators, the exact-likelihood one and the
+    paper's (``paper_*``; NaN where it fails, which makes its rms NaN).
     """
     cfg = AriConfig() if config is None else config
     out = []
@@ -602,13 +621,21 @@ def _strip_row(
     """One :func:`strip_rows` row: ``values`` cut into strips of ``length`` epochs, each fitted
     at the order of ``whole``; ``None`` when no strip could be fitted."""
     sigmas: list[float] = []
+    paper: list[float] = []
     for k in range(min(max_strips, values.size // length)):
         part = values[k * length : (k + 1) * length]
         if np.count_nonzero(np.isnan(part)) > 0.2 * length:
             continue
         res = fit_ari(part, dataclasses.replace(cfg, order=(whole.p, whole.d)))
-        if res.estimated:
-            sigmas.append(res.sigma_n)
+        if not res.estimated:
+            continue
+        sigmas.append(res.sigma_n)
+        seen = np.flatnonzero(np.isfinite(part))  # the paper's estimator starts at an epoch
+        res = fit_ari(
+            part[seen[0] : seen[-1] + 1],
+            dataclasses.replace(cfg, order=(whole.p, whole.d), estimator="paper"),
+        )
+        paper.append(res.sigma_n if res.estimated else math.nan)
     if not sigmas:
         return None
     return {
@@ -618,6 +645,8 @@ def _strip_row(
         "strip_epochs": length,
         "sigma_n_strips": sigmas,
         "rms_sigma_n": float(np.sqrt(np.mean(np.square(sigmas)))),
+        "paper_sigma_n_strips": paper,
+        "paper_rms_sigma_n": float(np.sqrt(np.mean(np.square(paper)))),
         "whole_sigma_n": whole.sigma_n,
     }
 

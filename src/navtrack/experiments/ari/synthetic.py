@@ -80,6 +80,9 @@ class SyntheticCase:
         The paper's ``r(1..k)`` the truth was fitted to.
     printed_source : str
         Where they are printed.
+    printed_sigma_n, printed_sigma_e : float or None
+        The paper's printed sigmas of that series (``None``: not printed; the truth's value was
+        then fitted).
     """
 
     name: str
@@ -94,6 +97,8 @@ class SyntheticCase:
     printed_ratio: float | None = None
     printed_r: tuple[float, ...] = ()
     printed_source: str = ""
+    printed_sigma_n: float | None = None
+    printed_sigma_e: float | None = None
 
 
 # AR parts fitted to the paper's printed statistics by
@@ -127,6 +132,7 @@ SYNTHETIC_CASES: tuple[SyntheticCase, ...] = (
         0.017 / 0.021,
         _GPS_R,
         "Tables 1, 3 (X)",
+        0.021,
     ),
     SyntheticCase(
         "gps_flight",
@@ -141,6 +147,7 @@ SYNTHETIC_CASES: tuple[SyntheticCase, ...] = (
         0.017 / 0.021,
         _GPS_R,
         "Tables 1, 3 (X)",
+        0.021,
     ),
     # Paper §3.2, Table 4: Shuttle INS ARI(6,1), 2 s, strips of 120–800 points.
     SyntheticCase(
@@ -156,6 +163,8 @@ SYNTHETIC_CASES: tuple[SyntheticCase, ...] = (
         0.0027 / 0.0060,
         (0.71, 0.46, 0.18, 0.13),
         "Table 4 (yaw)",
+        0.0060,
+        0.0019,
     ),
     # Paper §3.2, Table 5: aircraft INS ARI(2,2), 10 Hz; 3000 epochs = 5 min of the
     # undisturbed central part of a flight.
@@ -172,6 +181,8 @@ SYNTHETIC_CASES: tuple[SyntheticCase, ...] = (
         0.0011 / 0.0023,
         (0.86, 0.57, 0.29, 0.09),
         "Table 5 (yaw)",
+        0.0023,
+        0.0005,
     ),
 )
 
@@ -449,6 +460,8 @@ def summarize_synthetic(
             },
             "printed": {
                 "source": case.printed_source,
+                "sigma_n": case.printed_sigma_n,
+                "sigma_e": case.printed_sigma_e,
                 "sigma_x_over_sigma_n": case.printed_ratio,
                 "r": list(case.printed_r),
             },

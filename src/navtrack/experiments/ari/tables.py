@@ -52,15 +52,51 @@ def _pct(value: Any) -> str:
     return f"{value:.1%}"
 
 
-def _spread(entry: dict[str, Any] | None, k: int | None = None, digits: int = 2) -> str:
+def _spread(
+    entry: dict[str, Any] | None, k: int | None = None, digits: int = 2, scale: float | None = None
+) -> str:
     """``median [q25, q75]`` of a :func:`~navtrack.experiments.ari.synthetic.summarize_synthetic`
-    spread (element ``k`` of a list-valued one); ``–`` when no run has it."""
+    spread (element ``k`` of a list-valued one; times ``scale`` in ``digits`` significant digits
+    when given); ``–`` when no run has it."""
     if entry is None:
         return "–"
     med, (lo, hi) = entry["median"], entry["iqr"]
     if k is not None:
         med, lo, hi = med[k], lo[k], hi[k]
+    if scale is not None:
+        med, lo, hi = (_fmt(v * scale, digits) for v in (med, lo, hi))
+        return f"{med} [{lo}, {hi}]"
     return f"{med:.{digits}f} [{lo:.{digits}f}, {hi:.{digits}f}]"
+
+
+def _synthetic_truths(synthetic: dict[str, Any]) -> list[str]:
+    """The synthetic truths: order, AR part, sigmas, Cramér–Rao bounds at the truth."""
+    lines = [
+        "",
+        "## Synthetic truths",
+        "",
+        "AR coefficients fitted so that the truth's theoretical σx/σn and r(h) of the filtered "
+        "series (from N⁻¹ of eqs. (2)–(3) at n epochs) are the paper's printed ones "
+        "(`navtrack.experiments.ari.truths.fit_published`: nonlinear least squares over the "
+        "partial autocorrelations, bounded to ±0.95 so every candidate is stationary, "
+        "residuals in units of the printed resolution 0.01, a small ridge for the "
+        "under-determined GPS case); σn, σe the printed ones where printed (GPS σe is not "
+        "printed: fitted too). CRB: relative Cramér–Rao sd of σn, σe of one series at the "
+        "truth.",
+        "",
+        "| case | n | Δt (s) | order | φ | σn | σe | CRB σn | CRB σe | printed in |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for s in synthetic.values():
+        t = s["truth"]
+        lines.append(
+            f"| {s['label']} | {t['n']} | {t['dt_s']:g} | ({t['order'][0]},{t['order'][1]}) | "
+            + " ".join(f"{v:.4g}" for v in t["phi"])
+            + f" | {_fmt(t['sigma_n'])} {t['unit']} | {_fmt(t['sigma_e'])} {t['unit']} | "
+            f"{s['crb_rel_sd_sigma_n']:.1%} | {s['crb_rel_sd_sigma_e']:.1%} | "
+            f"{s.get('printed', {}).get('source') or '–'} |"
+        )
+    return lines
 
 
 def _printed_vs_estimators(synthetic: dict[str, Any]) -> list[str]:
@@ -68,16 +104,14 @@ def _printed_vs_estimators(synthetic: dict[str, Any]) -> list[str]:
     estimators' medians with their inter-quartile range over the runs."""
     lines = [
         "",
-        "## Printed values, exact-likelihood and paper estimator (synthetic truths fitted to "
-        "the paper)",
+        "## Printed values, exact-likelihood and paper estimator (clean synthetic series)",
         "",
-        "The AR part of each truth was fitted so that its theoretical σx/σn and r(h) are the "
-        "printed ones (`navtrack.experiments.ari.truths`). *truth*: theoretical value of the "
-        "fitted truth; *exact*: exact-likelihood estimator; *paper*: the paper's conditional "
-        "Gauss–Markov model with the alternating filtering/VCE iteration, same clean series, "
-        "true order. Cells: median [25 %, 75 %] over runs; the paper's estimator and the BIC "
-        "order selection run only in the first runs (`paper_runs`, `order_runs`): their run "
-        "counts are given per case.",
+        "*printed*: the paper's value; *truth*: theoretical value of the fitted truth; *exact*: "
+        "exact-likelihood estimator; *paper*: the paper's conditional Gauss–Markov model with "
+        "the alternating filtering/VCE iteration (SQUAREM-accelerated); both on the same clean "
+        "series at the true order, the orders by BIC over p = 0..6, d = 1..2 with each "
+        "estimator fitting every candidate. Cells: median [25 %, 75 %] over runs; run counts "
+        "per estimator in the case label (`paper_runs`, `order_runs`).",
         "",
         "| case | quantity | printed | truth | exact | paper |",
         "|---|---|---|---|---|---|",
@@ -87,6 +121,8 @@ def _printed_vs_estimators(synthetic: dict[str, Any]) -> list[str]:
         if not est:
             continue
         printed = s.get("printed", {})
+        t = s["truth"]
+        u = t["unit"]
         label = (
             f"{s['label']} ({printed.get('source') or 'no printed values'}; runs: exact "
             f"{s['runs']}, paper {s.get('paper_runs', s['runs'])}, BIC "
@@ -95,30 +131,105 @@ def _printed_vs_estimators(synthetic: dict[str, Any]) -> list[str]:
         ex, pa = est["exact"], est["paper"]
         lines.append(
             f"| {label} | σx/σn | {_fmt(printed.get('sigma_x_over_sigma_n'), 2)} | "
-            f"{s['truth']['sigma_x_over_sigma_n']:.2f} | {_spread(ex['sigma_x_over_sigma_n'])} | "
+            f"{t['sigma_x_over_sigma_n']:.2f} | {_spread(ex['sigma_x_over_sigma_n'])} | "
             f"{_spread(pa['sigma_x_over_sigma_n'])} |"
         )
         printed_r = printed.get("r") or []
-        for k in range(len(s["truth"]["r"])):
+        for k in range(len(t["r"])):
             pr = f"{printed_r[k]:.2f}" if k < len(printed_r) else "–"
             lines.append(
-                f"| | r({k + 1}) | {pr} | {s['truth']['r'][k]:.2f} | {_spread(ex['r'], k)} | "
+                f"| | r({k + 1}) | {pr} | {t['r'][k]:.2f} | {_spread(ex['r'], k)} | "
                 f"{_spread(pa['r'], k)} |"
             )
+        for name, key, crb in (
+            ("σn", "sigma_n", s["crb_rel_sd_sigma_n"]),
+            ("σe", "sigma_e", s["crb_rel_sd_sigma_e"]),
+        ):
+            lines.append(
+                f"| | {name} ({u}; CRB {crb:.1%}) | {_fmt(printed.get(key), 2)} | "
+                f"{_fmt(t[key], 3)} | {_spread(ex[f'{key}_ratio'], digits=3, scale=t[key])} | "
+                f"{_spread(pa[f'{key}_ratio'], digits=3, scale=t[key])} |"
+            )
         lines += [
-            f"| | σn / truth (CRB {s['crb_rel_sd_sigma_n']:.1%}) | – | 1 | "
-            f"{_spread(ex['sigma_n_ratio'], digits=3)} | "
-            f"{_spread(pa['sigma_n_ratio'], digits=3)} |",
-            f"| | σe / truth (CRB {s['crb_rel_sd_sigma_e']:.1%}) | – | 1 | "
-            f"{_spread(ex['sigma_e_ratio'], digits=3)} | "
-            f"{_spread(pa['sigma_e_ratio'], digits=3)} |",
             f"| | status | – | – | {_counts(ex['status'])} | {_counts(pa['status'])} |",
             f"| | seconds per fit | – | – | {_spread(ex['seconds'])} | {_spread(pa['seconds'])} |",
             f"| | iterations (paper) | – | – | – | {_spread(pa.get('n_iter'), digits=0)} |",
-            f"| | order by BIC | ({s['truth']['order'][0]},{s['truth']['order'][1]}) | – | "
-            f"{_counts(s['orders_selected']) or '–'} | "
+            f"| | order by BIC | ({t['order'][0]},{t['order'][1]}) | "
+            f"({t['order'][0]},{t['order'][1]}) | {_counts(s['orders_selected']) or '–'} | "
             f"{_counts(s.get('orders_selected_paper') or {}) or '–'} |",
         ]
+    return lines
+
+
+def _gross_errors(synthetic: dict[str, Any], robust: str) -> list[str]:
+    """Per synthetic case and estimator: recall, false flags and sigmas on the contaminated
+    series."""
+    lines = [
+        "",
+        f"## Gross errors (1 % of epochs, 5–15 σn, robust = {robust}, flag |T| > 3.29)",
+        "",
+        "Both estimators with robust weights on the same contaminated series, at the true order; "
+        "*no robust weights*: the exact estimator without them. σ ratios: estimate / truth, "
+        "median [25 %, 75 %] over the runs.",
+        "",
+        "| case | estimator | runs | injected | recall | 5–7σ | 7–10σ | 10–15σ | false flags | "
+        "false-flag rate | σn ratio | σe ratio | status | seconds per fit |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for s in synthetic.values():
+        est = s.get("estimators") or {}
+        for k, name in enumerate(("exact", "paper")):
+            rob = (est.get(name) or {}).get("robust") or {"runs": 0}
+            head = f"{_first(s, k)} {name} | {rob['runs']} | "
+            if not rob["runs"]:
+                lines.append(head + " | ".join(["–"] * 11) + " |")
+                continue
+            by = rob["recall_by_magnitude"]
+            lines.append(
+                head
+                + f"{rob['injected']} | {rob['recall']:.3f} | "
+                + " | ".join(_fmt(by[key], 3) for key in by)
+                + f" | {rob['false_flags']} | {rob['false_flag_rate']:.4f} | "
+                f"{_spread(rob['sigma_n_ratio'], digits=3)} | "
+                f"{_spread(rob['sigma_e_ratio'], digits=3)} | {_counts(rob['status'])} | "
+                f"{_spread(rob['seconds'])} |"
+            )
+        lines.append(
+            f"| | exact, no robust weights | {s['runs']} | {s['injected']} | "
+            f"{s['plain_recall']:.3f} | – | – | – | – | – | "
+            f"{s['plain_median_sigma_n_ratio']:.3f} | – | – | – |"
+        )
+    return lines
+
+
+def _first(s: dict[str, Any], k: int) -> str:
+    """First cell of the ``k``-th row of a case: its label on the first row only."""
+    return f"| {s['label']} |" if k == 0 else "| |"
+
+
+def _bars(synthetic: dict[str, Any]) -> list[str]:
+    lines = [
+        "",
+        "## Bars",
+        "",
+        "| case | estimator | σn within 10 % | σe within 10 % | recall ≥ 95 % "
+        "| false flags ≤ 1 % |",
+        "|---|---|---|---|---|---|",
+    ]
+    for s in synthetic.values():
+        est = s.get("estimators") or {"exact": {"bars": s["bars"]}}
+        for k, (name, e) in enumerate(est.items()):
+            b = e["bars"]
+            lines.append(
+                f"{_first(s, k)} {name} | "
+                f"{_fmt(b['sigma_n_within_10pct'])} | {_fmt(b['sigma_e_within_10pct'])} | "
+                f"{_fmt(b['recall_ge_95pct'])} | {_fmt(b['false_flags_le_1pct'])} |"
+            )
+    lines += [
+        "",
+        "(– = not identifiable at this series length, or no run of that estimator: the bar does "
+        "not apply.)",
+    ]
     return lines
 
 
@@ -128,10 +239,11 @@ def _counts(counts: dict[str, int]) -> str:
 
 def _paper_cells(paper: dict[str, Any] | None, unit: str) -> str:
     if not paper:
-        return "– | – | – | – | –"
+        return "– | – | – | – | – | – | –"
     return (
         f"{_fmt(paper['sigma_n'])} {unit} | {_fmt(paper['sigma_e'])} {unit} | "
         f"{_fmt(paper['sigma_x'])} {unit} | {_fmt(paper['r'][0], 2)} | "
+        f"{_pct(paper.get('crb_sigma_n'))} | {_pct(paper.get('crb_sigma_e'))} | "
         f"{paper['status']} ({paper['n_iter']})"
     )
 
@@ -192,8 +304,9 @@ def _flags_and_process(
             "",
             'The paper reweights eq. (3) to reduce "the influences of edges and '
             'discontinuities" (§2.2): here on the moving platforms (attitude, vehicle track, '
-            "walking rover), exact estimator at the order of the row above; static stations "
-            "have no edges. *down-weighted*: process equations with weight < 0.5.",
+            "walking rover), both estimators at the order of the row above; static stations "
+            "have no edges. *down-weighted*: process equations with weight < 0.5. Cells: "
+            "exact / paper estimator.",
             "",
             "| source | column | σn | σn, robust (3) | σe | σe, robust (3) | flagged | "
             "flagged, robust (3) | down-weighted (3) | status, robust (3) |",
@@ -201,38 +314,70 @@ def _flags_and_process(
         ]
         for r in moving:
             rp = r["robust_process"]
+            pair = [r, r.get("paper") or {}]
+            pair_rp = [rp, rp.get("paper") or {}]
             u = r["unit"]
+
+            def both(rows: list[dict[str, Any]], key: str, unit: str = "") -> str:
+                return " / ".join(_fmt(x.get(key)) for x in rows) + (f" {unit}" if unit else "")
+
             lines.append(
-                f"| {r['source']} | {r['column']} | {_fmt(r['sigma_n'])} {u} | "
-                f"{_fmt(rp['sigma_n'])} {u} | {_fmt(r['sigma_e'])} {u} | "
-                f"{_fmt(rp['sigma_e'])} {u} | {r['n_flagged']} | {rp['n_flagged']} | "
-                f"{rp['n_process_downweighted']} of {rp['n_process']} | {rp['status']} |"
+                f"| {r['source']} | {r['column']} | {both(pair, 'sigma_n', u)} | "
+                f"{both(pair_rp, 'sigma_n', u)} | {both(pair, 'sigma_e', u)} | "
+                f"{both(pair_rp, 'sigma_e', u)} | {both(pair, 'n_flagged')} | "
+                f"{both(pair_rp, 'n_flagged')} | "
+                + " / ".join(
+                    f"{x['n_process_downweighted']} of {x['n_process']}" if x else "–"
+                    for x in pair_rp
+                )
+                + f" | {both(pair_rp, 'status')} |"
             )
     return lines
 
 
+#: Paper Tables 1 and 2: ARI ``sigma_n`` (rms of strips) and the single-epoch least-squares
+#: accuracy with the assumed sigma_0 = 0.006 m, GPS X/Y/Z in m.
+PAPER_TABLE2: dict[str, dict[str, list[float]]] = {
+    "strips 3,4,5": {"ari": [0.021, 0.010, 0.026], "ls": [0.022, 0.009, 0.017]},
+    "strips 1,6,7": {"ari": [0.018, 0.010, 0.021], "ls": [0.020, 0.009, 0.020]},
+}
+#: Paper Table 1: ARI ``sigma_n`` per strip (strips 1, 3, 4, 5, 6, 7), GPS X/Y/Z in m.
+PAPER_TABLE1: dict[str, list[float]] = {
+    "X": [0.027, 0.020, 0.024, 0.020, 0.014, 0.012],
+    "Y": [0.011, 0.009, 0.009, 0.013, 0.011, 0.007],
+    "Z": [0.038, 0.026, 0.027, 0.024, 0.014, 0.010],
+}
+
+
 def _table2_and_strips(results: dict[str, Any]) -> list[str]:
     """Paper Table 2 (filtered vs single-epoch least-squares accuracy) and Table 1 (rms over
-    strips) on the real series."""
+    strips) on the real series, each below the paper's printed rows."""
     lines: list[str] = []
     if results.get("table2"):
         lines += [
             "",
             "## Table 2: ARI σn vs the single-epoch least-squares accuracy",
             "",
-            "Paper: σn from the ARI model 0.021/0.010/0.026 m vs 0.022/0.009/0.017 m from the "
-            "adjustment with an assumed σ0 = 0.006 m. Here: RMS over solved epochs of each "
-            "solution's own formal sd (RTKLIB `sdx..sdzx` rotated to ENU; navtrack SPP its "
-            "covariance), beside σn of the same coordinate.",
+            "Paper rows: σn of the ARI model (Table 1, rms of strips) vs the adjustment's "
+            "accuracy with an assumed σ0 = 0.006 m (Table 2). Here: RMS over solved epochs of "
+            "each solution's own formal sd (RTKLIB `sdx..sdzx` rotated to ENU; navtrack SPP its "
+            "covariance), beside σn of the same coordinate by both estimators.",
             "",
-            "| source | column | σn exact (m) | σn paper (m) | LS sd rms (m) | σn / LS |",
-            "|---|---|---|---|---|---|",
+            "| source | column | σn exact (m) | σn paper (m) | LS sd rms (m) | exact / LS | "
+            "paper / LS |",
+            "|---|---|---|---|---|---|---|",
         ]
+        for strips, vals in PAPER_TABLE2.items():
+            for k, col in enumerate("XYZ"):
+                ari, ls = vals["ari"][k], vals["ls"][k]
+                lines.append(
+                    f"| paper, {strips} (printed) | {col} | – | {ari} | {ls} | – | {ari / ls:.3f} |"
+                )
         for row in results["table2"]:
             lines.append(
                 f"| {row['source']} | {row['column']} | {_fmt(row['sigma_n'])} | "
                 f"{_fmt(row['paper_sigma_n'])} | {_fmt(row['ls_sd_rms'])} | "
-                f"{_fmt(row['ratio'], 3)} |"
+                f"{_fmt(row['ratio'], 3)} | {_fmt(row.get('paper_ratio'), 3)} |"
             )
     if results.get("strips"):
         lines += [
@@ -240,17 +385,30 @@ def _table2_and_strips(results: dict[str, Any]) -> list[str]:
             "## Table 1: σn per strip and rms over strips",
             "",
             "Consecutive strips from the start (130 epochs for positions, as the paper's GPS "
-            "strips; 400 for attitude), each fitted at the whole series' order.",
+            "strips; 400 for attitude), each fitted at the whole series' order by both "
+            "estimators (robust weights). Paper rows: its strips 1, 3, 4, 5, 6, 7 (paper's "
+            "estimator), rms over all six.",
             "",
-            "| source | column | order | strip epochs | σn per strip | rms of strips | σn whole |",
-            "|---|---|---|---|---|---|---|",
+            "| source | column | order | strip epochs | σn per strip, exact | rms, exact | "
+            "σn per strip, paper | rms, paper | σn whole (exact) |",
+            "|---|---|---|---|---|---|---|---|---|",
         ]
+        for col, printed in PAPER_TABLE1.items():
+            rms = math.sqrt(sum(v * v for v in printed) / len(printed))
+            lines.append(
+                f"| paper Table 1 (printed) | {col} | (5,2) | ~130 | – | – | "
+                + " ".join(f"{v:.3f}" for v in printed)
+                + f" | {rms:.3f} | – |"
+            )
         for row in results["strips"]:
+            paper = row.get("paper_sigma_n_strips") or []
             lines.append(
                 f"| {row['source']} | {row['column']} | ({row['order'][0]},{row['order'][1]}) | "
                 f"{row['strip_epochs']} | "
                 + " ".join(_fmt(v, 3) for v in row["sigma_n_strips"])
-                + f" | {_fmt(row['rms_sigma_n'])} | {_fmt(row['whole_sigma_n'])} |"
+                + f" | {_fmt(row['rms_sigma_n'])} | "
+                + (" ".join(_fmt(v, 3) for v in paper) or "–")
+                + f" | {_fmt(row.get('paper_rms_sigma_n'))} | {_fmt(row['whole_sigma_n'])} |"
             )
     return lines
 
@@ -273,63 +431,11 @@ def tables_markdown(results: dict[str, Any]) -> str:
         "series at the truth; a sigma is *identifiable* when CRB < "
         f"{results['parameters']['identifiable_crb']:.0%}.",
         "",
-        "## Synthetic series (truth vs estimate)",
-        "",
-        "| case | n | truth (p,d) | σn | σe | median σn ratio [IQR] | median σe ratio [IQR] "
-        "| CRB σn | CRB σe | σx/σn est (truth) | orders chosen (BIC) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for _name, s in results["synthetic"].items():
-        t = s["truth"]
-        orders = ", ".join(
-            f"{k}×{v}" for k, v in sorted(s["orders_selected"].items(), key=lambda kv: -kv[1])
-        )
-        lines.append(
-            f"| {s['label']} | {t['n']} | ({t['order'][0]},{t['order'][1]}) | "
-            f"{_fmt(t['sigma_n'])} {t['unit']} | {_fmt(t['sigma_e'])} {t['unit']} | "
-            f"{s['median_sigma_n_ratio']:.3f} [{s['iqr_sigma_n_ratio'][0]:.2f}, "
-            f"{s['iqr_sigma_n_ratio'][1]:.2f}] | {s['median_sigma_e_ratio']:.3f} "
-            f"[{s['iqr_sigma_e_ratio'][0]:.2f}, {s['iqr_sigma_e_ratio'][1]:.2f}] | "
-            f"{s['crb_rel_sd_sigma_n']:.3f} | {s['crb_rel_sd_sigma_e']:.3f} | "
-            f"{s['median_sigma_x_over_sigma_n']:.2f} ({t['sigma_x_over_sigma_n']:.2f}) | "
-            f"{orders or '–'} |"
-        )
+    lines += _synthetic_truths(results["synthetic"])
     lines += _printed_vs_estimators(results["synthetic"])
-    lines += [
-        "",
-        "## Gross errors (1 % of epochs, 5–15 σn, robust = "
-        f"{results['parameters']['robust']}, flag |T| > 3.29)",
-        "",
-        "| case | injected | recall | recall 5–7σ | 7–10σ | 10–15σ | false flags | false-flag rate "
-        "| robust σn ratio | non-robust σn ratio | non-robust recall |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for s in results["synthetic"].values():
-        rb = s["recall_by_magnitude"]
-        keys = list(rb)
-        lines.append(
-            f"| {s['label']} | {s['injected']} | {s['recall']:.3f} | "
-            + " | ".join(_fmt(rb[k], 3) for k in keys)
-            + f" | {s['false_flags']} | {s['false_flag_rate']:.4f} | "
-            f"{s['robust_median_sigma_n_ratio']:.3f} | {s['plain_median_sigma_n_ratio']:.3f} | "
-            f"{s['plain_recall']:.3f} |"
-        )
-    lines += [
-        "",
-        "## Bars",
-        "",
-        "| case | σn within 10 % | σe within 10 % | recall ≥ 95 % | false flags ≤ 1 % |",
-        "|---|---|---|---|---|",
-    ]
-    for s in results["synthetic"].values():
-        b = s["bars"]
-        lines.append(
-            f"| {s['label']} | {_fmt(b['sigma_n_within_10pct'])} | "
-            f"{_fmt(b['sigma_e_within_10pct'])} | {_fmt(b['recall_ge_95pct'])} | "
-            f"{_fmt(b['false_flags_le_1pct'])} |"
-        )
-    lines.append("")
-    lines.append("(– = not identifiable at this series length: the bar does not apply.)")
+    lines += _gross_errors(results["synthetic"], results["parameters"]["robust"])
+    lines += _bars(results["synthetic"])
     lines += [
         "",
         "## The paper's published values (for comparison with the synthetic truths)",
@@ -350,17 +456,20 @@ def tables_markdown(results: dict[str, Any]) -> str:
         "## Real data (paper Tables 1, 3, 4, 5 quantities)",
         "",
         "Exact-likelihood estimate (order by BIC) with its Cramér–Rao relative sd (CRB); the "
-        "paper's estimator at the same order in the *paper* columns. Attitude as the "
-        "rotation-vector path of the body-frame increments (`rotvec_*`; or yaw/pitch/roll with "
-        '`attitude_form="euler"`). Model errors (Euler form only): flags at Euler-angle '
-        "artefacts (|Δyaw| + |Δroll| > 3× the rotation between the samples, near gimbal lock), "
-        "counted apart from the gross errors.",
+        "paper's estimator at the same order in the *paper* columns, with the CRB of its "
+        "conditional likelihood. *warnings*: the identifiability warnings of `navtrack smooth` "
+        '(σe/σn outside the paper\'s §2.2 "same order", an estimate at its bound, CRB > '
+        "10 %). Attitude as the rotation-vector path of the body-frame increments "
+        '(`rotvec_*`; or yaw/pitch/roll with `attitude_form="euler"`). Model errors (Euler '
+        "form only): flags at Euler-angle artefacts (|Δyaw| + |Δroll| > 3× the rotation "
+        "between the samples, near gimbal lock), counted apart from the gross errors.",
         "",
         "| source | column | n | missing | order | σn | σe | σx | r(1) | r(2) | r(3) | r(4) "
-        "| CRB σn | CRB σe | paper σn | paper σe | paper σx | paper r(1) | paper status "
-        "(iterations) | flagged | model errors | status | warnings |",
+        "| CRB σn | CRB σe | paper σn | paper σe | paper σx | paper r(1) | paper CRB σn "
+        "| paper CRB σe | paper status (iterations) | flagged | model errors | status | "
+        "warnings |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
-        "---|---|",
+        "---|---|---|---|",
     ]
     for row in results["real"]:
         r = row["r"]
@@ -456,9 +565,15 @@ def summary_lines(results: dict[str, Any]) -> list[str]:
         est = s.get("estimators")
         if est and est["paper"]["sigma_n_ratio"] is not None:
             pa = est["paper"]
+            rob = pa.get("robust") or {"runs": 0}
             lines.append(
                 f"{'  paper estimator':<30} σn ratio {pa['sigma_n_ratio']['median']:.3f}  "
                 f"σe ratio {pa['sigma_e_ratio']['median']:.3f}  status {_counts(pa['status'])}"
+                + (
+                    f"  recall {rob['recall']:.3f}  false flags {rob['false_flag_rate']:.4f}"
+                    if rob["runs"]
+                    else ""
+                )
             )
     real = results.get("real", [])
     statuses: dict[str, int] = {}
