@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -48,6 +49,38 @@ def test_smooth_rtklib_pos(gnss_data: Path, tmp_path: Path, capsys: pytest.Captu
     for col in ("x_m", "y_m", "z_m"):
         assert f"{col}: status" in text
     assert text.count("sigma_n = ") == 3
+
+
+@pytest.mark.parametrize("estimator", ["exact", "paper"])
+def test_smooth_warns_outside_the_papers_conditions(
+    estimator: str, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    """Paper §2.2: sigma_e and sigma_n of the same order; a slow random walk under much noise
+    leaves it (sigma_e/sigma_n = 0.05, estimated 0.06), a constant with noise puts sigma_e at
+    its bound; a series within both conditions gets no such warning."""
+    rng = np.random.default_rng(3)
+    n = 400
+    walk, _ = simulate_ari(rng, n, (), 1, 1.0, 0.05)
+    flat = 1.0 + 0.02 * rng.standard_normal(n)
+    good, _ = simulate_ari(rng, n, (), 1, 0.02, 0.02)
+    src = tmp_path / "series.csv"
+    pd.DataFrame({"t_s": np.arange(n), "walk": walk, "flat": flat, "good": good}).to_csv(
+        src, index=False
+    )
+    out = tmp_path / "out.csv"
+    argv = ["smooth", str(src), "--order", "0,1", "--estimator", estimator, "--out", str(out)]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    warned = {
+        col: [ln for ln in text.splitlines() if ln.startswith(f"warning    {col}:")]
+        for col in ("walk", "flat", "good")
+    }
+    assert any("not of the same order of magnitude" in ln for ln in warned["walk"])
+    assert any("sits at its bound" in ln for ln in warned["flat"])
+    assert not any("same order" in ln or "bound" in ln for ln in warned["good"])
+    summary = json.loads(out.with_suffix(".json").read_text())["columns"]
+    assert summary["flat"]["status"] == "boundary"
+    assert [f"warning    flat: {w}" for w in summary["flat"]["warnings"]] == warned["flat"]
 
 
 def test_smooth_bad_column(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:

@@ -210,13 +210,18 @@ def run_smooth(args: argparse.Namespace) -> int:
             )
             crb_n, crb_e = sigma_bounds(res, conditional=cfg.estimator == "paper")
             print(f"{col}: Cramér–Rao relative sd sigma_n {crb_n:.1%}, sigma_e {crb_e:.1%}")
-            for why in identifiability_warnings(res, crb_n, crb_e):
+            warnings = identifiability_warnings(res, crb_n, crb_e)
+            for why in warnings:
                 print(f"warning    {col}: {why}")
         else:
             print(f"{col}: status {res.status} ({res.message})")
         summary["columns"][col] = {**res.summary(), "unit": unit}
         if res.estimated:
-            summary["columns"][col] |= {"crb_rel_sd_sigma_n": crb_n, "crb_rel_sd_sigma_e": crb_e}
+            summary["columns"][col] |= {
+                "crb_rel_sd_sigma_n": crb_n,
+                "crb_rel_sd_sigma_e": crb_e,
+                "warnings": warnings,
+            }
         out_cols[col] = grid[:, k]
         out_cols[f"{col}_filtered"] = res.x
         out_cols[f"{col}_sigma_x"] = res.sigma_x
