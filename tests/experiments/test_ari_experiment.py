@@ -49,6 +49,13 @@ def test_paper_estimator_and_order_only_in_the_first_runs() -> None:
     s = exp.summarize_synthetic(params, runs)["small"]
     assert (s["runs"], s["paper_runs"], s["order_runs"]) == (3, 1, 2)
     assert sum(s["orders_selected_paper"].values()) == 2
+    # how far the true order's BIC is from the chosen one's (0 when chosen), both estimators
+    for est in ("exact", "paper"):
+        gap = s["estimators"][est]["bic_true_minus_chosen"]
+        assert gap["runs"] == 2
+        assert gap["iqr"][0] >= 0.0
+    assert [r["small"]["order"] for r in runs[:2]] == [[1, 2], [1, 2]]  # the true order
+    assert [r["small"]["bic_true_minus_chosen"] for r in runs[:2]] == [0.0, 0.0]
     assert s["estimators"]["paper"]["sigma_n_ratio"]["runs"] == 1
     assert s["estimators"]["exact"]["sigma_n_ratio"]["runs"] == 3
     # both estimators on the contaminated series too, counted over their own runs

@@ -110,8 +110,10 @@ def _printed_vs_estimators(synthetic: dict[str, Any]) -> list[str]:
         "exact-likelihood estimator; *paper*: the paper's conditional Gauss–Markov model with "
         "the alternating filtering/VCE iteration (SQUAREM-accelerated); both on the same clean "
         "series at the true order, the orders by BIC over p = 0..6, d = 1..2 with each "
-        "estimator fitting every candidate. Cells: median [25 %, 75 %] over runs; run counts "
-        "per estimator in the case label (`paper_runs`, `order_runs`).",
+        "estimator fitting every candidate; BIC = −2 logL + (p + 2) ln n_eff on the likelihood "
+        "conditional on the first 8 epochs (n_eff = n − 8), so each AR coefficient must gain "
+        "ln(n_eff)/2 in logL (3.0 at n = 400, 4.0 at 3000). Cells: median [25 %, 75 %] over "
+        "runs; run counts per estimator in the case label (`paper_runs`, `order_runs`).",
         "",
         "| case | quantity | printed | truth | exact | paper |",
         "|---|---|---|---|---|---|",
@@ -157,6 +159,9 @@ def _printed_vs_estimators(synthetic: dict[str, Any]) -> list[str]:
             f"| | order by BIC | ({t['order'][0]},{t['order'][1]}) | "
             f"({t['order'][0]},{t['order'][1]}) | {_counts(s['orders_selected']) or '–'} | "
             f"{_counts(s.get('orders_selected_paper') or {}) or '–'} |",
+            f"| | BIC(true order) − BIC(chosen) | – | 0 | "
+            f"{_spread(ex.get('bic_true_minus_chosen'), digits=1)} | "
+            f"{_spread(pa.get('bic_true_minus_chosen'), digits=1)} |",
         ]
     return lines
 
@@ -494,7 +499,8 @@ def tables_markdown(results: dict[str, Any]) -> str:
             "## GNSS SPP: navtrack's own solutions vs RTKLIB's (same files and options)",
             "",
             "ENU about each solution's mean; static stations except the walking rover. "
-            "Cells are navtrack / RTKLIB.",
+            "Cells are navtrack / RTKLIB, exact-likelihood estimator (the paper's estimator on "
+            "the same rows: *paper* columns of the real-data table).",
             "",
             "| run | column | solved | order | σn (m) | σe (m) | σx (m) | r(1) | flagged "
             "| status |",
@@ -520,6 +526,10 @@ def tables_markdown(results: dict[str, Any]) -> str:
         lines += [
             "",
             "## SARIMAX cross-check (same series, same order; both scored by both likelihoods)",
+            "",
+            "navtrack's exact-likelihood estimator against statsmodels' SARIMAX, which "
+            "maximises the same exact likelihood; the paper's estimator maximises the "
+            "conditional one and is compared with the exact estimator in the tables above.",
             "",
             "| series | (p,d) | n | navtrack s | SARIMAX s | speed-up | SARIMAX converged | "
             "σn nav / SM | σe nav / SM | logL_SM(nav) − logL_SM(SM) | "
