@@ -126,19 +126,29 @@ def gate(
     if angle_mask is not None and np.any(angle_mask):
         am = np.flatnonzero(angle_mask)
         y[..., am] = wrap_angle(y[..., am])
-    try:
-        L = np.linalg.cholesky(S)
-    except np.linalg.LinAlgError:
-        raise ValueError("S: innovation covariance not positive definite") from None
-    log_det = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
-    log_norm = -0.5 * (m * np.log(2 * np.pi) + log_det)
-    if T == 0 or M == 0:
-        d2 = np.zeros(y.shape[:-1])
+    if m == 2:  # closed form (the common planar case): no LAPACK call per gate
+        a, b, c = S[..., 0, 0], S[..., 1, 0], S[..., 1, 1]
+        det = a * c - b * b
+        if not np.all((a > 0) & (det > 0)):
+            raise ValueError("S: innovation covariance not positive definite")
+        log_det = np.log(det)
+        y0, y1 = y[..., 0], y[..., 1]
+        d2 = c[..., None] * y0 * y0 - 2.0 * b[..., None] * y0 * y1 + a[..., None] * y1 * y1
+        d2 = d2 / det[..., None]
     else:
-        # whitened innovations w = L⁻¹ y for every (t, j): one inverse per track, applied to
-        # the track's M innovations by one stacked product
-        w = y @ np.swapaxes(np.linalg.inv(L), -1, -2)
-        d2 = np.einsum("...i,...i->...", w, w)
+        try:
+            L = np.linalg.cholesky(S)
+        except np.linalg.LinAlgError:
+            raise ValueError("S: innovation covariance not positive definite") from None
+        log_det = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
+        if T == 0 or M == 0:
+            d2 = np.zeros(y.shape[:-1])
+        else:
+            # whitened innovations w = L⁻¹ y for every (t, j): one inverse per track, applied
+            # to the track's M innovations by one stacked product
+            w = y @ np.swapaxes(np.linalg.inv(L), -1, -2)
+            d2 = np.einsum("...i,...i->...", w, w)
+    log_norm = -0.5 * (m * np.log(2 * np.pi) + log_det)
     if candidates is not None:
         d2 = np.where(candidates, d2, np.inf)
     return Gate(y, d2, d2 <= gamma, log_norm)

@@ -114,7 +114,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from math import comb, perm
+from functools import lru_cache
 from typing import Literal
 
 import numpy as np
@@ -125,13 +125,13 @@ from navtrack.tracking.assignment import SdProblem, SdStatus, sd_assign
 from navtrack.tracking.gating import chi2_threshold, gate
 from navtrack.tracking.jpda import (
     JpdaConfig,
-    joint_events,
     jpda_marginals,
     jpda_marginals_batch,
     jpda_step,
+    n_joint_events,
 )
-from navtrack.tracking.kalman import gain_update, innovation_gain, kf_predict
-from navtrack.tracking.models import LinearMotion, MeasurementModel, wrap_angle
+from navtrack.tracking.kalman import gain_update, innovation_gain, kf_predict, stacked_inverse
+from navtrack.tracking.models import LinearMotion, MeasurementModel, measure, wrap_angle
 
 __all__ = [
     "ALGORITHMS",
@@ -310,44 +310,39 @@ def _sensor_terms(
     for s, zs in enumerate(z):
         Z[s, : len(zs)] = zs
         ok[s, : len(zs)] = True
-    H = np.array([model.jacobian(xp) for model in sensors])
+    zp, H = measure(sensors, xp)  # (T, S, m), (T, S, m, n)
+    zp, H = np.swapaxes(zp, 0, 1), np.swapaxes(H, 0, 1)
     R = np.array([model.R for model in sensors])[:, None]
     Sg, K = innovation_gain(Pp, H, R)
-    zp = np.array([model.h(xp) for model in sensors])
     pg = config.gate_probability
     g = gate(zp, Sg, Z, chi2_threshold(pg, m), angle_mask=sensors[0].angle_mask)
     valid = g.valid & ok[:, None, :]
-    ll = g.log_likelihood()
     pd = np.asarray(config.pd)[:, None, None]
     lam = np.asarray(config.clutter_density)[:, None, None]
-    log_w = np.full((*valid.shape[:-1], M + 1), -np.inf)
+    log_w = np.empty((*valid.shape[:-1], M + 1))
     with np.errstate(divide="ignore"):
         log_w[..., :1] = np.log1p(-pd * pg)
-    log_w[..., 1:] = np.where(valid, ll + np.log(pd) - np.log(lam), -np.inf)
+    log_w[..., 1:] = np.where(valid, g.log_likelihood() + np.log(pd) - np.log(lam), -np.inf)
     # the weights of association_weights, all sensors at once: each row scaled to max 1
     mx = log_w.max(axis=-1, keepdims=True)
     W = np.exp(log_w - np.where(np.isfinite(mx), mx, 0.0))
-    T = xp.shape[0]
     # marginals over the measurements some target gates (the others are certain clutter):
-    # column 0 and the gated columns of each sensor, padded with weight-0 columns
-    cols = [np.r_[0, 1 + np.flatnonzero(valid[s].any(axis=0))] for s in range(S_)]
-    Mc = max(c.size for c in cols) - 1
-    Wc = np.zeros((S_, T, Mc + 1))
-    for s, c in enumerate(cols):
-        Wc[s, :, : c.size] = W[s][:, c]
-    if _n_events(T, Mc) <= 20_000:
-        bc = jpda_marginals_batch(Wc, joint_events(T, Mc))
+    # column 0 and the gated columns of each sensor moved to the front (stable order), the
+    # rest (weight 0, so marginal 0) cut to the most gated columns of a sensor
+    keep = np.ones((S_, M + 1), dtype=bool)
+    keep[:, 1:] = valid.any(axis=1)
+    cols = np.argsort(~keep, axis=1, kind="stable")[:, None, : keep.sum(axis=1).max()]
+    T, Mc = xp.shape[0], cols.shape[-1] - 1
+    at = (np.arange(S_)[:, None, None], np.arange(T)[:, None], cols)  # (S, T, Mc + 1)
+    Wc = W[at]
+    if n_joint_events(T, Mc) <= 20_000:
+        bc = jpda_marginals_batch(Wc)
     else:
         bc = np.array([jpda_marginals(Wc[s], config.jpda(s)).beta for s in range(S_)])
     beta = np.zeros_like(W)
-    for s, c in enumerate(cols):
-        beta[s][:, c] = bc[s, :, : c.size]
+    beta[at] = bc
     n_meas = np.array([len(zs) for zs in z], dtype=np.int64)
     return _SensorTerms(Z, H, Sg, K, g.innovation, log_w, beta, n_meas)
-
-
-def _n_events(T: int, M: int) -> int:
-    return sum(comb(T, k) * perm(M, k) for k in range(min(T, M) + 1))
 
 
 def tuple_marginals(
@@ -487,7 +482,7 @@ def equivalent_measurement(
 
     Parameters
     ----------
-    z : (n_L, S, m) the tuples' measurements (any value where not ``hit``)
+    z : (n_L, S, m) the tuples' measurements (any finite value where not ``hit``)
     hit : (n_L, S) bool, sensor ``s`` has a measurement in the tuple; every tuple needs one
     sensors : S measurement models, each with ``dim_z >= len(o)`` (alone it fixes ``x[o]``)
     x_ref : (n,) or (n_L, n) linearisation point and start (the prediction)
@@ -513,11 +508,8 @@ def equivalent_measurement(
     """
     x_ref = np.asarray(x_ref, dtype=float)
     n = x_ref.shape[-1]
-    if linearised is None:
-        J0 = np.concatenate([model.jacobian(x_ref).reshape(-1, n) for model in sensors])
-    else:
-        J0 = np.asarray(linearised[0]).reshape(-1, n)
-    o = np.flatnonzero((J0 != 0.0).any(axis=0))
+    J0 = measure(sensors, x_ref)[1] if linearised is None else np.asarray(linearised[0])
+    o = np.flatnonzero((J0.reshape(-1, n) != 0.0).any(axis=0))
     if any(model.dim_z < o.size for model in sensors):
         raise ValueError(
             f"equivalent_measurement: every sensor must observe the {o.size} state "
@@ -526,55 +518,54 @@ def equivalent_measurement(
     if not np.all(hit.any(axis=1)):
         raise ValueError("equivalent_measurement: every tuple needs one measurement")
     n_L, S_, m = z.shape
-    # the sensors' measurements stacked, k = s m + i: whitening Wᵀ (block diagonal of the
-    # C_sᵀ, R_s⁻¹ = C_sᵀ C_s) on the right of row vectors, the tuples' sensors as a 0/1 mask
-    Wt = np.zeros((S_ * m, S_ * m))
-    for s, model in enumerate(sensors):
-        Wt[s * m : (s + 1) * m, s * m : (s + 1) * m] = np.linalg.cholesky(np.linalg.inv(model.R))
-    mask = np.repeat(hit, m, axis=1).astype(float)  # (n_L, S m)
-    angle = np.concatenate([model.angle_mask for model in sensors])
-    zk = z.reshape(n_L, S_ * m)
-    x = np.broadcast_to(x_ref, (n_L, n)).copy()
-    active = np.ones(n_L, dtype=bool)
+    n_o = o.size
+    try:
+        Ct, angle = _whitening(tuple(sensors))
+    except TypeError:  # a model that cannot be hashed: no cache
+        Ct, angle = _whitening.__wrapped__(tuple(sensors))
+    # the tuple axis last (k tuples): residuals (S, m, k), whitened rows (S, m, n_o, k), those
+    # of a sensor missing from a tuple weighted 0
+    w = hit.T[:, None, None, :]
+    zt = z.transpose(1, 2, 0)
+    x = np.array(np.broadcast_to(x_ref, (n_L, n)), dtype=float)
+    cov = np.empty((n_L, n_o, n_o))
+    todo = np.arange(n_L)  # the tuples not converged yet
     for it in range(iterations):
         if it == 0 and linearised is not None:
-            Jt = np.asarray(linearised[0])[..., o].transpose(0, 3, 1, 2).reshape(n_L, o.size, -1)
-            r = np.asarray(linearised[1]).reshape(n_L, -1)
+            J, r = J0[..., o], np.asarray(linearised[1]).transpose(1, 2, 0)
         else:
-            Jt = np.concatenate(
-                [np.swapaxes(model.jacobian(x)[..., o], -1, -2) for model in sensors], axis=-1
-            )  # (n_L, n_o, S m): the transposed Jacobians
-            r = zk - np.concatenate([model.h(x) for model in sensors], axis=-1)
-            r = np.where(angle, wrap_angle(r), r)
-        Bt = (Jt.reshape(-1, S_ * m) @ Wt).reshape(Jt.shape) * mask[:, None, :]
-        info = Bt @ np.swapaxes(Bt, -1, -2)
-        cov = _inv_spd(info)
-        step = np.einsum("lij,lj->li", cov, np.einsum("lik,lk->li", Bt, (r @ Wt) * mask))
-        step[~active] = 0.0
-        x[:, o] += step
+            zp, J = measure(sensors, x[todo])
+            J, r = J[..., o], zt[..., todo] - zp.transpose(1, 2, 0)
+            r[angle] = wrap_angle(r[angle])
+        k = todo.size
+        B = (Ct @ J.transpose(1, 2, 3, 0).reshape(S_, m, n_o * k)).reshape(S_, m, n_o, k)
+        B = B * w[..., todo]
+        e = Ct @ r
+        info = np.einsum("smpk,smqk->kpq", B, B)  # Σ_s J_sᵀ R_s⁻¹ J_s
+        g = np.einsum("smpk,smk->kp", B, e)  # Σ_s J_sᵀ R_s⁻¹ r_s
+        cov[todo] = c = stacked_inverse(info)
+        step = np.einsum("kpq,kq->kp", c, g)
+        x[todo[:, None], o] += step
         if it == 0:
-            first = x.copy(), cov
-        active &= np.einsum("li,lij,lj->l", step, info, step) >= tol * tol
-        if not active.any():
+            first = x.copy(), cov.copy()
+        todo = todo[np.einsum("kp,kp->k", step, g) >= tol * tol]  # δᵀ R_eq⁻¹ δ = δᵀ g
+        if todo.size == 0:
             break
-    if active.any():  # not converged: the first step, linearised at x_ref
-        x[active], cov[active] = first[0][active], first[1][active]
+    # not converged: the first step, linearised at x_ref
+    x[todo], cov[todo] = first[0][todo], first[1][todo]
     return o.astype(np.int64), x[:, o], cov
 
 
-def _inv_spd(A: FloatArray) -> FloatArray:
-    """Inverses of stacked symmetric positive-definite matrices ``(..., n, n)`` (closed form
-    for ``n = 2``, the position of a planar target; exactly symmetric)."""
-    if A.shape[-1] != 2:
-        inv = np.linalg.inv(A)
-        return np.asarray(0.5 * (inv + np.swapaxes(inv, -1, -2)), dtype=float)
-    a, b, d = A[..., 0, 0], A[..., 0, 1], A[..., 1, 1]
-    det = a * d - b * b
-    out = np.empty_like(A)
-    out[..., 0, 0] = d / det
-    out[..., 1, 1] = a / det
-    out[..., 0, 1] = out[..., 1, 0] = -b / det
-    return out
+@lru_cache(maxsize=16)
+def _whitening(sensors: tuple[MeasurementModel, ...]) -> tuple[FloatArray, BoolArray]:
+    """``C_sᵀ`` with ``R_s⁻¹ = C_s C_sᵀ`` (S, m, m) and the angle masks (S, m) of the sensors
+    (models are immutable: computed once per set of sensors)."""
+    R = np.array([model.R for model in sensors])
+    Ct = np.swapaxes(np.linalg.cholesky(np.linalg.inv(R)), 1, 2)
+    angle = np.array([model.angle_mask for model in sensors])
+    Ct.setflags(write=False)
+    angle.setflags(write=False)
+    return Ct, angle
 
 
 def _equivalent_updates(
@@ -591,18 +582,18 @@ def _equivalent_updates(
     the prediction); the empty tuple keeps the prediction."""
     x, P = xp[target], Pp[target]
     hit = L > 0
-    some = hit.any(axis=1)
-    if some.any():
-        t, Ls = target[some], L[some]
+    some = np.flatnonzero(hit.any(axis=1))
+    if some.size:
+        t, j = target[some], np.maximum(L[some] - 1, 0)  # j: any index where not in the tuple
         sidx = np.arange(L.shape[1])
-        j = np.maximum(Ls - 1, 0)  # any measurement where the sensor is not in the tuple
-        Z = terms.z[sidx, j]  # (n, S, m)
-        J = np.swapaxes(terms.H[:, t], 0, 1)  # (n, S, m, n_x) at the prediction
+        J = terms.H[:, t].transpose(1, 0, 2, 3)  # (n, S, m, n_x) at the prediction
         r = terms.innovation[sidx, t[:, None], j]  # (n, S, m)
-        o, zeta, R_eq = equivalent_measurement(Z, hit[some], sensors, x[some], linearised=(J, r))
-        E = np.eye(xp.shape[-1])[o]
-        S, K = innovation_gain(P[some], E, R_eq)
-        x[some], P[some] = gain_update(x[some], P[some], zeta - x[some][:, o], K, S)
+        xt, Pt = xp[t], Pp[t]
+        o, zeta, R_eq = equivalent_measurement(
+            terms.z[sidx, j], hit[some], sensors, xt, linearised=(J, r)
+        )
+        S, K = innovation_gain(Pt, np.eye(xp.shape[-1])[o], R_eq)
+        x[some], P[some] = gain_update(xt, Pt, zeta - xt[:, o], K, S)
     return x, P
 
 
