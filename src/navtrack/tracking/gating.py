@@ -117,19 +117,19 @@ def gate(
     Z = Z.reshape(-1, m) if zp.ndim == 2 else Z
     if Z.shape[:-2] != zp.shape[:-2] or Z.shape[-1] != m:
         raise ValueError(f"z: expected shape (..., M, {m}) like z_pred {zp.shape}, got {Z.shape}")
-    if not np.all(np.isfinite(Z)):
+    if not np.isfinite(Z).all():
         raise ValueError("z: measurements must be finite")
     T, M = zp.shape[-2], Z.shape[-2]
     y = Z[..., None, :, :] - zp[..., :, None, :]
     if pair_offset is not None:
         y = y - np.asarray(pair_offset, dtype=float)
-    if angle_mask is not None and np.any(angle_mask):
-        am = np.flatnonzero(angle_mask)
-        y[..., am] = wrap_angle(y[..., am])
+    if angle_mask is not None:
+        for i in np.flatnonzero(angle_mask):
+            y[..., i] = wrap_angle(y[..., i])
     if m == 2:  # closed form (the common planar case): no LAPACK call per gate
         a, b, c = S[..., 0, 0], S[..., 1, 0], S[..., 1, 1]
         det = a * c - b * b
-        if not np.all((a > 0) & (det > 0)):
+        if not ((a > 0) & (det > 0)).all():
             raise ValueError("S: innovation covariance not positive definite")
         log_det = np.log(det)
         y0, y1 = y[..., 0], y[..., 1]

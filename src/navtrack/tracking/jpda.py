@@ -660,7 +660,7 @@ def jpda_marginals_batch(W: ArrayLike, events: IntArray | None = None) -> FloatA
     beta : (..., T, M+1)
     """
     W = np.asarray(W, dtype=float)
-    if W.ndim < 2 or not np.all(np.isfinite(W)) or np.any(W < 0):
+    if W.ndim < 2 or not np.isfinite(W).all() or (W < 0).any():
         raise ValueError("W must be a finite, non-negative (..., T, M+1) array")
     T, M1 = W.shape[-2:]
     if events is None:
@@ -670,7 +670,7 @@ def jpda_marginals_batch(W: ArrayLike, events: IntArray | None = None) -> FloatA
         onehot = _indicator(E, M1)
     p = np.prod(W[..., np.arange(T), E], axis=-1)  # (..., n_events)
     Z = p.sum(axis=-1, keepdims=True)
-    if np.any(Z <= 0):
+    if (Z <= 0).any():
         raise ValueError("a problem of the batch has zero total weight")
     return np.asarray((p / Z) @ onehot.reshape(len(E), T * M1)).reshape(*W.shape[:-2], T, M1)
 

@@ -91,7 +91,7 @@ def stacked_inverse(A: ArrayLike) -> FloatArray:
         return np.asarray(np.linalg.inv(A), dtype=float)
     a, b, c, d = A[..., 0, 0], A[..., 0, 1], A[..., 1, 0], A[..., 1, 1]
     det = a * d - b * c
-    if np.any(det == 0):
+    if (det == 0).any():
         raise np.linalg.LinAlgError("Singular matrix")
     out = np.empty_like(A)
     out[..., 0, 0] = d / det

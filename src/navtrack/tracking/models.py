@@ -394,7 +394,7 @@ class RangeBearing:
 
     def h(self, x: FloatArray) -> FloatArray:
         dx, dy = _offsets(np.asarray(x, dtype=float), self.sensor_xy, self.position_index)
-        return _range_bearing(dx, dy, self.from_north)
+        return _range_bearing(dx, dy, np.sqrt(dx * dx + dy * dy), self.from_north)
 
     def jacobian(self, x: FloatArray) -> FloatArray:
         dx, dy = _offsets(np.asarray(x, dtype=float), self.sensor_xy, self.position_index)
@@ -412,17 +412,25 @@ def _offsets(
     return x[..., i, None] - sensor_xy[:, 0], x[..., j, None] - sensor_xy[:, 1]
 
 
-def _range_bearing(dx: FloatArray, dy: FloatArray, from_north: bool) -> FloatArray:
-    """``[range, bearing]`` (..., 2) of east / north offsets (see :class:`RangeBearing`)."""
+def _range_bearing(dx: FloatArray, dy: FloatArray, r: FloatArray, from_north: bool) -> FloatArray:
+    """``[range, bearing]`` (..., 2) of east / north offsets with range ``r`` (see
+    :class:`RangeBearing`)."""
     a, b = (dy, dx) if from_north else (dx, dy)  # bearing = atan2(b, a)
-    return np.stack([np.hypot(a, b), np.arctan2(b, a)], axis=-1)
+    return np.stack([r, np.arctan2(b, a)], axis=-1)
 
 
 def _range_bearing_jacobian(
-    dx: FloatArray, dy: FloatArray, position_index: tuple[int, int], dim_x: int, from_north: bool
+    dx: FloatArray,
+    dy: FloatArray,
+    position_index: tuple[int, int],
+    dim_x: int,
+    from_north: bool,
+    r2: FloatArray | None = None,
 ) -> FloatArray:
-    """Jacobian (..., 2, dim_x) of :func:`_range_bearing` with respect to the state."""
-    r2 = dx * dx + dy * dy
+    """Jacobian (..., 2, dim_x) of :func:`_range_bearing` with respect to the state
+    (``r2``: the squared range when the caller has it)."""
+    if r2 is None:
+        r2 = dx * dx + dy * dy
     r = np.sqrt(r2)
     i, j = position_index
     J = np.zeros((*dx.shape, 2, dim_x))
@@ -476,9 +484,10 @@ def measure(models: Sequence[MeasurementModel], x: ArrayLike) -> tuple[FloatArra
     if group is not None:
         m0, xy = group
         dx, dy = _offsets(x, xy, m0.position_index)
+        r2 = dx * dx + dy * dy
         return (
-            _range_bearing(dx, dy, m0.from_north),
-            _range_bearing_jacobian(dx, dy, m0.position_index, m0.dim_x, m0.from_north),
+            _range_bearing(dx, dy, np.sqrt(r2), m0.from_north),
+            _range_bearing_jacobian(dx, dy, m0.position_index, m0.dim_x, m0.from_north, r2),
         )
     if len({m.dim_z for m in models}) != 1:
         raise ValueError("measure: the models need one dim_z")

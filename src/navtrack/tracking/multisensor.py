@@ -383,7 +383,7 @@ def _mixtures(
     """Moment-matched Gaussian mixture of each target: components ``(C,)`` grouped by the
     sorted ``target`` (every target ``0..T-1`` present), weights ``w`` normalised per target,
     means ``(C, n)``, covariances ``(C, n, n)``; returns ``(T, n)``, ``(T, n, n)``."""
-    start = np.flatnonzero(np.r_[True, target[1:] != target[:-1]])
+    start = np.searchsorted(target, np.arange(target[-1] + 1))
     xm = np.add.reduceat(w[:, None] * x, start)
     d = x - xm[target]
     Pm = np.add.reduceat(w[:, None, None] * (P + d[:, :, None] * d[:, None, :]), start)
@@ -509,13 +509,13 @@ def equivalent_measurement(
     x_ref = np.asarray(x_ref, dtype=float)
     n = x_ref.shape[-1]
     J0 = measure(sensors, x_ref)[1] if linearised is None else np.asarray(linearised[0])
-    o = np.flatnonzero((J0.reshape(-1, n) != 0.0).any(axis=0))
+    o = np.flatnonzero((J0 != 0.0).reshape(-1, n).any(axis=0))
     if any(model.dim_z < o.size for model in sensors):
         raise ValueError(
             f"equivalent_measurement: every sensor must observe the {o.size} state "
             f"components {o.tolist()} alone (dim_z >= {o.size})"
         )
-    if not np.all(hit.any(axis=1)):
+    if not hit.any(axis=1).all():
         raise ValueError("equivalent_measurement: every tuple needs one measurement")
     n_L, S_, m = z.shape
     n_o = o.size
@@ -524,11 +524,11 @@ def equivalent_measurement(
     except TypeError:  # a model that cannot be hashed: no cache
         Ct, angle = _whitening.__wrapped__(tuple(sensors))
     # the tuple axis last (k tuples): residuals (S, m, k), whitened rows (S, m, n_o, k), those
-    # of a sensor missing from a tuple weighted 0
+    # of a sensor missing from a tuple weighted 0, normal equations (n_o, n_o, k)
     w = hit.T[:, None, None, :]
     zt = z.transpose(1, 2, 0)
     x = np.array(np.broadcast_to(x_ref, (n_L, n)), dtype=float)
-    cov = np.empty((n_L, n_o, n_o))
+    info_last = np.empty((n_o, n_o, n_L))
     todo = np.arange(n_L)  # the tuples not converged yet
     for it in range(iterations):
         if it == 0 and linearised is not None:
@@ -539,21 +539,32 @@ def equivalent_measurement(
             r[angle] = wrap_angle(r[angle])
         k = todo.size
         B = (Ct @ J.transpose(1, 2, 3, 0).reshape(S_, m, n_o * k)).reshape(S_, m, n_o, k)
-        B = B * w[..., todo]
-        e = Ct @ r
-        info = np.einsum("smpk,smqk->kpq", B, B)  # Σ_s J_sᵀ R_s⁻¹ J_s
-        g = np.einsum("smpk,smk->kp", B, e)  # Σ_s J_sᵀ R_s⁻¹ r_s
-        cov[todo] = c = stacked_inverse(info)
-        step = np.einsum("kpq,kq->kp", c, g)
-        x[todo[:, None], o] += step
+        B *= w[..., todo]
+        info = np.einsum("smpk,smqk->pqk", B, B)  # Σ_s J_sᵀ R_s⁻¹ J_s
+        g = np.einsum("smpk,smk->pk", B, Ct @ r)  # Σ_s J_sᵀ R_s⁻¹ r_s
+        step = _solve_last(info, g)
+        info_last[..., todo] = info
+        x[todo[:, None], o] += step.T
         if it == 0:
-            first = x.copy(), cov.copy()
-        todo = todo[np.einsum("kp,kp->k", step, g) >= tol * tol]  # δᵀ R_eq⁻¹ δ = δᵀ g
+            first = x.copy(), info_last.copy()
+        todo = todo[np.einsum("pk,pk->k", step, g) >= tol * tol]  # δᵀ R_eq⁻¹ δ = δᵀ g
         if todo.size == 0:
             break
     # not converged: the first step, linearised at x_ref
-    x[todo], cov[todo] = first[0][todo], first[1][todo]
-    return o.astype(np.int64), x[:, o], cov
+    x[todo], info_last[..., todo] = first[0][todo], first[1][..., todo]
+    return o.astype(np.int64), x[:, o], stacked_inverse(info_last.transpose(2, 0, 1))
+
+
+def _solve_last(A: FloatArray, b: FloatArray) -> FloatArray:
+    """Solutions ``(n, k)`` of ``k`` linear systems stored with the system axis last, ``A (n,
+    n, k)``, ``b (n, k)`` (closed form for ``n = 2``: Cramer's rule)."""
+    if A.shape[0] != 2:
+        return np.asarray(np.linalg.solve(A.transpose(2, 0, 1), b.T[..., None])[..., 0].T)
+    det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+    out = np.empty_like(b)
+    out[0] = (A[1, 1] * b[0] - A[0, 1] * b[1]) / det
+    out[1] = (A[0, 0] * b[1] - A[1, 0] * b[0]) / det
+    return out
 
 
 @lru_cache(maxsize=16)
@@ -593,7 +604,7 @@ def _equivalent_updates(
             terms.z[sidx, j], hit[some], sensors, xt, linearised=(J, r)
         )
         S, K = innovation_gain(Pt, np.eye(xp.shape[-1])[o], R_eq)
-        x[some], P[some] = gain_update(xt, Pt, zeta - xt[:, o], K, S)
+        x[some], P[some] = gain_update(xt, Pt, zeta - xt[:, o], K, S, symmetrize=False)
     return x, P
 
 
