@@ -312,17 +312,15 @@ def _sensor_terms(
         ok[s, : len(zs)] = True
     zp, H = measure(sensors, xp)  # (T, S, m), (T, S, m, n)
     zp, H = np.swapaxes(zp, 0, 1), np.swapaxes(H, 0, 1)
-    R = np.array([model.R for model in sensors])[:, None]
-    Sg, K = innovation_gain(Pp, H, R)
+    R = _sensor_constants(sensors)[0]
+    Sg, K = innovation_gain(Pp, H, R[:, None])
     pg = config.gate_probability
     g = gate(zp, Sg, Z, chi2_threshold(pg, m), angle_mask=sensors[0].angle_mask)
     valid = g.valid & ok[:, None, :]
-    pd = np.asarray(config.pd)[:, None, None]
-    lam = np.asarray(config.clutter_density)[:, None, None]
+    log_miss, log_detect = _event_logs(config)
     log_w = np.empty((*valid.shape[:-1], M + 1))
-    with np.errstate(divide="ignore"):
-        log_w[..., :1] = np.log1p(-pd * pg)
-    log_w[..., 1:] = np.where(valid, g.log_likelihood() + np.log(pd) - np.log(lam), -np.inf)
+    log_w[..., :1] = log_miss
+    log_w[..., 1:] = np.where(valid, g.log_likelihood() + log_detect, -np.inf)
     # the weights of association_weights, all sensors at once: each row scaled to max 1
     mx = log_w.max(axis=-1, keepdims=True)
     W = np.exp(log_w - np.where(np.isfinite(mx), mx, 0.0))
@@ -367,9 +365,9 @@ def tuple_marginals(
     bs = [np.asarray(b, dtype=float) for b in betas]
     T = bs[0].shape[0]
     opts = [np.flatnonzero((b > 0).any(axis=0)) for b in bs]
-    p = np.ones(T)
-    for s, (b, o) in enumerate(zip(bs, opts, strict=True)):
-        p = p[..., None] * b[:, o].reshape(T, *(1,) * s, o.size)
+    p = bs[0][:, opts[0]]
+    for s in range(1, len(bs)):
+        p = p[..., None] * bs[s][:, opts[s]].reshape(T, *(1,) * s, opts[s].size)
     idx = np.nonzero(p)
     beta = p[idx]
     target = idx[0].astype(np.int64)
@@ -519,10 +517,7 @@ def equivalent_measurement(
         raise ValueError("equivalent_measurement: every tuple needs one measurement")
     n_L, S_, m = z.shape
     n_o = o.size
-    try:
-        Ct, angle = _whitening(tuple(sensors))
-    except TypeError:  # a model that cannot be hashed: no cache
-        Ct, angle = _whitening.__wrapped__(tuple(sensors))
+    Ct, angle = _sensor_constants(sensors)[1:]
     # the tuple axis last (k tuples): residuals (S, m, k), whitened rows (S, m, n_o, k), those
     # of a sensor missing from a tuple weighted 0, normal equations (n_o, n_o, k)
     w = hit.T[:, None, None, :]
@@ -567,16 +562,38 @@ def _solve_last(A: FloatArray, b: FloatArray) -> FloatArray:
     return out
 
 
+def _sensor_constants(sensors: Sequence[MeasurementModel]) -> tuple[FloatArray, ...]:
+    """Noise covariances ``R_s`` (S, m, m), whitening ``C_sᵀ`` with ``R_s⁻¹ = C_s C_sᵀ`` (S, m,
+    m) and angle masks (S, m) of the sensors (read-only; computed once per set of sensors,
+    which are immutable, unless a model cannot be hashed)."""
+    try:
+        return _constants_of(tuple(sensors))
+    except TypeError:
+        return _constants_of.__wrapped__(tuple(sensors))
+
+
 @lru_cache(maxsize=16)
-def _whitening(sensors: tuple[MeasurementModel, ...]) -> tuple[FloatArray, BoolArray]:
-    """``C_sᵀ`` with ``R_s⁻¹ = C_s C_sᵀ`` (S, m, m) and the angle masks (S, m) of the sensors
-    (models are immutable: computed once per set of sensors)."""
+def _constants_of(sensors: tuple[MeasurementModel, ...]) -> tuple[FloatArray, ...]:
     R = np.array([model.R for model in sensors])
     Ct = np.swapaxes(np.linalg.cholesky(np.linalg.inv(R)), 1, 2)
     angle = np.array([model.angle_mask for model in sensors])
-    Ct.setflags(write=False)
-    angle.setflags(write=False)
-    return Ct, angle
+    for a in (R, Ct, angle):
+        a.setflags(write=False)
+    return R, Ct, angle
+
+
+@lru_cache(maxsize=64)
+def _event_logs(config: FusionConfig) -> tuple[FloatArray, FloatArray]:
+    """``log(1 - P_D,s P_G)`` and ``log(P_D,s / λ_s)`` of each sensor, ``(S, 1, 1)`` each: the
+    eq. 21 factors of a missed and of a detected target, without the Gaussian."""
+    pd = np.asarray(config.pd)[:, None, None]
+    lam = np.asarray(config.clutter_density)[:, None, None]
+    with np.errstate(divide="ignore"):
+        miss = np.log1p(-pd * config.gate_probability)
+    detect = np.log(pd) - np.log(lam)
+    miss.setflags(write=False)
+    detect.setflags(write=False)
+    return miss, detect
 
 
 def _equivalent_updates(
