@@ -654,7 +654,10 @@ def _joint_tuple_marginals(
         R[s * m : (s + 1) * m, s * m : (s + 1) * m] = model.R
     S_full = H @ Pp @ np.swapaxes(H, -1, -2) + R  # (T, S m, S m)
     sidx = np.arange(S_)
-    nu = terms.innovation[sidx, target[:, None], np.maximum(L - 1, 0)].reshape(len(L), -1)
+    if terms.innovation.shape[2]:
+        nu = terms.innovation[sidx, target[:, None], np.maximum(L - 1, 0)].reshape(len(L), -1)
+    else:  # no sensor reported: every tuple is empty
+        nu = np.zeros((len(L), S_ * m))
     patterns, which = np.unique(hit, axis=0, return_inverse=True)
     for p, pattern in enumerate(patterns):
         k = np.repeat(pattern, m)
