@@ -471,12 +471,13 @@ def equivalent_measurement(
     tuple's measurements, a linear measurement ``ζ = E x + w``, ``w ~ N(0, R_eq)``, ``E`` the
     rows ``o`` of the identity.
 
-    All tuples are solved in one batch: each iteration evaluates every sensor's model once
-    for all tuples, stacks the sensors' rows (``S m`` per tuple, masked by ``hit``), whitens
-    them with one matrix product (``R_s⁻¹ = C_sᵀ C_s``), forms every tuple's normal equations
-    by a stacked matrix product and solves the stacked ``n_o x n_o`` systems (closed form for
-    ``n_o = 2``); a tuple whose step fell below ``tol`` is frozen
-    (convergence mask) and the loop ends when all are.
+    All tuples are solved in one batch, the tuple axis last: each iteration evaluates the
+    sensors' models once for the tuples still iterating (:func:`~navtrack.tracking.models.
+    measure`: range-bearing sensors in one vectorised call), whitens each sensor's rows with
+    one product (``R_s⁻¹ = C_s C_sᵀ``), zeroes the rows of sensors not in the tuple, sums the
+    normal equations and solves them (Cramer's rule for ``n_o = 2``); a tuple whose step fell
+    below ``tol`` leaves the batch, and the loop ends when none is left. ``R_eq`` is inverted
+    once, at the end.
 
     Parameters
     ----------
@@ -489,10 +490,11 @@ def equivalent_measurement(
         measured range may be below the noise) keeps its first step, linearised at ``x_ref``
         (the EKF's information form)
     tol : float, a tuple stops when its step is below ``tol`` standard deviations of its
-        equivalent measurement, ``δᵀ R_eq⁻¹ δ < tol²``. The iteration converges linearly
-        (about x0.1 per step on the paper's scenario: a non-zero-residual problem), so the
-        remaining error is about a tenth of the last step: below 0.2 % of a standard
-        deviation at the default, in 2-3 steps from a prediction a few hundred metres off
+        equivalent measurement, ``δᵀ R_eq⁻¹ δ < tol²``. On the paper's scenario (59 000
+        tuples) the error left after a step is at most 0.2 of the step (median 2e-4: a
+        non-zero-residual problem, nearly quadratic this close), so below 0.4 % of a standard
+        deviation at the default; from a prediction a few hundred metres off the first step
+        (free with ``linearised``) and two model evaluations suffice on 93 % of the scans
     linearised : optional ``(J (n_L, S, m, n), r (n_L, S, m))``, the Jacobians and wrapped
         residuals ``z_s - h_s(x_ref)`` at ``x_ref`` when the caller already has them (the
         tracker's Jacobians and innovations at the prediction): the first iteration then
