@@ -554,14 +554,15 @@ def equivalent_measurement(
 
 def _solve_last(A: FloatArray, b: FloatArray) -> FloatArray:
     """Solutions ``(n, k)`` of ``k`` linear systems stored with the system axis last, ``A (n,
-    n, k)``, ``b (n, k)`` (closed form for ``n = 2``: Cramer's rule)."""
+    n, k)``, ``b (n, k)`` (closed form for ``n = 2``: the adjugate over the determinant)."""
     if A.shape[0] != 2:
         return np.asarray(np.linalg.solve(A.transpose(2, 0, 1), b.T[..., None])[..., 0].T)
+    adj = A[::-1, ::-1] * _ADJUGATE_SIGN
     det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
-    out = np.empty_like(b)
-    out[0] = (A[1, 1] * b[0] - A[0, 1] * b[1]) / det
-    out[1] = (A[0, 0] * b[1] - A[1, 0] * b[0]) / det
-    return out
+    return np.asarray(np.einsum("pqk,qk->pk", adj, b) / det)
+
+
+_ADJUGATE_SIGN = np.array([[1.0, -1.0], [-1.0, 1.0]])[..., None]  # adj(A) = sign * A[::-1, ::-1]
 
 
 def _sensor_constants(sensors: Sequence[MeasurementModel]) -> tuple[FloatArray, ...]:
