@@ -4,15 +4,17 @@ Run: ``PYTHONPATH=src python benchmarks/bench_fusion.py [--baseline REV] [--repe
 [--runs 2] [--clutter gate|box] [--algorithms a,b,...]``.
 
 The scans (paper-3 scenario, :mod:`navtrack.experiments.sdcmsjpda.scenario`, ``--runs`` scan
-sets per P_D = 0.97, 0.76, 0.58, seeded) are simulated once by this checkout and written to a
-temporary file. Each repeat then runs every tracker on all of them in one fresh process per code
-tree: this checkout's ``src`` and, with ``--baseline REV``, the ``src`` of revision ``REV``
-(``git archive``), the two alternating (order swapped every repeat). A process runs one
-untimed warm-up pass per tracker, then reports ``FusionResult.ms_per_step`` (CPU time of the
-fusion step, ``time.thread_time``, as the study's ``ms_per_step``) averaged over the scan sets.
+sets per P_D = 0.97, 0.76, 0.58, seed ``--seed``) are simulated once by this checkout and
+written to a temporary file. One worker process per code tree loads them: this checkout's
+``src`` and, with ``--baseline REV``, the ``src`` of revision ``REV`` (``git archive``). After
+one untimed warm-up pass per tracker, the workers run each tracker on each scan set in turn,
+the two trees alternating on every scan set (order swapped every time), and report
+``FusionResult.ms_per_step`` (CPU time of the fusion step, ``time.thread_time``, as the study's
+``ms_per_step``).
 
-Printed: the load average before each repeat; per tracker the median over repeats of each
-tree's ms per step and their ratio (baseline / this checkout); SD-CMSJPDA over sequential
+Printed: the load average before each repeat; per tracker the median over repeats and scan
+sets of each tree's ms per step and the median of the paired ratios (baseline / this checkout,
+one pair per scan set and repeat); SD-CMSJPDA over sequential
 MSJPDA in this checkout; and the largest difference between the two trees' posterior position
 estimates over all steps, targets and scan sets, in units of the posterior's standard deviation
 (``|Δx| / sqrt(P_xx)`` and the same for y), which shows whether a change moved the estimates.
