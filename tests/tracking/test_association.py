@@ -199,6 +199,20 @@ def test_gate_distances_and_kdtree_pregate() -> None:
     y = Z[None] - zp[:, None]
     d2 = np.einsum("tji,tik,tjk->tj", y, np.linalg.inv(S), y)
     np.testing.assert_allclose(g.d2, d2, rtol=1e-10)
+    log_norm = -0.5 * (2 * np.log(2 * np.pi) + np.linalg.slogdet(S)[1])
+    np.testing.assert_allclose(g.log_norm, log_norm, rtol=1e-12)
+    # m = 3 takes the Cholesky path (m = 2 the closed form): same quantities
+    A3 = rng.normal(size=(5, 3, 3))
+    S3 = A3 @ np.swapaxes(A3, -1, -2) + np.eye(3)
+    zp3, Z3 = rng.normal(size=(5, 3)), rng.normal(size=(7, 3))
+    g3 = gate(zp3, S3, Z3, gamma)
+    y3 = Z3[None] - zp3[:, None]
+    np.testing.assert_allclose(
+        g3.d2, np.einsum("tji,tik,tjk->tj", y3, np.linalg.inv(S3), y3), rtol=1e-10
+    )
+    np.testing.assert_allclose(
+        g3.log_norm, -0.5 * (3 * np.log(2 * np.pi) + np.linalg.slogdet(S3)[1]), rtol=1e-12
+    )
     cand = kdtree_pregate(zp, S, Z, gamma)
     assert np.all(cand[g.valid])  # no false rejections
     g2 = gate(zp, S, Z, gamma, candidates=cand)
@@ -210,6 +224,10 @@ def test_bad_inputs() -> None:
         gate(np.zeros((1, 2)), np.eye(2)[None], np.array([[np.nan, 0.0]]), 9.0)
     with pytest.raises(ValueError, match="positive definite"):
         gate(np.zeros((1, 2)), -np.eye(2)[None], np.zeros((1, 2)), 9.0)
+    with pytest.raises(ValueError, match="positive definite"):  # indefinite, positive diagonal
+        gate(np.zeros((1, 2)), np.array([[[1.0, 2.0], [2.0, 1.0]]]), np.zeros((1, 2)), 9.0)
+    with pytest.raises(ValueError, match="positive definite"):
+        gate(np.zeros((1, 3)), -np.eye(3)[None], np.zeros((1, 3)), 9.0)
     with pytest.raises(ValueError, match="NaN"):
         assign2d(np.array([[np.nan]]), [1.0])
     with pytest.raises(ValueError, match="W must be finite"):

@@ -10,8 +10,10 @@ from hypothesis import strategies as st
 from navtrack.tracking.kalman import (
     ekf_predict,
     ekf_update,
+    kalman_gain,
     kf_predict,
     kf_update,
+    stacked_inverse,
     ukf_predict,
     ukf_update,
 )
@@ -231,3 +233,22 @@ def test_function_measurement_hook_foveal_sensor() -> None:
     np.testing.assert_allclose(
         ukf_update(x, Ps, z, analytic).x, ekf_update(x, Ps, z, analytic).x, rtol=1e-5
     )
+
+
+def test_stacked_inverse_and_closed_form_gain() -> None:
+    """2 x 2 stacks in closed form (any non-singular matrix, symmetric ones exactly symmetric),
+    others by LAPACK; the m = 2 gain equals the solve of the general path."""
+    rng = np.random.default_rng(11)
+    A = rng.normal(size=(50, 2, 2))  # general, some indefinite
+    np.testing.assert_allclose(stacked_inverse(A), np.linalg.inv(A), rtol=1e-9, atol=1e-12)
+    Ssym = A @ np.swapaxes(A, -1, -2) + 0.1 * np.eye(2)
+    inv = stacked_inverse(Ssym)
+    np.testing.assert_array_equal(inv, np.swapaxes(inv, -1, -2))
+    B = rng.normal(size=(4, 3, 3, 3))
+    np.testing.assert_allclose(stacked_inverse(B), np.linalg.inv(B), rtol=1e-12)
+    with pytest.raises(np.linalg.LinAlgError):
+        stacked_inverse(np.array([[[1.0, 2.0], [2.0, 4.0]]]))
+    PHt = rng.normal(size=(50, 4, 2))
+    K = kalman_gain(PHt, Ssym)
+    ref = np.swapaxes(np.linalg.solve(Ssym, np.swapaxes(PHt, -1, -2)), -1, -2)
+    np.testing.assert_allclose(K, ref, rtol=1e-9, atol=1e-12)

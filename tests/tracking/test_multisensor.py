@@ -10,7 +10,14 @@ import pytest
 from navtrack.tracking.assignment import assign2d
 from navtrack.tracking.jpda import association_weights, jpda_marginals
 from navtrack.tracking.kalman import ekf_update, gain_update, innovation_gain, kf_predict
-from navtrack.tracking.models import RangeBearing, constant_velocity, wrap_angle
+from navtrack.tracking.models import (
+    FunctionMeasurement,
+    RangeBearing,
+    constant_velocity,
+    linear_position,
+    measure,
+    wrap_angle,
+)
 from navtrack.tracking.multisensor import (
     ALGORITHMS,
     FusionConfig,
@@ -391,3 +398,55 @@ def test_bad_configuration() -> None:
     z[1, 0, 0, 0] = np.nan
     with pytest.raises(ValueError, match=r"z\[1, 0, 0\]"):
         MultiScans(z, scans.valid, scans.t_s)
+
+
+def test_measure_stacks_the_sensors_models() -> None:
+    """Range-bearing sensors of one convention are evaluated together; any other set one
+    model at a time; both equal each model's own h and Jacobian."""
+    rng = np.random.default_rng(5)
+    x = rng.normal(size=(7, 4)) * 10_000.0
+    north = RangeBearing(np.diag([100.0**2, 0.01**2]), np.array([300.0, -200.0]), from_north=True)
+    hook = FunctionMeasurement(SENSORS[0].h, SENSORS[0].R, 4, SENSORS[0].jacobian)
+    for models in (SENSORS, [SENSORS[0], north], [hook, SENSORS[1]]):
+        z, H = measure(models, x)
+        assert z.shape == (7, len(models), 2)
+        assert H.shape == (7, len(models), 2, 4)
+        for s, m in enumerate(models):
+            np.testing.assert_allclose(z[:, s], m.h(x), rtol=1e-14)
+            np.testing.assert_allclose(H[:, s], m.jacobian(x), rtol=1e-14)
+    with pytest.raises(ValueError, match="one dim_z"):
+        measure([SENSORS[0], linear_position(4, (0, 2, 1), 10.0)], x)
+
+
+def test_equivalent_measurement_of_linear_sensors_is_the_information_mean() -> None:
+    """Three observed components (the general solve, not the 2 x 2 closed form): linear
+    position sensors fuse to the information-weighted mean in one step."""
+    from navtrack.tracking.multisensor import equivalent_measurement
+
+    rng = np.random.default_rng(6)
+    sig = [10.0, 20.0, 40.0]
+    sensors = [linear_position(6, (0, 2, 4), s_) for s_ in sig]
+    z = rng.normal(size=(5, 3, 3)) * 30.0
+    hit = np.array([[1, 1, 1], [1, 0, 1], [0, 1, 0], [1, 1, 0], [0, 0, 1]], dtype=bool)
+    o, zeta, R_eq = equivalent_measurement(z, hit, sensors, np.zeros(6))
+    assert o.tolist() == [0, 2, 4]
+    w = hit / np.square(sig)  # (tuples, sensors) information per axis
+    np.testing.assert_allclose(zeta, np.einsum("ls,lsi->li", w, z) / w.sum(1)[:, None])
+    np.testing.assert_allclose(R_eq, np.eye(3) / w.sum(1)[:, None, None])
+
+
+def test_all_sensors_silent_for_a_while() -> None:
+    """Scans where no sensor reports are predictions only, for every tracker."""
+    truth, scans = _one_target_scans(40, np.random.default_rng(7))
+    valid = scans.valid.copy()
+    valid[15:20] = False
+    quiet = MultiScans(np.where(valid[..., None], scans.z, np.nan), valid, scans.t_s)
+    cfg = FusionConfig((0.97,) * 3, (1e-7,) * 3)
+    for alg in ALGORITHMS:
+        r = run_fusion(alg, quiet, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
+        np.testing.assert_array_equal(r.longest_silence, [5, 5, 5])
+        xp = MOTION.f(r.x[14, 0], 1.0)
+        np.testing.assert_allclose(r.x[15, 0], xp, rtol=1e-12)  # prediction only
+        assert np.all(np.diff(np.trace(r.P[14:20, 0], axis1=-2, axis2=-1)) > 0), alg
+        err = np.hypot(*(r.x[:, 0, [0, 2]] - truth[:, [0, 2]]).T)
+        assert np.sqrt(np.mean(err[25:] ** 2)) < 250.0, alg

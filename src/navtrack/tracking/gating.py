@@ -117,28 +117,38 @@ def gate(
     Z = Z.reshape(-1, m) if zp.ndim == 2 else Z
     if Z.shape[:-2] != zp.shape[:-2] or Z.shape[-1] != m:
         raise ValueError(f"z: expected shape (..., M, {m}) like z_pred {zp.shape}, got {Z.shape}")
-    if not np.all(np.isfinite(Z)):
+    if not np.isfinite(Z).all():
         raise ValueError("z: measurements must be finite")
     T, M = zp.shape[-2], Z.shape[-2]
     y = Z[..., None, :, :] - zp[..., :, None, :]
     if pair_offset is not None:
         y = y - np.asarray(pair_offset, dtype=float)
-    if angle_mask is not None and np.any(angle_mask):
-        am = np.flatnonzero(angle_mask)
-        y[..., am] = wrap_angle(y[..., am])
-    try:
-        L = np.linalg.cholesky(S)
-    except np.linalg.LinAlgError:
-        raise ValueError("S: innovation covariance not positive definite") from None
-    log_det = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
-    log_norm = -0.5 * (m * np.log(2 * np.pi) + log_det)
-    if T == 0 or M == 0:
-        d2 = np.zeros(y.shape[:-1])
+    if angle_mask is not None:
+        for i in np.flatnonzero(angle_mask):
+            y[..., i] = wrap_angle(y[..., i])
+    if m == 2:  # closed form (the common planar case): no LAPACK call per gate
+        a, b, c = S[..., 0, 0], S[..., 1, 0], S[..., 1, 1]
+        det = a * c - b * b
+        if not ((a > 0) & (det > 0)).all():
+            raise ValueError("S: innovation covariance not positive definite")
+        log_det = np.log(det)
+        y0, y1 = y[..., 0], y[..., 1]
+        d2 = c[..., None] * y0 * y0 - 2.0 * b[..., None] * y0 * y1 + a[..., None] * y1 * y1
+        d2 = d2 / det[..., None]
     else:
-        # whitened innovations w = L⁻¹ y for every (t, j): one inverse per track, applied to
-        # the track's M innovations by one stacked product
-        w = y @ np.swapaxes(np.linalg.inv(L), -1, -2)
-        d2 = np.einsum("...i,...i->...", w, w)
+        try:
+            L = np.linalg.cholesky(S)
+        except np.linalg.LinAlgError:
+            raise ValueError("S: innovation covariance not positive definite") from None
+        log_det = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
+        if T == 0 or M == 0:
+            d2 = np.zeros(y.shape[:-1])
+        else:
+            # whitened innovations w = L⁻¹ y for every (t, j): one inverse per track, applied
+            # to the track's M innovations by one stacked product
+            w = y @ np.swapaxes(np.linalg.inv(L), -1, -2)
+            d2 = np.einsum("...i,...i->...", w, w)
+    log_norm = -0.5 * (m * np.log(2 * np.pi) + log_det)
     if candidates is not None:
         d2 = np.where(candidates, d2, np.inf)
     return Gate(y, d2, d2 <= gamma, log_norm)

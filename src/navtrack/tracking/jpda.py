@@ -266,7 +266,7 @@ def jpda_marginals(W: ArrayLike, config: JpdaConfig | None = None) -> JpdaMargin
         Wc = W[np.ix_(tr, np.concatenate([[0], cols + 1]))]
         if n_joint_events(tr.size, cols.size) <= DENSE_EVENTS:
             # small cluster: dense enumeration of its joint events is cheapest
-            bc = jpda_marginals_batch(Wc, joint_events(tr.size, cols.size))
+            bc = jpda_marginals_batch(Wc)
             method[tr] = JpdaMethod.EXACT
             beta[tr, 0] = bc[:, 0]
             beta[np.ix_(tr, cols + 1)] = bc[:, 1:]
@@ -652,25 +652,44 @@ def jpda_marginals_batch(W: ArrayLike, events: IntArray | None = None) -> FloatA
     Parameters
     ----------
     W : (..., T, M+1) weights, column 0 = missed (see :func:`association_weights`)
-    events : from :func:`joint_events` (computed when None; pass it to reuse)
+    events : joint events ``(n_events, T)``; None = all of them, :func:`joint_events`
+        (with its event-to-pair indicator, both computed once per ``(T, M)``)
 
     Returns
     -------
     beta : (..., T, M+1)
     """
     W = np.asarray(W, dtype=float)
-    if W.ndim < 2 or np.any(~np.isfinite(W)) or np.any(W < 0):
+    if W.ndim < 2 or not np.isfinite(W).all() or (W < 0).any():
         raise ValueError("W must be a finite, non-negative (..., T, M+1) array")
     T, M1 = W.shape[-2:]
-    E = joint_events(T, M1 - 1) if events is None else np.asarray(events)
-    tix = np.arange(T)
-    p = np.prod(W[..., tix, E], axis=-1)  # (..., n_events)
+    if events is None:
+        E, onehot = joint_events(T, M1 - 1), _event_indicator(T, M1 - 1)
+    else:
+        E = np.asarray(events)
+        onehot = _indicator(E, M1)
+    p = np.prod(W[..., np.arange(T), E], axis=-1)  # (..., n_events)
     Z = p.sum(axis=-1, keepdims=True)
-    if np.any(Z <= 0):
+    if (Z <= 0).any():
         raise ValueError("a problem of the batch has zero total weight")
-    onehot = np.zeros((len(E), T, M1))
-    onehot[np.arange(len(E))[:, None], tix, E] = 1.0
-    return np.asarray(np.einsum("...e,etj->...tj", p / Z, onehot))
+    return np.asarray((p / Z) @ onehot.reshape(len(E), T * M1)).reshape(*W.shape[:-2], T, M1)
+
+
+def _indicator(E: IntArray, n_cols: int) -> FloatArray:
+    """``I[e, t, j] = 1`` where event ``e`` gives track ``t`` column ``j`` (``(n_events, T,
+    n_cols)``)."""
+    n, T = E.shape
+    onehot = np.zeros((n, T, n_cols))
+    onehot[np.arange(n)[:, None], np.arange(T), E] = 1.0
+    return onehot
+
+
+@lru_cache(maxsize=256)
+def _event_indicator(n_tracks: int, n_meas: int) -> FloatArray:
+    """:func:`_indicator` of :func:`joint_events` ``(n_tracks, n_meas)`` (read-only)."""
+    onehot = _indicator(joint_events(n_tracks, n_meas), n_meas + 1)
+    onehot.setflags(write=False)
+    return onehot
 
 
 def jpda_step_batch(
@@ -712,7 +731,7 @@ def jpda_step_batch(
 
     def marginals(W: FloatArray) -> tuple[FloatArray, JpdaMarginals]:
         if n_ev <= max_events:
-            beta = jpda_marginals_batch(W, joint_events(T, M))
+            beta = jpda_marginals_batch(W)
             return beta, JpdaMarginals(
                 beta.reshape(R_ * T, M + 1),
                 np.repeat(np.arange(R_), T).astype(np.int64),

@@ -35,6 +35,7 @@ __all__ = [
     "kf_update",
     "mahalanobis2",
     "sigma_points",
+    "stacked_inverse",
     "ukf_predict",
     "ukf_update",
 ]
@@ -74,6 +75,30 @@ def _T(a: FloatArray) -> FloatArray:
 
 def _sym(P: FloatArray) -> FloatArray:
     return 0.5 * (P + _T(P))
+
+
+def stacked_inverse(A: ArrayLike) -> FloatArray:
+    """Inverses of stacked square matrices ``(..., n, n)``.
+
+    ``n = 2`` (planar positions, range-bearing innovations) in closed form, the adjugate over
+    the determinant: a few array operations instead of one LAPACK call per matrix, which is
+    what large stacks of 2 x 2 matrices cost in ``numpy.linalg``; a symmetric matrix gets an
+    exactly symmetric inverse. A singular matrix raises ``numpy.linalg.LinAlgError`` as
+    ``numpy.linalg.inv`` does.
+    """
+    A = np.asarray(A, dtype=float)
+    if A.shape[-1] != 2:
+        return np.asarray(np.linalg.inv(A), dtype=float)
+    a, b, c, d = A[..., 0, 0], A[..., 0, 1], A[..., 1, 0], A[..., 1, 1]
+    det = a * d - b * c
+    if (det == 0).any():
+        raise np.linalg.LinAlgError("Singular matrix")
+    out = np.empty_like(A)
+    out[..., 0, 0] = d / det
+    out[..., 0, 1] = -b / det
+    out[..., 1, 0] = -c / det
+    out[..., 1, 1] = a / det
+    return out
 
 
 def mahalanobis2(y: FloatArray, S: FloatArray) -> FloatArray:
@@ -166,7 +191,8 @@ def _wrap(y: FloatArray, angle_mask: BoolArray | None) -> FloatArray:
 
 
 def kalman_gain(PHt: ArrayLike, S: ArrayLike) -> FloatArray:
-    """Gain ``K = P Hᵀ S⁻¹`` (Bar-Shalom eq. 5.2.3-11) by a solve on the symmetric ``S``.
+    """Gain ``K = P Hᵀ S⁻¹`` (Bar-Shalom eq. 5.2.3-11) by a solve on the symmetric ``S`` (for
+    ``m = 2`` the product with :func:`stacked_inverse`, closed form).
 
     Parameters
     ----------
@@ -179,9 +205,11 @@ def kalman_gain(PHt: ArrayLike, S: ArrayLike) -> FloatArray:
     -------
     K : (..., n, m)
     """
-    # K = (S⁻¹ (P Hᵀ)ᵀ)ᵀ
     S = np.asarray(S, dtype=float)
     PHt = np.asarray(PHt, dtype=float)
+    if S.shape[-1] == 2:
+        return np.asarray(PHt @ stacked_inverse(S))
+    # K = (S⁻¹ (P Hᵀ)ᵀ)ᵀ
     return _T(np.asarray(np.linalg.solve(S, _T(PHt)), dtype=float))
 
 

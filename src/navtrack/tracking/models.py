@@ -20,8 +20,9 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Literal, Protocol
 
 import numpy as np
@@ -42,6 +43,7 @@ __all__ = [
     "constant_acceleration",
     "constant_velocity",
     "linear_position",
+    "measure",
     "wrap_angle",
 ]
 
@@ -390,35 +392,109 @@ class RangeBearing:
     def linear(self) -> bool:
         return False
 
-    def _d(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
-        x = np.asarray(x, dtype=float)
-        i, j = self.position_index
-        dx = x[..., i] - self.sensor_xy[0]
-        dy = x[..., j] - self.sensor_xy[1]
-        return (dy, dx) if self.from_north else (dx, dy)
-
     def h(self, x: FloatArray) -> FloatArray:
-        a, b = self._d(x)  # angle = atan2(b, a)
-        return np.stack([np.hypot(a, b), np.arctan2(b, a)], axis=-1)
+        dx, dy = _offsets(np.asarray(x, dtype=float), self.sensor_xy, self.position_index)
+        return _range_bearing(dx, dy, np.sqrt(dx * dx + dy * dy), self.from_north)
 
     def jacobian(self, x: FloatArray) -> FloatArray:
-        x = np.asarray(x, dtype=float)
-        dx, dy = self._d(x)
-        if self.from_north:
-            dx, dy = dy, dx  # back to east/north differences
+        dx, dy = _offsets(np.asarray(x, dtype=float), self.sensor_xy, self.position_index)
+        return _range_bearing_jacobian(dx, dy, self.position_index, self.dim_x, self.from_north)
+
+
+def _offsets(
+    x: FloatArray, sensor_xy: FloatArray, position_index: tuple[int, int]
+) -> tuple[FloatArray, FloatArray]:
+    """East and north offsets of the targets ``x (..., n)`` from one sensor ``(2,)``, shape
+    ``(...)``, or from several sensors ``(S, 2)``, shape ``(..., S)``."""
+    i, j = position_index
+    if sensor_xy.ndim == 1:
+        return x[..., i] - sensor_xy[0], x[..., j] - sensor_xy[1]
+    return x[..., i, None] - sensor_xy[:, 0], x[..., j, None] - sensor_xy[:, 1]
+
+
+def _range_bearing(dx: FloatArray, dy: FloatArray, r: FloatArray, from_north: bool) -> FloatArray:
+    """``[range, bearing]`` (..., 2) of east / north offsets with range ``r`` (see
+    :class:`RangeBearing`)."""
+    a, b = (dy, dx) if from_north else (dx, dy)  # bearing = atan2(b, a)
+    return np.stack([r, np.arctan2(b, a)], axis=-1)
+
+
+def _range_bearing_jacobian(
+    dx: FloatArray,
+    dy: FloatArray,
+    position_index: tuple[int, int],
+    dim_x: int,
+    from_north: bool,
+    r2: FloatArray | None = None,
+) -> FloatArray:
+    """Jacobian (..., 2, dim_x) of :func:`_range_bearing` with respect to the state
+    (``r2``: the squared range when the caller has it)."""
+    if r2 is None:
         r2 = dx * dx + dy * dy
-        r = np.sqrt(r2)
-        i, j = self.position_index
-        J = np.zeros((*x.shape[:-1], 2, self.dim_x))
-        J[..., 0, i] = dx / r
-        J[..., 0, j] = dy / r
-        if self.from_north:  # theta = atan2(dx, dy)
-            J[..., 1, i] = dy / r2
-            J[..., 1, j] = -dx / r2
-        else:  # theta = atan2(dy, dx)
-            J[..., 1, i] = -dy / r2
-            J[..., 1, j] = dx / r2
-        return J
+    r = np.sqrt(r2)
+    i, j = position_index
+    J = np.zeros((*dx.shape, 2, dim_x))
+    J[..., 0, i] = dx / r
+    J[..., 0, j] = dy / r
+    if from_north:  # theta = atan2(dx, dy)
+        J[..., 1, i] = dy / r2
+        J[..., 1, j] = -dx / r2
+    else:  # theta = atan2(dy, dx)
+        J[..., 1, i] = -dy / r2
+        J[..., 1, j] = dx / r2
+    return J
+
+
+@lru_cache(maxsize=32)
+def _range_bearing_group(
+    models: tuple[MeasurementModel, ...],
+) -> tuple[RangeBearing, FloatArray] | None:
+    """``(first model, sensor positions (S, 2))`` when all ``models`` are range-bearing with one
+    ``position_index``, ``dim_x`` and ``from_north`` (one vectorised evaluation), else None."""
+    rb = [m for m in models if isinstance(m, RangeBearing)]
+    if len(rb) != len(models) or len({(m.position_index, m.dim_x, m.from_north) for m in rb}) > 1:
+        return None
+    xy = np.array([m.sensor_xy for m in rb])
+    xy.setflags(write=False)
+    return rb[0], xy
+
+
+def measure(models: Sequence[MeasurementModel], x: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Predicted measurements and Jacobians of ``S`` sensors at the same states.
+
+    Range-bearing sensors that share ``position_index``, ``dim_x`` and ``from_north`` are
+    evaluated together, vectorised over the sensor axis (the same kernels as
+    :meth:`RangeBearing.h` / :meth:`RangeBearing.jacobian`); other models one at a time.
+
+    Parameters
+    ----------
+    models : S measurement models with one ``dim_z`` (``m``)
+    x : (..., n) states
+
+    Returns
+    -------
+    z : (..., S, m) ``h_s(x)``
+    H : (..., S, m, n) ``∂h_s / ∂x`` at ``x``
+    """
+    x = np.asarray(x, dtype=float)
+    try:
+        group = _range_bearing_group(tuple(models))
+    except TypeError:  # a model that cannot be hashed: no cache
+        group = _range_bearing_group.__wrapped__(tuple(models))
+    if group is not None:
+        m0, xy = group
+        dx, dy = _offsets(x, xy, m0.position_index)
+        r2 = dx * dx + dy * dy
+        return (
+            _range_bearing(dx, dy, np.sqrt(r2), m0.from_north),
+            _range_bearing_jacobian(dx, dy, m0.position_index, m0.dim_x, m0.from_north, r2),
+        )
+    if len({m.dim_z for m in models}) != 1:
+        raise ValueError("measure: the models need one dim_z")
+    return (
+        np.stack([m.h(x) for m in models], axis=-2),
+        np.stack([m.jacobian(x) for m in models], axis=-3),
+    )
 
 
 @dataclass(frozen=True, slots=True, eq=False)
