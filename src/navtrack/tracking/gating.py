@@ -15,6 +15,7 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
+from navtrack.tracking.kalman import spd_inverse_2x2
 from navtrack.tracking.models import wrap_angle
 
 __all__ = ["Gate", "chi2_threshold", "gate", "kdtree_pregate"]
@@ -126,19 +127,27 @@ def gate(
     if angle_mask is not None and np.any(angle_mask):
         am = np.flatnonzero(angle_mask)
         y[..., am] = wrap_angle(y[..., am])
-    try:
-        L = np.linalg.cholesky(S)
-    except np.linalg.LinAlgError:
-        raise ValueError("S: innovation covariance not positive definite") from None
-    log_det = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
-    log_norm = -0.5 * (m * np.log(2 * np.pi) + log_det)
-    if T == 0 or M == 0:
-        d2 = np.zeros(y.shape[:-1])
+    if m == 2:  # a plane position: closed form (spd_inverse_2x2)
+        S_inv, det = spd_inverse_2x2(S)
+        if not np.all((det > 0) & (S[..., 0, 0] > 0)):
+            raise ValueError("S: innovation covariance not positive definite")
+        log_det = np.log(det)
+        # S⁻¹ applied to the M innovations of each track by one stacked product
+        d2 = np.einsum("...i,...i->...", y @ S_inv, y) if T and M else np.zeros(y.shape[:-1])
     else:
-        # whitened innovations w = L⁻¹ y for every (t, j): one inverse per track, applied to
-        # the track's M innovations by one stacked product
-        w = y @ np.swapaxes(np.linalg.inv(L), -1, -2)
-        d2 = np.einsum("...i,...i->...", w, w)
+        try:
+            L = np.linalg.cholesky(S)
+        except np.linalg.LinAlgError:
+            raise ValueError("S: innovation covariance not positive definite") from None
+        log_det = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
+        if T == 0 or M == 0:
+            d2 = np.zeros(y.shape[:-1])
+        else:
+            # whitened innovations w = L⁻¹ y for every (t, j): one inverse per track, applied
+            # to the track's M innovations by one stacked product
+            w = y @ np.swapaxes(np.linalg.inv(L), -1, -2)
+            d2 = np.einsum("...i,...i->...", w, w)
+    log_norm = -0.5 * (m * np.log(2 * np.pi) + log_det)
     if candidates is not None:
         d2 = np.where(candidates, d2, np.inf)
     return Gate(y, d2, d2 <= gamma, log_norm)
