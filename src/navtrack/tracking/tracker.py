@@ -50,6 +50,7 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, Int8Array, IntArray
+from navtrack.tracking._compiled import HAVE_COMPILED, imm_predict, position_gate
 from navtrack.tracking.jpda import JpdaConfig, JpdaMarginals
 from navtrack.tracking.models import (
     LinearMeasurement,
@@ -514,14 +515,18 @@ def predict(store: TrackStore, dt: float, model: TrackerModel) -> None:
     if not (dt > 0 and store.size):
         return
     r = len(model.motions)
+    Pi = markov_matrix(r, -np.expm1(-dt / model.config.imm_sojourn_s) if r > 1 else 0.0)
+    Qm = model.q[:, None, None] * _unit_motion(model.config.motion).Q(dt)
+    F = model.config.motion.F(dt)
+    if HAVE_COMPILED:  # the same arithmetic in one compiled loop over the tracks
+        imm_predict(store.x, store.P, store.mu, Pi, F, Qm)
+        return
     if r > 1:
-        Pi = markov_matrix(r, -np.expm1(-dt / model.config.imm_sojourn_s))
         x0, P0, c_pred = imm_mix(store.x, store.P, store.mu, Pi)
         store.mu[:] = c_pred
     else:
         x0, P0 = store.x, store.P
-    Qm = model.q[:, None, None] * _unit_motion(model.config.motion).Q(dt)
-    store.x[:], store.P[:] = kf_predict(x0, P0, model.config.motion.F(dt), Qm)
+    store.x[:], store.P[:] = kf_predict(x0, P0, F, Qm)
 
 
 @lru_cache(maxsize=8)
@@ -588,6 +593,16 @@ def gate_scan(
     T, r, n = store.x.shape
     M, m = z.shape[0], meas.dim_z
     xf = store.x.reshape(T * r, n)
+    mot = model.config.motion
+    if HAVE_COMPILED and _is_position(meas, mot):  # one compiled loop over tracks and pairs
+        dt = np.zeros(M) if dt_s is None else np.asarray(dt_s, dtype=float)
+        S, K, y, d2, det = position_gate(
+            xf, store.P.reshape(T * r, n, n), mot.position_index, mot.velocity_index, meas.R, z, dt
+        )
+        if not np.all(det > 0):
+            raise ValueError("S: innovation covariance not positive definite")
+        log_norm = -0.5 * (m * np.log(2 * np.pi) + np.log(det))
+        return _scan_gate(store, y, S, K, d2, log_norm[:, None] - 0.5 * d2, d2 <= model.gamma)
     H = meas.H if isinstance(meas, LinearMeasurement) else meas.jacobian(xf)  # (one H: faster)
     S, K = innovation_gain(store.P.reshape(T * r, n, n), H, meas.R)
     zp = meas.h(xf)
@@ -611,10 +626,39 @@ def gate_scan(
         candidates=cand,
         pair_offset=offset,
     )
-    valid = np.asarray(g.valid.reshape(T, r, M).any(axis=1), dtype=bool)
-    ll_rm = g.log_likelihood().reshape(T, r, M)
+    ll = g.log_likelihood()
     if cand is not None:  # pairs left out by the pre-gate (d2 = inf)
-        ll_rm = np.where(np.isfinite(ll_rm), ll_rm, -1e300)
+        ll = np.where(np.isfinite(ll), ll, -1e300)
+    return _scan_gate(store, g.innovation, S, K, g.d2, ll, g.valid)
+
+
+def _is_position(meas: MeasurementModel, motion: LinearMotion) -> bool:
+    """``meas`` measures the plane position of ``motion``'s state (``H`` picks it)."""
+    return isinstance(meas, LinearMeasurement) and _picks_position(meas, motion)
+
+
+@lru_cache(maxsize=8)
+def _picks_position(meas: LinearMeasurement, motion: LinearMotion) -> bool:
+    if meas.H.shape != (2, motion.dim_x):
+        return False
+    pick = np.zeros_like(meas.H)
+    pick[[0, 1], list(motion.position_index)] = 1.0
+    return bool(np.array_equal(meas.H, pick))
+
+
+def _scan_gate(
+    store: TrackStore,
+    y: FloatArray,
+    S: FloatArray,
+    K: FloatArray,
+    d2: FloatArray,
+    ll: FloatArray,
+    valid: BoolArray,
+) -> ScanGate:
+    """The :class:`ScanGate` of the per-pair arrays over the ``T r`` track models (rows)."""
+    T, r, n = store.x.shape
+    M, m = y.shape[-2:]
+    ll_rm = ll.reshape(T, r, M)
     if r == 1:  # the mixture of one model is the model
         ll_mix = ll_rm[:, 0]
     else:  # mixture likelihood over models with the predicted model probabilities
@@ -622,13 +666,13 @@ def gate_scan(
         a = np.log(np.where(c_pred > 0, c_pred, 1e-300))[:, :, None] + ll_rm
         ll_mix = np.logaddexp.reduce(a, axis=1)
     return ScanGate(
-        g.innovation.reshape(T, r, M, m),
+        y.reshape(T, r, M, m),
         S.reshape(T, r, m, m),
         K.reshape(T, r, n, m),
-        valid,
+        np.asarray(valid.reshape(T, r, M).any(axis=1), dtype=bool),
         ll_rm,
         ll_mix,
-        g.d2.reshape(T, r, M),
+        d2.reshape(T, r, M),
     )
 
 
@@ -828,19 +872,21 @@ def manage(store: TrackStore, hit: BoolArray, t_s: float, config: TrackerConfig)
     cov = std > config.max_position_std_m
     conf = store.confirmed.copy()
     unconf = ~conf & (t_s - store.born_s > config.confirm_window_s)
-    kept = ~(coast | cov | unconf)
+    gone = coast | cov | unconf
+    n_gone = np.count_nonzero(gone)
     out = Management(
         store.id.copy(),
         np.array(xc),
         std,
         conf,
-        kept,
-        int(new_conf.sum()),
-        int((coast & conf).sum()),
-        int((cov & ~coast & conf).sum()),
-        int((~conf & (coast | cov | unconf)).sum()),
+        ~gone,
+        int(np.count_nonzero(new_conf)),
+        int(np.count_nonzero(coast & conf)) if n_gone else 0,
+        int(np.count_nonzero(cov & ~coast & conf)) if n_gone else 0,
+        int(np.count_nonzero(gone & ~conf)) if n_gone else 0,
     )
-    store.keep(kept)
+    if n_gone:
+        store.keep(~gone)
     return out
 
 
@@ -1127,8 +1173,9 @@ def run_tracker(
             )
             det_nis[s0 + used] = g.d2[k[used], :, used].min(axis=1)
             det_ll[s0 + used] = g.log_likelihood_mix[k[used], used]
-            m = manage(store, a.hit, tk, cfg)
-            log.updates(tk, m, a.hit)
+            hit = a.hit
+            m = manage(store, hit, tk, cfg)
+            log.updates(tk, m, hit)
             _add_counts(counts, a, m)
             claimed = a.associated if cfg.init_from == "unassociated" else g.gated
         free = np.flatnonzero(~claimed)
