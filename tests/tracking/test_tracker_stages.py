@@ -8,6 +8,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from navtrack.tracking import _compiled
+from navtrack.tracking._compiled import HAVE_COMPILED
 from navtrack.tracking.imm import imm_mix, imm_model_probabilities, markov_matrix
 from navtrack.tracking.jpda import JpdaConfig, JpdaMethod, jpda_step, jpda_step_batch, pda_update
 from navtrack.tracking.kalman import (
@@ -35,15 +37,12 @@ from navtrack.tracking.tracker import (
 )
 
 
-@pytest.fixture(params=["numpy", "compiled"])
-def path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
+@pytest.fixture(params=[False, True], ids=["numpy", "compiled"])
+def compiled(request: pytest.FixtureRequest) -> bool:
     """The tracker's NumPy stages, or its compiled loops (numba, extra ``speed``)."""
-    import navtrack.tracking.tracker as tracker
-
-    if request.param == "compiled" and not tracker.HAVE_COMPILED:
+    if request.param and not HAVE_COMPILED:
         pytest.skip("numba not installed")
-    monkeypatch.setattr(tracker, "HAVE_COMPILED", request.param == "compiled")
-    return str(request.param)
+    return bool(request.param)
 
 
 def _close(actual: np.ndarray, desired: np.ndarray) -> None:
@@ -99,10 +98,10 @@ def test_store_grows_by_doubling_and_keeps_earlier_tracks() -> None:
     assert store.size == keep.sum() + 1
 
 
-def test_predict_stage_equals_kalman_and_imm_kernels(path: str) -> None:
+def test_predict_stage_equals_kalman_and_imm_kernels(compiled: bool) -> None:
     rng = np.random.default_rng(1)
     cfg = TrackerConfig(sigma_m=10.0)
-    model = TrackerModel.from_config(cfg)
+    model = TrackerModel.from_config(cfg, compiled)
     store = _store(rng, 5)
     x0, P0 = store.x.copy(), store.P.copy()
     predict(store, 7.5, model)
@@ -114,7 +113,7 @@ def test_predict_stage_equals_kalman_and_imm_kernels(path: str) -> None:
     np.testing.assert_array_equal(store.x, x1)
     # IMM: mixing with the continuous-time switching probability, then each model's KF
     icfg = replace(cfg, imm_q=(1e-4, 1.0), imm_sojourn_s=50.0)
-    imodel = TrackerModel.from_config(icfg)
+    imodel = TrackerModel.from_config(icfg, compiled)
     store = _store(rng, 4, r=2)
     store.mu[:] = rng.dirichlet([1, 1], size=4)
     store.x[:, 1] += 30.0
@@ -130,10 +129,10 @@ def test_predict_stage_equals_kalman_and_imm_kernels(path: str) -> None:
     assert not np.allclose(Q[0], Q[1])
 
 
-def test_gnn_update_stage_equals_kf_update(path: str) -> None:
+def test_gnn_update_stage_equals_kf_update(compiled: bool) -> None:
     rng = np.random.default_rng(2)
     cfg = TrackerConfig(sigma_m=20.0, clutter_density=1e-8)
-    model = TrackerModel.from_config(cfg)
+    model = TrackerModel.from_config(cfg, compiled)
     store = _store(rng, 4)
     H, R = model.measurement.jacobian(store.x[0, 0]), model.measurement.R
     # detections near tracks 0, 2 and 3 (track 1 has none), in shuffled order
@@ -155,10 +154,10 @@ def test_gnn_update_stage_equals_kf_update(path: str) -> None:
     np.testing.assert_array_equal(store.P[1, 0], P0[1])
 
 
-def test_jpda_update_stage_equals_pda_update_with_imm_probabilities(path: str) -> None:
+def test_jpda_update_stage_equals_pda_update_with_imm_probabilities(compiled: bool) -> None:
     rng = np.random.default_rng(3)
     cfg = TrackerConfig(sigma_m=50.0, associator="jpda", clutter_density=1e-8, imm_q=(0.01, 1.0))
-    model = TrackerModel.from_config(cfg)
+    model = TrackerModel.from_config(cfg, compiled)
     store = _store(rng, 3, r=2)
     store.x[1] = store.x[0] + [80.0, 0, 40.0, 0]  # tracks 0 and 1 share detections
     store.mu[:] = [[0.3, 0.7], [0.5, 0.5], [0.9, 0.1]]
@@ -309,7 +308,7 @@ def test_compiled_and_numpy_runs_give_the_same_fates(monkeypatch: pytest.MonkeyP
     # IMM, GNN and JPDA): every detection's fate and every track state agree
     import navtrack.tracking.tracker as tracker
 
-    if not tracker.HAVE_COMPILED:
+    if not HAVE_COMPILED:
         pytest.skip("numba not installed")
     rng = np.random.default_rng(7)
     n, k = 6, 60
@@ -324,10 +323,11 @@ def test_compiled_and_numpy_runs_give_the_same_fates(monkeypatch: pytest.MonkeyP
             TrackerConfig.for_ships(assoc), sigma_m=15.0, init_max_speed_mps=10.0, scan_window_s=5.0
         )
         runs = []
-        for compiled in (True, False):
-            monkeypatch.setattr(tracker, "HAVE_COMPILED", compiled)
+        for min_scans in (0, ts.size + 1):  # every run compiled, none
+            monkeypatch.setattr(tracker, "COMPILED_MIN_SCANS", min_scans)
             runs.append(tracker.run_tracker(ts, zs, cfg, report_times=np.arange(0.0, 600.0, 60.0)))
         a, b = runs
+        assert _compiled._kernels.cache_info().currsize == 1  # the compiled loops ran
         assert a.counts.scans < ts.size  # windows of several reports
         np.testing.assert_array_equal(a.det_status, b.det_status)
         np.testing.assert_array_equal(a.det_track, b.det_track)

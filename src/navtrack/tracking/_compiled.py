@@ -15,29 +15,28 @@ for all tracks in one call each:
 
 The results equal the NumPy path to rounding (``tests/tracking/test_tracker_stages.py``
 runs both). ``HAVE_COMPILED`` is False without numba, or with ``NAVTRACK_NO_NUMBA`` set.
+numba is imported on the first call only: its import and the load of the cached machine code
+cost about half a second per process, which only long runs pay back
+(:data:`~navtrack.tracking.tracker.COMPILED_MIN_SCANS`).
 """
 
 from __future__ import annotations
 
+import importlib.util
 import os
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
 from navtrack._typing import FloatArray
 
-_numba: Any
-try:  # optional accelerator (extra ``speed``); everything works without it
-    if os.environ.get("NAVTRACK_NO_NUMBA"):
-        raise ImportError("disabled by NAVTRACK_NO_NUMBA")
-    import numba as _numba
-except ImportError:
-    _numba = None
-
 __all__ = ["HAVE_COMPILED", "imm_predict", "position_gate"]
 
-#: True when the compiled loops (numba) are available.
-HAVE_COMPILED = _numba is not None
+#: True when the compiled loops (numba, extra ``speed``) are available.
+HAVE_COMPILED = (
+    not os.environ.get("NAVTRACK_NO_NUMBA") and importlib.util.find_spec("numba") is not None
+)
 
 
 def _imm_predict_py(
@@ -132,11 +131,15 @@ def _position_gate_py(
     return S, K, y, d2, det
 
 
-if _numba is not None:
-    _imm_predict = _numba.njit(cache=True, nogil=True)(_imm_predict_py)
-    _position_gate = _numba.njit(cache=True, nogil=True)(_position_gate_py)
-else:
-    _imm_predict = _position_gate = None
+@lru_cache(maxsize=1)
+def _kernels() -> tuple[Any, Any]:
+    """The two loops compiled (numba's on-disk cache after the first run)."""
+    if not HAVE_COMPILED:
+        raise RuntimeError("the compiled tracker loops need numba (extra 'speed')")
+    import numba
+
+    jit = numba.njit(cache=True, nogil=True)
+    return jit(_imm_predict_py), jit(_position_gate_py)
 
 
 def imm_predict(
@@ -152,9 +155,7 @@ def imm_predict(
     Pi : (r, r) model transition matrix; F : (n, n) transition; Q : (r, n, n) process noise
         of each model.
     """
-    if _imm_predict is None:
-        raise RuntimeError("imm_predict needs numba (extra 'speed'); see HAVE_COMPILED")
-    _imm_predict(x, P, mu, Pi, F, Q)
+    _kernels()[0](x, P, mu, Pi, F, Q)
 
 
 def position_gate(
@@ -179,9 +180,7 @@ def position_gate(
     -------
     S : (B, 2, 2), K : (B, n, 2), innovation : (B, M, 2), d2 : (B, M), det_S : (B,)
     """
-    if _position_gate is None:
-        raise RuntimeError("position_gate needs numba (extra 'speed'); see HAVE_COMPILED")
-    out: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray] = _position_gate(
+    out: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray] = _kernels()[1](
         x, P, np.array(pos), np.array(vel), R, z, dt_s
     )
     return out
