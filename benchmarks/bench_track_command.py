@@ -1,7 +1,7 @@
 """Whole-command time of ``navtrack track`` on the shared tracking files, with its stage split.
 
 Run: ``NAVTRACK_SHARED_DATA=/work/shared/data PYTHONPATH=src python
-benchmarks/bench_track_command.py [--reps 3] [--numpy]``.
+benchmarks/bench_track_command.py [--reps 3] [--baseline DIR]``.
 
 Times what a user runs with no tuning flags, ``python -m navtrack track FILE --format ais|opensky
 [--associator jpda]`` (the ``auto`` model, progress bar on stderr, no ``--out``), as whole
@@ -9,15 +9,14 @@ processes: wall clock and CPU time (user + system) of the child, median over ``-
 the cases alternating in every repeat. The stage split (read / auto tune / track) is the one
 the command prints in its summary; "start-up" is the median wall time of ``python -m navtrack
 track --help`` (interpreter and CLI imports), measured in the same rounds. The bars of issue
-11 are 10 s (GNN) and 20 s (JPDA) per file. One untimed run first fills numba's cache of the
-compiled tracker loops (``tracking/_compiled.py``; a first run after installing compiles them,
-a few seconds once).
+11 are 10 s (GNN) and 20 s (JPDA) per file. One untimed run comes first (file cache).
 
-``--numpy`` also runs every case with ``NAVTRACK_NO_NUMBA=1`` (the tracker's NumPy stages,
-what runs without the ``speed`` extra), alternating with the default in the same rounds, and
-prints the ratio of the CPU times. No peer ratio is printed: no peer library runs this
-pipeline (model tuned from the data, IMM, scan windows, track management) on these files;
-``bench_tracking.py`` compares the JPDA kernels with Stone Soup on simulated scans.
+``--baseline DIR`` also runs every case with ``PYTHONPATH=DIR`` (an earlier release's ``src``,
+e.g. a checkout of the previous main), alternating with the default in the same rounds; the
+ratios of its CPU and wall medians to the default's are printed. No peer ratio is printed: no
+peer library runs this pipeline (model tuned from the data, IMM, scan windows, track
+management) on these files; ``bench_tracking.py`` compares the JPDA kernels with Stone Soup on
+simulated scans.
 """
 
 from __future__ import annotations
@@ -60,14 +59,12 @@ def stages(summary: str) -> list[float]:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--reps", type=int, default=3)
-    ap.add_argument(
-        "--numpy", action="store_true", help="also time the NumPy stages (NAVTRACK_NO_NUMBA=1)"
-    )
+    ap.add_argument("--baseline", type=Path, help="also time this src directory (PYTHONPATH)")
     a = ap.parse_args(argv)
     base = [sys.executable, "-m", "navtrack", "track"]
-    paths = {"compiled": dict(os.environ)}
-    if a.numpy:
-        paths["numpy"] = {**os.environ, "NAVTRACK_NO_NUMBA": "1"}
+    paths = {"default": dict(os.environ)}
+    if a.baseline is not None:
+        paths["baseline"] = {**os.environ, "PYTHONPATH": str(a.baseline.resolve())}
     cases = [
         (fname, fmt, assoc, path)
         for fname, fmt in FILES
@@ -85,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     mota: dict[tuple[str, str, str], str] = {}
     startup: list[float] = []
     fname, fmt = cases[0][:2]
-    run([*base, str(DATA / fname), "--format", fmt])  # numba's cache filled (untimed)
+    run([*base, str(DATA / fname), "--format", fmt])  # untimed: files in the page cache
     load0 = os.getloadavg()
     for _ in range(a.reps):
         startup.append(run([*base, "--help"])[0])
@@ -118,14 +115,16 @@ def main(argv: list[str] | None = None) -> int:
             f"| {statistics.median(cpu[key]):.2f} | {med[0]:.2f} / {med[1]:.2f} / {med[2]:.2f} "
             f"| {mota[key]} | {BARS_S[assoc]:.0f} |"
         )
-    if a.numpy:
-        print("CPU time, NumPy stages / compiled loops (medians, same rounds):")
+    for other in [p for p in paths if p != "default"]:
+        print(f"{other} / default, CPU and wall (medians of the same rounds):")
         for fname, assoc, path in keys:
-            if path == "compiled":
-                ratio = statistics.median(cpu[fname, assoc, "numpy"]) / statistics.median(
-                    cpu[fname, assoc, "compiled"]
-                )
-                print(f"  {fname} {assoc}: {ratio:.2f}")
+            if path == "default":
+                ratios = [
+                    statistics.median(v[fname, assoc, other])
+                    / statistics.median(v[fname, assoc, "default"])
+                    for v in (cpu, wall)
+                ]
+                print(f"  {fname} {assoc}: {ratios[0]:.2f} {ratios[1]:.2f}")
     return 0
 
 

@@ -8,8 +8,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from navtrack.tracking import _compiled
-from navtrack.tracking._compiled import HAVE_COMPILED
 from navtrack.tracking.imm import imm_mix, imm_model_probabilities, markov_matrix
 from navtrack.tracking.jpda import JpdaConfig, JpdaMethod, jpda_step, jpda_step_batch, pda_update
 from navtrack.tracking.kalman import (
@@ -35,19 +33,6 @@ from navtrack.tracking.tracker import (
     predict,
     update,
 )
-
-
-@pytest.fixture(params=[False, True], ids=["numpy", "compiled"])
-def compiled(request: pytest.FixtureRequest) -> bool:
-    """The tracker's NumPy stages, or its compiled loops (numba, extra ``speed``)."""
-    if request.param and not HAVE_COMPILED:
-        pytest.skip("numba not installed")
-    return bool(request.param)
-
-
-def _close(actual: np.ndarray, desired: np.ndarray) -> None:
-    """Equal to rounding (the compiled loops sum in another order than NumPy)."""
-    np.testing.assert_allclose(actual, desired, rtol=1e-12, atol=1e-9)
 
 
 def _spd(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -98,22 +83,21 @@ def test_store_grows_by_doubling_and_keeps_earlier_tracks() -> None:
     assert store.size == keep.sum() + 1
 
 
-def test_predict_stage_equals_kalman_and_imm_kernels(compiled: bool) -> None:
+def test_predict_stage_equals_kalman_and_imm_kernels() -> None:
     rng = np.random.default_rng(1)
     cfg = TrackerConfig(sigma_m=10.0)
-    model = TrackerModel.from_config(cfg, compiled)
+    model = TrackerModel.from_config(cfg)
     store = _store(rng, 5)
     x0, P0 = store.x.copy(), store.P.copy()
     predict(store, 7.5, model)
     xk, Pk = kf_predict(x0[:, 0], P0[:, 0], cfg.motion.F(7.5), cfg.motion.Q(7.5))
-    _close(store.x[:, 0], xk)
-    _close(store.P[:, 0], Pk)
-    x1 = store.x.copy()
+    np.testing.assert_array_equal(store.x[:, 0], xk)
+    np.testing.assert_array_equal(store.P[:, 0], Pk)
     predict(store, 0.0, model)  # no time step: nothing moves
-    np.testing.assert_array_equal(store.x, x1)
+    np.testing.assert_array_equal(store.x[:, 0], xk)
     # IMM: mixing with the continuous-time switching probability, then each model's KF
     icfg = replace(cfg, imm_q=(1e-4, 1.0), imm_sojourn_s=50.0)
-    imodel = TrackerModel.from_config(icfg, compiled)
+    imodel = TrackerModel.from_config(icfg)
     store = _store(rng, 4, r=2)
     store.mu[:] = rng.dirichlet([1, 1], size=4)
     store.x[:, 1] += 30.0
@@ -122,17 +106,16 @@ def test_predict_stage_equals_kalman_and_imm_kernels(compiled: bool) -> None:
     xm, Pm, c = imm_mix(x0, P0, mu0, markov_matrix(2, -np.expm1(-10.0 / 50.0)))
     Q = np.stack([m.Q(10.0) for m in imodel.motions])
     xk, Pk = kf_predict(xm, Pm, icfg.motion.F(10.0), Q)
-    _close(store.x, xk)
-    _close(store.P, Pk)
-    _close(store.mu, c)
-    np.testing.assert_array_equal(store.P, np.swapaxes(store.P, -1, -2))
+    np.testing.assert_array_equal(store.x, xk)
+    np.testing.assert_array_equal(store.P, Pk)
+    np.testing.assert_array_equal(store.mu, c)
     assert not np.allclose(Q[0], Q[1])
 
 
-def test_gnn_update_stage_equals_kf_update(compiled: bool) -> None:
+def test_gnn_update_stage_equals_kf_update() -> None:
     rng = np.random.default_rng(2)
     cfg = TrackerConfig(sigma_m=20.0, clutter_density=1e-8)
-    model = TrackerModel.from_config(cfg, compiled)
+    model = TrackerModel.from_config(cfg)
     store = _store(rng, 4)
     H, R = model.measurement.jacobian(store.x[0, 0]), model.measurement.R
     # detections near tracks 0, 2 and 3 (track 1 has none), in shuffled order
@@ -140,8 +123,8 @@ def test_gnn_update_stage_equals_kf_update(compiled: bool) -> None:
     x0, P0 = store.x[:, 0].copy(), store.P[:, 0].copy()
     g = gate_scan(store, z, model)
     S, K = innovation_gain(P0, H, R)
-    _close(g.S[:, 0], S)
-    _close(g.K[:, 0], K)
+    np.testing.assert_array_equal(g.S[:, 0], S)
+    np.testing.assert_array_equal(g.K[:, 0], K)
     a = associate_gnn(g, cfg.pd, cfg.gate_probability, cfg.clutter_density)
     np.testing.assert_array_equal(a.detection_track, [3, 0, 2])
     np.testing.assert_array_equal(a.hit, [True, False, True, True])
@@ -154,10 +137,10 @@ def test_gnn_update_stage_equals_kf_update(compiled: bool) -> None:
     np.testing.assert_array_equal(store.P[1, 0], P0[1])
 
 
-def test_jpda_update_stage_equals_pda_update_with_imm_probabilities(compiled: bool) -> None:
+def test_jpda_update_stage_equals_pda_update_with_imm_probabilities() -> None:
     rng = np.random.default_rng(3)
     cfg = TrackerConfig(sigma_m=50.0, associator="jpda", clutter_density=1e-8, imm_q=(0.01, 1.0))
-    model = TrackerModel.from_config(cfg, compiled)
+    model = TrackerModel.from_config(cfg)
     store = _store(rng, 3, r=2)
     store.x[1] = store.x[0] + [80.0, 0, 40.0, 0]  # tracks 0 and 1 share detections
     store.mu[:] = [[0.3, 0.7], [0.5, 0.5], [0.9, 0.1]]
@@ -301,36 +284,3 @@ def test_kalman_gain_kernels() -> None:
     np.testing.assert_array_equal(xg, u.x)
     np.testing.assert_array_equal(Pg, u.P)
     np.testing.assert_array_equal(Pg, np.swapaxes(Pg, -1, -2))
-
-
-def test_compiled_and_numpy_runs_give_the_same_fates(monkeypatch: pytest.MonkeyPatch) -> None:
-    # ships 150 m apart crossing on irregular report times (scan windows of several reports,
-    # IMM, GNN and JPDA): every detection's fate and every track state agree
-    import navtrack.tracking.tracker as tracker
-
-    if not HAVE_COMPILED:
-        pytest.skip("numba not installed")
-    rng = np.random.default_rng(7)
-    n, k = 6, 60
-    t = np.sort(rng.uniform(0.0, 600.0, (n, k)), axis=1)
-    start = np.column_stack([np.arange(n) * 150.0, np.zeros(n)])
-    v = np.column_stack([np.full(n, 3.0), np.linspace(-1.0, 1.0, n)])
-    z = start[:, None, :] + v[:, None, :] * t[..., None] + rng.normal(0.0, 15.0, (n, k, 2))
-    order = np.argsort(t.ravel(), kind="stable")
-    ts, zs = t.ravel()[order], z.reshape(-1, 2)[order]
-    for assoc in ("gnn", "jpda"):
-        cfg = replace(
-            TrackerConfig.for_ships(assoc), sigma_m=15.0, init_max_speed_mps=10.0, scan_window_s=5.0
-        )
-        runs = []
-        for min_scans in (0, ts.size + 1):  # every run compiled, none
-            monkeypatch.setattr(tracker, "COMPILED_MIN_SCANS", min_scans)
-            runs.append(tracker.run_tracker(ts, zs, cfg, report_times=np.arange(0.0, 600.0, 60.0)))
-        a, b = runs
-        assert _compiled._kernels.cache_info().currsize == 1  # the compiled loops ran
-        assert a.counts.scans < ts.size  # windows of several reports
-        np.testing.assert_array_equal(a.det_status, b.det_status)
-        np.testing.assert_array_equal(a.det_track, b.det_track)
-        np.testing.assert_allclose(a.track_x, b.track_x, rtol=1e-9, atol=1e-6)
-        np.testing.assert_allclose(a.det_log_likelihood, b.det_log_likelihood, rtol=1e-9)
-        assert a.counts.tracks_confirmed >= n

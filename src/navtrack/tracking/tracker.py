@@ -28,12 +28,6 @@ per scan (detections sharing one time stamp), a chain of named stages over a
 Track ids are integers given at birth and never reused. Every detection's fate is recorded
 (``det_status``, :class:`DetStatus`) so nothing is dropped silently.
 
-With numba installed (extra ``speed``), stages 1 and 2 run the same arithmetic as compiled
-loops over all tracks (:mod:`navtrack.tracking._compiled`, for the tracker's plane position
-measurement): a scan holds a few reports against tens of tracks, and the NumPy stages spend
-most of their time in the fixed cost of each array operation. Detection fates are the same
-on either path (tested; equal on the shared AIS and ADS-B files).
-
 References
 ----------
 .. [1] S. S. Blackman, R. Popoli, *Design and Analysis of Modern Tracking Systems*, Artech
@@ -56,7 +50,6 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, Int8Array, IntArray
-from navtrack.tracking._compiled import HAVE_COMPILED, imm_predict, position_gate
 from navtrack.tracking.jpda import JpdaConfig, JpdaMarginals
 from navtrack.tracking.models import (
     LinearMeasurement,
@@ -232,9 +225,6 @@ class TrackerModel:
     jpda : JpdaConfig
         JPDA parameters (``pd``, ``clutter_density``, ``gate_probability``, ``max_exact_bits``,
         ``k_best`` of the config).
-    compiled : bool
-        Stages 1 and 2 as compiled loops (:mod:`navtrack.tracking._compiled`, needs numba);
-        :func:`run_tracker` sets it for runs of at least ``COMPILED_MIN_SCANS`` scans.
     """
 
     config: TrackerConfig
@@ -242,7 +232,6 @@ class TrackerModel:
     measurement: MeasurementModel
     gamma: float
     jpda: JpdaConfig
-    compiled: bool = False
 
     @property
     def q(self) -> FloatArray:
@@ -250,7 +239,7 @@ class TrackerModel:
         return np.array([m.q for m in self.motions])
 
     @staticmethod
-    def from_config(config: TrackerConfig, compiled: bool = False) -> TrackerModel:
+    def from_config(config: TrackerConfig) -> TrackerModel:
         """Motion models, position measurement, gate size and JPDA parameters of ``config``."""
         from navtrack.tracking.gating import chi2_threshold
 
@@ -269,7 +258,6 @@ class TrackerModel:
                 config.max_exact_bits,
                 config.k_best,
             ),
-            compiled,
         )
 
 
@@ -526,18 +514,14 @@ def predict(store: TrackStore, dt: float, model: TrackerModel) -> None:
     if not (dt > 0 and store.size):
         return
     r = len(model.motions)
-    Pi = markov_matrix(r, -np.expm1(-dt / model.config.imm_sojourn_s) if r > 1 else 0.0)
-    Qm = model.q[:, None, None] * _unit_motion(model.config.motion).Q(dt)
-    F = model.config.motion.F(dt)
-    if model.compiled:  # the same arithmetic in one compiled loop over the tracks
-        imm_predict(store.x, store.P, store.mu, Pi, F, Qm)
-        return
     if r > 1:
+        Pi = markov_matrix(r, -np.expm1(-dt / model.config.imm_sojourn_s))
         x0, P0, c_pred = imm_mix(store.x, store.P, store.mu, Pi)
         store.mu[:] = c_pred
     else:
         x0, P0 = store.x, store.P
-    store.x[:], store.P[:] = kf_predict(x0, P0, F, Qm)
+    Qm = model.q[:, None, None] * _unit_motion(model.config.motion).Q(dt)
+    store.x[:], store.P[:] = kf_predict(x0, P0, model.config.motion.F(dt), Qm)
 
 
 @lru_cache(maxsize=8)
@@ -604,16 +588,6 @@ def gate_scan(
     T, r, n = store.x.shape
     M, m = z.shape[0], meas.dim_z
     xf = store.x.reshape(T * r, n)
-    mot = model.config.motion
-    if model.compiled and _is_position(meas, mot):  # one compiled loop over tracks and pairs
-        dt = np.zeros(M) if dt_s is None else np.asarray(dt_s, dtype=float)
-        S, K, y, d2, det = position_gate(
-            xf, store.P.reshape(T * r, n, n), mot.position_index, mot.velocity_index, meas.R, z, dt
-        )
-        if not np.all(det > 0):
-            raise ValueError("S: innovation covariance not positive definite")
-        log_norm = -0.5 * (m * np.log(2 * np.pi) + np.log(det))
-        return _scan_gate(store, y, S, K, d2, log_norm[:, None] - 0.5 * d2, d2 <= model.gamma)
     H = meas.H if isinstance(meas, LinearMeasurement) else meas.jacobian(xf)  # (one H: faster)
     S, K = innovation_gain(store.P.reshape(T * r, n, n), H, meas.R)
     zp = meas.h(xf)
@@ -637,39 +611,10 @@ def gate_scan(
         candidates=cand,
         pair_offset=offset,
     )
-    ll = g.log_likelihood()
+    valid = np.asarray(g.valid.reshape(T, r, M).any(axis=1), dtype=bool)
+    ll_rm = g.log_likelihood().reshape(T, r, M)
     if cand is not None:  # pairs left out by the pre-gate (d2 = inf)
-        ll = np.where(np.isfinite(ll), ll, -1e300)
-    return _scan_gate(store, g.innovation, S, K, g.d2, ll, g.valid)
-
-
-def _is_position(meas: MeasurementModel, motion: LinearMotion) -> bool:
-    """``meas`` measures the plane position of ``motion``'s state (``H`` picks it)."""
-    return isinstance(meas, LinearMeasurement) and _picks_position(meas, motion)
-
-
-@lru_cache(maxsize=8)
-def _picks_position(meas: LinearMeasurement, motion: LinearMotion) -> bool:
-    if meas.H.shape != (2, motion.dim_x):
-        return False
-    pick = np.zeros_like(meas.H)
-    pick[[0, 1], list(motion.position_index)] = 1.0
-    return bool(np.array_equal(meas.H, pick))
-
-
-def _scan_gate(
-    store: TrackStore,
-    y: FloatArray,
-    S: FloatArray,
-    K: FloatArray,
-    d2: FloatArray,
-    ll: FloatArray,
-    valid: BoolArray,
-) -> ScanGate:
-    """The :class:`ScanGate` of the per-pair arrays over the ``T r`` track models (rows)."""
-    T, r, n = store.x.shape
-    M, m = y.shape[-2:]
-    ll_rm = ll.reshape(T, r, M)
+        ll_rm = np.where(np.isfinite(ll_rm), ll_rm, -1e300)
     if r == 1:  # the mixture of one model is the model
         ll_mix = ll_rm[:, 0]
     else:  # mixture likelihood over models with the predicted model probabilities
@@ -677,13 +622,13 @@ def _scan_gate(
         a = np.log(np.where(c_pred > 0, c_pred, 1e-300))[:, :, None] + ll_rm
         ll_mix = np.logaddexp.reduce(a, axis=1)
     return ScanGate(
-        y.reshape(T, r, M, m),
+        g.innovation.reshape(T, r, M, m),
         S.reshape(T, r, m, m),
         K.reshape(T, r, n, m),
-        np.asarray(valid.reshape(T, r, M).any(axis=1), dtype=bool),
+        valid,
         ll_rm,
         ll_mix,
-        d2.reshape(T, r, M),
+        g.d2.reshape(T, r, M),
     )
 
 
@@ -1092,12 +1037,6 @@ def scan_windows(
     return st.astype(np.int64), np.r_[st[1:], N].astype(np.int64)
 
 
-#: Runs of at least this many scans use the compiled loops when numba is installed: they save
-#: about 0.3 ms a scan and cost about 0.5 s per process to load (chosen on the Solent AIS
-#: file, 3432 scans; the q trials of ``auto`` and the OpenSky file stay on NumPy).
-COMPILED_MIN_SCANS = 2000
-
-
 def run_tracker(
     t_s: ArrayLike,
     z: ArrayLike,
@@ -1160,8 +1099,6 @@ def run_tracker(
     counts = dict.fromkeys(TrackerCounts.__dataclass_fields__, 0)
     now = t[0] if N else 0.0
     starts, ends = scan_windows(t, Z, cfg.scan_window_s, window_separation_m(model))
-    if HAVE_COMPILED and starts.size >= COMPILED_MIN_SCANS:
-        model = TrackerModel.from_config(cfg, compiled=True)
     done = 0  # detections reported to ``progress``
     for s0, s1 in zip(starts, ends, strict=True):
         if progress is not None and s0:
