@@ -286,3 +286,26 @@ def test_kalman_gain_kernels() -> None:
     np.testing.assert_array_equal(xg, u.x)
     np.testing.assert_array_equal(Pg, u.P)
     np.testing.assert_array_equal(Pg, np.swapaxes(Pg, -1, -2))
+
+
+def test_closed_form_2x2_inverse_and_gate_match_lapack() -> None:
+    from navtrack.tracking.gating import gate
+    from navtrack.tracking.kalman import spd_inverse_2x2
+
+    rng = np.random.default_rng(5)
+    S = np.stack([_spd(rng, 2) * 10.0**k for k in range(-3, 5)])  # 1e-3 .. 1e4 scales
+    S_inv, det = spd_inverse_2x2(S)
+    np.testing.assert_allclose(S_inv, np.linalg.inv(S), rtol=1e-12)
+    np.testing.assert_allclose(det, np.linalg.det(S), rtol=1e-12)
+    # the plane gate (closed form) against the same gate of a 3-D measurement whose third
+    # axis is independent with zero innovation (Cholesky path): equal distances
+    zp, z = rng.normal(size=(8, 2)), rng.normal(size=(5, 2))
+    g = gate(zp, S, z, 9.21)
+    S3 = np.zeros((8, 3, 3))
+    S3[:, :2, :2] = S
+    S3[:, 2, 2] = 1.0
+    g3 = gate(np.column_stack([zp, np.zeros(8)]), S3, np.column_stack([z, np.zeros(5)]), 9.21)
+    np.testing.assert_allclose(g.d2, g3.d2, rtol=1e-12)
+    np.testing.assert_allclose(g.log_norm, g3.log_norm + 0.5 * np.log(2 * np.pi), rtol=1e-12)
+    with pytest.raises(ValueError, match="not positive definite"):
+        gate(zp[:1], -S[:1], z, 9.21)
