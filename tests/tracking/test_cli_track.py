@@ -272,3 +272,37 @@ def test_track_warns_with_counts_on_suspicious_input(
     assert "knots read as m/s" in err
     assert "1.94" in err
     assert "median of 87 moving reports; 87 differ" in err  # 29 intervals x 3 ids
+
+
+def test_track_reports_rows_thousands_of_km_apart_with_counts(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    def fleets(n_near: int, n_far: int) -> str:
+        # ``n_near`` ships in the Channel, ``n_far`` off the Canaries (about 2600 km away)
+        text = _fleet(n_ids=n_near, n_reports=30)
+        for k in range(30):
+            t = f"2020-01-01T00:{k // 6:02d}:{(k % 6) * 10:02d}Z"
+            text += "".join(
+                f"{t},{28.0 + 0.05 * i + 1e-4 * k},{-15.0 + 2e-4 * k},f{i}\n" for i in range(n_far)
+            )
+        return text
+
+    f = tmp_path / "far.csv"
+    f.write_text(fleets(3, 2))  # the far minority is skipped, counted and named
+    assert main(["track", str(f), "--format", "csv"]) == 0
+    text = capsys.readouterr().out
+    assert re.search(r"bad rows skipped +60\n", text)
+    assert "position more than 1000 km from the median position: 60" in text
+    assert re.search(r"ids / confirmed tracks +3 / 3\n", text)
+    # two equal fleets: the median lies between them and every row is skipped, said so
+    f.write_text(fleets(2, 2))
+    assert main(["track", str(f), "--format", "csv"]) == 1
+    text = capsys.readouterr().out
+    assert "position more than 1000 km from the median position: 120" in text
+    assert "no usable detections: all 120 rows were skipped" in text
+    assert "--max-range-km" in text
+    # a range limit beyond the spread tracks both fleets
+    assert main(["track", str(f), "--format", "csv", "--max-range-km", "5000"]) == 0
+    text = capsys.readouterr().out
+    assert re.search(r"bad rows skipped +0\n", text)
+    assert re.search(r"ids / confirmed tracks +4 / 4\n", text)

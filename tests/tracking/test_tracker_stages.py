@@ -91,10 +91,12 @@ def test_predict_stage_equals_kalman_and_imm_kernels() -> None:
     x0, P0 = store.x.copy(), store.P.copy()
     predict(store, 7.5, model)
     xk, Pk = kf_predict(x0[:, 0], P0[:, 0], cfg.motion.F(7.5), cfg.motion.Q(7.5))
-    np.testing.assert_array_equal(store.x[:, 0], xk)
-    np.testing.assert_array_equal(store.P[:, 0], Pk)
+    # the same products over (T, 1, n) instead of (T, n): equal to rounding
+    np.testing.assert_allclose(store.x[:, 0], xk, rtol=1e-15, atol=1e-12)
+    np.testing.assert_allclose(store.P[:, 0], Pk, rtol=1e-15, atol=1e-12)
+    x1 = store.x.copy()
     predict(store, 0.0, model)  # no time step: nothing moves
-    np.testing.assert_array_equal(store.x[:, 0], xk)
+    np.testing.assert_array_equal(store.x, x1)
     # IMM: mixing with the continuous-time switching probability, then each model's KF
     icfg = replace(cfg, imm_q=(1e-4, 1.0), imm_sojourn_s=50.0)
     imodel = TrackerModel.from_config(icfg)
@@ -106,8 +108,8 @@ def test_predict_stage_equals_kalman_and_imm_kernels() -> None:
     xm, Pm, c = imm_mix(x0, P0, mu0, markov_matrix(2, -np.expm1(-10.0 / 50.0)))
     Q = np.stack([m.Q(10.0) for m in imodel.motions])
     xk, Pk = kf_predict(xm, Pm, icfg.motion.F(10.0), Q)
-    np.testing.assert_array_equal(store.x, xk)
-    np.testing.assert_array_equal(store.P, Pk)
+    np.testing.assert_allclose(store.x, xk, rtol=1e-15, atol=1e-12)
+    np.testing.assert_allclose(store.P, Pk, rtol=1e-15, atol=1e-12)
     np.testing.assert_array_equal(store.mu, c)
     assert not np.allclose(Q[0], Q[1])
 
@@ -284,3 +286,24 @@ def test_kalman_gain_kernels() -> None:
     np.testing.assert_array_equal(xg, u.x)
     np.testing.assert_array_equal(Pg, u.P)
     np.testing.assert_array_equal(Pg, np.swapaxes(Pg, -1, -2))
+
+
+def test_closed_form_2x2_inverse_and_gate_match_lapack() -> None:
+    from navtrack.tracking.gating import gate
+    from navtrack.tracking.kalman import stacked_inverse
+
+    rng = np.random.default_rng(5)
+    S = np.stack([_spd(rng, 2) * 10.0**k for k in range(-3, 5)])  # 1e-3 .. 1e4 scales
+    np.testing.assert_allclose(stacked_inverse(S), np.linalg.inv(S), rtol=1e-12)
+    # the plane gate (closed form) against the same gate of a 3-D measurement whose third
+    # axis is independent with zero innovation (Cholesky path): equal distances
+    zp, z = rng.normal(size=(8, 2)), rng.normal(size=(5, 2))
+    g = gate(zp, S, z, 9.21)
+    S3 = np.zeros((8, 3, 3))
+    S3[:, :2, :2] = S
+    S3[:, 2, 2] = 1.0
+    g3 = gate(np.column_stack([zp, np.zeros(8)]), S3, np.column_stack([z, np.zeros(5)]), 9.21)
+    np.testing.assert_allclose(g.d2, g3.d2, rtol=1e-12)
+    np.testing.assert_allclose(g.log_norm, g3.log_norm + 0.5 * np.log(2 * np.pi), rtol=1e-12)
+    with pytest.raises(ValueError, match="not positive definite"):
+        gate(zp[:1], -S[:1], z, 9.21)

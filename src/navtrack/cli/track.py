@@ -144,7 +144,16 @@ def run_track(args: argparse.Namespace) -> int:
     summary: dict[str, Any] = det.summary()
     if len(det) == 0:
         _print(summary)
-        print("no usable detections")
+        skipped = len(det.bad_lines)
+        print(
+            "no usable detections"
+            + (
+                f": all {skipped} rows were skipped (reasons above; --max-range-km and "
+                "--max-time-days set how far from the median position and time a row may lie)"
+                if skipped
+                else ""
+            )
+        )
         return 1
     en, ref = to_local_enu(det)
     report_s, max_gap_s, match_m = DEFAULTS[args.fmt]

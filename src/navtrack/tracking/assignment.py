@@ -90,7 +90,7 @@ def _check(cost: ArrayLike, miss_cost: ArrayLike) -> tuple[FloatArray, FloatArra
     if C.ndim != 2:
         raise ValueError(f"cost must be a (T, M) matrix, got shape {C.shape}")
     miss = np.broadcast_to(np.asarray(miss_cost, dtype=float), (C.shape[0],))
-    if np.any(np.isnan(C)) or np.any(-np.inf == C):
+    if not np.all(-np.inf < C):  # (False for NaN too)
         raise ValueError("cost must not contain NaN or -inf (use +inf for forbidden pairs)")
     if not np.all(np.isfinite(miss)):
         raise ValueError("miss_cost must be finite")
@@ -100,10 +100,11 @@ def _check(cost: ArrayLike, miss_cost: ArrayLike) -> tuple[FloatArray, FloatArra
 def augmented_cost(cost: ArrayLike, miss_cost: ArrayLike) -> FloatArray:
     """The ``T × (M + T)`` matrix ``[cost | diag(miss_cost)]`` with ``inf`` off the diagonal."""
     C, miss = _check(cost, miss_cost)
-    T = C.shape[0]
-    D = np.full((T, T), np.inf)
-    D[np.arange(T), np.arange(T)] = miss
-    return np.concatenate([C, D], axis=1)
+    T, M = C.shape
+    A = np.full((T, M + T), np.inf)
+    A[:, :M] = C
+    A[np.arange(T), M + np.arange(T)] = miss
+    return A
 
 
 def _solve(A: FloatArray) -> tuple[IntArray, float] | None:

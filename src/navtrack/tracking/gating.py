@@ -123,9 +123,9 @@ def gate(
     y = Z[..., None, :, :] - zp[..., :, None, :]
     if pair_offset is not None:
         y = y - np.asarray(pair_offset, dtype=float)
-    if angle_mask is not None:
-        for i in np.flatnonzero(angle_mask):
-            y[..., i] = wrap_angle(y[..., i])
+    if angle_mask is not None and np.any(angle_mask):
+        am = np.flatnonzero(angle_mask)
+        y[..., am] = wrap_angle(y[..., am])
     if m == 2:  # closed form (the common planar case): no LAPACK call per gate
         a, b, c = S[..., 0, 0], S[..., 1, 0], S[..., 1, 1]
         det = a * c - b * b

@@ -123,9 +123,15 @@ def kf_predict(
     x = np.asarray(x, dtype=float)
     P = np.asarray(P, dtype=float)
     F = np.asarray(F, dtype=float)
-    xp = np.einsum("...ij,...j->...i", F, x)
-    Pp = F @ P @ _T(F) + np.asarray(Q, dtype=float)
-    return xp, _sym(Pp)
+    if F.ndim == 2:  # one F for the batch: x Fᵀ, and P as rows of n² by F ⊗ F (one product)
+        n = F.shape[0]
+        FF = (F[:, None, :, None] * F[None, :, None, :]).reshape(n * n, n * n)
+        xp = x @ F.T
+        Pp = (P.reshape(*P.shape[:-2], n * n) @ FF.T).reshape(P.shape)
+    else:
+        xp = np.einsum("...ij,...j->...i", F, x)
+        Pp = F @ P @ _T(F)
+    return xp, _sym(Pp + np.asarray(Q, dtype=float))
 
 
 def ekf_predict(
@@ -229,8 +235,14 @@ def innovation_gain(P: ArrayLike, H: ArrayLike, R: ArrayLike) -> tuple[FloatArra
     """
     P = np.asarray(P, dtype=float)
     H = np.asarray(H, dtype=float)
-    PHt = P @ _T(H)
-    S = _sym(H @ PHt + np.asarray(R, dtype=float))
+    if H.ndim == 2 and P.ndim > 2:  # one H for the batch: two products over all rows at once
+        n, m = P.shape[-1], H.shape[0]
+        PHt = (P.reshape(-1, n) @ H.T).reshape(*P.shape[:-1], m)
+        HPHt = _T((_T(PHt).reshape(-1, n) @ H.T).reshape(*P.shape[:-2], m, m))
+    else:
+        PHt = P @ _T(H)
+        HPHt = H @ PHt
+    S = _sym(HPHt + np.asarray(R, dtype=float))
     return S, kalman_gain(PHt, S)
 
 

@@ -52,6 +52,7 @@ from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, Int8Array, IntArray
 from navtrack.tracking.jpda import JpdaConfig, JpdaMarginals
 from navtrack.tracking.models import (
+    LinearMeasurement,
     LinearMotion,
     MeasurementModel,
     constant_velocity,
@@ -587,7 +588,8 @@ def gate_scan(
     T, r, n = store.x.shape
     M, m = z.shape[0], meas.dim_z
     xf = store.x.reshape(T * r, n)
-    S, K = innovation_gain(store.P.reshape(T * r, n, n), meas.jacobian(xf), meas.R)
+    H = meas.H if isinstance(meas, LinearMeasurement) else meas.jacobian(xf)  # (one H: faster)
+    S, K = innovation_gain(store.P.reshape(T * r, n, n), H, meas.R)
     zp = meas.h(xf)
     v = offset = None
     if dt_s is not None and (dt_s != 0).any():
@@ -618,8 +620,7 @@ def gate_scan(
     else:  # mixture likelihood over models with the predicted model probabilities
         c_pred = store.mu
         a = np.log(np.where(c_pred > 0, c_pred, 1e-300))[:, :, None] + ll_rm
-        amax = a.max(axis=1)
-        ll_mix = amax + np.log(np.exp(a - amax[:, None]).sum(axis=1))
+        ll_mix = np.logaddexp.reduce(a, axis=1)
     return ScanGate(
         g.innovation.reshape(T, r, M, m),
         S.reshape(T, r, m, m),
@@ -686,11 +687,22 @@ def associate_gnn(
 
     log_miss = np.log1p(-pd * gate_probability)
     log_det_gain = np.log(pd) - np.log(clutter_density)
-    cost = np.where(gated.valid, -(gated.log_likelihood_mix + log_det_gain), np.inf)
-    a_t = assign2d(cost, -log_miss).track_to_meas
     T, M = gated.valid.shape
     beta = np.zeros((T, M + 1))
-    beta[np.arange(T), a_t + 1] = 1.0
+    beta[:, 0] = 1.0
+    # a track that gates no detection takes its miss column in every optimum: the assignment
+    # is solved among the tracks that gate some detection (a few of the tens alive)
+    rows = np.flatnonzero(gated.valid.any(axis=1))
+    if rows.size:
+        valid = gated.valid[rows]
+        cost = np.where(valid, -(gated.log_likelihood_mix[rows] + log_det_gain), np.inf)
+        if valid.sum(axis=0).max() == 1:  # no detection in two gates: each track on its own
+            best = np.argmin(cost, axis=1)
+            a_t = np.where(cost[np.arange(rows.size), best] < -log_miss, best, -1)
+        else:
+            a_t = assign2d(cost, -log_miss).track_to_meas
+        beta[rows, 0] = 0.0
+        beta[rows, a_t + 1] = 1.0
     return ScanAssociation(beta, True)
 
 
@@ -816,19 +828,21 @@ def manage(store: TrackStore, hit: BoolArray, t_s: float, config: TrackerConfig)
     cov = std > config.max_position_std_m
     conf = store.confirmed.copy()
     unconf = ~conf & (t_s - store.born_s > config.confirm_window_s)
-    kept = ~(coast | cov | unconf)
+    gone = coast | cov | unconf
+    n_gone = np.count_nonzero(gone)
     out = Management(
         store.id.copy(),
         np.array(xc),
         std,
         conf,
-        kept,
-        int(new_conf.sum()),
-        int((coast & conf).sum()),
-        int((cov & ~coast & conf).sum()),
-        int((~conf & (coast | cov | unconf)).sum()),
+        ~gone,
+        int(np.count_nonzero(new_conf)),
+        int(np.count_nonzero(coast & conf)) if n_gone else 0,
+        int(np.count_nonzero(cov & ~coast & conf)) if n_gone else 0,
+        int(np.count_nonzero(gone & ~conf)) if n_gone else 0,
     )
-    store.keep(kept)
+    if n_gone:
+        store.keep(~gone)
     return out
 
 
@@ -1115,8 +1129,9 @@ def run_tracker(
             )
             det_nis[s0 + used] = g.d2[k[used], :, used].min(axis=1)
             det_ll[s0 + used] = g.log_likelihood_mix[k[used], used]
-            m = manage(store, a.hit, tk, cfg)
-            log.updates(tk, m, a.hit)
+            hit = a.hit
+            m = manage(store, hit, tk, cfg)
+            log.updates(tk, m, hit)
             _add_counts(counts, a, m)
             claimed = a.associated if cfg.init_from == "unassociated" else g.gated
         free = np.flatnonzero(~claimed)
