@@ -742,6 +742,14 @@ def estimate_exact_likelihood(
         full = problem
         for size in _stage_sizes(head, n, config.stage_growth):
             stage = full.head(size)
+            done = problem.n if problem.n < size else 0
+            if use_robust and done:
+                # the previous block's weights, unit weights after it, as the first weights
+                m = problem.m
+                stage = stage.with_weights(
+                    np.concatenate([problem.w, stage.w[done:]]),
+                    np.concatenate([problem.v, stage.v[done - m :]]),
+                )
             at_start = evaluate(best.vec, stage)
             n_iter += 1
             if at_start is None:
