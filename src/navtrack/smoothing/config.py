@@ -53,10 +53,12 @@ class AriConfig:
     screen_n : int
         Starts are screened on the first ``screen_n`` epochs when the series is longer.
     stage_growth : int
-        A series longer than ``screen_n`` is then fitted on leading blocks of
+        A series of ``screen_n * stage_growth`` epochs or more is fitted on leading blocks of
         ``screen_n * stage_growth^k`` epochs and finally whole, each block started from the
-        previous one's estimate and weights
-        (:func:`navtrack.smoothing.estimation.estimate_exact_likelihood`).
+        previous one's estimate and weights and searched by scoring
+        (:func:`navtrack.smoothing.estimation.estimate_exact_likelihood`); shorter series go
+        from the window to the whole series by BFGS. Default 16 (blocks of 64000, 1024000, ...
+        epochs), set on the simulated 1e6-epoch benchmark series.
     boundary_margin : float
         An interior solution (both variances positive) is kept over a boundary one
         (``sigma_n`` or ``sigma_e`` at its lower bound) unless the boundary one has a larger
