@@ -53,12 +53,12 @@ class AriConfig:
     screen_n : int
         Starts are screened on the first ``screen_n`` epochs when the series is longer.
     stage_growth : int
-        A series of ``screen_n * stage_growth`` epochs or more is fitted on leading blocks of
-        ``screen_n * stage_growth^k`` epochs and finally whole, each block started from the
-        previous one's estimate and weights and searched by scoring
+        A series of ``n >= screen_n * stage_growth`` epochs is fitted on leading blocks of
+        ``n / stage_growth^k`` epochs (those longer than ``screen_n``) and finally whole, each
+        block started from the previous one's estimate and weights and searched by scoring
         (:func:`navtrack.smoothing.estimation.estimate_exact_likelihood`); shorter series go
-        from the window to the whole series by BFGS. Default 16 (blocks of 64000, 1024000, ...
-        epochs), set on the simulated 1e6-epoch benchmark series.
+        from the window to the whole series by BFGS. Default 16 (n = 1e6: a block of 62500
+        epochs, then the whole series), set on the simulated 1e6-epoch benchmark series.
     boundary_margin : float
         An interior solution (both variances positive) is kept over a boundary one
         (``sigma_n`` or ``sigma_e`` at its lower bound) unless the boundary one has a larger

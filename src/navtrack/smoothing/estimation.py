@@ -405,8 +405,10 @@ def quasi_newton(
     start : Estimate, optional
         An estimate already evaluated at ``vec`` on this problem (saves that evaluation).
     information : callable, optional
-        ``vec -> (p + 2, p + 2)`` curvature model recomputed at every iterate (scoring, e.g.
-        :func:`spectral_information`) in place of the BFGS update of ``hess``.
+        ``vec -> (p + 2, p + 2)`` curvature model (e.g. :func:`spectral_information`; ``hess``
+        should be its value at ``vec``): its change between iterates is added to the matrix
+        before the BFGS update (structured quasi-Newton), so the search follows the model
+        where it bends and the secant updates correct it where it is wrong.
 
     Returns
     -------
@@ -426,10 +428,9 @@ def quasi_newton(
         return None
     b_mat = hess.copy()
     converged = False
+    info_at = information(vec) if information is not None else None
     for _ in range(max_iter):
         f, g = -out.fit.loglike, out.grad
-        if information is not None:
-            b_mat = information(vec)
         step = -np.linalg.solve(b_mat, g)
         gain = -0.5 * float(g @ step)
         if gain < tol:
@@ -466,7 +467,15 @@ def quasi_newton(
         s_k = trial - vec
         y_k = new.grad - g
         sy = float(s_k @ y_k)
-        if information is None and sy > 1e-12 * float(np.linalg.norm(s_k) * np.linalg.norm(y_k)):
+        if information is not None and info_at is not None:
+            # follow the model's change from the old to the new point; keep what the secant
+            # updates learned beyond it (unless that leaves the matrix indefinite)
+            info_new = information(trial)
+            b_mat = b_mat + (info_new - info_at)
+            info_at = info_new
+            if np.any(np.linalg.eigvalsh(b_mat) <= 0):
+                b_mat = info_new.copy()
+        if sy > 1e-12 * float(np.linalg.norm(s_k) * np.linalg.norm(y_k)):
             bs = b_mat @ s_k
             b_mat = b_mat - np.outer(bs, bs) / float(s_k @ bs) + np.outer(y_k, y_k) / sy
         vec, out = trial, new
@@ -632,13 +641,12 @@ def _reweighting_rounds(
 
 
 def _stage_sizes(head: int, n: int, growth: int) -> list[int]:
-    """Leading blocks ``head * growth^k`` below ``n``, then ``n``."""
-    sizes = []
-    size = head * growth
-    while size < n:
-        sizes.append(size)
-        size *= growth
-    return [*sizes, n]
+    """Leading blocks ``n / growth^k`` longer than ``head``, shortest first, ending with ``n``:
+    each block is ``growth`` times the one before it."""
+    sizes = [n]
+    while sizes[0] // growth > head:
+        sizes.insert(0, sizes[0] // growth)
+    return sizes
 
 
 def estimate_exact_likelihood(
@@ -672,7 +680,8 @@ def estimate_exact_likelihood(
     weights; a final VCE iteration certifies the variance components.
 
     A series of ``screen_n * stage_growth`` epochs or more is instead fitted on growing
-    leading blocks (``screen_n * stage_growth^k`` epochs, then the whole series), each started
+    leading blocks (``n / stage_growth^k`` epochs longer than the window, then the whole
+    series), each started
     from the previous block's estimate and weights (unit weights on the new epochs, then
     reweighted over the block), and searched by scoring with :func:`spectral_information`.
     Why: the cost is the number of whole-series evaluations.
