@@ -35,9 +35,9 @@ Everything the paper lists is estimated without a-priori stochastic information:
   components. Stopping rule: predicted log-likelihood gain of the next quasi-Newton step below
   ``gain_tol`` (1e-3), then VCE relative change below ``tol`` (1e-6); ``max_iter`` otherwise
   (status ``not_converged``). Series longer than ``screen_n`` are fitted on growing leading
-  blocks (``stage_growth``), each searched by scoring with Whittle's spectral information
-  (:func:`~navtrack.smoothing.estimation.spectral_information`): the curved ``sigma_e``/``phi``
-  ridge of long ARI(p, 2) series made BFGS crawl.
+  blocks (``stage_growth``), each searched by BFGS structured on Whittle's spectral
+  information (:func:`~navtrack.smoothing.estimation.spectral_information`, recomputed at every
+  iterate): the curved ``sigma_e``/``phi`` ridge of long ARI(p, 2) series made plain BFGS crawl.
 * The likelihood in ``(phi, sigma_n, sigma_e)`` is multimodal on short series (``sigma_n -> 0``
   is a local optimum — the SARIMAX failure the issue describes); several starts spread over the
   noise fraction are run (on long series on a leading window, then refined on the whole

@@ -55,7 +55,8 @@ class AriConfig:
     stage_growth : int
         A series of ``n >= screen_n * stage_growth`` epochs is fitted on leading blocks of
         ``n / stage_growth^k`` epochs (those longer than ``screen_n``) and finally whole, each
-        block started from the previous one's estimate and weights and searched by scoring
+        block started from the previous one's estimate and weights and searched by BFGS
+        structured on the spectral information
         (:func:`navtrack.smoothing.estimation.estimate_exact_likelihood`); shorter series go
         from the window to the whole series by BFGS. Default 16 (n = 1e6: a block of 62500
         epochs, then the whole series), set on the simulated 1e6-epoch benchmark series.

@@ -7,7 +7,9 @@ vector ``vec = (phi_1..phi_p, log sigma_n^2, log sigma_e^2)``:
   the gradient of ``-log L``, whose variance part is the VCE equation
   ``r_k - Omega_k / sigma_k^2`` (zero at ``sigma_k^2 = Omega_k / r_k``) and whose AR part is the
   expected-moment least-squares equation of the paper's alternating scheme;
-* :func:`quasi_newton` — BFGS with Armijo backtracking on ``-log L`` (all parameters jointly);
+* :func:`quasi_newton` — BFGS with Armijo backtracking on ``-log L`` (all parameters jointly),
+  optionally structured on a curvature model such as :func:`spectral_information` (Whittle's
+  expected information, used for series of 64000 epochs and more);
 * :func:`vce_iteration` — the reproducing VCE ``sigma_k^2 <- Omega_k / r_k`` with ``phi`` fixed;
 * :func:`robust_reweight` — new weights of both equation groups from their studentized
   deletion residuals (:mod:`navtrack.smoothing.robust`);
@@ -382,7 +384,8 @@ def quasi_newton(
     start: Estimate | None = None,
     information: Callable[[FloatArray], FloatArray] | None = None,
 ) -> Estimate | None:
-    """Quasi-Newton (BFGS from ``hess``, or scoring) with Armijo backtracking on ``-log L``.
+    """Quasi-Newton (BFGS from ``hess``, optionally structured) with Armijo backtracking on
+    ``-log L``.
 
     The AR coefficients and the two log-variances move together with the analytic gradient.
     Steps are capped (1 in ``phi``, 2 in ``log sigma^2``) and the log-variances kept in
@@ -683,16 +686,20 @@ def estimate_exact_likelihood(
     leading blocks (``n / stage_growth^k`` epochs longer than the window, then the whole
     series), each started
     from the previous block's estimate and weights (unit weights on the new epochs, then
-    reweighted over the block), and searched by scoring with :func:`spectral_information`.
+    reweighted over the block), and searched by the structured quasi-Newton on
+    :func:`spectral_information` (its change between iterates added to the BFGS matrix).
     Why: the cost is the number of whole-series evaluations.
     Between the window's optimum and the whole series' lies a long stretch of the curved
     ``sigma_e``/``phi`` ridge of ARI(p, 2), along which BFGS from the window's Hessian crawled
     (n = 1e6, Danish weights: 124 whole-series solutions, ~57 of them in one search); a
     block's optimum is close to the next block's, and the spectral information, recomputed at
-    every iterate, follows the bending ridge where BFGS updates did not. Below
-    ``screen_n * stage_growth`` epochs scoring is not used: on the 5324-epoch BROAD attitude
-    series (ARI(6, 1), robust) it took 3x the time of the window-Hessian BFGS and moved
-    sigma_n by up to 3.5 %.
+    every iterate, follows the bending ridge where BFGS updates did not; the secant updates on
+    top of it correct it where it is wrong (plain scoring overshot every step on the 1e5
+    benchmark series: 91 trials against 1.3 s of CPU for the whole fit now). Below
+    ``screen_n * stage_growth`` epochs the blocks and the spectral search are not used: on the
+    5324-epoch BROAD attitude series (ARI(6, 1), robust) plain scoring took 3x the time of the
+    window-Hessian BFGS and moved sigma_n by up to 3.5 % (the structured form was not tried
+    there).
     """
     p, d, n = problem.p, problem.d, problem.n
     head = min(n, config.screen_n)
@@ -747,7 +754,7 @@ def estimate_exact_likelihood(
             n_iter += spent
     else:
 
-        def scoring_search(est: Estimate, prob: AriProblem) -> tuple[Estimate | None, int]:
+        def spectral_search(est: Estimate, prob: AriProblem) -> tuple[Estimate | None, int]:
             n_eff = float(np.count_nonzero(prob.w))
 
             def information(vec: FloatArray) -> FloatArray:
@@ -783,10 +790,10 @@ def estimate_exact_likelihood(
             best = make_estimate(best.vec, at_start, 1, False, stage.log_floor)
             if use_robust:
                 best, problem, spent = _reweighting_rounds(
-                    best, stage, full.w[:size] > 0, config, scoring_search
+                    best, stage, full.w[:size] > 0, config, spectral_search
                 )
             else:
-                refined, spent = scoring_search(best, stage)
+                refined, spent = spectral_search(best, stage)
                 if refined is None:
                     return EstimatorOutcome(
                         None, problem, n_iter, f"normal matrix singular on the first {size} epochs"
