@@ -16,11 +16,11 @@ Usage::
 
 At ``--n`` navtrack (robust off, Danish) and SARIMAX alternate on the same series; medians of
 ``--repeat`` runs (SARIMAX: at most 2) and the ratios SARIMAX / navtrack of this run. At ``--big``
-navtrack's robust-off fit and the median of ``--big-repeat`` Danish fits; SARIMAX there only with
-``--big-sarimax`` (about 10x its ``--n`` time, over 10 min), else its ``--n`` figure scaled
-linearly, printed as an estimate. The load average is printed with the timings. Memory is
-measured with ``tracemalloc`` (peak of Python-allocated NumPy memory) at n/10 and n to show it
-is linear in n.
+the medians of ``--big-repeat`` robust-off and Danish fits (alternating), with their ratios to
+SARIMAX at ``--big``: measured in this run with ``--big-sarimax`` (about 10x its ``--n`` time,
+over 10 min), else its ``--n`` figure of this run scaled linearly and labelled an estimate. The
+load average is printed with the timings. Memory is measured with ``tracemalloc`` (peak of
+Python-allocated NumPy memory) at n/10 and n to show it is linear in n.
 """
 
 from __future__ import annotations
@@ -112,7 +112,7 @@ def main() -> None:
     parser.add_argument("--n", type=int, default=100_000)
     parser.add_argument("--big", type=int, default=1_000_000)
     parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--big-repeat", type=int, default=3, help="runs of the big Danish fit")
+    parser.add_argument("--big-repeat", type=int, default=3, help="runs of each big fit")
     parser.add_argument("--big-sarimax", action="store_true", help="SARIMAX at --big too (slow)")
     parser.add_argument("--order", default="5,2")
     parser.add_argument("--skip-sarimax", action="store_true")
@@ -184,36 +184,41 @@ def main() -> None:
     )
     if args.big:
         yb = _series(args.big, order2, seed=2)
-        wall, cpu, res_big = _time_navtrack(yb, order2, "off")
-        print(
-            f"navtrack n={args.big} (robust off): {wall:.1f} s (CPU {cpu:.1f} s); status "
-            f"{res_big.status}, sigma_n {res_big.sigma_n:.5f}, "  # type: ignore[attr-defined]
-            f"sigma_e {res_big.sigma_e:.5f}; load {_load()}"  # type: ignore[attr-defined]
-        )
-        big_runs = []
+        # robust off and Danish alternate: under a varying load both medians see the same load
+        big: dict[str, list[tuple[float, float]]] = {"off": [], "danish": []}
+        last: dict[str, object] = {}
         for _ in range(args.big_repeat):
-            wall, cpu, res_big_r = _time_navtrack(yb, order2, "danish")
-            big_runs.append((wall, cpu))
-        big_w, big_c = _medians(big_runs)
-        print(
-            f"navtrack n={args.big} (danish):     {_describe(big_runs)}; status "
-            f"{res_big_r.status}, flagged {res_big_r.n_flagged}; load {_load()}"  # type: ignore[attr-defined]
-        )
-        if sarimax and args.big_sarimax:
-            wall, cpu, _, _ = _time_sarimax(yb, order2)
+            for robust in ("off", "danish"):
+                wall, cpu, last[robust] = _time_navtrack(yb, order2, robust)
+                big[robust].append((wall, cpu))
+        big_med = {key: _medians(val) for key, val in big.items()}
+        for robust in ("off", "danish"):
+            res_big = last[robust]
             print(
-                f"SARIMAX fit+smooth n={args.big}: {wall:.1f} s (CPU {cpu:.1f} s); SARIMAX / "
-                f"navtrack danish {wall / big_w:.1f}x (CPU {cpu / big_c:.1f}x)"
+                f"navtrack n={args.big} ({robust}): {_describe(big[robust])}; status "
+                f"{res_big.status}, sigma_n {res_big.sigma_n:.5f}, "  # type: ignore[attr-defined]
+                f"sigma_e {res_big.sigma_e:.5f}, flagged {res_big.n_flagged}, "  # type: ignore[attr-defined]
+                f"evaluations {res_big.n_iter}; load {_load()}"  # type: ignore[attr-defined]
             )
-        elif sarimax:
-            # SARIMAX's Kalman filter is linear in n: its n-epoch figure of this run scaled
-            sm_w, sm_c = med["sarimax"]
-            scale = args.big / args.n
+        if sarimax:
+            if args.big_sarimax:
+                sm_w, sm_c, _, _ = _time_sarimax(yb, order2)
+                what = f"SARIMAX fit+smooth n={args.big}: {sm_w:.1f} s (CPU {sm_c:.1f} s), measured"
+            else:
+                # SARIMAX's Kalman filter is linear in n: its n-epoch figure of this run scaled
+                scale = args.big / args.n
+                sm_w, sm_c = med["sarimax"][0] * scale, med["sarimax"][1] * scale
+                what = (
+                    f"SARIMAX at n={args.big} NOT RUN (needs --big-sarimax, over 10 min): "
+                    f"ESTIMATE from its n={args.n} median of this run scaled linearly, "
+                    f"{sm_w:.0f} s (CPU {sm_c:.0f} s)"
+                )
             print(
-                f"SARIMAX at n={args.big} not run (--big-sarimax): its n={args.n} median scaled "
-                f"linearly, {sm_w * scale:.0f} s (CPU {sm_c * scale:.0f} s), "
-                f"{sm_w * scale / big_w:.1f}x (CPU {sm_c * scale / big_c:.1f}x) navtrack danish "
-                f"(an estimate, not a measurement)"
+                f"{what}; SARIMAX / navtrack at n={args.big} (wall, CPU): robust off "
+                f"{sm_w / big_med['off'][0]:.1f}x, {sm_c / big_med['off'][1]:.1f}x; danish "
+                f"{sm_w / big_med['danish'][0]:.1f}x, {sm_c / big_med['danish'][1]:.1f}x"
+                + ("" if args.big_sarimax else " (ratios to an estimate, not a measurement)")
+                + f"; load {_load()}"
             )
         peak = _peak_memory(yb, order2)
         print(f"peak traced memory n={args.big}: {peak:.1f} MiB; load average {_load()}")

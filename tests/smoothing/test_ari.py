@@ -22,6 +22,7 @@ from navtrack.smoothing.ari import (
     regularize_time,
     simulate_ari,
 )
+from navtrack.smoothing.estimation import observed_information, spectral_information
 
 
 def _dense_normal(y, phi, d, sigma_n, sigma_e, *, stationary=False):
@@ -316,3 +317,33 @@ def test_order_selection_does_not_depend_on_the_warm_start(
     for key, score in a.items():
         # the two modes differ by ~200 BIC units; 2 units is the convergence noise
         assert b[key] == pytest.approx(score, abs=2.0), key
+
+
+def test_long_series_blocks_and_scoring_reach_the_window_bfgs_optimum() -> None:
+    # A series of screen_n * stage_growth epochs or more goes through a leading block and the
+    # structured quasi-Newton search on the spectral information; a stage_growth too large for
+    # any block sends the same series through the window-Hessian BFGS path. Oracle: both are
+    # maximum-likelihood routes, so they reach the same optimum (robust off, gaps included).
+    y, _ = simulate_ari(np.random.default_rng(12), 80_000, [-0.6], 2, 0.02, 0.01)
+    y[30_000:30_050] = np.nan
+    fits = [
+        fit_ari(y, AriConfig(order=(1, 2), robust="off", stage_growth=growth))
+        for growth in (16, 1000)
+    ]
+    assert all(f.status == AriStatus.OK for f in fits)
+    assert fits[0].loglike == pytest.approx(fits[1].loglike, abs=0.01)
+    assert fits[0].sigma_n == pytest.approx(fits[1].sigma_n, rel=1e-3)
+    assert fits[0].sigma_e == pytest.approx(fits[1].sigma_e, rel=1e-2)
+    np.testing.assert_allclose(fits[0].x, fits[1].x, atol=1e-2 * float(np.min(fits[1].sigma_x)))
+
+
+def test_spectral_information_matches_the_observed_information_on_a_long_series() -> None:
+    # Oracle: Whittle's expected information equals the observed information of the exact
+    # likelihood up to O(n^-1/2) relative terms; n = 50000, ARI(1,1) near its truth.
+    phi, sn, se = [-0.5], 0.02, 0.01
+    y, _ = simulate_ari(np.random.default_rng(13), 50_000, phi, 1, sn, se)
+    observed = observed_information(y, phi, 1, sn, se)
+    vec = np.array([phi[0], 2 * math.log(sn), 2 * math.log(se)])
+    expected = spectral_information(vec, 1, float(y.size))
+    np.testing.assert_allclose(np.diag(expected), np.diag(observed), rtol=0.05)
+    assert np.all(np.linalg.eigvalsh(expected) > 0)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
 
@@ -124,3 +126,23 @@ def test_convolution_band_matches_dense(monkeypatch: pytest.MonkeyPatch) -> None
     np.testing.assert_array_equal(plain, compiled)  # same sums in the same order
     with pytest.raises(ValueError, match="do not match"):
         _banded.add_convolution_band(plain, c, vs[1:])
+
+
+def test_centred_convolution_is_exact_far_from_zero(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Oracle: the convolution in exact rational arithmetic of the same floating-point values.
+    rng = np.random.default_rng(5)
+    c = np.convolve(np.convolve([1.0, -0.6, 0.2], [1.0, -1.0]), [1.0, -1.0])  # c(1) = 0
+    far = rng.normal(size=60) + 1e9 + 1e3 * np.arange(60)  # far from 0, slowly drifting
+    m = c.size - 1
+    exact = np.array(
+        [
+            float(sum(Fraction(c[i]) * Fraction(far[s - i]) for i in range(m + 1)))
+            for s in range(m, far.size)
+        ]
+    )
+    compiled = _banded.centred_convolution(c, far)
+    np.testing.assert_allclose(compiled, exact, rtol=0, atol=1e-11)
+    assert np.max(np.abs(np.convolve(far, c, mode="valid") - exact)) > 1e-8  # what it replaces
+    monkeypatch.setattr(_banded, "_centred_convolution", None)  # NumPy path
+    np.testing.assert_array_equal(_banded.centred_convolution(c, far), compiled)
+    assert _banded.centred_convolution(c, far[:3]).size == 0

@@ -34,12 +34,19 @@ Everything the paper lists is estimated without a-priori stochastic information:
   started from a finite-difference Hessian; a final VCE iteration certifies the variance
   components. Stopping rule: predicted log-likelihood gain of the next quasi-Newton step below
   ``gain_tol`` (1e-3), then VCE relative change below ``tol`` (1e-6); ``max_iter`` otherwise
-  (status ``not_converged``).
+  (status ``not_converged``). Series longer than ``screen_n`` are fitted on growing leading
+  blocks (``stage_growth``), each searched by BFGS structured on Whittle's spectral
+  information (:func:`~navtrack.smoothing.estimation.spectral_information`, recomputed at every
+  iterate): the curved ``sigma_e``/``phi`` ridge of long ARI(p, 2) series made plain BFGS crawl.
 * The likelihood in ``(phi, sigma_n, sigma_e)`` is multimodal on short series (``sigma_n -> 0``
   is a local optimum — the SARIMAX failure the issue describes); several starts spread over the
   noise fraction are run (on long series on a leading window, then refined on the whole
   series), and an interior optimum is kept over a boundary one unless the latter is
   significantly better (``boundary_margin``).
+* The normal equations are solved for the correction ``x - y`` to the observations (``y``
+  interpolated over gaps), not for ``x``: an integrated series drifts to values far larger than
+  its noise, and the solve's rounding, proportional to ``|x|``, made the likelihood of a 1e6
+  epoch series noisy by up to one unit.
 * robust reweighting (IRLS inside the VCE iteration) with a weight function of the studentized
   *deletion* residual ``T`` (Baarda's w-test statistic for unit weight; for a down-weighted
   observation it is the prediction residual from all other data, so the test does not

@@ -52,6 +52,14 @@ class AriConfig:
         Limit of the reweighting loop.
     screen_n : int
         Starts are screened on the first ``screen_n`` epochs when the series is longer.
+    stage_growth : int
+        A series of ``n >= screen_n * stage_growth`` epochs is fitted on leading blocks of
+        ``n / stage_growth^k`` epochs (those longer than ``screen_n``) and finally whole, each
+        block started from the previous one's estimate and weights and searched by BFGS
+        structured on the spectral information
+        (:func:`navtrack.smoothing.estimation.estimate_exact_likelihood`); shorter series go
+        from the window to the whole series by BFGS. Default 16 (n = 1e6: a block of 62500
+        epochs, then the whole series), set on the simulated 1e6-epoch benchmark series.
     boundary_margin : float
         An interior solution (both variances positive) is kept over a boundary one
         (``sigma_n`` or ``sigma_e`` at its lower bound) unless the boundary one has a larger
@@ -96,6 +104,7 @@ class AriConfig:
     max_iter: int = 300
     max_robust_iter: int = 20
     screen_n: int = 4000
+    stage_growth: int = 16
     select_n: int = 20000
     boundary_margin: float = 1.92
     initial: Literal["stationary", "conditional"] = "stationary"
@@ -121,6 +130,8 @@ class AriConfig:
             raise ValueError(f"estimator must be 'exact' or 'paper', got {self.estimator!r}")
         if self.n_starts < 1 or self.max_iter < 1 or self.tol <= 0:
             raise ValueError("need n_starts >= 1, max_iter >= 1, tol > 0")
+        if self.stage_growth < 2:
+            raise ValueError(f"stage_growth must be >= 2, got {self.stage_growth}")
 
     @property
     def tuning(self) -> tuple[float, ...]:
