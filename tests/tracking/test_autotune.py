@@ -13,7 +13,9 @@ from navtrack.tracking.autotune import (
     QTrial,
     auto_config,
     fit_noise,
+    gate_edge_density,
     select_q,
+    steady_innovation_variance,
 )
 from navtrack.tracking.gating import gate
 from navtrack.tracking.models import constant_velocity
@@ -189,3 +191,33 @@ def test_select_q_weighs_births_then_likelihood() -> None:
     noisy = ll - 2.0 + np.r_[np.full(50, 0.05), np.full(50, -0.04)]
     assert select_q([trials[1], QTrial(10.0, 52, noisy)], 0) == 0
     assert select_q([trials[1], QTrial(10.0, 52, ll - 1.9)], 0) == 1
+
+
+def test_auto_jpda_on_sparse_reports_starts_no_duplicate_tracks() -> None:
+    # issue 11's bar, tracks : ids <= 2, with JPDA on reports 20 s apart (oracle: the
+    # simulation's ids). With λ from σ alone (a σ-sized gate), the predicted spread at 20 s
+    # (~1 km per axis) put a report's Gaussian density near λ, its summed association
+    # probability below 1/2, and it started a duplicate: 30 confirmed tracks for 10 ids here.
+    rng = np.random.default_rng(2)
+    t, z, ids = _cv_tracks(rng, 10, 300.0, 30.0, 1200.0, 20.0, 200.0, spacing_m=50_000.0)
+    v = np.full(z.shape, 200.0 / np.sqrt(2))
+    tune = auto_config(t, z, v, associator="jpda")
+    res = run_tracker(t, z, tune.config, velocity=v)
+    n_tracks = np.unique(res.track_id[res.track_confirmed]).size
+    assert n_tracks <= 2 * np.unique(ids).size
+
+
+def test_steady_innovation_variance_is_the_kalman_fixed_point() -> None:
+    # oracle: the CV Kalman filter of models.constant_velocity run to convergence
+    q, sigma, dt = 300.0, 25.0, 20.0
+    mot = constant_velocity(1, q, "continuous")
+    P = np.eye(2) * 1e8
+    for _ in range(300):
+        M = mot.F(dt) @ P @ mot.F(dt).T + mot.Q(dt)
+        s = M[0, 0] + sigma**2
+        P = M - np.outer(M[:, 0], M[0, :]) / s
+    assert steady_innovation_variance(q, sigma, dt) == pytest.approx(s, rel=1e-9)
+    assert steady_innovation_variance(q, sigma, 0.0) == sigma**2
+    # the density on the gate falls with the innovation variance: λ(σ²) / λ(S) = S / σ²
+    ratio = gate_edge_density(0.9, 0.9999, sigma**2) / gate_edge_density(0.9, 0.9999, s)
+    assert ratio == pytest.approx(s / sigma**2)
