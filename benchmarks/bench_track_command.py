@@ -1,6 +1,6 @@
 """Whole-command time of ``navtrack track`` on the shared tracking files, with its stage split.
 
-Run: ``NAVTRACK_SHARED_DATA=/work/shared/data PYTHONPATH=src python
+Run: ``NAVTRACK_SHARED_DATA=../shared/data PYTHONPATH=src python
 benchmarks/bench_track_command.py [--reps 3] [--baseline DIR]``.
 
 Times what a user runs with no tuning flags, ``python -m navtrack track FILE --format ais|opensky

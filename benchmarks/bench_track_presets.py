@@ -1,6 +1,6 @@
 """Honest tuning table of the tracker presets and ``auto`` on the shared tracking files.
 
-Run: ``NAVTRACK_SHARED_DATA=/work/shared/data PYTHONPATH=src python
+Run: ``NAVTRACK_SHARED_DATA=../shared/data PYTHONPATH=src python
 benchmarks/bench_track_presets.py [--associator gnn|jpda] [--quick]``.
 
 Every file is split in time at the middle of its span. Rows are what chose the model, columns

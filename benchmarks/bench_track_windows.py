@@ -1,6 +1,6 @@
 """Tracking time of the shared files with scan windows against one scan per time stamp.
 
-Run: ``NAVTRACK_SHARED_DATA=/work/shared/data PYTHONPATH=src python
+Run: ``NAVTRACK_SHARED_DATA=../shared/data PYTHONPATH=src python
 benchmarks/bench_track_windows.py [--reps N]``.
 
 For each shared file and associator the ``auto`` model of the file (what ``navtrack track``
