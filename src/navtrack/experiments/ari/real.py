@@ -338,14 +338,8 @@ def _fit_column(
         "n": int(task.values.size),
         "n_missing": res.n_missing,
         "n_inserted": task.n_inserted,
-        "status": str(res.status),
         "order": [res.p, res.d],
-        "sigma_n": res.sigma_n,
-        "sigma_e": res.sigma_e,
-        "sigma_x": res.sigma_x_rms,
-        "r": [float(v) for v in res.autocorr],
-        "crb_sigma_n": crb_n,
-        "crb_sigma_e": crb_e,
+        **_estimates(res, crb_n, crb_e),
         "warnings": identifiability_warnings(res, crb_n, crb_e),
         "n_flagged": res.n_flagged,
         "n_model_error": int(np.count_nonzero(res.gross_error & model_error)),
@@ -467,6 +461,19 @@ def _process_record(res: AriResult) -> dict[str, Any]:
     }
 
 
+def _estimates(res: AriResult, crb_n: float, crb_e: float) -> dict[str, Any]:
+    """Status, variance components, σx, r(h) and their Cramér–Rao bounds of one fit."""
+    return {
+        "status": str(res.status),
+        "sigma_n": res.sigma_n,
+        "sigma_e": res.sigma_e,
+        "sigma_x": res.sigma_x_rms,
+        "r": [float(v) for v in res.autocorr],
+        "crb_sigma_n": crb_n,
+        "crb_sigma_e": crb_e,
+    }
+
+
 def _paper_fit(values: FloatArray, p: int, d: int, cfg: AriConfig) -> dict[str, Any]:
     """The paper's estimator on one real column at the order ``(p, d)`` found by the exact one."""
     seen = np.flatnonzero(np.isfinite(values))
@@ -477,13 +484,7 @@ def _paper_fit(values: FloatArray, p: int, d: int, cfg: AriConfig) -> dict[str, 
     elapsed = time.perf_counter() - t0
     crb_n, crb_e = sigma_bounds(res, conditional=True)
     return {
-        "status": str(res.status),
-        "sigma_n": res.sigma_n,
-        "sigma_e": res.sigma_e,
-        "sigma_x": res.sigma_x_rms,
-        "r": [float(v) for v in res.autocorr],
-        "crb_sigma_n": crb_n,
-        "crb_sigma_e": crb_e,
+        **_estimates(res, crb_n, crb_e),
         "n_flagged": res.n_flagged,
         "n_iter": res.n_iter,
         "seconds": elapsed,
