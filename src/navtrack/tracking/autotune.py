@@ -378,26 +378,19 @@ def steady_innovation_variance(q: float, sigma_m: float, dt_s: float) -> float:
     """Per-axis innovation variance of a CV filter in steady state at report interval ``dt_s``.
 
     Nearly-constant-velocity model of continuous white-acceleration PSD ``q`` (m²/s³) on one
-    axis, position measured with standard deviation ``sigma_m`` every ``dt_s`` seconds: the
-    Riccati recursion is iterated to its fixed point (it converges geometrically for any
-    ``q, σ > 0``) and ``S = P_pred[0, 0] + σ²`` is returned; ``σ²`` for ``dt_s = 0``.
+    axis (:func:`~navtrack.tracking.models.constant_velocity`), position measured with standard
+    deviation ``sigma_m`` every ``dt_s`` seconds: the steady predicted covariance ``P`` solves
+    the filter's discrete algebraic Riccati equation (``scipy.linalg.solve_discrete_are``), and
+    ``S = P[0, 0] + σ²`` is returned; ``σ²`` for ``dt_s = 0``.
     """
     if not dt_s > 0:
         return sigma_m**2
-    F = np.array([[1.0, dt_s], [0.0, 1.0]])
-    Q = q * np.array([[dt_s**3 / 3, dt_s**2 / 2], [dt_s**2 / 2, dt_s]])
-    r = sigma_m**2
-    P = np.diag([r, r / dt_s**2 + q * dt_s])
-    s = r
-    for _ in range(500):
-        M = F @ P @ F.T + Q
-        s_new = float(M[0, 0] + r)
-        K = M[:, 0] / s_new
-        P = M - np.outer(K, M[0, :])
-        if abs(s_new - s) <= 1e-12 * s_new:
-            break
-        s = s_new
-    return s_new
+    from scipy.linalg import solve_discrete_are
+
+    motion = constant_velocity(1, q, "continuous")
+    H = np.array([[1.0, 0.0]])
+    P = solve_discrete_are(motion.F(dt_s).T, H.T, motion.Q(dt_s), np.array([[sigma_m**2]]))
+    return float(P[0, 0] + sigma_m**2)
 
 
 def _track_intervals(t_s: FloatArray, result: TrackerResult) -> tuple[FloatArray, FloatArray]:
