@@ -38,6 +38,19 @@ X0 = np.array([[-29500.0, 400.0, 34500.0, -400.0]])
 P0 = np.diag([300.0**2, 30.0**2, 300.0**2, 30.0**2])[None]
 
 
+@pytest.fixture(params=["numpy", "compiled"])
+def gauss_newton(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
+    """Run a test through each path of the equivalent measurement's Gauss-Newton loop: the
+    NumPy loop, and the compiled range-bearing loop (skipped without numba)."""
+    import navtrack.tracking.multisensor as ms
+
+    if request.param == "numpy":
+        monkeypatch.setattr(ms, "_compiled_gauss_newton", lambda: None)
+    elif ms._compiled_gauss_newton() is None:
+        pytest.skip("numba is not installed")
+    return str(request.param)
+
+
 def _one_target_scans(K: int, rng: np.random.Generator, t_offset: np.ndarray | None = None):
     t = np.repeat(np.arange(K, dtype=float)[:, None], 3, axis=1)
     if t_offset is not None:
@@ -117,7 +130,9 @@ def _scaled(eps: float):
 
 
 @pytest.mark.parametrize("seed", [0, 1])
-def test_equivalent_measurement_update_is_the_centralised_ekf_to_first_order(seed: int) -> None:
+def test_equivalent_measurement_update_is_the_centralised_ekf_to_first_order(
+    seed: int, gauss_newton: str
+) -> None:
     """One target, no clutter, P_D = 1, three sensors: ``sdcmsjpda`` (EKF update with the
     tuple's ML equivalent measurement) equals the stacked EKF (``parallel``, tested above
     against the oracle) up to the linearisation error, which shrinks with the noise."""
@@ -150,7 +165,7 @@ def test_equivalent_measurement_update_is_the_centralised_ekf_to_first_order(see
     assert rel[1] < 0.2 * rel[0]
 
 
-def test_equivalent_measurement_is_the_ml_fusion_of_the_tuple() -> None:
+def test_equivalent_measurement_is_the_ml_fusion_of_the_tuple(gauss_newton: str) -> None:
     """Noise-free tuples give the true position exactly and the Cramér-Rao covariance
     ``(Σ J_sᵀ R_s⁻¹ J_s)⁻¹`` at it; with noise the fit equals an independent ML solver
     (``scipy.optimize.least_squares``) on the whitened residuals."""
@@ -278,7 +293,7 @@ def test_two_target_parallel_step_is_the_mixture_over_enumerated_events(seed: in
         np.testing.assert_allclose(Pn[t], Pm, rtol=1e-7, atol=1e-6)
 
 
-def test_equivalent_measurement_not_converged_keeps_the_linearised_step() -> None:
+def test_equivalent_measurement_not_converged_keeps_the_linearised_step(gauss_newton: str) -> None:
     """A target passing over sensor 1 (true range 150 m, measured range below zero): the
     Gauss-Newton fit of that single detection does not settle; the tuple keeps its first,
     prediction-linearised step."""
@@ -450,3 +465,30 @@ def test_all_sensors_silent_for_a_while() -> None:
         assert np.all(np.diff(np.trace(r.P[14:20, 0], axis1=-2, axis2=-1)) > 0), alg
         err = np.hypot(*(r.x[:, 0, [0, 2]] - truth[:, [0, 2]]).T)
         assert np.sqrt(np.mean(err[25:] ** 2)) < 250.0, alg
+
+
+@pytest.mark.parametrize(("position_index", "from_north"), [((0, 2), False), ((2, 0), True)])
+def test_compiled_gauss_newton_equals_the_numpy_loop(
+    position_index: tuple[int, int], from_north: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The compiled range-bearing loop and the NumPy loop of ``equivalent_measurement`` give
+    the same equivalent measurements (rounding only) on noisy tuples of 1-3 detections, also
+    with the position components in reverse order and bearings from north."""
+    import navtrack.tracking.multisensor as ms
+
+    if ms._compiled_gauss_newton() is None:
+        pytest.skip("numba is not installed")
+    sensors = [RangeBearing(m.R, m.sensor_xy, position_index, 4, from_north) for m in SENSORS]
+    rng = np.random.default_rng(11)
+    x = np.zeros((200, 4))
+    x[:, list(position_index)] = rng.uniform([-30000, 20000], [30000, 40000], (200, 2))
+    z = measure(sensors, x)[0] + rng.standard_normal((200, 3, 2)) * np.array([200.0, 0.02])
+    hit = rng.random((200, 3)) < 0.7
+    hit[~hit.any(axis=1), 1] = True
+    x_ref = x + rng.normal(0.0, 400.0, x.shape)
+    compiled = ms.equivalent_measurement(z, hit, sensors, x_ref)
+    monkeypatch.setattr(ms, "_compiled_gauss_newton", lambda: None)
+    plain = ms.equivalent_measurement(z, hit, sensors, x_ref)
+    np.testing.assert_array_equal(compiled[0], plain[0])
+    np.testing.assert_allclose(compiled[1], plain[1], rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(compiled[2], plain[2], rtol=1e-9)

@@ -30,7 +30,6 @@ References
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -38,15 +37,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from navtrack._frozen import freeze_arrays
+from navtrack._numba import numba_module
 from navtrack._typing import ArrayLike, FloatArray
 
-_numba: Any
-try:  # optional accelerator (extra ``speed``): propagation as one compiled loop
-    if os.environ.get("NAVTRACK_NO_NUMBA"):
-        raise ImportError("disabled by NAVTRACK_NO_NUMBA")
-    import numba as _numba
-except ImportError:
-    _numba = None
+_numba: Any = numba_module()  # optional accelerator: propagation as one compiled loop
 
 __all__ = [
     "HAVE_NUMBA",

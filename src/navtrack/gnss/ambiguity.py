@@ -27,9 +27,7 @@ bootstrapping. Journal of Geodesy 72, 606-612 (bootstrapped success rate, eq. 7)
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import os
 from dataclasses import dataclass
 from enum import IntEnum
 from typing import Any
@@ -37,24 +35,8 @@ from typing import Any
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
+from navtrack._numba import HAVE_NUMBA, numba_module
 from navtrack._typing import FloatArray, IntArray
-
-
-def _numba_module() -> Any:
-    """numba, or None when it is not installed or disabled by ``NAVTRACK_NO_NUMBA``."""
-    if os.environ.get("NAVTRACK_NO_NUMBA"):
-        return None
-    try:
-        import numba
-    except ImportError:
-        return None
-    return numba
-
-
-#: True when the LAMBDA kernels can be compiled (numba installed; extra ``speed``).
-HAVE_NUMBA = importlib.util.find_spec("numba") is not None and not os.environ.get(
-    "NAVTRACK_NO_NUMBA"
-)
 
 __all__ = [
     "COMPILE_MIN_AMBIGUITIES",
@@ -306,7 +288,7 @@ def _kernel(name: str, n: int) -> tuple[Any, bool]:
     if not HAVE_NUMBA or n < COMPILE_MIN_AMBIGUITIES:
         return py, False
     if name not in _COMPILED:
-        numba = _numba_module()
+        numba = numba_module()
         _COMPILED[name] = py if numba is None else numba.njit(cache=True, nogil=True)(py)
     return _COMPILED[name], _COMPILED[name] is not py
 

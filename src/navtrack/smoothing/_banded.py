@@ -24,22 +24,16 @@ The band of the inverse is returned by diagonal offset: ``zb[l, t] = Z[t, t + l]
 
 from __future__ import annotations
 
-import os
 from contextlib import AbstractContextManager, nullcontext
 from typing import Any
 
 import numpy as np
 import scipy.linalg
 
+from navtrack._numba import numba_module
 from navtrack._typing import FloatArray
 
-_numba: Any
-try:  # optional accelerator (extra ``speed``); everything works without it
-    if os.environ.get("NAVTRACK_NO_NUMBA"):
-        raise ImportError("disabled by NAVTRACK_NO_NUMBA")
-    import numba as _numba
-except ImportError:
-    _numba = None
+_numba: Any = numba_module()  # optional accelerator; everything works without it
 
 __all__ = [
     "HAVE_NUMBA",

@@ -44,6 +44,7 @@ __all__ = [
     "constant_velocity",
     "linear_position",
     "measure",
+    "range_bearing_group",
     "wrap_angle",
 ]
 
@@ -445,6 +446,18 @@ def _range_bearing_jacobian(
     return J
 
 
+def range_bearing_group(
+    models: Sequence[MeasurementModel],
+) -> tuple[RangeBearing, FloatArray] | None:
+    """``(first model, sensor positions (S, 2))`` when all ``models`` are range-bearing with one
+    ``position_index``, ``dim_x`` and ``from_north`` (evaluated together by :func:`measure`),
+    else None. Cached per tuple of models, unless a model cannot be hashed."""
+    try:
+        return _range_bearing_group(tuple(models))
+    except TypeError:
+        return _range_bearing_group.__wrapped__(tuple(models))
+
+
 @lru_cache(maxsize=32)
 def _range_bearing_group(
     models: tuple[MeasurementModel, ...],
@@ -477,10 +490,7 @@ def measure(models: Sequence[MeasurementModel], x: ArrayLike) -> tuple[FloatArra
     H : (..., S, m, n) ``∂h_s / ∂x`` at ``x``
     """
     x = np.asarray(x, dtype=float)
-    try:
-        group = _range_bearing_group(tuple(models))
-    except TypeError:  # a model that cannot be hashed: no cache
-        group = _range_bearing_group.__wrapped__(tuple(models))
+    group = range_bearing_group(models)
     if group is not None:
         m0, xy = group
         dx, dy = _offsets(x, xy, m0.position_index)

@@ -111,8 +111,9 @@ References
 
 from __future__ import annotations
 
+import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Literal
@@ -120,6 +121,7 @@ from typing import Literal
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
+from navtrack._numba import numba_module
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
 from navtrack.tracking.assignment import SdProblem, SdStatus, sd_assign
 from navtrack.tracking.gating import chi2_threshold, gate
@@ -131,7 +133,13 @@ from navtrack.tracking.jpda import (
     n_joint_events,
 )
 from navtrack.tracking.kalman import gain_update, innovation_gain, kf_predict, stacked_inverse
-from navtrack.tracking.models import LinearMotion, MeasurementModel, measure, wrap_angle
+from navtrack.tracking.models import (
+    LinearMotion,
+    MeasurementModel,
+    measure,
+    range_bearing_group,
+    wrap_angle,
+)
 
 __all__ = [
     "ALGORITHMS",
@@ -477,7 +485,12 @@ def equivalent_measurement(
     one product (``R_s⁻¹ = C_s C_sᵀ``), zeroes the rows of sensors not in the tuple, sums the
     normal equations and solves them (Cramer's rule for ``n_o = 2``); a tuple whose step fell
     below ``tol`` leaves the batch, and the loop ends when none is left. ``R_eq`` is inverted
-    once, at the end.
+    once, at the end. With numba installed (extra ``speed``) and range-bearing sensors that
+    share one ``position_index`` (:func:`~navtrack.tracking.models.range_bearing_group`), the
+    same loop runs compiled, one tuple at a time in scalar arithmetic
+    (:func:`_gauss_newton_range_bearing`; the tests check both paths against each other): on
+    the paper's scenario it takes a step from 2.2 to 1.4 ms, the few hundred small NumPy calls
+    of the batched loop being most of its cost.
 
     Parameters
     ----------
@@ -497,8 +510,8 @@ def equivalent_measurement(
         two model evaluations suffice on 93 % of the scans
     linearised : optional ``(J (n_L, S, m, n), r (n_L, S, m))``, the Jacobians and wrapped
         residuals ``z_s - h_s(x_ref)`` at ``x_ref`` when the caller already has them (the
-        tracker's Jacobians and innovations at the prediction): the first iteration then
-        evaluates no model
+        tracker's Jacobians and innovations at the prediction): the first iteration of the
+        NumPy loop then evaluates no model (the compiled loop evaluates them itself)
 
     Returns
     -------
@@ -520,6 +533,16 @@ def equivalent_measurement(
     n_L, S_, m = z.shape
     n_o = o.size
     Ct, angle = _sensor_constants(sensors)[1:]
+    group = range_bearing_group(sensors)
+    kernel = _compiled_gauss_newton()
+    if kernel is not None and group is not None and n_L:
+        ij = np.array(group[0].position_index)
+        if np.array_equal(np.sort(ij), o):
+            p0 = np.broadcast_to(x_ref, (n_L, n))[:, ij]
+            p, info = kernel(z, hit, p0, group[1], Ct, group[0].from_north, iterations, tol)
+            if ij[0] > ij[1]:  # back to the order of o
+                p, info = p[:, ::-1], info[:, ::-1, ::-1]
+            return o.astype(np.int64), p, stacked_inverse(info)
     # the tuple axis last (k tuples): residuals (S, m, k), whitened rows (S, m, n_o, k), those
     # of a sensor missing from a tuple weighted 0, normal equations (n_o, n_o, k)
     w = hit.T[:, None, None, :]
@@ -550,6 +573,82 @@ def equivalent_measurement(
     # not converged: the first step, linearised at x_ref
     x[todo], info_last[..., todo] = first[0][todo], first[1][..., todo]
     return o.astype(np.int64), x[:, o], stacked_inverse(info_last.transpose(2, 0, 1))
+
+
+def _gauss_newton_range_bearing(
+    z: FloatArray,
+    hit: BoolArray,
+    p0: FloatArray,
+    xy: FloatArray,
+    Ct: FloatArray,
+    from_north: bool,
+    iterations: int,
+    tol: float,
+) -> tuple[FloatArray, FloatArray]:
+    """The Gauss-Newton loop of :func:`equivalent_measurement` for range-bearing sensors, one
+    tuple at a time in scalar arithmetic (compiled by numba: :func:`_compiled_gauss_newton`).
+
+    ``z (n_L, S, 2)``, ``hit (n_L, S)``, start positions ``p0 (n_L, 2)`` (the state's
+    ``position_index`` components), sensor positions ``xy (S, 2)``, whitening ``Ct (S, 2,
+    2)``. The same steps, stopping rule and fallback to the first step as the NumPy loop.
+    Returns the positions ``(n_L, 2)`` and information matrices ``(n_L, 2, 2)``.
+    """
+    n_L, S_ = hit.shape
+    out = np.empty((n_L, 2))
+    info = np.empty((n_L, 2, 2))
+    two_pi = 2.0 * math.pi
+    for k in range(n_L):
+        px, py = p0[k, 0], p0[k, 1]
+        first = (px, py, 0.0, 0.0, 0.0)
+        a00 = a01 = a11 = 0.0
+        converged = False
+        for it in range(iterations):
+            a00 = a01 = a11 = g0 = g1 = 0.0
+            for s in range(S_):
+                if not hit[k, s]:
+                    continue
+                dx, dy = px - xy[s, 0], py - xy[s, 1]
+                r2 = dx * dx + dy * dy
+                r = math.sqrt(r2)
+                if from_north:
+                    bearing, j10, j11 = math.atan2(dx, dy), dy / r2, -dx / r2
+                else:
+                    bearing, j10, j11 = math.atan2(dy, dx), -dy / r2, dx / r2
+                j00, j01 = dx / r, dy / r
+                e0 = z[k, s, 0] - r
+                e1 = (z[k, s, 1] - bearing + math.pi) % two_pi - math.pi
+                c00, c01, c10, c11 = Ct[s, 0, 0], Ct[s, 0, 1], Ct[s, 1, 0], Ct[s, 1, 1]
+                b00, b01 = c00 * j00 + c01 * j10, c00 * j01 + c01 * j11
+                b10, b11 = c10 * j00 + c11 * j10, c10 * j01 + c11 * j11
+                w0, w1 = c00 * e0 + c01 * e1, c10 * e0 + c11 * e1
+                a00 += b00 * b00 + b10 * b10
+                a01 += b00 * b01 + b10 * b11
+                a11 += b01 * b01 + b11 * b11
+                g0 += b00 * w0 + b10 * w1
+                g1 += b01 * w0 + b11 * w1
+            det = a00 * a11 - a01 * a01
+            d0, d1 = (a11 * g0 - a01 * g1) / det, (a00 * g1 - a01 * g0) / det
+            px, py = px + d0, py + d1
+            if it == 0:
+                first = (px, py, a00, a01, a11)
+            if d0 * g0 + d1 * g1 < tol * tol:
+                converged = True
+                break
+        if not converged:  # the first step, linearised at the start
+            px, py, a00, a01, a11 = first
+        out[k, 0], out[k, 1] = px, py
+        info[k, 0, 0], info[k, 0, 1], info[k, 1, 0], info[k, 1, 1] = a00, a01, a01, a11
+    return out, info
+
+
+@lru_cache(maxsize=1)
+def _compiled_gauss_newton() -> Callable[..., tuple[FloatArray, FloatArray]] | None:
+    """:func:`_gauss_newton_range_bearing` compiled by numba (on first use), or None without
+    numba: :func:`equivalent_measurement` then runs its NumPy loop."""
+    numba = numba_module()
+    if numba is None:
+        return None
+    return numba.njit(cache=True, nogil=True)(_gauss_newton_range_bearing)
 
 
 def _solve_last(A: FloatArray, b: FloatArray) -> FloatArray:
