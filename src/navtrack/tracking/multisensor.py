@@ -539,7 +539,9 @@ def equivalent_measurement(
         ij = np.array(group[0].position_index)
         if np.array_equal(np.sort(ij), o):
             p0 = np.broadcast_to(x_ref, (n_L, n))[:, ij]
-            p, info = kernel(z, hit, p0, group[1], Ct, group[0].from_north, iterations, tol)
+            # fresh C arrays: the argument types the kernel was compiled for
+            zc, hc = np.array(z, dtype=float), np.array(hit, dtype=bool)
+            p, info = kernel(zc, hc, p0, group[1], Ct, group[0].from_north, iterations, tol)
             if ij[0] > ij[1]:  # back to the order of o
                 p, info = p[:, ::-1], info[:, ::-1, ::-1]
             return o.astype(np.int64), p, stacked_inverse(info)
@@ -643,12 +645,22 @@ def _gauss_newton_range_bearing(
 
 @lru_cache(maxsize=1)
 def _compiled_gauss_newton() -> Callable[..., tuple[FloatArray, FloatArray]] | None:
-    """:func:`_gauss_newton_range_bearing` compiled by numba (on first use), or None without
-    numba: :func:`equivalent_measurement` then runs its NumPy loop."""
+    """:func:`_gauss_newton_range_bearing` compiled by numba, or None without numba
+    (:func:`equivalent_measurement` then runs its NumPy loop).
+
+    Compiled on the first call (about a second; loaded from numba's disk cache afterwards, a
+    tenth of that) for the argument types :func:`equivalent_measurement` passes: writable
+    ``z``, ``hit``, ``p0``, read-only (cached) sensor positions and whitening.
+    """
     numba = numba_module()
     if numba is None:
         return None
-    return numba.njit(cache=True, nogil=True)(_gauss_newton_range_bearing)
+    kernel = numba.njit(cache=True, nogil=True)(_gauss_newton_range_bearing)
+    fixed = np.zeros((1, 2)), np.eye(2)[None]
+    for a in fixed:
+        a.setflags(write=False)
+    kernel(np.ones((1, 1, 2)), np.ones((1, 1), dtype=bool), np.ones((1, 2)), *fixed, False, 1, 0.0)
+    return kernel
 
 
 def _solve_last(A: FloatArray, b: FloatArray) -> FloatArray:
@@ -677,7 +689,7 @@ def _sensor_constants(sensors: Sequence[MeasurementModel]) -> tuple[FloatArray, 
 @lru_cache(maxsize=16)
 def _constants_of(sensors: tuple[MeasurementModel, ...]) -> tuple[FloatArray, ...]:
     R = np.array([model.R for model in sensors])
-    Ct = np.swapaxes(np.linalg.cholesky(np.linalg.inv(R)), 1, 2)
+    Ct = np.ascontiguousarray(np.swapaxes(np.linalg.cholesky(np.linalg.inv(R)), 1, 2))
     angle = np.array([model.angle_mask for model in sensors])
     for a in (R, Ct, angle):
         a.setflags(write=False)
@@ -936,6 +948,8 @@ def run_fusion(
     Ps = np.empty((K, *P.shape))
     gaps = 0
     elapsed = 0.0
+    if algorithm.startswith("sdcmsjpda"):
+        _compiled_gauss_newton()  # a one-off compilation is no part of a step's time
     for k in range(K):
         ts = scans.t_s[k]
         if centralised and np.ptp(ts) > config.time_tolerance_s:
