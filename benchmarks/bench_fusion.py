@@ -1,12 +1,13 @@
 """Fusion trackers: CPU ms per step on the paper-3 scenario, this checkout against a git revision.
 
 Run: ``PYTHONPATH=src python benchmarks/bench_fusion.py [--baseline REV] [--repeat 5]
-[--runs 2] [--clutter gate|box] [--algorithms a,b,...]``.
+[--runs 2] [--clutter gate|box] [--algorithms a,b,...] [--no-numba-too]``.
 
 The scans (paper-3 scenario, :mod:`navtrack.experiments.sdcmsjpda.scenario`, ``--runs`` scan
 sets per P_D = 0.97, 0.76, 0.58, seed ``--seed``) are simulated once by this checkout and
 written to a temporary file. One worker process per code tree loads them: this checkout's
-``src`` and, with ``--baseline REV``, the ``src`` of revision ``REV`` (``git archive``). After
+``src`` and, with ``--baseline REV``, the ``src`` of revision ``REV`` (``git archive``); with
+``--no-numba-too`` also this checkout with numba disabled (its NumPy paths). After
 one untimed warm-up pass per tracker, the workers run each tracker on each scan set in turn,
 the two trees alternating on every scan set (order swapped every time), and report
 ``FusionResult.ms_per_step`` (CPU time of the fusion step, ``time.thread_time``, as the study's
@@ -115,8 +116,10 @@ def tree_of(rev: str, where: Path) -> Path:
 class Tree:
     """A worker process on one code tree."""
 
-    def __init__(self, src: Path, scans: Path) -> None:
+    def __init__(self, src: Path, scans: Path, no_numba: bool = False) -> None:
         env = {**os.environ, "PYTHONPATH": str(src)}
+        if no_numba:
+            env["NAVTRACK_NO_NUMBA"] = "1"
         cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", str(scans)]
         self.proc = subprocess.Popen(
             cmd, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
@@ -158,6 +161,11 @@ def main() -> None:
     ap.add_argument("--clutter", default="gate", choices=["gate", "box"])
     ap.add_argument("--algorithms", default=DEFAULT_ALGORITHMS)
     ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument(
+        "--no-numba-too",
+        action="store_true",
+        help="also run this checkout without numba (NAVTRACK_NO_NUMBA=1): the NumPy paths",
+    )
     ap.add_argument("--worker", type=Path, help=argparse.SUPPRESS)
     args = ap.parse_args()
     algorithms = args.algorithms.split(",")
@@ -172,6 +180,8 @@ def main() -> None:
         if args.baseline:
             srcs[args.baseline] = tree_of(args.baseline, tmp / "baseline")
         trees = {name: Tree(src, scans) for name, src in srcs.items()}
+        if args.no_numba_too:
+            trees["numpy"] = Tree(ROOT / "src", scans, no_numba=True)
         n_sets = 3 * args.runs
         print(
             f"paper-3 scenario, {args.clutter} clutter, {args.runs} scan sets per P_D (seed "
@@ -204,13 +214,19 @@ def main() -> None:
             tree.close()
         med = {t: {a: statistics.median(v) for a, v in times[t].items()} for t in trees}
         head = f"{'tracker':20s} {'this ms':>8s}"
+        if args.no_numba_too:
+            head += f" {'no numba ms':>12s} {'ratio':>6s} {'max |dx|/sigma':>15s}"
+            diff_np = max_sigma_difference(tmp / "post_this.npz", tmp / "post_numpy.npz")
         if args.baseline:
             head += f" {args.baseline + ' ms':>12s} {'ratio':>6s} {'max |dx|/sigma':>15s}"
             diff = max_sigma_difference(tmp / "post_this.npz", tmp / f"post_{args.baseline}.npz")
         print(f"\nmedians over {args.repeat} repeats x {n_sets} scan sets (ratio: median of the")
-        print(f"paired ratios, baseline / this)\n{head}")
+        print(f"paired ratios, other / this)\n{head}")
         for a in algorithms:
             line = f"{a:20s} {med['this'][a]:8.2f}"
+            if args.no_numba_too:
+                pairs = np.array(times["numpy"][a]) / np.array(times["this"][a])
+                line += f" {med['numpy'][a]:12.2f} {np.median(pairs):6.2f} {diff_np[a]:15.2e}"
             if args.baseline:
                 b = med[args.baseline][a]
                 pairs = np.array(times[args.baseline][a]) / np.array(times["this"][a])

@@ -136,6 +136,7 @@ from navtrack.tracking.kalman import gain_update, innovation_gain, kf_predict, s
 from navtrack.tracking.models import (
     LinearMotion,
     MeasurementModel,
+    RangeBearing,
     measure,
     range_bearing_group,
     wrap_angle,
@@ -521,8 +522,13 @@ def equivalent_measurement(
     """
     x_ref = np.asarray(x_ref, dtype=float)
     n = x_ref.shape[-1]
-    J0 = measure(sensors, x_ref)[1] if linearised is None else np.asarray(linearised[0])
-    o = np.flatnonzero((J0 != 0.0).reshape(-1, n).any(axis=0))
+    group = range_bearing_group(sensors)
+    compiled = _compiled_range_bearing(sensors)
+    if group is not None:  # range-bearing: the position components, in state order
+        o = np.sort(np.array(group[0].position_index))
+    else:
+        J0 = measure(sensors, x_ref)[1] if linearised is None else np.asarray(linearised[0])
+        o = np.flatnonzero((J0 != 0.0).reshape(-1, n).any(axis=0))
     if any(model.dim_z < o.size for model in sensors):
         raise ValueError(
             f"equivalent_measurement: every sensor must observe the {o.size} state "
@@ -533,18 +539,16 @@ def equivalent_measurement(
     n_L, S_, m = z.shape
     n_o = o.size
     Ct, angle = _sensor_constants(sensors)[1:]
-    group = range_bearing_group(sensors)
-    kernel = _compiled_gauss_newton()
-    if kernel is not None and group is not None and n_L:
-        ij = np.array(group[0].position_index)
-        if np.array_equal(np.sort(ij), o):
-            p0 = np.broadcast_to(x_ref, (n_L, n))[:, ij]
-            # fresh C arrays: the argument types the kernel was compiled for
-            zc, hc = np.array(z, dtype=float), np.array(hit, dtype=bool)
-            p, info = kernel(zc, hc, p0, group[1], Ct, group[0].from_north, iterations, tol)
-            if ij[0] > ij[1]:  # back to the order of o
-                p, info = p[:, ::-1], info[:, ::-1, ::-1]
-            return o.astype(np.int64), p, stacked_inverse(info)
+    if compiled is not None:
+        kernel, (model, xy) = compiled
+        ij = np.array(model.position_index)
+        p0 = np.broadcast_to(x_ref, (n_L, n))[:, ij]
+        # fresh C arrays: the argument types the kernel was compiled for
+        zc, hc = np.array(z, dtype=float), np.array(hit, dtype=bool)
+        p, info = kernel(zc, hc, p0, xy, Ct, model.from_north, iterations, tol)
+        if ij[0] > ij[1]:  # back to the order of o
+            p, info = p[:, ::-1], info[:, ::-1, ::-1]
+        return o.astype(np.int64), p, stacked_inverse(info)
     # the tuple axis last (k tuples): residuals (S, m, k), whitened rows (S, m, n_o, k), those
     # of a sensor missing from a tuple weighted 0, normal equations (n_o, n_o, k)
     w = hit.T[:, None, None, :]
@@ -554,7 +558,8 @@ def equivalent_measurement(
     todo = np.arange(n_L)  # the tuples not converged yet
     for it in range(iterations):
         if it == 0 and linearised is not None:
-            J, r = J0[..., o], np.asarray(linearised[1]).transpose(1, 2, 0)
+            J = np.asarray(linearised[0])[..., o]
+            r = np.asarray(linearised[1]).transpose(1, 2, 0)
         else:
             zp, J = measure(sensors, x[todo])
             J, r = J[..., o], zt[..., todo] - zp.transpose(1, 2, 0)
@@ -663,6 +668,17 @@ def _compiled_gauss_newton() -> Callable[..., tuple[FloatArray, FloatArray]] | N
     return kernel
 
 
+def _compiled_range_bearing(
+    sensors: Sequence[MeasurementModel],
+) -> tuple[Callable[..., tuple[FloatArray, FloatArray]], tuple[RangeBearing, FloatArray]] | None:
+    """The compiled Gauss-Newton loop and the sensors' range-bearing group (first model,
+    positions) when both exist (numba installed, all sensors range-bearing with one
+    ``position_index``), else None."""
+    group = range_bearing_group(sensors)
+    kernel = _compiled_gauss_newton() if group is not None else None
+    return None if kernel is None or group is None else (kernel, group)
+
+
 def _solve_last(A: FloatArray, b: FloatArray) -> FloatArray:
     """Solutions ``(n, k)`` of ``k`` linear systems stored with the system axis last, ``A (n,
     n, k)``, ``b (n, k)`` (closed form for ``n = 2``: the adjugate over the determinant)."""
@@ -728,11 +744,13 @@ def _equivalent_updates(
     if some.size:
         t, j = target[some], np.maximum(L[some] - 1, 0)  # j: any index where not in the tuple
         sidx = np.arange(L.shape[1])
-        J = terms.H[:, t].transpose(1, 0, 2, 3)  # (n, S, m, n_x) at the prediction
-        r = terms.innovation[sidx, t[:, None], j]  # (n, S, m)
+        linearised = None
+        if _compiled_range_bearing(sensors) is None:  # the NumPy loop starts from these
+            J = terms.H[:, t].transpose(1, 0, 2, 3)  # (n, S, m, n_x) at the prediction
+            linearised = J, terms.innovation[sidx, t[:, None], j]  # and (n, S, m)
         xt, Pt = xp[t], Pp[t]
         o, zeta, R_eq = equivalent_measurement(
-            terms.z[sidx, j], hit[some], sensors, xt, linearised=(J, r)
+            terms.z[sidx, j], hit[some], sensors, xt, linearised=linearised
         )
         S, K = innovation_gain(Pt, np.eye(xp.shape[-1])[o], R_eq)
         x[some], P[some] = gain_update(xt, Pt, zeta - xt[:, o], K, S, symmetrize=False)
