@@ -1111,6 +1111,7 @@ class _Cell:
     forced: IntArray  # tuples in every solution of the cell
     free: BoolArray  # (K,) not forbidden and sharing no real element with a forced tuple
     bound: float  # lower bound on the cell's costs known before solving it (the parent's)
+    start: IntArray | None = None  # a solution of the cell known before solving it
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -1197,7 +1198,7 @@ def _solve_cell(
     """Best solution found in the cell and a lower bound on its costs.
 
     ``(None, inf)``: the cell is empty. ``(None, bound)``: unresolved (the relaxation kept a
-    penalty singleton, the cell is too large for milp).
+    penalty singleton, the cell is too large for milp and came with no start).
     """
     rem = _remainder(problem, cell)
     if rem is None:
@@ -1211,7 +1212,7 @@ def _solve_cell(
     if opt.method == "exact" and small:
         sol, st = _milp(R, real, opt.time_limit_s, "optimal (milp)")
         if sol is not None:
-            return _lift(problem, cell, rem, sol, opt, head, "")
+            return _exact_in_cell(problem, cell, rem, sol, head)
         if st == _MILP_INFEASIBLE:
             return None, np.inf
         too_large = f"milp found no optimum (status {st})"
@@ -1219,46 +1220,82 @@ def _solve_cell(
     elif opt.method == "exact":
         too_large = f"{n_free} tuples > max_exact_tuples = {opt.max_exact_tuples}"
     relaxed = sd_assign(R, "lagrangian", max_iter=opt.max_iter, tol=opt.tol)
+    if relaxed.method != SdMethod.LAGRANGIAN:  # S = 2: the penalised problem solved exactly
+        if np.all(real[relaxed.selected]):
+            return _exact_in_cell(problem, cell, rem, relaxed, head)
+        return None, np.inf
+    bound = rem.forced_cost + relaxed.lower_bound
+    found = []  # (cost, selected, how)
     if np.all(real[relaxed.selected]):
-        return _lift(problem, cell, rem, relaxed, opt, head, too_large)
+        mine = np.r_[cell.forced, rem.tuple_of[relaxed.selected]]
+        found.append((float(problem.cost[mine].sum()), mine, f"remainder {relaxed.message}"))
+    if cell.start is not None:
+        how = f"the parent's solution with one tuple re-covered (remainder {relaxed.message})"
+        found.append((float(problem.cost[cell.start].sum()), cell.start, how))
+    if found:
+        _, selected, how = min(found, key=lambda f: f[0])
+        sol = _solution(problem, selected, -np.inf, 0, SdMethod.LAGRANGIAN, SdStatus.GAP, "")
+        lb = min(max(cell.bound, bound), sol.cost)
+        if too_large:
+            status = SdStatus.TOO_LARGE
+            how = f"exact solver not used ({too_large}); Lagrangian relaxation, {how}"
+        else:
+            closed = sol.cost - lb <= opt.tol * max(abs(sol.cost), 1e-12)
+            status = SdStatus.OPTIMAL if closed else SdStatus.GAP
+            how = f"Lagrangian relaxation, {how}"
+        message = f"{head}: {how}"
+        it = relaxed.iterations
+        return _solution(problem, sol.selected, lb, it, SdMethod.LAGRANGIAN, status, message), lb
     # a penalty singleton was kept: the cell is empty, or the relaxation missed its solutions
     if relaxed.lower_bound > rem.max_cost + 1e-9 * max(1.0, abs(rem.max_cost)):
         return None, np.inf
     if small:
         sol, st = _milp(R, real, opt.time_limit_s, "optimal (milp; the relaxation kept a penalty)")
         if sol is not None:
-            return _lift(problem, cell, rem, sol, opt, head, "")
+            return _exact_in_cell(problem, cell, rem, sol, head)
         if st == _MILP_INFEASIBLE:
             return None, np.inf
-    return None, max(cell.bound, rem.forced_cost + relaxed.lower_bound)
+    return None, max(cell.bound, bound)
 
 
-def _lift(
-    problem: SdProblem,
-    cell: _Cell,
-    rem: _Remainder,
-    sol: SdSolution,
-    opt: _KBestOptions,
-    head: str,
-    too_large: str,
+def _exact_in_cell(
+    problem: SdProblem, cell: _Cell, rem: _Remainder, sol: SdSolution, head: str
 ) -> tuple[SdSolution, float]:
-    """The remainder's solution as a solution of the full problem in ``cell``."""
+    """The remainder's exact solution as a solution of the full problem in ``cell``."""
     selected = np.sort(np.r_[cell.forced, rem.tuple_of[sol.selected]])
-    cost = float(problem.cost[selected].sum())  # as _solution sums it
-    lb = min(max(cell.bound, cost - sol.gap), cost)  # cost - gap: exactly cost when gap = 0
-    if sol.method != SdMethod.LAGRANGIAN:
-        status, message = SdStatus.OPTIMAL, f"{head}: {sol.message}"
-    elif too_large:
-        status = SdStatus.TOO_LARGE
-        message = (
-            f"{head}: exact solver not used ({too_large}); Lagrangian relaxation, remainder "
-            f"{sol.message}"
-        )
-    else:
-        closed = cost - lb <= opt.tol * max(abs(cost), 1e-12)
-        status = SdStatus.OPTIMAL if closed else SdStatus.GAP
-        message = f"{head}: Lagrangian relaxation, remainder {sol.message}"
-    return _solution(problem, selected, lb, sol.iterations, sol.method, status, message), lb
+    cost = float(problem.cost[selected].sum())
+    message = f"{head}: {sol.message}"
+    return _solution(problem, selected, cost, 0, sol.method, SdStatus.OPTIMAL, message), cost
+
+
+def _cover(problem: SdProblem, free: BoolArray, tau: int) -> IntArray | None:
+    """Cheapest set of ``free`` tuples covering exactly the real elements of tuple ``tau``
+    (exact cover by dynamic programming over the ``<= S`` elements), None if there is none."""
+    t = problem.tuples
+    row = t[tau]
+    cand = np.flatnonzero(free & np.all((t == 0) | (t == row), axis=1))
+    pos = np.flatnonzero(row > 0)
+    bits = ((t[cand][:, pos] > 0) @ (1 << np.arange(pos.size))).tolist()
+    costs = problem.cost[cand].tolist()
+    full = (1 << pos.size) - 1
+    best = [np.inf] * (full + 1)
+    back: list[tuple[int, int]] = [(0, -1)] * (full + 1)
+    best[0] = 0.0
+    for mask in range(full):
+        if best[mask] == np.inf:
+            continue
+        low = ~mask & (mask + 1)  # the first element not yet covered
+        for b, c, k in zip(bits, costs, cand.tolist(), strict=True):
+            if b & low and not b & mask and best[mask] + c < best[mask | b]:
+                best[mask | b] = best[mask] + c
+                back[mask | b] = (mask, k)
+    if best[full] == np.inf:
+        return None
+    out, mask = [], full
+    while mask:
+        mask, k = back[mask]
+        out.append(k)
+    return np.array(out, dtype=np.int64)
 
 
 def _children(problem: SdProblem, cell: _Cell, sol: SdSolution) -> list[_Cell]:
@@ -1266,7 +1303,8 @@ def _children(problem: SdProblem, cell: _Cell, sol: SdSolution) -> list[_Cell]:
     the cell does not force, child ``j`` forbids ``τ_j`` and forces ``τ_1..τ_{j-1}``.
 
     The tuples with most real elements go first, so the later children (most forced
-    elements) have the smallest remainders.
+    elements) have the smallest remainders. Each child starts from ``sol`` with ``τ_j``
+    replaced by the cheapest cover of its elements that the child allows (:func:`_cover`).
     """
     t = problem.tuples
     mine = sol.selected[~np.isin(sol.selected, cell.forced)]
@@ -1276,7 +1314,9 @@ def _children(problem: SdProblem, cell: _Cell, sol: SdSolution) -> list[_Cell]:
     for tau in mine.tolist():
         child = free.copy()
         child[tau] = False
-        out.append(_Cell(forced, child, sol.lower_bound))
+        cover = _cover(problem, child, tau)
+        start = None if cover is None else np.r_[sol.selected[sol.selected != tau], cover]
+        out.append(_Cell(forced, child, sol.lower_bound, start))
         free &= ~np.any((t == t[tau]) & (t[tau] > 0), axis=1)  # force tau: drop its clashes
         forced = np.append(forced, tau)
     return out
@@ -1326,9 +1366,16 @@ def sd_kbest(
     lies in one of them or costs at least ``cost[k - 1]``.
 
     **Cheaper Murty.** A cell inherits its parent's lower bound (it is a subset of the
-    parent); the partition forces the tuples with most real elements first, so the later
-    cells have small remainders (often under ``max_exact_tuples``); the forced tuples of a
-    cell are never partitioned on again; and no cell is split once ``k`` were taken.
+    parent) and starts from its parent's solution: with ``τ_j`` replaced by the cheapest cover
+    of its elements the cell allows, that solution is in the cell, and a relaxed cell returns
+    it when the relaxation finds nothing cheaper (or keeps a penalty). The partition forces
+    the tuples with most real elements first, so the later cells have small remainders (often
+    under ``max_exact_tuples``); the forced tuples of a cell are never partitioned on again;
+    a cell with an element no allowed tuple covers is dropped unsolved; and no cell is split
+    once ``k`` were taken. Skipping a cell whose inherited bound exceeds the ``k``-th cost
+    found never applies: the parent was the cheapest cell left, so its bound is below every
+    cost in the heap (a child bound tighter than the parent's would need the relaxation's
+    multipliers).
 
     Parameters
     ----------
