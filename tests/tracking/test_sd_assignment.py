@@ -212,6 +212,35 @@ def test_forbidden_singleton_cells(monkeypatch: pytest.MonkeyPatch) -> None:
     assert sd._remainder(p, sd._Cell(np.zeros(0, dtype=np.int64), no_cover, -np.inf)) is None
 
 
+def test_relaxation_keeping_a_penalty(monkeypatch: pytest.MonkeyPatch) -> None:
+    """When the relaxation returns a penalty singleton without a bound proving the cell empty
+    (here forced: a relaxation that returns all singletons and no bound), a small cell is
+    solved by milp, a large one is counted as unresolved and its bound kept, so the ranks
+    after it are not claimed as proven."""
+    from navtrack.tracking import assignment as sd
+
+    def singletons_only(R: SdProblem, *args: object, **kw: object) -> object:
+        sel = np.flatnonzero((R.tuples > 0).sum(axis=1) == 1)
+        return sd._solution(R, sel, -np.inf, 1, SdMethod.LAGRANGIAN, SdStatus.GAP, "stub")
+
+    tup = np.array([[1, 0, 0], [2, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1], [2, 1, 0], [2, 0, 1]])
+    p = SdProblem([2, 1, 1], tup, [0.0, 0.0, 0.0, 0.0, -3.0, -1.0, 2.0])
+    free = np.ones(len(tup), dtype=bool)
+    free[1] = False
+    cell = sd._Cell(np.zeros(0, dtype=np.int64), free, -np.inf)
+    monkeypatch.setattr(sd, "sd_assign", singletons_only)
+    small = sd._solve_cell(p, cell, sd._KBestOptions("lagrangian", 5000, 30, 1e-3, None))
+    assert small[0] is not None
+    assert small[0].method == SdMethod.EXACT
+    assert small[0].cost == pytest.approx(-1.0)
+    large = sd._solve_cell(p, cell, sd._KBestOptions("lagrangian", 0, 30, 1e-3, None))
+    assert large == (None, -np.inf)
+    kb = sd_kbest(p, 3, "lagrangian", max_exact_tuples=0)
+    check_kbest(p, kb)
+    assert kb.cells_unresolved >= 1
+    assert not kb.proven.any()  # an unresolved cell's bound (-inf) is below every rank
+
+
 def test_kbest_bad_arguments() -> None:
     p = random_sd_problem((2, 2, 2), np.random.default_rng(1))
     for k in (0, -1, 2.5, True):

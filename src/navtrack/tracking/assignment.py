@@ -1134,10 +1134,11 @@ def _remainder(problem: SdProblem, cell: _Cell) -> _Remainder | None:
     """The cell's remainder problem, None when an element has no allowed tuple left.
 
     An element whose singleton the cell forbids gets a penalty singleton costing
-    ``M = U - L + 1``, with ``U`` (``L``) the sum over the remaining elements of the largest
-    positive (smallest negative) cost of a free tuple holding it: charging each tuple to one
-    of its elements, every solution within the cell costs at most ``U`` and every other
-    partial solution at least ``L``, so a solution using a penalty costs more than ``U``.
+    ``M = 2 (U - D) + 1``, with ``U`` (``D``) the sum over the remaining elements of the
+    largest positive (smallest negative) cost of a free tuple holding it: charging each tuple
+    to one of its elements, every solution within the cell costs at most ``U`` and every set
+    of disjoint free tuples at least ``D``, so a solution using a penalty costs more than
+    ``U + (U - D)``.
     """
     t, n = problem.tuples, problem.sizes
     S = problem.n_lists
@@ -1150,7 +1151,7 @@ def _remainder(problem: SdProblem, cell: _Cell) -> _Remainder | None:
         number = np.cumsum(~taken) - 1  # new index of each remaining element, 0 the dummy
         new_sizes.append(int(n[s] - taken.sum()))
         parts.append(number[t[idx, s]])
-    tt = np.stack(parts, axis=1) if parts else np.zeros((0, S), dtype=np.int64)
+    tt = np.stack(parts, axis=1)
     c = problem.cost[idx]
     real = tt > 0
     single = real.sum(axis=1) == 1
@@ -1170,10 +1171,11 @@ def _remainder(problem: SdProblem, cell: _Cell) -> _Remainder | None:
             row = np.zeros(S, dtype=np.int64)
             row[s] = i
             extra.append(row)
-    U, L = float(sum(hi)), float(sum(lo))
+    U, D = float(sum(hi)), float(sum(lo))
     rows = np.array(extra, dtype=np.int64).reshape(-1, S)
+    penalty = 2.0 * (U - D) + 1.0
     reduced = SdProblem(
-        np.array(new_sizes), np.vstack([tt, rows]), np.r_[c, np.full(len(rows), U - L + 1.0)]
+        np.array(new_sizes), np.vstack([tt, rows]), np.r_[c, np.full(len(rows), penalty)]
     )
     return _Remainder(
         reduced,
