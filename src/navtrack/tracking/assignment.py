@@ -21,9 +21,12 @@ References
    assignment problems arising from multitarget tracking", SIAM J. Optim. 3(3), 1993.
 .. [6] M. Held, P. Wolfe, H. P. Crowder, "Validation of subgradient optimization", Math.
    Programming 6, 1974 (Polyak step with a halving step factor).
+.. [8] R. L. Popp, K. R. Pattipati, Y. Bar-Shalom, "m-best S-D assignment algorithm with
+   application to multitarget tracking", IEEE T-AES 37(1), 2001 (Murty's ranking over S-D
+   problems whose cells are solved by Lagrangian relaxation).
 
 S-D assignment (``S >= 3`` lists, :func:`sd_assign`) is described in the section comment
-before :class:`SdProblem`.
+before :class:`SdProblem`; its k best solutions (:func:`sd_kbest`) in that function's notes.
 """
 
 from __future__ import annotations
@@ -1072,16 +1075,17 @@ class SdKBest:
     lower_bound : (k,) float
         ``lower_bound[j]`` is at most the true ``(j + 1)``-th best cost of the problem:
         ``min(cost[j], L)``, ``L`` the least lower bound of the parts of the solution space
-        left unexplored. Rank ``j`` is proven when ``lower_bound[j] == cost[j]``.
+        left unexplored. Rank ``j`` is proven when ``lower_bound[j] == cost[j]`` (a milp
+        optimum is proven to HiGHS' default relative gap, 1e-4).
     cells : int
         Murty cells examined (each solved at most once).
     cells_infeasible : int
         Cells found empty: before any solve (an element with no allowed tuple), by milp, or by
         the relaxation's lower bound exceeding every cost the cell allows.
     cells_unresolved : int
-        Cells whose relaxation kept a forbidden singleton without proving the cell empty and
-        that were too large for milp: no solution of theirs is returned, and their lower
-        bounds enter ``lower_bound``.
+        Cells whose relaxation kept a forbidden singleton without proving the cell empty, too
+        large for milp and with no start from the parent: no solution of theirs is returned,
+        and their lower bounds enter ``lower_bound``.
     """
 
     solutions: tuple[SdSolution, ...]
@@ -1401,8 +1405,7 @@ def sd_kbest(
 
     References
     ----------
-    K. G. Murty 1968 [1]_; R. L. Popp, K. R. Pattipati, Y. Bar-Shalom, "m-best S-D assignment
-    algorithm with application to multitarget tracking", IEEE T-AES 37(1), 2001.
+    Murty 1968 [1]_; Popp, Pattipati & Bar-Shalom 2001 [8]_ (module references).
     """
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
         raise ValueError(f"k must be an integer >= 1, got {k!r}")
