@@ -212,11 +212,10 @@ def test_forbidden_singleton_cells(monkeypatch: pytest.MonkeyPatch) -> None:
     assert sd._remainder(p, sd._Cell(np.zeros(0, dtype=np.int64), no_cover, -np.inf)) is None
 
 
-def test_relaxation_keeping_a_penalty(monkeypatch: pytest.MonkeyPatch) -> None:
-    """When the relaxation returns a penalty singleton without a bound proving the cell empty
-    (here forced: a relaxation that returns all singletons and no bound), a small cell is
-    solved by milp, a large one is counted as unresolved and its bound kept, so the ranks
-    after it are not claimed as proven."""
+def test_cells_when_the_relaxation_falls_short(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With a relaxation that returns all singletons and no bound: a cell where that keeps a
+    penalty is solved by milp when small, else counted as unresolved with its bound kept (so
+    no rank is claimed as proven); a cell with a cheaper start from its parent returns it."""
     from navtrack.tracking import assignment as sd
 
     def singletons_only(R: SdProblem, *args: object, **kw: object) -> object:
@@ -239,6 +238,18 @@ def test_relaxation_keeping_a_penalty(monkeypatch: pytest.MonkeyPatch) -> None:
     check_kbest(p, kb)
     assert kb.cells_unresolved >= 1
     assert not kb.proven.any()  # an unresolved cell's bound (-inf) is below every rank
+    # a child forbidding (1,1,1) starts from the parent's solution with (1,1,1) re-covered:
+    # by (1,1,0) and c1, cheaper than what the (stub) relaxation finds
+    q = SdProblem([2, 1, 1], np.vstack([tup, [1, 1, 0]]), np.r_[p.cost, -2.0])
+    parent = sd._solution(q, np.array([1, 4]), -np.inf, 0, SdMethod.LAGRANGIAN, SdStatus.GAP, "")
+    root = sd._Cell(np.zeros(0, dtype=np.int64), np.ones(len(q.tuples), dtype=bool), -np.inf)
+    child = sd._children(q, root, parent)[0]
+    assert child.start is not None
+    assert sorted(child.start.tolist()) == [1, 3, 7]  # a2, c1, (1,1,0)
+    sol, _ = sd._solve_cell(q, child, sd._KBestOptions("lagrangian", 0, 30, 1e-3, None))
+    assert sol is not None
+    assert sol.cost == pytest.approx(-2.0)
+    assert "parent's solution" in sol.message
 
 
 def test_kbest_bad_arguments() -> None:
