@@ -1357,9 +1357,10 @@ def sd_kbest(
     every solution of the cell at its own cost, and its lower bounds are lower bounds of the
     cell; (ii) its optimum uses a penalty only if the cell is empty. A relaxation result
     without penalties is a solution of the cell; one with a penalty whose lower bound exceeds
-    every cost the cell allows proves the cell empty; otherwise the cell is solved by milp when
-    it has at most ``max_exact_tuples`` tuples, else it is counted as unresolved and its bound
-    kept. A cell with an element that no allowed tuple covers is empty without a solve.
+    every cost the cell allows proves the cell empty; otherwise (and without a start from the
+    parent, below) the cell is solved by milp when it has at most ``max_exact_tuples`` tuples,
+    else it is counted as unresolved and its bound kept. A cell with an element that no
+    allowed tuple covers is empty without a solve.
 
     **Guarantees.** Every solution returned is feasible and in its own cell, so they are
     pairwise distinct; they are the ``k`` cheapest of all solutions found, in non-decreasing
