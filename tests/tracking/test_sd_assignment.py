@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from navtrack.tracking.assignment import (
+    SdKBest,
     SdMethod,
     SdProblem,
     SdStatus,
@@ -113,14 +114,155 @@ def test_two_lists_match_assign2d() -> None:
     assert sol.cost == pytest.approx(ref.cost)
 
 
-def test_kbest_against_brute_force() -> None:
-    p = random_sd_problem((2, 2, 2), np.random.default_rng(5))
-    costs = brute_force(p)
-    kb = sd_kbest(p, 6)
-    np.testing.assert_allclose(kb.cost, costs[:6], atol=1e-9)
+def check_kbest(p: SdProblem, kb: SdKBest) -> None:
+    """Feasible, pairwise distinct, non-decreasing; rank bounds below the costs."""
     assert all(p.is_feasible(s.selected) for s in kb.solutions)
-    sets = {tuple(s.selected.tolist()) for s in kb.solutions}
-    assert len(sets) == 6
+    assert len({tuple(s.selected.tolist()) for s in kb.solutions}) == len(kb.solutions)
+    assert np.all(np.diff(kb.cost) >= 0)
+    assert np.all(kb.lower_bound <= kb.cost)
+    assert all(s.lower_bound <= s.cost for s in kb.solutions)
+
+
+@pytest.mark.parametrize("method", ["exact", "lagrangian"])
+@pytest.mark.parametrize(
+    ("sizes", "density", "seed"),
+    [((2, 2, 2), 1.0, 5), ((3, 2, 3), 0.6, 1), ((2, 2, 2, 2), 0.5, 7), ((2, 3), 1.0, 3)],
+)
+def test_kbest_enumerates_every_solution_in_order(
+    method: str, sizes: tuple[int, ...], density: float, seed: int
+) -> None:
+    """Asked for more than exist, milp cells and relaxed cells alike return every solution
+    in order (brute force): every Murty cell, forbidden singletons included, was solved
+    right, and the ranks are proven (nothing is left unexplored)."""
+    p = random_sd_problem(sizes, np.random.default_rng(seed), density)
+    costs = brute_force(p)
+    kb = sd_kbest(p, len(costs) + 5, method)
+    np.testing.assert_allclose(kb.cost, costs, atol=1e-9)
+    check_kbest(p, kb)
+    assert kb.proven.all()
+    assert kb.cells_unresolved == 0
+
+
+@pytest.mark.parametrize(("sizes", "density"), [((3, 3, 3), 1.0), ((3, 3, 3, 3), 0.3)])
+def test_relaxed_cells_match_milp_cells(sizes: tuple[int, ...], density: float) -> None:
+    """Relaxation-celled k-best against milp-celled k-best (and brute force): same costs on
+    these small problems; proven ranks are the true ones; bounds below the true costs."""
+    rng = np.random.default_rng(17)
+    for _ in range(3):
+        p = random_sd_problem(sizes, rng, density)
+        costs = np.array(brute_force(p)[:10])
+        exact = sd_kbest(p, 10)
+        relaxed = sd_kbest(p, 10, "lagrangian")
+        for kb in (exact, relaxed):
+            check_kbest(p, kb)
+            assert np.all(kb.lower_bound <= costs + 1e-9)
+            np.testing.assert_allclose(kb.cost[kb.proven], costs[kb.proven], atol=1e-9)
+        assert exact.proven.all()
+        assert all(s.method == SdMethod.EXACT for s in exact.solutions)
+        assert {s.method for s in relaxed.solutions} == {SdMethod.LAGRANGIAN}
+        np.testing.assert_allclose(relaxed.cost, costs, atol=1e-9)
+
+
+def test_kbest_large_cells_relaxed_with_status() -> None:
+    """The max_exact_tuples rule of sd_assign per cell: the large cells are relaxed and say
+    so (TOO_LARGE), the small late cells are milp-solved; every solution is feasible."""
+    p = random_sd_problem((5, 5, 5, 5), np.random.default_rng(3), 0.3)
+    kb = sd_kbest(p, 8, max_exact_tuples=200)
+    check_kbest(p, kb)
+    first = kb.solutions[0]
+    assert first.method == SdMethod.LAGRANGIAN
+    assert first.status == SdStatus.TOO_LARGE
+    assert "max_exact_tuples = 200" in first.message
+    assert "duality gap" in first.message
+    ref = sd_kbest(p, 8)
+    assert np.all(kb.lower_bound <= ref.cost + 1e-9)
+    assert np.all(kb.cost >= ref.cost - 1e-9)  # the j-th of any k distinct >= the true j-th
+
+
+def test_forbidden_singleton_cells(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A cell forbidding an element's singleton must cover it by a real tuple: the relaxation
+    on the penalised remainder does, and a cell where two such elements need the same third
+    one is proven empty by the relaxation's bound (no milp)."""
+    from navtrack.tracking import assignment as sd
+
+    # lists (2, 1, 1): a1, a2 | b1 | c1; singletons cost 0, (1,1,1) and (2,1,0) gain
+    tup = np.array([[1, 0, 0], [2, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1], [2, 1, 0], [2, 0, 1]])
+    p = SdProblem([2, 1, 1], tup, [0.0, 0.0, 0.0, 0.0, -3.0, -1.0, 2.0])
+    opt = sd._KBestOptions("lagrangian", 5000, 30, 1e-3, None)
+    free = np.ones(len(tup), dtype=bool)
+    free[1] = False  # a2 may not stand alone: (2,1,0) or (2,0,1) must cover it
+    sol, bound = sd._solve_cell(p, sd._Cell(np.zeros(0, dtype=np.int64), free, -np.inf), opt)
+    assert sol is not None
+    assert p.is_feasible(sol.selected)
+    assert 1 not in sol.selected.tolist()
+    assert sol.cost == pytest.approx(-1.0)  # (2,1,0) + a1 + c1, not (1,1,1) + a2 alone
+    assert bound <= sol.cost
+    assert sol.method == SdMethod.LAGRANGIAN
+    both = free.copy()
+    both[[0, 6]] = False  # a1 and a2 both need b1
+
+    def no_milp(*args: object) -> None:
+        raise AssertionError("milp called")
+
+    monkeypatch.setattr(sd, "_milp", no_milp)
+    empty = sd._solve_cell(p, sd._Cell(np.zeros(0, dtype=np.int64), both, -np.inf), opt)
+    assert empty == (None, np.inf)
+    no_cover = free.copy()
+    no_cover[[5, 6]] = False  # a2: no allowed tuple left
+    assert sd._remainder(p, sd._Cell(np.zeros(0, dtype=np.int64), no_cover, -np.inf)) is None
+
+
+def test_cells_when_the_relaxation_falls_short(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With a relaxation that returns all singletons and no bound: a cell where that keeps a
+    penalty is solved by milp when small, else counted as unresolved with its bound kept (so
+    no rank is claimed as proven); a cell with a cheaper start from its parent returns it."""
+    from navtrack.tracking import assignment as sd
+
+    def singletons_only(R: SdProblem, *args: object, **kw: object) -> object:
+        sel = np.flatnonzero((R.tuples > 0).sum(axis=1) == 1)
+        return sd._solution(R, sel, -np.inf, 1, SdMethod.LAGRANGIAN, SdStatus.GAP, "stub")
+
+    tup = np.array([[1, 0, 0], [2, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1], [2, 1, 0], [2, 0, 1]])
+    p = SdProblem([2, 1, 1], tup, [0.0, 0.0, 0.0, 0.0, -3.0, -1.0, 2.0])
+    free = np.ones(len(tup), dtype=bool)
+    free[1] = False
+    cell = sd._Cell(np.zeros(0, dtype=np.int64), free, -np.inf)
+    monkeypatch.setattr(sd, "sd_assign", singletons_only)
+    small = sd._solve_cell(p, cell, sd._KBestOptions("lagrangian", 5000, 30, 1e-3, None))
+    assert small[0] is not None
+    assert small[0].method == SdMethod.EXACT
+    assert small[0].cost == pytest.approx(-1.0)
+    large = sd._solve_cell(p, cell, sd._KBestOptions("lagrangian", 0, 30, 1e-3, None))
+    assert large == (None, -np.inf)
+    kb = sd_kbest(p, 3, "lagrangian", max_exact_tuples=0)
+    check_kbest(p, kb)
+    assert kb.cells_unresolved >= 1
+    assert not kb.proven.any()  # an unresolved cell's bound (-inf) is below every rank
+    # a child forbidding (1,1,1) starts from the parent's solution with (1,1,1) re-covered:
+    # by (1,1,0) and c1, cheaper than what the (stub) relaxation finds
+    q = SdProblem([2, 1, 1], np.vstack([tup, [1, 1, 0]]), np.r_[p.cost, -2.0])
+    parent = sd._solution(q, np.array([1, 4]), -np.inf, 0, SdMethod.LAGRANGIAN, SdStatus.GAP, "")
+    root = sd._Cell(np.zeros(0, dtype=np.int64), np.ones(len(q.tuples), dtype=bool), -np.inf)
+    child = sd._children(q, root, parent)[0]
+    assert child.start is not None
+    assert sorted(child.start.tolist()) == [1, 3, 7]  # a2, c1, (1,1,0)
+    sol, _ = sd._solve_cell(q, child, sd._KBestOptions("lagrangian", 0, 30, 1e-3, None))
+    assert sol is not None
+    assert sol.cost == pytest.approx(-2.0)
+    assert "parent's solution" in sol.message
+
+
+def test_kbest_bad_arguments() -> None:
+    p = random_sd_problem((2, 2, 2), np.random.default_rng(1))
+    for k in (0, -1, 2.5, True):
+        with pytest.raises(ValueError, match="k must be an integer >= 1"):
+            sd_kbest(p, k)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="method must be"):
+        sd_kbest(p, 3, "milp")
+    with pytest.raises(ValueError, match="max_exact_tuples"):
+        sd_kbest(p, 3, max_exact_tuples=-1)
+    with pytest.raises(ValueError, match="time_limit_s"):
+        sd_kbest(p, 3, time_limit_s=0.0)
 
 
 def test_too_large_for_exact_falls_back_with_gap() -> None:

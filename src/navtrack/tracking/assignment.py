@@ -21,9 +21,12 @@ References
    assignment problems arising from multitarget tracking", SIAM J. Optim. 3(3), 1993.
 .. [6] M. Held, P. Wolfe, H. P. Crowder, "Validation of subgradient optimization", Math.
    Programming 6, 1974 (Polyak step with a halving step factor).
+.. [8] R. L. Popp, K. R. Pattipati, Y. Bar-Shalom, "m-best S-D assignment algorithm with
+   application to multitarget tracking", IEEE T-AES 37(1), 2001 (Murty's ranking over S-D
+   problems whose cells are solved by Lagrangian relaxation).
 
 S-D assignment (``S >= 3`` lists, :func:`sd_assign`) is described in the section comment
-before :class:`SdProblem`.
+before :class:`SdProblem`; its k best solutions (:func:`sd_kbest`) in that function's notes.
 """
 
 from __future__ import annotations
@@ -505,20 +508,24 @@ def sd_exact(problem: SdProblem, time_limit_s: float | None = None) -> SdSolutio
     Returns None when the time limit was hit before an optimum.
     """
     allowed = np.ones(len(problem.tuples), dtype=bool)
-    return _milp(problem, allowed, time_limit_s, "optimal (milp)")
+    return _milp(problem, allowed, time_limit_s, "optimal (milp)")[0]
+
+
+_MILP_INFEASIBLE = 2  # scipy.optimize.milp status "problem is infeasible"
 
 
 def _milp(
     problem: SdProblem, allowed: BoolArray, time_limit_s: float | None, message: str
-) -> SdSolution | None:
-    """Exact solution over the ``allowed`` tuples; None if infeasible or out of time."""
+) -> tuple[SdSolution | None, int]:
+    """Exact solution over the ``allowed`` tuples (None if infeasible or out of time) and the
+    ``scipy.optimize.milp`` status (0 optimal, 1 time limit, 2 infeasible)."""
     from scipy.optimize import Bounds, LinearConstraint, milp
 
     idx = np.flatnonzero(allowed)
     if idx.size == 0:
         if problem.sizes.sum() > 0:
-            return None
-        return _solution(problem, idx, 0.0, 0, SdMethod.EXACT, SdStatus.OPTIMAL, message)
+            return None, _MILP_INFEASIBLE
+        return _solution(problem, idx, 0.0, 0, SdMethod.EXACT, SdStatus.OPTIMAL, message), 0
     A = _constraint_matrix(problem)[:, idx]  # type: ignore[index]
     options = {} if time_limit_s is None else {"time_limit": time_limit_s}
     res = milp(
@@ -529,10 +536,10 @@ def _milp(
         options=options,
     )
     if res.status != 0 or res.x is None:
-        return None
+        return None, int(res.status)
     sel = idx[res.x > 0.5]
     lb = float(problem.cost[sel].sum())
-    return _solution(problem, sel, lb, 0, SdMethod.EXACT, SdStatus.OPTIMAL, message)
+    return _solution(problem, sel, lb, 0, SdMethod.EXACT, SdStatus.OPTIMAL, message), 0
 
 
 # ---------------------------------------------------------------------------- relaxation
@@ -1050,63 +1057,398 @@ def sd_assign(
     return sd_lagrangian(problem, max_iter, tol)
 
 
+# --------------------------------------------------------------------------------------------
+# k-best S-D solutions (Murty's partitioning with exact or relaxed cells)
+# --------------------------------------------------------------------------------------------
+
+
 @dataclass(frozen=True, slots=True, eq=False)
 class SdKBest:
-    """Ranked S-D solutions, best first.
+    """Ranked S-D solutions, best first (:func:`sd_kbest`).
 
     Attributes
     ----------
     solutions : tuple of SdSolution
-        In non-decreasing cost (exact solutions of Murty's partition cells).
+        Pairwise distinct feasible solutions in non-decreasing cost. Each carries the
+        ``method``, ``status``, ``lower_bound`` and ``gap`` of the solve of its Murty cell:
+        its ``lower_bound`` bounds the best solution of that cell.
+    lower_bound : (k,) float
+        ``lower_bound[j]`` is at most the true ``(j + 1)``-th best cost of the problem:
+        ``min(cost[j], L)``, ``L`` the least lower bound of the parts of the solution space
+        left unexplored. Rank ``j`` is proven when ``lower_bound[j] == cost[j]`` (a milp
+        optimum is proven to HiGHS' default relative gap, 1e-4).
+    cells : int
+        Murty cells examined (each solved at most once).
+    cells_infeasible : int
+        Cells found empty: before any solve (an element with no allowed tuple), by milp, or by
+        the relaxation's lower bound exceeding every cost the cell allows.
+    cells_unresolved : int
+        Cells whose relaxation kept a forbidden singleton without proving the cell empty, too
+        large for milp and with no start from the parent: no solution of theirs is returned,
+        and their lower bounds enter ``lower_bound``.
     """
 
     solutions: tuple[SdSolution, ...]
+    lower_bound: FloatArray
+    cells: int
+    cells_infeasible: int
+    cells_unresolved: int
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
 
     @property
     def cost(self) -> FloatArray:
         """(k,) costs."""
         return np.array([s.cost for s in self.solutions], dtype=float)
 
+    @property
+    def proven(self) -> BoolArray:
+        """(k,) whether each cost is proven to be the true cost of its rank."""
+        return self.lower_bound >= self.cost
 
-def sd_kbest(problem: SdProblem, k: int, *, time_limit_s: float | None = None) -> SdKBest:
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _Cell:
+    """A Murty cell: the solutions that hold every ``forced`` tuple, the rest from ``free``."""
+
+    forced: IntArray  # tuples in every solution of the cell
+    free: BoolArray  # (K,) not forbidden and sharing no real element with a forced tuple
+    bound: float  # lower bound on the cell's costs known before solving it (the parent's)
+    start: IntArray | None = None  # a solution of the cell known before solving it
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _Remainder:
+    """The S-D problem left by a cell once its forced tuples are taken out."""
+
+    problem: SdProblem  # remaining elements renumbered; the free tuples, then penalty singletons
+    tuple_of: IntArray  # (K',) tuple of the full problem behind each, -1 for a penalty singleton
+    forced_cost: float
+    max_cost: float  # no solution of the remainder within the cell costs more
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+
+def _remainder(problem: SdProblem, cell: _Cell) -> _Remainder | None:
+    """The cell's remainder problem, None when an element has no allowed tuple left.
+
+    An element whose singleton the cell forbids gets a penalty singleton costing
+    ``M = 2 (U - D) + 1``, with ``U`` (``D``) the sum over the remaining elements of the
+    largest positive (smallest negative) cost of a free tuple holding it: charging each tuple
+    to one of its elements, every solution within the cell costs at most ``U`` and every set
+    of disjoint free tuples at least ``D``, so a solution using a penalty costs more than
+    ``U + (U - D)``.
+    """
+    t, n = problem.tuples, problem.sizes
+    S = problem.n_lists
+    idx = np.flatnonzero(cell.free)
+    parts, hi, lo, new_sizes = [], [], [], []
+    for s in range(S):
+        taken = np.zeros(n[s] + 1, dtype=bool)
+        taken[t[cell.forced, s]] = True
+        taken[0] = False
+        number = np.cumsum(~taken) - 1  # new index of each remaining element, 0 the dummy
+        new_sizes.append(int(n[s] - taken.sum()))
+        parts.append(number[t[idx, s]])
+    tt = np.stack(parts, axis=1)
+    c = problem.cost[idx]
+    real = tt > 0
+    single = real.sum(axis=1) == 1
+    extra = []
+    for s in range(S):
+        top = np.full(new_sizes[s] + 1, -np.inf)
+        bottom = np.full(new_sizes[s] + 1, np.inf)
+        np.maximum.at(top, tt[:, s], c)
+        np.minimum.at(bottom, tt[:, s], c)
+        if not np.all(np.isfinite(top[1:])):
+            return None  # an element no allowed tuple covers: the cell is empty
+        hi.append(np.maximum(top[1:], 0.0).sum())
+        lo.append(np.minimum(bottom[1:], 0.0).sum())
+        has_single = np.zeros(new_sizes[s] + 1, dtype=bool)
+        has_single[tt[single & real[:, s], s]] = True
+        for i in np.flatnonzero(~has_single[1:]) + 1:
+            row = np.zeros(S, dtype=np.int64)
+            row[s] = i
+            extra.append(row)
+    U, D = float(sum(hi)), float(sum(lo))
+    rows = np.array(extra, dtype=np.int64).reshape(-1, S)
+    penalty = 2.0 * (U - D) + 1.0
+    reduced = SdProblem(
+        np.array(new_sizes), np.vstack([tt, rows]), np.r_[c, np.full(len(rows), penalty)]
+    )
+    return _Remainder(
+        reduced,
+        np.r_[idx, np.full(len(rows), -1, dtype=np.int64)],
+        float(problem.cost[cell.forced].sum()),
+        U,
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class _KBestOptions:
+    method: str
+    max_exact_tuples: int
+    max_iter: int
+    tol: float
+    time_limit_s: float | None
+
+
+def _solve_cell(
+    problem: SdProblem, cell: _Cell, opt: _KBestOptions
+) -> tuple[SdSolution | None, float]:
+    """Best solution found in the cell and a lower bound on its costs.
+
+    ``(None, inf)``: the cell is empty. ``(None, bound)``: unresolved (the relaxation kept a
+    penalty singleton, the cell is too large for milp and came with no start).
+    """
+    rem = _remainder(problem, cell)
+    if rem is None:
+        return None, np.inf
+    R = rem.problem
+    real = rem.tuple_of >= 0
+    n_free = int(real.sum())
+    head = f"Murty cell with {cell.forced.size} forced and {n_free} free tuples"
+    small = n_free <= opt.max_exact_tuples
+    too_large = ""
+    if opt.method == "exact" and small:
+        sol, st = _milp(R, real, opt.time_limit_s, "optimal (milp)")
+        if sol is not None:
+            return _exact_in_cell(problem, cell, rem, sol, head)
+        if st == _MILP_INFEASIBLE:
+            return None, np.inf
+        too_large = f"milp found no optimum (status {st})"
+        small = False  # milp was tried
+    elif opt.method == "exact":
+        too_large = f"{n_free} tuples > max_exact_tuples = {opt.max_exact_tuples}"
+    relaxed = sd_assign(R, "lagrangian", max_iter=opt.max_iter, tol=opt.tol)
+    if relaxed.method != SdMethod.LAGRANGIAN:  # S = 2: the penalised problem solved exactly
+        if np.all(real[relaxed.selected]):
+            return _exact_in_cell(problem, cell, rem, relaxed, head)
+        return None, np.inf
+    bound = rem.forced_cost + relaxed.lower_bound
+    found = []  # (cost, selected, how)
+    if np.all(real[relaxed.selected]):
+        mine = np.r_[cell.forced, rem.tuple_of[relaxed.selected]]
+        found.append((float(problem.cost[mine].sum()), mine, f"remainder {relaxed.message}"))
+    if cell.start is not None:
+        how = f"the parent's solution with one tuple re-covered (remainder {relaxed.message})"
+        found.append((float(problem.cost[cell.start].sum()), cell.start, how))
+    if found:
+        _, selected, how = min(found, key=lambda f: f[0])
+        sol = _solution(problem, selected, -np.inf, 0, SdMethod.LAGRANGIAN, SdStatus.GAP, "")
+        lb = min(max(cell.bound, bound), sol.cost)
+        if too_large:
+            status = SdStatus.TOO_LARGE
+            how = f"exact solver not used ({too_large}); Lagrangian relaxation, {how}"
+        else:
+            closed = sol.cost - lb <= opt.tol * max(abs(sol.cost), 1e-12)
+            status = SdStatus.OPTIMAL if closed else SdStatus.GAP
+            how = f"Lagrangian relaxation, {how}"
+        message = f"{head}: {how}"
+        it = relaxed.iterations
+        return _solution(problem, sol.selected, lb, it, SdMethod.LAGRANGIAN, status, message), lb
+    # a penalty singleton was kept: the cell is empty, or the relaxation missed its solutions
+    if relaxed.lower_bound > rem.max_cost + 1e-9 * max(1.0, abs(rem.max_cost)):
+        return None, np.inf
+    if small:
+        sol, st = _milp(R, real, opt.time_limit_s, "optimal (milp; the relaxation kept a penalty)")
+        if sol is not None:
+            return _exact_in_cell(problem, cell, rem, sol, head)
+        if st == _MILP_INFEASIBLE:
+            return None, np.inf
+    return None, max(cell.bound, bound)
+
+
+def _exact_in_cell(
+    problem: SdProblem, cell: _Cell, rem: _Remainder, sol: SdSolution, head: str
+) -> tuple[SdSolution, float]:
+    """The remainder's exact solution as a solution of the full problem in ``cell``."""
+    selected = np.sort(np.r_[cell.forced, rem.tuple_of[sol.selected]])
+    cost = float(problem.cost[selected].sum())
+    message = f"{head}: {sol.message}"
+    return _solution(problem, selected, cost, 0, sol.method, SdStatus.OPTIMAL, message), cost
+
+
+def _cover(problem: SdProblem, free: BoolArray, tau: int) -> IntArray | None:
+    """Cheapest set of ``free`` tuples covering exactly the real elements of tuple ``tau``
+    (exact cover by dynamic programming over the ``<= S`` elements), None if there is none."""
+    t = problem.tuples
+    row = t[tau]
+    cand = np.flatnonzero(free & np.all((t == 0) | (t == row), axis=1))
+    pos = np.flatnonzero(row > 0)
+    bits = ((t[cand][:, pos] > 0) @ (1 << np.arange(pos.size))).tolist()
+    costs = problem.cost[cand].tolist()
+    full = (1 << pos.size) - 1
+    best = [np.inf] * (full + 1)
+    back: list[tuple[int, int]] = [(0, -1)] * (full + 1)
+    best[0] = 0.0
+    for mask in range(full):
+        if best[mask] == np.inf:
+            continue
+        low = ~mask & (mask + 1)  # the first element not yet covered
+        for b, c, k in zip(bits, costs, cand.tolist(), strict=True):
+            if b & low and not b & mask and best[mask] + c < best[mask | b]:
+                best[mask | b] = best[mask] + c
+                back[mask | b] = (mask, k)
+    if best[full] == np.inf:
+        return None
+    out, mask = [], full
+    while mask:
+        mask, k = back[mask]
+        out.append(k)
+    return np.array(out, dtype=np.int64)
+
+
+def _children(problem: SdProblem, cell: _Cell, sol: SdSolution) -> list[_Cell]:
+    """Murty's partition of ``cell`` minus ``sol``: with ``τ_1..τ_r`` the tuples of ``sol``
+    the cell does not force, child ``j`` forbids ``τ_j`` and forces ``τ_1..τ_{j-1}``.
+
+    The tuples with most real elements go first, so the later children (most forced
+    elements) have the smallest remainders. Each child starts from ``sol`` with ``τ_j``
+    replaced by the cheapest cover of its elements that the child allows (:func:`_cover`).
+    """
+    t = problem.tuples
+    mine = sol.selected[~np.isin(sol.selected, cell.forced)]
+    mine = mine[np.argsort(-(t[mine] > 0).sum(axis=1), kind="stable")]
+    free, forced = cell.free.copy(), cell.forced
+    out = []
+    for tau in mine.tolist():
+        child = free.copy()
+        child[tau] = False
+        cover = _cover(problem, child, tau)
+        start = None if cover is None else np.r_[sol.selected[sol.selected != tau], cover]
+        out.append(_Cell(forced, child, sol.lower_bound, start))
+        free &= ~np.any((t == t[tau]) & (t[tau] > 0), axis=1)  # force tau: drop its clashes
+        forced = np.append(forced, tau)
+    return out
+
+
+def sd_kbest(
+    problem: SdProblem,
+    k: int,
+    method: str = "exact",
+    *,
+    max_exact_tuples: int = 5000,
+    max_iter: int = 30,
+    tol: float = 1e-3,
+    time_limit_s: float | None = None,
+) -> SdKBest:
     """The ``k`` best S-D solutions (fewer if fewer exist) by Murty's partitioning.
 
-    A cell of the partition is a set of allowed tuples. The best solution of a cell
-    (``sd_exact``) with chosen tuples ``τ_1..τ_r`` splits it into ``r`` cells: cell ``j``
-    forbids ``τ_j`` and forces ``τ_1..τ_{j-1}`` (forcing = forbidding every other tuple that
-    shares a real index with it), as in Murty (1968) with tuples in place of matrix cells.
+    A *cell* of the partition is the set of solutions that hold some forced tuples and avoid
+    some forbidden ones. The best solution found in a cell, with tuples ``τ_1..τ_r`` besides
+    the forced ones, splits the rest of the cell into ``r`` cells: cell ``j`` forbids ``τ_j``
+    and forces ``τ_1..τ_{j-1}`` (Murty 1968 with tuples in place of matrix cells; Popp,
+    Pattipati & Bar-Shalom 2001 for S-D). Cells wait in a heap by the cost of their solution;
+    the cheapest is taken next.
+
+    **How a cell is solved.** Its forced tuples are taken out: their elements leave the lists
+    (the rest renumbered) and their cost is added; the free tuples touching no forced element
+    stay, forbidden ones are dropped. What remains is an ordinary S-D problem except where a
+    forbidden tuple is an element's singleton: that element must then be covered by a real
+    tuple, which the relaxation's greedy start and recovery (they fall back to singletons)
+    cannot respect. It gets a *penalty singleton* instead, costing more than the spread of
+    all costs the cell allows (:func:`_remainder`), so that (i) the penalised problem holds
+    every solution of the cell at its own cost, and its lower bounds are lower bounds of the
+    cell; (ii) its optimum uses a penalty only if the cell is empty. A relaxation result
+    without penalties is a solution of the cell; one with a penalty whose lower bound exceeds
+    every cost the cell allows proves the cell empty; otherwise (and without a start from the
+    parent, below) the cell is solved by milp when it has at most ``max_exact_tuples`` tuples,
+    else it is counted as unresolved and its bound kept. A cell with an element that no
+    allowed tuple covers is empty without a solve.
+
+    **Guarantees.** Every solution returned is feasible and in its own cell, so they are
+    pairwise distinct; they are the ``k`` cheapest of all solutions found, in non-decreasing
+    cost. With exact cells (milp or 2-D) they are the ``k`` best solutions. With relaxed
+    cells a cell's solution may be above the cell's optimum, so a better solution may be
+    missed or found later, and the ranking is approximate: each solution's ``lower_bound``
+    and ``gap`` bound its cell, and ``SdKBest.lower_bound[j] = min(cost[j], L)`` bounds the
+    true ``(j + 1)``-th best cost, ``L`` the least bound of the unexplored cells (the cells
+    still in the heap, the last one taken, the unresolved ones): every solution not returned
+    lies in one of them or costs at least ``cost[k - 1]``.
+
+    **Cheaper Murty.** A cell inherits its parent's lower bound (it is a subset of the
+    parent) and starts from its parent's solution: with ``τ_j`` replaced by the cheapest cover
+    of its elements the cell allows, that solution is in the cell, and a relaxed cell returns
+    it when the relaxation finds nothing cheaper (or keeps a penalty). The partition forces
+    the tuples with most real elements first, so the later cells have small remainders (often
+    under ``max_exact_tuples``); the forced tuples of a cell are never partitioned on again;
+    a cell with an element no allowed tuple covers is dropped unsolved; and no cell is split
+    once ``k`` were taken. Skipping a cell whose inherited bound exceeds the ``k``-th cost
+    found never applies: the parent was the cheapest cell left, so its bound is below every
+    cost in the heap (a child bound tighter than the parent's would need the relaxation's
+    multipliers).
 
     Parameters
     ----------
     problem : SdProblem
     k : int >= 1
-    time_limit_s : float or None, per cell (milp)
+    method : {"exact", "auto", "lagrangian"}
+        As in :func:`sd_assign`, per cell (the size rule applies to the cell's remainder).
+        ``"exact"`` (default): milp on cells of at most ``max_exact_tuples`` tuples, the
+        relaxation on larger ones (``status`` TOO_LARGE). ``"lagrangian"``, ``"auto"``: the
+        relaxation on every cell (2-D assignment when ``S = 2``); milp only for an unresolved
+        forbidden singleton.
+    max_exact_tuples : int
+        Size limit of milp, as in :func:`sd_assign`. Default 5000.
+    max_iter, tol : relaxation limits per cell (:func:`sd_lagrangian`)
+    time_limit_s : float or None
+        Per milp solve; a cell that runs out of time is solved by relaxation (TOO_LARGE).
+
+    Returns
+    -------
+    SdKBest
+
+    References
+    ----------
+    Murty 1968 [1]_; Popp, Pattipati & Bar-Shalom 2001 [8]_ (module references).
     """
-    if k < 1:
-        raise ValueError(f"k must be >= 1, got {k}")
-    allowed0 = np.ones(len(problem.tuples), dtype=bool)
-    first = _milp(problem, allowed0, time_limit_s, "optimal (milp)")
-    if first is None:
-        return SdKBest(())
-    real = problem.tuples > 0
-    counter = 0
-    heap: list[tuple[float, int, SdSolution, BoolArray]] = [(first.cost, 0, first, allowed0)]
-    out: list[SdSolution] = []
-    while heap and len(out) < k:
-        _, _, sol, allowed = heapq.heappop(heap)
-        out.append(sol)
-        cell = allowed.copy()
-        for tau in sol.selected.tolist():
-            child = cell.copy()
-            child[tau] = False
-            found = _milp(problem, child, time_limit_s, "optimal in its Murty cell (milp)")
-            if found is not None:
-                counter += 1
-                heapq.heappush(heap, (found.cost, counter, found, child))
-            # force tau in the cells that follow
-            clash = np.zeros(len(cell), dtype=bool)
-            for s in np.flatnonzero(real[tau]).tolist():
-                clash |= problem.tuples[:, s] == problem.tuples[tau, s]
-            clash[tau] = False
-            cell &= ~clash
-    return SdKBest(tuple(out))
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
+        raise ValueError(f"k must be an integer >= 1, got {k!r}")
+    if method not in ("auto", "exact", "lagrangian"):
+        raise ValueError(f"method must be 'auto', 'exact' or 'lagrangian', got {method!r}")
+    if max_exact_tuples < 0:
+        raise ValueError(f"max_exact_tuples must be >= 0, got {max_exact_tuples}")
+    if time_limit_s is not None and not time_limit_s > 0:
+        raise ValueError(f"time_limit_s must be > 0 or None, got {time_limit_s}")
+    opt = _KBestOptions(method, max_exact_tuples, max_iter, tol, time_limit_s)
+    heap: list[tuple[float, int, SdSolution, _Cell]] = []
+    unexplored: list[float] = []  # lower bounds of the parts of the space not searched
+    cells = infeasible = unresolved = 0
+
+    def add(cell: _Cell) -> None:
+        nonlocal cells, infeasible, unresolved
+        cells += 1
+        sol, bound = _solve_cell(problem, cell, opt)
+        if sol is not None:
+            heapq.heappush(heap, (sol.cost, cells, sol, cell))
+        elif bound == np.inf:
+            infeasible += 1
+        else:
+            unresolved += 1
+            unexplored.append(bound)
+
+    K = len(problem.tuples)
+    add(_Cell(np.zeros(0, dtype=np.int64), np.ones(K, dtype=bool), -np.inf))
+    taken: list[SdSolution] = []
+    while heap and len(taken) < k:
+        _, _, sol, cell = heapq.heappop(heap)
+        taken.append(sol)
+        if len(taken) == k:
+            unexplored.append(sol.lower_bound)  # the rest of its cell
+            break
+        for child in _children(problem, cell, sol):
+            add(child)
+    found = taken + [item[2] for item in heap]
+    unexplored += [item[2].lower_bound for item in heap]
+    best = np.argsort([s.cost for s in found], kind="stable")[:k]
+    out = tuple(found[i] for i in best)
+    cost = np.array([s.cost for s in out], dtype=float)
+    return SdKBest(
+        out, np.minimum(cost, min(unexplored, default=np.inf)), cells, infeasible, unresolved
+    )
