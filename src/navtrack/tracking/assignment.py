@@ -561,6 +561,10 @@ class _Prep:
     cell_group: IntArray  # (G',) their group numbers
     cell_lookup: IntArray  # (n1 + n2, n2 + n1) group of each matrix cell, -1 none
     zero_group: int  # group of the pair (0, 0), -1 if none
+    seg_order: IntArray  # (K,) tuples sorted by group, then by i_3 (stable)
+    seg_starts: IntArray  # (G3,) starts of the runs of equal (group, i_3) in ``seg_order``
+    seg_group: IntArray  # (G3,) group of each run
+    seg_elem: IntArray  # (G3,) i_3 of each run
     free: IntArray  # tuples of the pair (0, 0)
     uidx: IntArray  # (S - 2, K) multiplier of each tuple's index in lists 3..S
     dummies: IntArray  # (S - 2,) positions of the dummies' multipliers (held at 0)
@@ -611,6 +615,10 @@ def _prep(problem: SdProblem) -> _Prep:
     cell_lookup = np.full(dual_matrix.shape, -1, dtype=np.int64)
     cell_lookup.flat[cell_flat] = cell_group
     zero = np.flatnonzero(~real)
+    third = t[:, 2] if S > 2 else np.zeros(K, dtype=np.int64)
+    seg_order = np.lexsort((third, group))
+    seg_key = (group * (int(n[2:3].sum()) + 1) + third)[seg_order]
+    seg_starts = np.flatnonzero(_run_starts(seg_key))
     off = np.r_[0, np.cumsum(n[2:] + 1)][:-1]
     radix = np.r_[1, np.cumprod(n[:-1] + 1)]
     key = t @ radix
@@ -644,6 +652,10 @@ def _prep(problem: SdProblem) -> _Prep:
         cell_group,
         cell_lookup,
         int(zero[0]) if zero.size else -1,
+        seg_order,
+        seg_starts,
+        group[seg_order[seg_starts]],
+        third[seg_order[seg_starts]],
         np.flatnonzero(pkey == 0),
         np.ascontiguousarray((t[:, 2:] + off).T),
         off,
@@ -716,34 +728,41 @@ def _recover(prep: _Prep, chosen: IntArray, u: FloatArray) -> IntArray:
     The pairs are fixed as partial tuples ("prefixes"); list ``k = 3..S`` is then joined to
     them by one 2-D assignment with dummies whose costs are the least reduced cost over the
     tuples extending (prefix, ``i_k``), reduced by the multipliers of lists ``k + 1..S`` only
-    (true costs at ``k = S``). A prefix may also be dissolved into its singletons, so every
-    step is feasible.
+    (true costs at ``k = S``, where a prefix and ``i_S`` fix one tuple). A prefix may also be
+    dissolved into its singletons, so every step is feasible.
     """
-    t, n = prep.tuples, prep.sizes
+    t, n, cost = prep.tuples, prep.sizes, prep.cost
     S = t.shape[1]
-    W = prep.singleton.shape[1]
     P = chosen.size
     prefix = np.zeros((P, S), dtype=np.int64)
     prefix[:, :2] = prep.pair[chosen]
+    dissolve = prep.singleton_cost[0, prefix[:, 0]] + prep.singleton_cost[1, prefix[:, 1]]
     lut = np.full(len(prep.starts), -1, dtype=np.int64)
     lut[chosen] = np.arange(1, P + 1)
     if prep.zero_group >= 0:
         lut[prep.zero_group] = 0  # prefix 0: nothing fixed yet
-    pid = lut[prep.group]
-    idx = np.flatnonzero(pid >= 0)
-    pid = pid[idx]
+    pid = lut[prep.group]  # (K,) prefix of each tuple, -1 none
     out: list[IntArray] = []
     for k in range(2, S):
-        red = _reduced(prep, u, idx, k - 1)
-        nk = int(n[k])
-        key = pid * (nk + 1) + t[idx, k]
-        o = np.lexsort((red, key))
-        ko = key[o]
-        head = o[_run_starts(ko)]  # least reduced cost per (prefix, i_k)
-        flat = np.full((P + 1) * (nk + 1), np.inf)
-        flat[ko[_run_starts(ko)]] = red[head]
-        M = flat.reshape(P + 1, nk + 1)
-        dissolve = prep.singleton_cost.ravel()[prefix + W * np.arange(S)].sum(axis=1)
+        width = int(n[k]) + 1
+        live = np.flatnonzero(pid >= 0)
+        key = pid[live] * width + t[live, k]
+        flat = np.full((P + 1) * width, np.inf)
+        if k == S - 1:  # one tuple per key
+            flat[key] = cost[live]
+        elif k == 2:  # least reduced cost over the tuples of each (pair, i_3), in prep order
+            mins = np.minimum.reduceat(_reduced(prep, u, None, 1)[prep.seg_order], prep.seg_starts)
+            sp = lut[prep.seg_group]
+            ok = sp >= 0
+            flat[sp[ok] * width + prep.seg_elem[ok]] = mins[ok]
+        else:
+            red = _reduced(prep, u, live, k - 1)
+            o = np.lexsort((red, key))
+            ko = key[o]
+            head = _run_starts(ko)
+            flat[ko[head]] = red[o[head]]
+        M = flat.reshape(P + 1, width)
+        nk = width - 1
         use_dis = dissolve < M[1:, 0]
         A = np.full((P + nk, nk + P), np.inf)
         A[:P, :nk] = M[1:, 1:]
@@ -762,19 +781,19 @@ def _recover(prep: _Prep, chosen: IntArray, u: FloatArray) -> IntArray:
         dis = prefix[gone]
         out.append(prep.singleton[np.nonzero(dis)[1], dis[dis > 0]])
         if k == S - 1:
-            arg = np.full((P + 1) * (nk + 1), -1, dtype=np.int64)
-            arg[ko[_run_starts(ko)]] = idx[head]
-            out.append(arg[ent_r * (nk + 1) + ent_c])
+            arg = np.full(flat.size, -1, dtype=np.int64)
+            arg[key] = live
+            out.append(arg[ent_r * width + ent_c])
             break
         prefix = np.vstack([np.zeros((1, S), dtype=np.int64), prefix])[ent_r]
         prefix[:, k] = ent_c
+        dissolve = np.r_[0.0, dissolve][ent_r] + prep.singleton_cost[k, ent_c]
         P = ent_r.size
-        new = np.full(M.size, -1, dtype=np.int64)
+        new = np.full(flat.size, -1, dtype=np.int64)
         new[0] = 0
-        new[ent_r * (nk + 1) + ent_c] = np.arange(1, P + 1)
-        pid = new[key]
-        keep = pid >= 0
-        idx, pid = idx[keep], pid[keep]
+        new[ent_r * width + ent_c] = np.arange(1, P + 1)
+        pid = np.full(len(t), -1, dtype=np.int64)
+        pid[live] = new[key]
     return np.concatenate(out)
 
 
