@@ -576,6 +576,7 @@ class _Prep:
     singleton: IntArray  # (S, W) singleton tuple of each element, -1 for the dummy
     singleton_cost: FloatArray  # (S, W) its cost, 0 for the dummy
     split_cost: FloatArray  # (K,) cost of each tuple's elements as singletons
+    excess: FloatArray  # (K + 1,) cost less split cost, and 0 for the index -1 (none)
     gainful: IntArray  # tuples cheaper than their elements as singletons
     gainful_elem: IntArray  # (S, gainful) their flat element indices
     gainful_gain: FloatArray  # (gainful,) their cost less that of their singletons
@@ -667,6 +668,7 @@ def _prep(problem: SdProblem) -> _Prep:
         singleton,
         singleton_cost,
         split_cost,
+        np.append(c - split_cost, 0.0),
         gainful,
         np.ascontiguousarray(elem[gainful].T),
         c[gainful] - split_cost[gainful],
@@ -829,47 +831,47 @@ def _insert(prep: _Prep, sel: IntArray, max_passes: int = 1000, batch: int = 32)
     other elements fall back to their singletons. Its gain, for all candidate ``σ`` at once:
     ``c(σ) - s(σ) - Σ_τ (c(τ) - s(τ))`` over the distinct displaced ``τ``, ``s`` = cost of a
     tuple's elements as singletons. Insertions displacing disjoint sets gain independently,
-    so each pass makes up to ``batch`` of them, best first.
+    so each pass makes up to ``batch`` of them, best first; a candidate holding a dummy
+    counts as overlapping every other such candidate, so a pass inserts at most one of those.
     """
     c, elem, single = prep.cost, prep.elem, prep.singleton.ravel()
-    cand, cand_elem, base = prep.gainful, prep.gainful_elem, prep.gainful_gain
+    cand, cand_elem, base, w = prep.gainful, prep.gainful_elem, prep.gainful_gain, prep.excess
     S = elem.shape[1]
     dummy = prep.singleton.shape[1] * np.arange(S)  # flat indices of the dummies
-    cover = np.full(single.size, -1, dtype=np.int64)
+    cover = np.full(single.size, -1, dtype=np.int64)  # chosen tuple holding each element
+    gone_mask = np.zeros(len(c), dtype=bool)
     for _ in range(max_passes):
         es = elem[sel]
-        cover[es] = np.arange(len(sel))[:, None]
+        cover[es.T] = sel
         cover[dummy] = -1
-        conf = cover[cand_elem]  # (S, candidates) chosen tuple holding each element, -1 none
-        w = np.zeros(len(sel) + 1)  # w[-1] = 0 for the dummy
-        np.subtract(c[sel], prep.split_cost[sel], out=w[:-1])
-        gain = w[conf]
+        conf = cover[cand_elem]  # (S, candidates), -1 = dummy
+        gain = w[conf]  # w[-1] = 0 for the dummy
         delta = base - gain[0]
         for s in range(1, S):
             again = conf[s] == conf[0]
             for q in range(1, s):
                 again |= conf[s] == conf[q]
-            gain[s, again] = 0.0  # a displaced tuple counts once
+            np.putmask(gain[s], again, 0.0)  # a displaced tuple counts once
             delta -= gain[s]
         good = np.flatnonzero(delta < -1e-9 * max(1.0, abs(float(c[sel].sum()))))
         if good.size == 0:
             break
         top = good[np.argsort(delta[good])][:batch]
-        touched: set[int] = set()  # the dummy's -1 counts as shared
+        touched: set[int] = set()
         taken = []
         for b, row in zip(top.tolist(), conf[:, top].T.tolist(), strict=True):
             if touched.isdisjoint(row):
                 touched.update(row)
                 taken.append(b)
         touched.discard(-1)
-        gone = np.fromiter(touched, dtype=np.int64, count=len(touched))
+        gone_mask[list(touched)] = True
+        gone = gone_mask[sel]
+        gone_mask[sel] = False
         covered = np.zeros(single.size, dtype=bool)
         covered[cand_elem[:, taken]] = True
-        rest = es[np.sort(gone)]
+        rest = es[gone]
         rest = rest[(rest != dummy) & ~covered[rest]]
-        keep = np.ones(len(sel), dtype=bool)
-        keep[gone] = False
-        sel = np.concatenate([sel[keep], cand[taken], single[rest]])
+        sel = np.concatenate([sel[~gone], cand[taken], single[rest]])
     return sel
 
 
