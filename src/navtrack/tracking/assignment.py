@@ -789,7 +789,7 @@ def _recover(prep: _Prep, chosen: IntArray, u: FloatArray) -> IntArray:
             break
         prefix = np.vstack([np.zeros((1, S), dtype=np.int64), prefix])[ent_r]
         prefix[:, k] = ent_c
-        dissolve = np.r_[0.0, dissolve][ent_r] + prep.singleton_cost[k, ent_c]
+        dissolve = np.concatenate([[0.0], dissolve])[ent_r] + prep.singleton_cost[k, ent_c]
         P = ent_r.size
         new = np.full(flat.size, -1, dtype=np.int64)
         new[0] = 0
