@@ -562,9 +562,9 @@ class _Prep:
     cell_lookup: IntArray  # (n1 + n2, n2 + n1) group of each matrix cell, -1 none
     zero_group: int  # group of the pair (0, 0), -1 if none
     seg_order: IntArray  # (K,) tuples sorted by group, then by i_3 (stable)
-    seg_starts: IntArray  # (G3,) starts of the runs of equal (group, i_3) in ``seg_order``
-    seg_group: IntArray  # (G3,) group of each run
+    seg_starts: IntArray  # (G3 + 1,) starts of the runs of equal (group, i_3) in it, and K
     seg_elem: IntArray  # (G3,) i_3 of each run
+    group_seg: IntArray  # (G + 1,) first run of each group, and G3
     free: IntArray  # tuples of the pair (0, 0)
     uidx: IntArray  # (S - 2, K) multiplier of each tuple's index in lists 3..S
     dummies: IntArray  # (S - 2,) positions of the dummies' multipliers (held at 0)
@@ -620,6 +620,7 @@ def _prep(problem: SdProblem) -> _Prep:
     seg_order = np.lexsort((third, group))
     seg_key = (group * (int(n[2:3].sum()) + 1) + third)[seg_order]
     seg_starts = np.flatnonzero(_run_starts(seg_key))
+    group_seg = np.searchsorted(group[seg_order[seg_starts]], np.arange(len(starts) + 1))
     off = np.r_[0, np.cumsum(n[2:] + 1)][:-1]
     radix = np.r_[1, np.cumprod(n[:-1] + 1)]
     key = t @ radix
@@ -654,9 +655,9 @@ def _prep(problem: SdProblem) -> _Prep:
         cell_lookup,
         int(zero[0]) if zero.size else -1,
         seg_order,
-        seg_starts,
-        group[seg_order[seg_starts]],
+        np.append(seg_starts, K),
         third[seg_order[seg_starts]],
+        group_seg,
         np.flatnonzero(pkey == 0),
         np.ascontiguousarray((t[:, 2:] + off).T),
         off,
@@ -673,6 +674,11 @@ def _prep(problem: SdProblem) -> _Prep:
         np.ascontiguousarray(elem[gainful].T),
         c[gainful] - split_cost[gainful],
     )
+
+
+def _ranges(start: IntArray, length: IntArray) -> IntArray:
+    """The ranges ``start[i] .. start[i] + length[i] - 1``, concatenated."""
+    return np.arange(int(length.sum())) + np.repeat(start - (np.cumsum(length) - length), length)
 
 
 def _lsa(A: FloatArray) -> tuple[IntArray, IntArray]:
@@ -709,7 +715,7 @@ def _dual(prep: _Prep, u: FloatArray) -> tuple[float, IntArray, IntArray]:
     """
     red = _reduced(prep, u)
     rs = red[prep.order]
-    mins = np.minimum.reduceat(rs, prep.starts) if rs.size else rs
+    mins = np.minimum.reduceat(rs, prep.starts)
     A = prep.dual_matrix.copy()
     A.flat[prep.cell_flat] = mins[prep.cell_group]
     r, c = _lsa(A)
@@ -743,22 +749,25 @@ def _recover(prep: _Prep, chosen: IntArray, u: FloatArray) -> IntArray:
     lut[chosen] = np.arange(1, P + 1)
     if prep.zero_group >= 0:
         lut[prep.zero_group] = 0  # prefix 0: nothing fixed yet
-    pid = lut[prep.group]  # (K,) prefix of each tuple, -1 none
+    # the tuples of the fixed pairs and of (0, 0), in runs of equal (pair, i_3)
+    runs = _ranges(prep.group_seg[:-1][lut >= 0], np.diff(prep.group_seg)[lut >= 0])
+    lo = prep.seg_starts[runs]
+    length = prep.seg_starts[runs + 1] - lo
+    idx = prep.seg_order[_ranges(lo, length)]
+    pid = lut[prep.group[idx]]  # prefix of each of these tuples
     out: list[IntArray] = []
     for k in range(2, S):
         width = int(n[k]) + 1
-        live = np.flatnonzero(pid >= 0)
-        key = pid[live] * width + t[live, k]
+        key = pid * width + t[idx, k]
         flat = np.full((P + 1) * width, np.inf)
         if k == S - 1:  # one tuple per key
-            flat[key] = cost[live]
-        elif k == 2:  # least reduced cost over the tuples of each (pair, i_3), in prep order
-            mins = np.minimum.reduceat(_reduced(prep, u, None, 1)[prep.seg_order], prep.seg_starts)
-            sp = lut[prep.seg_group]
-            ok = sp >= 0
-            flat[sp[ok] * width + prep.seg_elem[ok]] = mins[ok]
+            flat[key] = cost[idx]
+        elif k == 2:  # least reduced cost over each run
+            first = np.cumsum(length) - length
+            mins = np.minimum.reduceat(_reduced(prep, u, idx, 1), first)
+            flat[pid[first] * width + prep.seg_elem[runs]] = mins
         else:
-            red = _reduced(prep, u, live, k - 1)
+            red = _reduced(prep, u, idx, k - 1)
             o = np.lexsort((red, key))
             ko = key[o]
             head = _run_starts(ko)
@@ -784,7 +793,7 @@ def _recover(prep: _Prep, chosen: IntArray, u: FloatArray) -> IntArray:
         out.append(prep.singleton[np.nonzero(dis)[1], dis[dis > 0]])
         if k == S - 1:
             arg = np.full(flat.size, -1, dtype=np.int64)
-            arg[key] = live
+            arg[key] = idx
             out.append(arg[ent_r * width + ent_c])
             break
         prefix = np.vstack([np.zeros((1, S), dtype=np.int64), prefix])[ent_r]
@@ -794,8 +803,8 @@ def _recover(prep: _Prep, chosen: IntArray, u: FloatArray) -> IntArray:
         new = np.full(flat.size, -1, dtype=np.int64)
         new[0] = 0
         new[ent_r * width + ent_c] = np.arange(1, P + 1)
-        pid = np.full(len(t), -1, dtype=np.int64)
-        pid[live] = new[key]
+        pid = new[key]
+        idx, pid = idx[pid >= 0], pid[pid >= 0]
     return np.concatenate(out)
 
 
