@@ -894,9 +894,10 @@ def _vary(prep: _Prep, sel: IntArray) -> IntArray:
     t, cost, radix = prep.tuples, prep.cost_inf, prep.radix
     S = t.shape[1]
     current = float(prep.cost[sel].sum())
-    whole = t[sel] @ radix
+    part = t[sel] * radix  # (r, S) each list's share of the chosen tuples' keys
+    whole = part.sum(axis=1)
     for s in range(S):
-        ka = t[sel, s] * radix[s]
+        ka = part[:, s]
         kb = whole - ka
         a, b = ka[ka > 0], kb[kb > 0]
         R, C = a.size, b.size
@@ -921,7 +922,8 @@ def _vary(prep: _Prep, sel: IntArray) -> IntArray:
                 ]
             )
             current = float(prep.cost[sel].sum())
-            whole = t[sel] @ radix
+            part = t[sel] * radix
+            whole = part.sum(axis=1)
     return sel
 
 
