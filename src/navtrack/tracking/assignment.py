@@ -584,11 +584,9 @@ class _Prep:
     elem: IntArray  # (K, S) flat element index of each tuple's entries
     singleton: IntArray  # (S, W) singleton tuple of each element, -1 for the dummy
     singleton_cost: FloatArray  # (S, W) its cost, 0 for the dummy
-    split_cost: FloatArray  # (K,) cost of each tuple's elements as singletons
-    excess: FloatArray  # (K + 1,) cost less split cost, and 0 for the index -1 (none)
+    excess: FloatArray  # (K + 1,) cost less that of the elements as singletons; 0 for -1
     gainful: IntArray  # tuples cheaper than their elements as singletons
     gainful_elem: IntArray  # (S, gainful) their flat element indices
-    gainful_gain: FloatArray  # (gainful,) their cost less that of their singletons
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -677,11 +675,9 @@ def _prep(problem: SdProblem) -> _Prep:
         elem,
         singleton,
         singleton_cost,
-        split_cost,
         np.append(c - split_cost, 0.0),
         gainful,
         np.ascontiguousarray(elem[gainful].T),
-        c[gainful] - split_cost[gainful],
     )
 
 
@@ -852,7 +848,8 @@ def _insert(prep: _Prep, sel: IntArray, max_passes: int = 1000, batch: int = 32)
     counts as overlapping every other such candidate, so a pass inserts at most one of those.
     """
     c, elem, single = prep.cost, prep.elem, prep.singleton.ravel()
-    cand, cand_elem, base, w = prep.gainful, prep.gainful_elem, prep.gainful_gain, prep.excess
+    cand, cand_elem, w = prep.gainful, prep.gainful_elem, prep.excess
+    base = w[cand]
     S = elem.shape[1]
     dummy = prep.singleton.shape[1] * np.arange(S)  # flat indices of the dummies
     cover = np.full(single.size, -1, dtype=np.int64)  # chosen tuple holding each element
