@@ -264,6 +264,15 @@ def _solve_fixed(B: FloatArray, fixed: np.ndarray, cols: IntArray) -> tuple[IntA
 # Defaults (30 multiplier updates per pass, all S - 1 rotations, recovery every 3 iterations)
 # were chosen on the benchmark problems of seed 13 and judged on those of seed 2026.
 #
+# Cost: on the 4-list benchmark problems (~4400 tuples) a solve is ~120 multiplier updates,
+# ~75 recoveries and as many local searches, and the local search and the recovery take most
+# of the time.  What does not change during a solve is built once per list order (``_prep``:
+# the 2-D matrix with its fixed entries, the tuples in runs of equal (pair, i_3) for the
+# recovery, flat element indices and each tuple's excess over its singletons for the
+# insertions), so each step is a few array operations on the tuples concerned.  The last list
+# of a recovery needs no minimum (a prefix and i_S fix one tuple).  These were changes of speed
+# only: the solutions on the benchmark problems of both seeds are the same, bit for bit.
+#
 # .. [7] D. Karapetyan, G. Gutin, "Local search heuristics for the multidimensional
 #    assignment problem", J. Heuristics 17(3), 2011 (dimension-wise variation).
 
@@ -466,17 +475,20 @@ def sd_greedy(problem: SdProblem) -> SdSolution:
 
     Every index left over is covered by its singleton. No bound (``status`` HEURISTIC).
     """
-    used = [np.zeros(k + 1, dtype=bool) for k in problem.sizes]
+    width = int(problem.sizes.max()) + 1 if problem.n_lists else 1
+    order = np.argsort(problem.cost, kind="stable")
+    elem = problem.tuples[order] + width * np.arange(problem.n_lists)  # flat element indices
+    dummies = set(range(0, width * problem.n_lists, width))
+    used: set[int] = set()
     chosen: list[int] = []
-    tup = problem.tuples
-    for k in np.argsort(problem.cost, kind="stable"):
-        row = tup[k]
-        if any(i > 0 and used[s][i] for s, i in enumerate(row)):
-            continue
-        chosen.append(int(k))
-        for s, i in enumerate(row):
-            if i > 0:
-                used[s][i] = True
+    n_real = int(problem.sizes.sum())
+    for k, row in zip(order.tolist(), elem.tolist(), strict=True):
+        real = set(row) - dummies
+        if used.isdisjoint(real):
+            chosen.append(k)
+            used |= real
+            if len(used) == n_real:
+                break
     return _solution(
         problem,
         np.array(chosen, dtype=np.int64),
@@ -548,30 +560,40 @@ def _milp(
 @dataclass(frozen=True, slots=True, eq=False)
 class _Prep:
     """Index arrays of one problem, built once per solve; ``K`` tuples, ``G`` (list 1, list 2)
-    pairs ("groups") among them, ``L = Σ_{s >= 3} (n_s + 1)`` multipliers."""
+    pairs ("groups") among them, ``L = Σ_{s >= 3} (n_s + 1)`` multipliers. Element ``i`` of
+    list ``s`` has the flat index ``s · W + i`` in the ``(S, W = max n + 1)`` element tables."""
 
     tuples: IntArray  # (K, S)
     cost: FloatArray  # (K,)
+    cost_inf: FloatArray  # (K + 1,) the costs and inf, picked by the tuple index -1 (none)
     sizes: IntArray  # (S,)
     order: IntArray  # (K,) tuples sorted by group
     starts: IntArray  # (G,) group starts in ``order``
     group_sorted: IntArray  # (K,) group of each sorted tuple
     group: IntArray  # (K,) group of each tuple
     pair: IntArray  # (G, 2) the (i_1, i_2) of each group
-    cells: IntArray  # (G', 2) row, column of the groups other than (0, 0) in the 2-D matrix
+    dual_matrix: FloatArray  # (n1 + n2, n2 + n1) 2-D matrix with its fixed entries (0 and inf)
+    cell_flat: IntArray  # (G',) flat positions of the groups other than (0, 0) in it
     cell_group: IntArray  # (G',) their group numbers
+    cell_lookup: IntArray  # (n1 + n2, n2 + n1) group of each matrix cell, -1 none
     zero_group: int  # group of the pair (0, 0), -1 if none
+    seg_order: IntArray  # (K,) tuples sorted by group, then by i_3 (stable)
+    seg_starts: IntArray  # (G3 + 1,) starts of the runs of equal (group, i_3) in it, and K
+    seg_elem: IntArray  # (G3,) i_3 of each run
+    group_seg: IntArray  # (G + 1,) first run of each group, and G3
     free: IntArray  # tuples of the pair (0, 0)
-    uidx: IntArray  # (K, S - 2) multiplier of each tuple's index in lists 3..S
+    uidx: IntArray  # (S - 2, K) multiplier of each tuple's index in lists 3..S
     dummies: IntArray  # (S - 2,) positions of the dummies' multipliers (held at 0)
     radix: IntArray  # (S,) mixed-radix weights of the tuple key Σ_s i_s radix_s
     keys: IntArray  # (K,) sorted tuple keys
     key_tuple: IntArray  # (K,) tuple of each sorted key
     table: IntArray  # (Π (n_s + 1),) tuple of each key, -1 = none; empty when too large
-    singleton: IntArray  # (S, max n + 1) singleton tuple of each element, -1 for the dummy
-    singleton_cost: FloatArray  # (S, max n + 1) its cost, 0 for the dummy
-    split_cost: FloatArray  # (K,) cost of each tuple's elements as singletons
+    elem: IntArray  # (K, S) flat element index of each tuple's entries
+    singleton: IntArray  # (S, W) singleton tuple of each element, -1 for the dummy
+    singleton_cost: FloatArray  # (S, W) its cost, 0 for the dummy
+    excess: FloatArray  # (K + 1,) cost less that of the elements as singletons; 0 for -1
     gainful: IntArray  # tuples cheaper than their elements as singletons
+    gainful_elem: IntArray  # (S, gainful) their flat element indices
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -601,7 +623,18 @@ def _prep(problem: SdProblem) -> _Prep:
     real = (i1 > 0) | (i2 > 0)
     rows = np.where(i1 > 0, i1 - 1, n1 + i2 - 1)
     cols = np.where(i2 > 0, i2 - 1, n2 + i1 - 1)
+    cell_flat = (rows * (n1 + n2) + cols)[real]
+    cell_group = np.flatnonzero(real)
+    dual_matrix = np.full((n1 + n2, n2 + n1), np.inf)
+    dual_matrix[n1:, n2:] = 0.0
+    cell_lookup = np.full(dual_matrix.shape, -1, dtype=np.int64)
+    cell_lookup.flat[cell_flat] = cell_group
     zero = np.flatnonzero(~real)
+    third = t[:, 2] if S > 2 else np.zeros(K, dtype=np.int64)
+    seg_order = np.lexsort((third, group))
+    seg_key = (group * (int(n[2:3].sum()) + 1) + third)[seg_order]
+    seg_starts = np.flatnonzero(_run_starts(seg_key))
+    group_seg = np.searchsorted(group[seg_order[seg_starts]], np.arange(len(starts) + 1))
     off = np.r_[0, np.cumsum(n[2:] + 1)][:-1]
     radix = np.r_[1, np.cumprod(n[:-1] + 1)]
     key = t @ radix
@@ -611,37 +644,53 @@ def _prep(problem: SdProblem) -> _Prep:
     if table.size:
         table[key] = np.arange(K)
     width = int(n.max()) + 1 if S else 1
+    elem = t + width * np.arange(S)
     singleton = np.full((S, width), -1, dtype=np.int64)
     single = (t > 0).sum(axis=1) == 1
     for s in range(S):
         k = np.flatnonzero(single & (t[:, s] > 0))
         singleton[s, t[k, s]] = k
     singleton_cost = np.append(c, 0.0)[singleton]  # -1 (the dummy) picks the appended 0
-    split_cost = singleton_cost[np.arange(S), t].sum(axis=1)
+    split_cost = singleton_cost.ravel()[elem].sum(axis=1)
+    gainful = np.flatnonzero(c < split_cost)
     return _Prep(
         t,
         c,
+        np.append(c, np.inf),
         n,
         order,
         starts,
         group_sorted,
         group,
         np.column_stack([i1, i2]),
-        np.column_stack([rows[real], cols[real]]),
-        np.flatnonzero(real),
+        dual_matrix,
+        cell_flat,
+        cell_group,
+        cell_lookup,
         int(zero[0]) if zero.size else -1,
+        seg_order,
+        np.append(seg_starts, K),
+        third[seg_order[seg_starts]],
+        group_seg,
         np.flatnonzero(pkey == 0),
-        t[:, 2:] + off,
+        np.ascontiguousarray((t[:, 2:] + off).T),
         off,
         radix,
         key[korder],
         korder,
         table,
+        elem,
         singleton,
         singleton_cost,
-        split_cost,
-        np.flatnonzero(c < split_cost),
+        np.append(c - split_cost, 0.0),
+        gainful,
+        np.ascontiguousarray(elem[gainful].T),
     )
+
+
+def _ranges(start: IntArray, length: IntArray) -> IntArray:
+    """The ranges ``start[i] .. start[i] + length[i] - 1``, concatenated."""
+    return np.arange(int(length.sum())) + np.repeat(start - (np.cumsum(length) - length), length)
 
 
 def _lsa(A: FloatArray) -> tuple[IntArray, IntArray]:
@@ -651,7 +700,20 @@ def _lsa(A: FloatArray) -> tuple[IntArray, IntArray]:
     if A.size == 0:
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
     r, c = linear_sum_assignment(A)
-    return r.astype(np.int64), c.astype(np.int64)
+    return r.astype(np.int64, copy=False), c.astype(np.int64, copy=False)
+
+
+def _reduced(prep: _Prep, u: FloatArray, idx: IntArray | None = None, first: int = 0) -> FloatArray:
+    """Reduced costs ``c - Σ_s u_s[i_s]`` over the lists ``3 + first..S`` of the tuples ``idx``
+    (all when None)."""
+    ui = prep.uidx[first:] if idx is None else prep.uidx[first:, idx]
+    cost = prep.cost if idx is None else prep.cost[idx]
+    if ui.shape[0] == 0:
+        return cost
+    total = u[ui[0]]
+    for row in ui[1:]:
+        total += u[row]
+    return cost - total
 
 
 def _dual(prep: _Prep, u: FloatArray) -> tuple[float, IntArray, IntArray]:
@@ -663,21 +725,17 @@ def _dual(prep: _Prep, u: FloatArray) -> tuple[float, IntArray, IntArray]:
 
     Returns ``(lower bound, selected tuples, chosen groups other than (0, 0))``.
     """
-    n1, n2 = int(prep.sizes[0]), int(prep.sizes[1])
-    red = prep.cost - u[prep.uidx].sum(axis=1)
+    red = _reduced(prep, u)
     rs = red[prep.order]
     mins = np.minimum.reduceat(rs, prep.starts)
+    A = prep.dual_matrix.copy()
+    A.flat[prep.cell_flat] = mins[prep.cell_group]
+    r, c = _lsa(A)
+    chosen = prep.cell_lookup[r, c]
+    chosen = np.sort(chosen[chosen >= 0])
     pos = np.flatnonzero(rs <= mins[prep.group_sorted])
     gp = prep.group_sorted[pos]
     best = prep.order[pos[_run_starts(gp)]]  # least reduced cost per group
-    A = np.full((n1 + n2, n2 + n1), np.inf)
-    A[n1:, n2:] = 0.0
-    A[prep.cells[:, 0], prep.cells[:, 1]] = mins[prep.cell_group]
-    lookup = np.full(A.shape, -1, dtype=np.int64)
-    lookup[prep.cells[:, 0], prep.cells[:, 1]] = prep.cell_group
-    r, c = _lsa(A)
-    chosen = lookup[r, c]
-    chosen = np.sort(chosen[chosen >= 0])
     sel = best[chosen]
     lb = float(mins[chosen].sum() + u.sum())
     neg = prep.free[red[prep.free] < 0]  # tuples of the pair (0, 0) are free in the relaxation
@@ -690,61 +748,74 @@ def _recover(prep: _Prep, chosen: IntArray, u: FloatArray) -> IntArray:
     The pairs are fixed as partial tuples ("prefixes"); list ``k = 3..S`` is then joined to
     them by one 2-D assignment with dummies whose costs are the least reduced cost over the
     tuples extending (prefix, ``i_k``), reduced by the multipliers of lists ``k + 1..S`` only
-    (true costs at ``k = S``). A prefix may also be dissolved into its singletons, so every
-    step is feasible.
+    (true costs at ``k = S``, where a prefix and ``i_S`` fix one tuple). A prefix may also be
+    dissolved into its singletons, so every step is feasible.
     """
-    t, cost, n = prep.tuples, prep.cost, prep.sizes
+    t, n, cost = prep.tuples, prep.sizes, prep.cost
     S = t.shape[1]
     P = chosen.size
     prefix = np.zeros((P, S), dtype=np.int64)
     prefix[:, :2] = prep.pair[chosen]
+    dissolve = prep.singleton_cost[0, prefix[:, 0]] + prep.singleton_cost[1, prefix[:, 1]]
     lut = np.full(len(prep.starts), -1, dtype=np.int64)
     lut[chosen] = np.arange(1, P + 1)
     if prep.zero_group >= 0:
         lut[prep.zero_group] = 0  # prefix 0: nothing fixed yet
-    pid = lut[prep.group]
+    # the tuples of the fixed pairs and of (0, 0), in runs of equal (pair, i_3)
+    runs = _ranges(prep.group_seg[:-1][lut >= 0], np.diff(prep.group_seg)[lut >= 0])
+    lo = prep.seg_starts[runs]
+    length = prep.seg_starts[runs + 1] - lo
+    idx = prep.seg_order[_ranges(lo, length)]
+    pid = lut[prep.group[idx]]  # prefix of each of these tuples
     out: list[IntArray] = []
-    lists = np.arange(S)
     for k in range(2, S):
-        idx = np.flatnonzero(pid >= 0)
-        red = cost[idx] - u[prep.uidx[idx, k - 1 :]].sum(axis=1)
-        nk = int(n[k])
-        key = pid[idx] * (nk + 1) + t[idx, k]
-        o = np.lexsort((red, key))
-        ko = key[o]
-        head = o[_run_starts(ko)]  # least reduced cost per (prefix, i_k)
-        flat = np.full((P + 1) * (nk + 1), np.inf)
-        flat[key[head]] = red[head]
-        arg = np.full((P + 1) * (nk + 1), -1, dtype=np.int64)
-        arg[key[head]] = idx[head]
-        M = flat.reshape(P + 1, nk + 1)
-        dissolve = prep.singleton_cost[lists, prefix].sum(axis=1)
+        width = int(n[k]) + 1
+        key = pid * width + t[idx, k]
+        flat = np.full((P + 1) * width, np.inf)
+        if k == S - 1:  # one tuple per key
+            flat[key] = cost[idx]
+        elif k == 2:  # least reduced cost over each run
+            first = np.cumsum(length) - length
+            mins = np.minimum.reduceat(_reduced(prep, u, idx, 1), first)
+            flat[pid[first] * width + prep.seg_elem[runs]] = mins
+        else:
+            red = _reduced(prep, u, idx, k - 1)
+            o = np.lexsort((red, key))
+            ko = key[o]
+            head = _run_starts(ko)
+            flat[ko[head]] = red[o[head]]
+        M = flat.reshape(P + 1, width)
+        nk = width - 1
         use_dis = dissolve < M[1:, 0]
         A = np.full((P + nk, nk + P), np.inf)
         A[:P, :nk] = M[1:, 1:]
-        A[np.arange(P), nk + np.arange(P)] = np.minimum(M[1:, 0], dissolve)
-        A[P + np.arange(nk), np.arange(nk)] = M[0, 1:]
+        A.flat[nk + (P + nk + 1) * np.arange(P)] = np.minimum(M[1:, 0], dissolve)
+        A.flat[(P + nk) * P + (P + nk + 1) * np.arange(nk)] = M[0, 1:]
         A[P:, nk:] = 0.0
-        r, c = _lsa(A)
-        pr, pc = r[r < P], c[r < P]
-        gone = pr[(pc >= nk) & use_dis[pr]]
-        stay = pr[(pc >= nk) & ~use_dis[pr]]
-        new_i = c[(r >= P) & (c < nk)]  # list-k elements starting a prefix of their own
-        ent_r = np.concatenate([pr[pc < nk] + 1, stay + 1, np.zeros(new_i.size, dtype=np.int64)])
-        ent_c = np.concatenate([pc[pc < nk] + 1, np.zeros(stay.size, dtype=np.int64), new_i + 1])
-        dis = prefix[gone]
+        c = _lsa(A)[1]  # the rows in order: the P prefixes, then the list-k elements
+        pc, ec = c[:P], c[P:]
+        miss = pc >= nk
+        joined = np.flatnonzero(~miss)
+        stay = np.flatnonzero(miss & ~use_dis)
+        new_i = ec[ec < nk]  # list-k elements starting a prefix of their own
+        ent_r = np.concatenate([joined, stay, np.full(new_i.size, -1)]) + 1
+        ent_c = np.concatenate([pc[joined] + 1, np.zeros(stay.size, dtype=np.int64), new_i + 1])
+        dis = prefix[miss & use_dis]
         out.append(prep.singleton[np.nonzero(dis)[1], dis[dis > 0]])
         if k == S - 1:
-            out.append(arg.reshape(P + 1, nk + 1)[ent_r, ent_c])
+            arg = np.full(flat.size, -1, dtype=np.int64)
+            arg[key] = idx
+            out.append(arg[ent_r * width + ent_c])
             break
         prefix = np.vstack([np.zeros((1, S), dtype=np.int64), prefix])[ent_r]
         prefix[:, k] = ent_c
+        dissolve = np.concatenate([[0.0], dissolve])[ent_r] + prep.singleton_cost[k, ent_c]
         P = ent_r.size
-        new = np.full(M.shape, -1, dtype=np.int64)
-        new[0, 0] = 0
-        new[ent_r, ent_c] = np.arange(1, P + 1)
-        pid = np.full(len(t), -1, dtype=np.int64)
-        pid[idx] = new.ravel()[key]
+        new = np.full(flat.size, -1, dtype=np.int64)
+        new[0] = 0
+        new[ent_r * width + ent_c] = np.arange(1, P + 1)
+        pid = new[key]
+        idx, pid = idx[pid >= 0], pid[pid >= 0]
     return np.concatenate(out)
 
 
@@ -780,43 +851,48 @@ def _insert(prep: _Prep, sel: IntArray, max_passes: int = 1000, batch: int = 32)
     other elements fall back to their singletons. Its gain, for all candidate ``σ`` at once:
     ``c(σ) - s(σ) - Σ_τ (c(τ) - s(τ))`` over the distinct displaced ``τ``, ``s`` = cost of a
     tuple's elements as singletons. Insertions displacing disjoint sets gain independently,
-    so each pass makes up to ``batch`` of them, best first.
+    so each pass makes up to ``batch`` of them, best first; a candidate holding a dummy
+    counts as overlapping every other such candidate, so a pass inserts at most one of those.
     """
-    t, c, split = prep.tuples, prep.cost, prep.split_cost
-    S = t.shape[1]
-    cand = prep.gainful  # only a tuple cheaper than its singletons can gain
-    tc = t[cand]
-    base = c[cand] - split[cand]
-    lists = np.arange(S)
+    c, elem, single = prep.cost, prep.elem, prep.singleton.ravel()
+    cand, cand_elem, w = prep.gainful, prep.gainful_elem, prep.excess
+    base = w[cand]
+    S = elem.shape[1]
+    dummy = prep.singleton.shape[1] * np.arange(S)  # flat indices of the dummies
+    cover = np.full(single.size, -1, dtype=np.int64)  # chosen tuple holding each element
+    gone_mask = np.zeros(len(c), dtype=bool)
     for _ in range(max_passes):
-        cover = np.full(prep.singleton.shape, -1, dtype=np.int64)
-        cover[lists[None, :], t[sel]] = np.arange(len(sel))[:, None]
-        cover[:, 0] = -1
-        conf = cover[lists, tc]  # (candidates, S) chosen tuple holding each element, -1 none
-        w = np.append(c[sel] - split[sel], 0.0)  # w[-1] = 0 for the dummy
-        delta = base - w[conf[:, 0]]
+        es = elem[sel]
+        cover[es.T] = sel
+        cover[dummy] = -1
+        conf = cover[cand_elem]  # (S, candidates), -1 = dummy
+        gain = w[conf]  # w[-1] = 0 for the dummy
+        delta = base - gain[0]
         for s in range(1, S):
-            again = conf[:, s] == conf[:, 0]
+            again = conf[s] == conf[0]
             for q in range(1, s):
-                again |= conf[:, s] == conf[:, q]
-            delta -= np.where(again, 0.0, w[conf[:, s]])
+                again |= conf[s] == conf[q]
+            np.putmask(gain[s], again, 0.0)  # a displaced tuple counts once
+            delta -= gain[s]
         good = np.flatnonzero(delta < -1e-9 * max(1.0, abs(float(c[sel].sum()))))
         if good.size == 0:
             break
-        touched = np.zeros(len(sel) + 1, dtype=bool)  # last slot: the dummy's -1
+        top = good[np.argsort(delta[good])][:batch]
+        touched: set[int] = set()
         taken = []
-        for b in good[np.argsort(delta[good])][:batch].tolist():
-            if not touched[conf[b]].any():
-                touched[conf[b]] = True
+        for b, row in zip(top.tolist(), conf[:, top].T.tolist(), strict=True):
+            if touched.isdisjoint(row):
+                touched.update(row)
                 taken.append(b)
-        touched[-1] = False
-        gone = np.flatnonzero(touched)
-        covered = np.zeros(prep.singleton.shape, dtype=bool)
-        covered[lists[None, :], tc[taken]] = True
-        rest = t[sel[gone]]
-        rest = rest * ~covered[lists, rest]
-        left = prep.singleton[np.nonzero(rest)[1], rest[rest > 0]]
-        sel = np.concatenate([np.delete(sel, gone), cand[taken], left])
+        touched.discard(-1)
+        gone_mask[list(touched)] = True
+        gone = gone_mask[sel]
+        gone_mask[sel] = False
+        covered = np.zeros(single.size, dtype=bool)
+        covered[cand_elem[:, taken]] = True
+        rest = es[gone]
+        rest = rest[(rest != dummy) & ~covered[rest]]
+        sel = np.concatenate([sel[~gone], cand[taken], single[rest]])
     return sel
 
 
@@ -827,14 +903,14 @@ def _vary(prep: _Prep, sel: IntArray) -> IntArray:
     rest; the two sides are re-paired by one exact 2-D assignment with dummies (a side may
     stand alone when that tuple exists), which never costs more than the current pairing.
     """
-    t, cost, radix = prep.tuples, prep.cost, prep.radix
+    t, cost, radix = prep.tuples, prep.cost_inf, prep.radix
     S = t.shape[1]
-    current = float(cost[sel].sum())
+    current = float(prep.cost[sel].sum())
+    part = t[sel] * radix  # (r, S) each list's share of the chosen tuples' keys
+    whole = part.sum(axis=1)
     for s in range(S):
-        q = np.arange(S) == s
-        rows_t = t[sel]
-        ka = (rows_t * q) @ radix
-        kb = (rows_t * ~q) @ radix
+        ka = part[:, s]
+        kb = whole - ka
         a, b = ka[ka > 0], kb[kb > 0]
         R, C = a.size, b.size
         if R == 0 or C == 0:
@@ -842,9 +918,9 @@ def _vary(prep: _Prep, sel: IntArray) -> IntArray:
         both = _lookup(prep, a[:, None] + b[None, :])  # keys add: the parts are disjoint
         alone_a, alone_b = _lookup(prep, a), _lookup(prep, b)
         A = np.full((R + C, C + R), np.inf)
-        A[:R, :C] = np.where(both >= 0, cost[both], np.inf)
-        A[np.arange(R), C + np.arange(R)] = np.where(alone_a >= 0, cost[alone_a], np.inf)
-        A[R + np.arange(C), np.arange(C)] = np.where(alone_b >= 0, cost[alone_b], np.inf)
+        A[:R, :C] = cost[both]  # the index -1 (no such tuple) picks inf
+        A.flat[C + (R + C + 1) * np.arange(R)] = cost[alone_a]
+        A.flat[(R + C) * R + (R + C + 1) * np.arange(C)] = cost[alone_b]
         A[R:, C:] = 0.0
         r, c = _lsa(A)
         total = float(A[r, c].sum())
@@ -857,7 +933,9 @@ def _vary(prep: _Prep, sel: IntArray) -> IntArray:
                     alone_b[c[~m & (c < C)]],
                 ]
             )
-            current = float(cost[sel].sum())
+            current = float(prep.cost[sel].sum())
+            part = t[sel] * radix
+            whole = part.sum(axis=1)
     return sel
 
 
@@ -924,7 +1002,7 @@ def _lagrangian(
                 alpha, stall = alpha / 2.0, 0
         if ub - lb <= tol * max(abs(ub), 1e-12) or alpha < min_alpha:
             break
-        g = 1.0 - np.bincount(prep.uidx[sel].ravel(), minlength=u.size)
+        g = 1.0 - np.bincount(prep.uidx[:, sel].ravel(), minlength=u.size)
         g[prep.dummies] = 0.0
         norm2 = float(g @ g)
         if norm2 == 0.0:  # relaxed solution is feasible, hence optimal
