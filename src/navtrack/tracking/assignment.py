@@ -32,12 +32,16 @@ before :class:`SdProblem`; its k best solutions (:func:`sd_kbest`) in that funct
 from __future__ import annotations
 
 import heapq
+import itertools
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import IntEnum
+from functools import cache, lru_cache
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
+from navtrack._numba import numba_module
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
 
 __all__ = [
@@ -50,6 +54,7 @@ __all__ = [
     "SdStatus",
     "assign2d",
     "augmented_cost",
+    "compile_kernels",
     "murty",
     "random_sd_problem",
     "sd_assign",
@@ -251,27 +256,35 @@ def _solve_fixed(B: FloatArray, fixed: np.ndarray, cols: IntArray) -> tuple[IntA
 # iterations) from the pairs the 2-D solution chose: they are fixed as partial tuples and list
 # 3, 4, ..., S is joined to them by one 2-D assignment each, costed by the least reduced cost
 # over the lists not yet joined (Deb et al. 1997, section IV, in its sequential form); a
-# partial tuple may also be dissolved into its singletons, so every step is feasible.  Every
-# recovered solution is then improved by a local search: tuple insertions (a tuple displaces
-# the chosen tuples it overlaps, their other elements fall back to singletons; all gains
-# evaluated at once) alternating with dimension-wise variation (Karapetyan & Gutin 2011: cut
-# every chosen tuple at one list and re-pair the two sides by an exact 2-D assignment).  The
-# best feasible cost is the upper bound; ``UB - LB`` is the duality gap reported.  While the
-# gap stays open the problem is solved again with its lists rotated (other lists relaxed,
-# other pairs fixed); the recoveries differ, and that, with the local search, is what brings
-# the sparse S = 4, 5 problems within 1 % of the optimum (``benchmarks/bench_sd_assignment.py``).
+# partial tuple may also be dissolved into its singletons, so every step is feasible; a pass
+# recovers from each set of pairs once.  Every recovered solution is then improved by a local
+# search: tuple insertions (a tuple displaces the chosen tuples it overlaps, their other
+# elements fall back to singletons; all gains evaluated at once, compiled by numba when it is
+# installed) alternating with dimension-wise variation (Karapetyan & Gutin 2011: cut every
+# chosen tuple between two sides of the lists and re-pair the parts by an exact 2-D
+# assignment; every one of the ``2^(S-1) - 1`` splits of the lists, not only one list against
+# the rest).  The best feasible cost is the upper bound; ``UB - LB`` is the duality gap
+# reported.  While the gap stays open the problem is solved again with its lists rotated
+# (other lists relaxed, other pairs fixed); the recoveries differ, and that, with the local
+# search, is what brings the sparse S = 4, 5 problems within 1 % of the optimum
+# (``benchmarks/bench_sd_assignment.py``).  A rotated pass starts where the best bound so far
+# stands: the lists it relaxes keep their multipliers, and the two lists that were kept get
+# theirs from the dual of that bound's 2-D problem (potentials of the augmented assignment by
+# Bellman-Ford on its residual graph), so together they are a dual of the whole problem and
+# the pass climbs on from there with a smaller step factor (``_WARM_ALPHA``) instead of
+# starting again at zero.
 #
-# Defaults (30 multiplier updates per pass, all S - 1 rotations, recovery every 3 iterations)
-# were chosen on the benchmark problems of seed 13 and judged on those of seed 2026.
+# Defaults (45 multiplier updates per pass, all S - 1 rotations, recovery every 3 iterations,
+# step factor 2 for the first pass and 0.5 for the warm-started ones) were chosen on the
+# benchmark problems of seed 13 (40 per size) and judged on those of seed 2026.
 #
-# Cost: on the 4-list benchmark problems (~4400 tuples) a solve is ~120 multiplier updates,
-# ~75 recoveries and as many local searches, and the local search and the recovery take most
-# of the time.  What does not change during a solve is built once per list order (``_prep``:
-# the 2-D matrix with its fixed entries, the tuples in runs of equal (pair, i_3) for the
-# recovery, flat element indices and each tuple's excess over its singletons for the
-# insertions), so each step is a few array operations on the tuples concerned.  The last list
-# of a recovery needs no minimum (a prefix and i_S fix one tuple).  These were changes of speed
-# only: the solutions on the benchmark problems of both seeds are the same, bit for bit.
+# Cost: on the 4-list benchmark problems (~4400 tuples) a solve is ~180 multiplier updates,
+# ~60 recoveries and as many local searches; the variation (its 2-D assignments), the recovery
+# and the updates take most of the time.  What does not change during a solve is built once
+# per list order (``_prep``: the 2-D matrix with its fixed entries, the tuples in runs of equal
+# (pair, i_3) for the recovery, flat element indices and each tuple's excess over its
+# singletons for the insertions), so each step is a few array operations on the tuples
+# concerned.  The last list of a recovery needs no minimum (a prefix and i_S fix one tuple).
 #
 # .. [7] D. Karapetyan, G. Gutin, "Local search heuristics for the multidimensional
 #    assignment problem", J. Heuristics 17(3), 2011 (dimension-wise variation).
@@ -716,6 +729,22 @@ def _reduced(prep: _Prep, u: FloatArray, idx: IntArray | None = None, first: int
     return cost - total
 
 
+def _pair_matrix(
+    prep: _Prep, u: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """The relaxed problem for the multipliers ``u`` (L,) of lists 3..S.
+
+    Returns ``(reduced costs (K,), the same sorted by pair, least reduced cost per pair (G,),
+    the augmented 2-D matrix)``: :attr:`_Prep.dual_matrix` with the pairs' costs filled in.
+    """
+    red = _reduced(prep, u)
+    rs = red[prep.order]
+    mins = np.minimum.reduceat(rs, prep.starts)
+    A = prep.dual_matrix.copy()
+    A.flat[prep.cell_flat] = mins[prep.cell_group]
+    return red, rs, mins, A
+
+
 def _dual(prep: _Prep, u: FloatArray) -> tuple[float, IntArray, IntArray]:
     """Optimum of the relaxed problem for the multipliers ``u`` (L,) of lists 3..S.
 
@@ -725,11 +754,7 @@ def _dual(prep: _Prep, u: FloatArray) -> tuple[float, IntArray, IntArray]:
 
     Returns ``(lower bound, selected tuples, chosen groups other than (0, 0))``.
     """
-    red = _reduced(prep, u)
-    rs = red[prep.order]
-    mins = np.minimum.reduceat(rs, prep.starts)
-    A = prep.dual_matrix.copy()
-    A.flat[prep.cell_flat] = mins[prep.cell_group]
+    red, rs, mins, A = _pair_matrix(prep, u)
     r, c = _lsa(A)
     chosen = prep.cell_lookup[r, c]
     chosen = np.sort(chosen[chosen >= 0])
@@ -740,6 +765,44 @@ def _dual(prep: _Prep, u: FloatArray) -> tuple[float, IntArray, IntArray]:
     lb = float(mins[chosen].sum() + u.sum())
     neg = prep.free[red[prep.free] < 0]  # tuples of the pair (0, 0) are free in the relaxation
     return lb + float(red[neg].sum()), np.concatenate([sel, neg]), chosen
+
+
+def _potentials(A: FloatArray, rows: IntArray, cols: IntArray) -> tuple[FloatArray, FloatArray]:
+    """Dual potentials ``(a, b)`` of the optimal assignment ``rows -> cols`` of the square
+    ``A``: ``a_r + b_c <= A[r, c]``, with equality on the assignment.
+
+    Shortest distances from a source joined to every row by a zero arc, over the arcs
+    row -> column (cost ``A``) and assigned column -> row (cost ``-A``): ``b`` = the columns'
+    distances, ``a`` = minus the rows'. The assignment is optimal, so there is no negative
+    cycle and Bellman-Ford settles within ``2 N`` rounds (ended there in any case).
+    """
+    N = A.shape[0]
+    match = np.empty(N, dtype=np.int64)
+    match[rows] = cols
+    back = A[np.arange(N), match]
+    d_row = np.zeros(N)
+    d_col = A.min(axis=0)
+    for _ in range(2 * N):
+        new = np.minimum(0.0, d_col[match] - back)
+        if np.array_equal(new, d_row):
+            break
+        d_row = new
+        d_col = (d_row[:, None] + A).min(axis=0)
+    return -d_row, d_col
+
+
+def _kept_multipliers(prep: _Prep, u: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Multipliers of lists 1 and 2 (each with the dummy's 0 first) that complete ``u`` to a
+    dual of the whole problem: the LP dual of the relaxed 2-D problem with dummies.
+
+    From the augmented matrix's potentials ``(a, b)``: ``v_1[i] = a[i] + b[n_2 + i]`` and
+    ``v_2[j] = b[j] + a[n_1 + j]`` meet ``v_1[i] + v_2[j] <= m(i, j)``, ``v_1[i] <= m(i, 0)``,
+    ``v_2[j] <= m(0, j)`` (the dummy block is 0) and sum to the 2-D optimum.
+    """
+    A = _pair_matrix(prep, u)[3]
+    a, b = _potentials(A, *_lsa(A))
+    n1, n2 = int(prep.sizes[0]), int(prep.sizes[1])
+    return np.r_[0.0, a[:n1] + b[n2:]], np.r_[0.0, b[:n2] + a[n1:]]
 
 
 def _recover(prep: _Prep, chosen: IntArray, u: FloatArray) -> IntArray:
@@ -853,7 +916,24 @@ def _insert(prep: _Prep, sel: IntArray, max_passes: int = 1000, batch: int = 32)
     tuple's elements as singletons. Insertions displacing disjoint sets gain independently,
     so each pass makes up to ``batch`` of them, best first; a candidate holding a dummy
     counts as overlapping every other such candidate, so a pass inserts at most one of those.
+
+    With numba the same passes run compiled (:func:`_insert_loop`), one candidate at a time.
     """
+    kernel = _compiled_insert()
+    if kernel is not None:
+        width = prep.singleton.shape[1]
+        return kernel(
+            np.array(sel, dtype=np.int64),  # writable: one compiled signature
+            prep.cost,
+            prep.gainful,
+            prep.gainful_elem,
+            prep.excess,
+            prep.elem,
+            prep.singleton.ravel(),
+            width,
+            max_passes,
+            batch,
+        )
     c, elem, single = prep.cost, prep.elem, prep.singleton.ravel()
     cand, cand_elem, w = prep.gainful, prep.gainful_elem, prep.excess
     base = w[cand]
@@ -896,20 +976,135 @@ def _insert(prep: _Prep, sel: IntArray, max_passes: int = 1000, batch: int = 32)
     return sel
 
 
+def _insert_loop(
+    sel: IntArray,
+    cost: FloatArray,
+    cand: IntArray,
+    cand_elem: IntArray,
+    excess: FloatArray,
+    elem: IntArray,
+    single: IntArray,
+    width: int,
+    max_passes: int,
+    batch: int,
+) -> IntArray:
+    """:func:`_insert`'s passes in scalar loops, for numba (:func:`_compiled_insert`): the same
+    gains, subtracted in the same order, the same choices and the same order of the result.
+
+    ``touched`` and the displaced tuples are indexed by tuple + 1 (0 = a dummy held).
+    """
+    S = elem.shape[1]
+    G = cand.size
+    cover = np.full(single.size, -1, dtype=np.int64)
+    delta = np.empty(G)
+    touched = np.zeros(cost.size + 1, dtype=np.bool_)
+    covered = np.zeros(single.size, dtype=np.bool_)
+    for _ in range(max_passes):
+        for k in sel:
+            for s in range(S):
+                cover[elem[k, s]] = k
+        for s in range(S):
+            cover[s * width] = -1
+        for b in range(G):
+            d = excess[cand[b]]
+            for s in range(S):
+                held = cover[cand_elem[s, b]]
+                again = held < 0
+                for q in range(s):
+                    again |= cover[cand_elem[q, b]] == held
+                if not again:
+                    d -= excess[held]
+            delta[b] = d
+        good = np.flatnonzero(delta < -1e-9 * max(1.0, abs(cost[sel].sum())))
+        if good.size == 0:
+            break
+        top = good[np.argsort(delta[good])][:batch]
+        taken = np.zeros(top.size, dtype=np.int64)
+        n_taken = 0
+        for b in top:
+            free = True
+            for s in range(S):
+                free &= not touched[cover[cand_elem[s, b]] + 1]
+            if free:
+                for s in range(S):
+                    touched[cover[cand_elem[s, b]] + 1] = True
+                    covered[cand_elem[s, b]] = True
+                taken[n_taken] = b
+                n_taken += 1
+        out = np.empty(sel.size + n_taken + S * sel.size, dtype=np.int64)
+        m = 0
+        for k in sel:
+            if not touched[k + 1]:
+                out[m] = k
+                m += 1
+        for j in range(n_taken):
+            out[m] = cand[taken[j]]
+            m += 1
+        for k in sel:
+            if touched[k + 1]:
+                for s in range(S):
+                    e = elem[k, s]
+                    if e != s * width and not covered[e]:
+                        out[m] = single[e]
+                        m += 1
+        touched[:] = False
+        for j in range(n_taken):
+            for s in range(S):
+                covered[cand_elem[s, taken[j]]] = False
+        sel = out[:m].copy()
+    return sel
+
+
+@lru_cache(maxsize=1)
+def _compiled_insert() -> Callable[..., IntArray] | None:
+    """:func:`_insert_loop` compiled by numba, or None without numba: :func:`_insert` then
+    runs its NumPy passes. Compiled on the first call for the argument types :func:`_insert`
+    passes (a writable ``sel``, the read-only arrays of :class:`_Prep`): about a second, a
+    tenth of that when loaded from numba's disk cache."""
+    numba = numba_module()
+    if numba is None:
+        return None
+    kernel = numba.njit(cache=True, nogil=True)(_insert_loop)
+    tiny = _prep(
+        SdProblem(
+            np.ones(3, dtype=np.int64),
+            np.vstack([np.eye(3), np.ones(3)]).astype(np.int64),
+            -np.eye(4)[3],
+        )
+    )
+    width = tiny.singleton.shape[1]
+    args = (
+        tiny.cost,
+        tiny.gainful,
+        tiny.gainful_elem,
+        tiny.excess,
+        tiny.elem,
+        tiny.singleton.ravel(),
+    )
+    kernel(np.arange(3), *args, width, 1, 1)  # compiled here, for the types _insert passes
+    return kernel
+
+
+def compile_kernels() -> None:
+    """Compile the relaxation's numba kernel now (nothing to do without numba), so that no
+    timed solve pays for it."""
+    _compiled_insert()
+
+
 def _vary(prep: _Prep, sel: IntArray) -> IntArray:
     """One round of dimension-wise variation (Karapetyan & Gutin 2011) on ``sel``.
 
-    For each list ``s`` in turn, every chosen tuple is cut into its list-``s`` element and the
-    rest; the two sides are re-paired by one exact 2-D assignment with dummies (a side may
-    stand alone when that tuple exists), which never costs more than the current pairing.
+    For each split of the lists into two sides (:func:`_splits`) in turn, every chosen tuple is
+    cut into its part on one side and its part on the other; the parts are re-paired by one
+    exact 2-D assignment with dummies (a part may stand alone when that tuple exists), which
+    never costs more than the current pairing.
     """
     t, cost, radix = prep.tuples, prep.cost_inf, prep.radix
-    S = t.shape[1]
     current = float(prep.cost[sel].sum())
     part = t[sel] * radix  # (r, S) each list's share of the chosen tuples' keys
     whole = part.sum(axis=1)
-    for s in range(S):
-        ka = part[:, s]
+    for side in _splits(t.shape[1]):
+        ka = part @ side
         kb = whole - ka
         a, b = ka[ka > 0], kb[kb > 0]
         R, C = a.size, b.size
@@ -939,6 +1134,18 @@ def _vary(prep: _Prep, sel: IntArray) -> IntArray:
     return sel
 
 
+@cache
+def _splits(S: int) -> IntArray:
+    """The ``2^(S-1) - 1`` splits of ``S`` lists into two non-empty sides, as 0/1 rows marking
+    the side that holds list 1. Cutting at every split, not only at one list (Karapetyan &
+    Gutin's DV1), halved the mean excess over the optimum of the benchmark's S = 4, 5 problems
+    (seed 13)."""
+    rows = [m for m in itertools.product((0, 1), repeat=S) if m[0] == 1 and 0 in m]
+    out = np.array(rows, dtype=np.int64).reshape(-1, S)
+    out.flags.writeable = False  # shared by every call (cached)
+    return out
+
+
 def _unchecked(sizes: IntArray, tuples: IntArray, cost: FloatArray) -> SdProblem:
     """An :class:`SdProblem` built without its checks (a valid problem with its lists
     permuted)."""
@@ -954,25 +1161,30 @@ def _solve_2d(problem: SdProblem) -> IntArray:
 
 
 def _lagrangian(
-    problem: SdProblem,
+    prep: _Prep,
     max_iter: int,
     tol: float,
     start: IntArray,
     seen: dict[bytes, IntArray],
+    u: FloatArray,
+    alpha: float,
     *,
     patience: int = 5,
     min_alpha: float = 2.0**-7,
     recover_every: int = 3,
-) -> tuple[float, IntArray, float, int]:
-    """One relaxation pass from zero multipliers, ``start`` the first feasible solution.
+) -> tuple[float, IntArray, float, int, FloatArray]:
+    """One relaxation pass from the multipliers ``u`` (L,) of lists 3..S and the step factor
+    ``alpha``, ``start`` the first feasible solution.
 
     ``seen`` maps each solution already polished by :func:`_improve` (sorted tuple indices)
     to its result: the local search is deterministic, so it runs once per solution, across
-    the rotated passes too (they share the tuple order).
+    the rotated passes too (they share the tuple order). A pass recovers from each set of
+    pairs once: a quarter of the recoveries repeated the pairs of an earlier one, and skipping
+    them cost the 4-list benchmark problems (seed 13) nothing.
 
-    Returns ``(upper bound, best feasible tuples, lower bound, iterations)``.
+    Returns ``(upper bound, best feasible tuples, lower bound, iterations, multipliers of the
+    lower bound)``.
     """
-    prep = _prep(problem)
 
     def polished(sel: IntArray) -> IntArray:
         key = np.sort(sel).tobytes()
@@ -980,22 +1192,27 @@ def _lagrangian(
             seen[key] = _improve(prep, sel)
         return seen[key]
 
-    u = np.zeros(int((problem.sizes[2:] + 1).sum()))
+    tried: set[bytes] = set()  # pair sets already fixed by a recovery in this pass
+    u = u.copy()
+    best_u = u.copy()
     best_sel = polished(start)
-    ub = float(problem.cost[best_sel].sum())
+    ub = float(prep.cost[best_sel].sum())
     lb = -np.inf
-    alpha, stall, it = 2.0, 0, 0
+    stall, it = 0, 0
     while it < max_iter:
         it += 1
         phi, sel, chosen = _dual(prep, u)
         improved = lb == -np.inf or phi > lb + 1e-12 * max(1.0, abs(lb))
-        if improved or it % recover_every == 0:
+        fixed = chosen.tobytes()
+        if (improved or it % recover_every == 0) and fixed not in tried:
+            tried.add(fixed)
             rec = polished(_recover(prep, chosen, u))
-            c = float(problem.cost[rec].sum())
+            c = float(prep.cost[rec].sum())
             if c < ub:
                 ub, best_sel = c, rec
         if improved:
             lb, stall = phi, 0
+            best_u[:] = u
         else:
             stall += 1
             if stall >= patience:
@@ -1006,17 +1223,20 @@ def _lagrangian(
         g[prep.dummies] = 0.0
         norm2 = float(g @ g)
         if norm2 == 0.0:  # relaxed solution is feasible, hence optimal
-            c = float(problem.cost[sel].sum())
+            c = float(prep.cost[sel].sum())
             if c < ub:
                 ub, best_sel = c, sel
             lb = max(lb, min(ub, phi))
             break
         u += alpha * max(ub - phi, 1e-9 * max(1.0, abs(ub))) / norm2 * g
-    return ub, best_sel, min(lb, ub), it
+    return ub, best_sel, min(lb, ub), it, best_u
+
+
+_WARM_ALPHA = 0.5  # step factor of the warm-started passes (module notes)
 
 
 def sd_lagrangian(
-    problem: SdProblem, max_iter: int = 30, tol: float = 1e-3, restarts: int = 4
+    problem: SdProblem, max_iter: int = 45, tol: float = 1e-3, restarts: int = 4
 ) -> SdSolution:
     """S-D assignment by Lagrangian relaxation of lists 3..S (module notes).
 
@@ -1024,14 +1244,17 @@ def sd_lagrangian(
     ----------
     problem : SdProblem with ``S >= 3`` lists
     max_iter : int
-        Multiplier updates per pass. Default 30 (module notes: chosen on seed 13).
+        Multiplier updates per pass. Default 45 (module notes: chosen on seed 13).
     tol : float
         Stop when ``UB - LB <= tol · |UB|`` (relative duality gap).
     restarts : int
         While the gap stays open, solve again with the lists rotated by 1, 2, ... (up to this
         many times, at most ``S - 1``): other lists are then kept in the 2-D subproblem and
-        other pairs fixed by the recovery. The best solution and the best bound of all passes
-        are kept (both stay valid). Default 4: every rotation up to ``S = 5``.
+        other pairs fixed by the recovery. Each rotated pass starts from the multipliers of
+        the best bound so far, those of the lists it now relaxes but kept before taken from
+        the dual of that bound's 2-D problem, so it starts at about that bound. The best
+        solution and the best bound of all passes are kept (both stay valid). Default 4:
+        every rotation up to ``S = 5``.
 
     Returns
     -------
@@ -1049,22 +1272,33 @@ def sd_lagrangian(
         return _solution(
             problem, problem.tuples[:0, 0], 0.0, 0, SdMethod.LAGRANGIAN, SdStatus.OPTIMAL, "empty"
         )
+    S = problem.n_lists
     seen: dict[bytes, IntArray] = {}  # polished solutions, shared by the rotated passes
     greedy = sd_greedy(problem).selected
-    ub, sel, lb, it = _lagrangian(problem, max_iter, tol, greedy, seen)
-    closed = ub - lb <= tol * max(abs(ub), 1e-12)
-    for shift in range(1, min(restarts, problem.n_lists - 1) + 1):
-        if closed:
-            break
+    mult = [np.zeros(int(k) + 1) for k in problem.sizes]  # per list, the dummy's 0 first
+    ub, sel, lb, it = np.inf, greedy, -np.inf, 0
+    for shift in range(min(restarts, S - 1) + 1):
         # the same problem with its lists rotated: other pairs are fixed by the recovery
-        order = np.roll(np.arange(problem.n_lists), -shift)
+        order = np.roll(np.arange(S), -shift)
         rot = _unchecked(problem.sizes[order], problem.tuples[:, order], problem.cost)
-        ub2, sel2, lb2, it2 = _lagrangian(rot, max_iter, tol, greedy, seen)
+        prep = _prep(rot)
+        u0 = np.concatenate([mult[k] for k in order[2:]])
+        alpha = 2.0 if shift == 0 else _WARM_ALPHA
+        ub2, sel2, lb2, it2, u = _lagrangian(prep, max_iter, tol, greedy, seen, u0, alpha)
         it += it2
-        lb = max(lb, lb2)
         if ub2 < ub:
             ub, sel = ub2, sel2
-        closed = ub - lb <= tol * max(abs(ub), 1e-12)
+        if ub - min(max(lb, lb2), ub) <= tol * max(abs(ub), 1e-12):
+            lb = max(lb, lb2)
+            break
+        if lb2 > lb:
+            lb = lb2
+            split = np.cumsum(rot.sizes[2:-1] + 1)
+            for k, uk in zip(order[2:], np.split(u, split), strict=True):
+                mult[k] = uk
+            mult[order[0]], mult[order[1]] = _kept_multipliers(prep, u)
+    lb = min(lb, ub)
+    closed = ub - lb <= tol * max(abs(ub), 1e-12)
     status = SdStatus.OPTIMAL if closed else SdStatus.GAP
     rel = (ub - lb) / max(abs(ub), 1e-12)
     msg = f"relative duality gap {rel:.2e} after {it} iterations"

@@ -123,7 +123,7 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._numba import numba_module
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
-from navtrack.tracking.assignment import SdProblem, SdStatus, sd_assign
+from navtrack.tracking.assignment import SdProblem, SdStatus, compile_kernels, sd_assign
 from navtrack.tracking.gating import chi2_threshold, gate
 from navtrack.tracking.jpda import (
     JpdaConfig,
@@ -966,8 +966,10 @@ def run_fusion(
     Ps = np.empty((K, *P.shape))
     gaps = 0
     elapsed = 0.0
-    if algorithm.startswith("sdcmsjpda"):
-        _compiled_gauss_newton()  # a one-off compilation is no part of a step's time
+    if algorithm.startswith("sdcmsjpda"):  # a one-off compilation is no part of a step's time
+        _compiled_gauss_newton()
+    elif algorithm == "sd_gnn":
+        compile_kernels()
     for k in range(K):
         ts = scans.t_s[k]
         if centralised and np.ptp(ts) > config.time_tolerance_s:
