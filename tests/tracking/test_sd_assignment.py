@@ -362,6 +362,45 @@ def test_compiled_insertions_equal_the_numpy_passes(monkeypatch: pytest.MonkeyPa
     assert changed >= 10  # the insertions did something to compare
 
 
+@pytest.mark.parametrize("table", [True, False])
+def test_compiled_split_matrices_equal_the_numpy_ones(
+    table: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The compiled variation builds the same 2-D problems as NumPy for every split (dense key
+    table and sorted keys alike), so a round of variation gives the same solution."""
+    from navtrack.tracking import assignment as sd
+
+    if sd._compiled_splits() is None:
+        pytest.skip("numba is not installed")
+    if not table:
+        monkeypatch.setattr(sd, "_TABLE_MAX", 0)
+    rng = np.random.default_rng(19)
+    changed = 0
+    for sizes, density in [((6, 7, 8), 1.0), ((5, 5, 5, 5), 0.4), ((5, 5, 5, 5, 5), 0.2)]:
+        p = random_sd_problem(sizes, rng, density)
+        prep = sd._prep(p)
+        assert bool(prep.table.size) == table
+        sides = sd._splits(p.n_lists)
+        for _ in range(8):
+            u = rng.normal(0.0, 1.5, int((p.sizes[2:] + 1).sum()))
+            u[prep.dummies] = 0.0
+            start = sd._recover(prep, sd._dual(prep, u)[2], u)
+            compiled = list(sd._split_problems(prep, start, sides))
+            varied = sd._vary(prep, start)
+            with monkeypatch.context() as m:
+                m.setattr(sd, "_compiled_splits", lambda: None)
+                plain = list(sd._split_problems(prep, start, sides))
+                np.testing.assert_array_equal(varied, sd._vary(prep, start))
+            assert len(compiled) == len(plain) == len(sides)
+            for a, b in zip(compiled, plain, strict=True):
+                assert (a is None) == (b is None)
+                if a is not None and b is not None:
+                    for x, y in zip(a, b, strict=True):
+                        np.testing.assert_array_equal(x, y)
+            changed += p.cost[varied].sum() < p.cost[start].sum() - 1e-9
+    assert changed >= 10
+
+
 def test_potentials_certify_the_2d_assignment() -> None:
     """Bellman-Ford potentials of an optimal assignment: dual feasible on every finite entry,
     tight on the assignment, and summing to its cost (LP duality)."""

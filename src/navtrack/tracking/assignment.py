@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import heapq
 import itertools
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from enum import IntEnum
 from functools import cache, lru_cache
@@ -926,7 +926,6 @@ def _insert(prep: _Prep, sel: IntArray, max_passes: int = 1000, batch: int = 32)
             np.array(sel, dtype=np.int64),  # writable: one compiled signature
             prep.cost,
             prep.gainful,
-            prep.gainful_elem,
             prep.excess,
             prep.elem,
             prep.singleton.ravel(),
@@ -980,7 +979,6 @@ def _insert_loop(
     sel: IntArray,
     cost: FloatArray,
     cand: IntArray,
-    cand_elem: IntArray,
     excess: FloatArray,
     elem: IntArray,
     single: IntArray,
@@ -997,6 +995,7 @@ def _insert_loop(
     G = cand.size
     cover = np.full(single.size, -1, dtype=np.int64)
     delta = np.empty(G)
+    held = np.empty(S, dtype=np.int64)  # the chosen tuple holding each element of a candidate
     touched = np.zeros(cost.size + 1, dtype=np.bool_)
     covered = np.zeros(single.size, dtype=np.bool_)
     for _ in range(max_passes):
@@ -1006,14 +1005,15 @@ def _insert_loop(
         for s in range(S):
             cover[s * width] = -1
         for b in range(G):
-            d = excess[cand[b]]
+            kb = cand[b]
+            d = excess[kb]
             for s in range(S):
-                held = cover[cand_elem[s, b]]
-                again = held < 0
+                held[s] = cover[elem[kb, s]]
+                again = held[s] < 0
                 for q in range(s):
-                    again |= cover[cand_elem[q, b]] == held
+                    again |= held[q] == held[s]
                 if not again:
-                    d -= excess[held]
+                    d -= excess[held[s]]
             delta[b] = d
         good = np.flatnonzero(delta < -1e-9 * max(1.0, abs(cost[sel].sum())))
         if good.size == 0:
@@ -1024,11 +1024,11 @@ def _insert_loop(
         for b in top:
             free = True
             for s in range(S):
-                free &= not touched[cover[cand_elem[s, b]] + 1]
+                free &= not touched[cover[elem[cand[b], s]] + 1]
             if free:
                 for s in range(S):
-                    touched[cover[cand_elem[s, b]] + 1] = True
-                    covered[cand_elem[s, b]] = True
+                    touched[cover[elem[cand[b], s]] + 1] = True
+                    covered[elem[cand[b], s]] = True
                 taken[n_taken] = b
                 n_taken += 1
         out = np.empty(sel.size + n_taken + S * sel.size, dtype=np.int64)
@@ -1050,9 +1050,15 @@ def _insert_loop(
         touched[:] = False
         for j in range(n_taken):
             for s in range(S):
-                covered[cand_elem[s, taken[j]]] = False
+                covered[elem[cand[taken[j]], s]] = False
         sel = out[:m].copy()
     return sel
+
+
+def _tiny_prep() -> _Prep:
+    """The :class:`_Prep` of a 3-list problem of one element each, to compile kernels on."""
+    tuples = np.vstack([np.eye(3), np.ones(3)]).astype(np.int64)
+    return _prep(SdProblem(np.ones(3, dtype=np.int64), tuples, -np.eye(4)[3]))
 
 
 @lru_cache(maxsize=1)
@@ -1065,18 +1071,11 @@ def _compiled_insert() -> Callable[..., IntArray] | None:
     if numba is None:
         return None
     kernel = numba.njit(cache=True, nogil=True)(_insert_loop)
-    tiny = _prep(
-        SdProblem(
-            np.ones(3, dtype=np.int64),
-            np.vstack([np.eye(3), np.ones(3)]).astype(np.int64),
-            -np.eye(4)[3],
-        )
-    )
+    tiny = _tiny_prep()
     width = tiny.singleton.shape[1]
     args = (
         tiny.cost,
         tiny.gainful,
-        tiny.gainful_elem,
         tiny.excess,
         tiny.elem,
         tiny.singleton.ravel(),
@@ -1086,9 +1085,10 @@ def _compiled_insert() -> Callable[..., IntArray] | None:
 
 
 def compile_kernels() -> None:
-    """Compile the relaxation's numba kernel now (nothing to do without numba), so that no
+    """Compile the relaxation's numba kernels now (nothing to do without numba), so that no
     timed solve pays for it."""
     _compiled_insert()
+    _compiled_splits()
 
 
 def _vary(prep: _Prep, sel: IntArray) -> IntArray:
@@ -1097,18 +1097,71 @@ def _vary(prep: _Prep, sel: IntArray) -> IntArray:
     For each split of the lists into two sides (:func:`_splits`) in turn, every chosen tuple is
     cut into its part on one side and its part on the other; the parts are re-paired by one
     exact 2-D assignment with dummies (a part may stand alone when that tuple exists), which
-    never costs more than the current pairing.
+    never costs more than the current pairing. After a split that lowers the cost, the next
+    ones cut the new solution.
     """
-    t, cost, radix = prep.tuples, prep.cost_inf, prep.radix
+    sides = _splits(prep.tuples.shape[1])
     current = float(prep.cost[sel].sum())
-    part = t[sel] * radix  # (r, S) each list's share of the chosen tuples' keys
+    done = 0
+    while done < len(sides):
+        for problem in _split_problems(prep, sel, sides[done:]):
+            done += 1
+            if problem is None:
+                continue
+            A, both, alone_a, alone_b = problem
+            R, C = both.shape
+            r, c = _lsa(A)
+            total = float(A[r, c].sum())
+            if total < current - 1e-9 * max(1.0, abs(current)):
+                m = r < R
+                sel = np.concatenate(
+                    [
+                        both[r[m & (c < C)], c[m & (c < C)]],
+                        alone_a[r[m & (c >= C)]],
+                        alone_b[c[~m & (c < C)]],
+                    ]
+                )
+                current = float(prep.cost[sel].sum())
+                break
+        else:
+            break
+    return sel
+
+
+_SplitProblem = tuple[FloatArray, IntArray, IntArray, IntArray]
+
+
+def _split_problems(prep: _Prep, sel: IntArray, sides: IntArray) -> Iterator[_SplitProblem | None]:
+    """For each split in ``sides`` (rows of :func:`_splits`), the 2-D problem re-pairing the
+    parts of the chosen tuples ``sel``, None when one side holds no real element.
+
+    Each is ``(A, both, alone_a, alone_b)``: the augmented ``(R + C) × (C + R)`` matrix of the
+    ``R`` side-1 parts and ``C`` side-2 parts, the tuple joining each pair of parts (-1 none,
+    cost inf), and each part's tuple on its own (its dummy entry). With numba all splits are
+    built by one compiled call (:func:`_split_loop`), the same matrices.
+    """
+    part = prep.tuples[sel] * prep.radix  # (r, S) each list's share of the chosen tuples' keys
+    kernel = _compiled_splits()
+    if kernel is not None:
+        args = prep.table, prep.keys, prep.key_tuple, prep.cost_inf
+        A_all, both_all, alone_a_all, alone_b_all, sizes = kernel(part, sides, *args)
+        for j, (R, C) in enumerate(sizes.tolist()):
+            if R == 0 or C == 0:
+                yield None
+                continue
+            M = R + C
+            A = A_all[j, : M * M].reshape(M, M)
+            yield A, both_all[j, : R * C].reshape(R, C), alone_a_all[j, :R], alone_b_all[j, :C]
+        return
+    cost = prep.cost_inf
     whole = part.sum(axis=1)
-    for side in _splits(t.shape[1]):
+    for side in sides:
         ka = part @ side
         kb = whole - ka
         a, b = ka[ka > 0], kb[kb > 0]
         R, C = a.size, b.size
         if R == 0 or C == 0:
+            yield None
             continue
         both = _lookup(prep, a[:, None] + b[None, :])  # keys add: the parts are disjoint
         alone_a, alone_b = _lookup(prep, a), _lookup(prep, b)
@@ -1117,21 +1170,104 @@ def _vary(prep: _Prep, sel: IntArray) -> IntArray:
         A.flat[C + (R + C + 1) * np.arange(R)] = cost[alone_a]
         A.flat[(R + C) * R + (R + C + 1) * np.arange(C)] = cost[alone_b]
         A[R:, C:] = 0.0
-        r, c = _lsa(A)
-        total = float(A[r, c].sum())
-        if total < current - 1e-9 * max(1.0, abs(current)):
-            m = r < R
-            sel = np.concatenate(
-                [
-                    both[r[m & (c < C)], c[m & (c < C)]],
-                    alone_a[r[m & (c >= C)]],
-                    alone_b[c[~m & (c < C)]],
-                ]
-            )
-            current = float(prep.cost[sel].sum())
-            part = t[sel] * radix
-            whole = part.sum(axis=1)
-    return sel
+        yield A, both, alone_a, alone_b
+
+
+def _split_loop(
+    part: IntArray,
+    sides: IntArray,
+    table: IntArray,
+    keys: IntArray,
+    key_tuple: IntArray,
+    cost_inf: FloatArray,
+) -> tuple[FloatArray, IntArray, IntArray, IntArray, IntArray]:
+    """:func:`_split_problems`' matrices for all ``sides`` in scalar loops, for numba
+    (:func:`_compiled_splits`); keys looked up as :func:`_lookup` does.
+
+    Returns row ``j`` of each output for split ``j``, padded: the matrix flattened in the first
+    ``(R + C)²`` entries, ``both`` in the first ``R · C``, and the ``(R, C)`` of each split.
+    """
+    r, S = part.shape
+    n = sides.shape[0]
+    A_all = np.empty((n, 4 * r * r))
+    both_all = np.empty((n, r * r), dtype=np.int64)
+    alone_a_all = np.empty((n, r), dtype=np.int64)
+    alone_b_all = np.empty((n, r), dtype=np.int64)
+    sizes = np.zeros((n, 2), dtype=np.int64)
+    ka = np.empty(r, dtype=np.int64)
+    kb = np.empty(r, dtype=np.int64)
+    dense = table.size > 0
+
+    def lookup(key: int) -> int:
+        if dense:
+            return int(table[key])
+        pos = np.searchsorted(keys, key)
+        return int(key_tuple[pos]) if pos < keys.size and keys[pos] == key else -1
+
+    for j in range(n):
+        R = 0
+        C = 0
+        for i in range(r):
+            on_a = 0
+            on_b = 0
+            for s in range(S):
+                if sides[j, s]:
+                    on_a += part[i, s]
+                else:
+                    on_b += part[i, s]
+            if on_a > 0:
+                ka[R] = on_a
+                R += 1
+            if on_b > 0:
+                kb[C] = on_b
+                C += 1
+        sizes[j, 0] = R
+        sizes[j, 1] = C
+        if R == 0 or C == 0:
+            continue
+        M = R + C
+        A = A_all[j]
+        A[: M * M] = np.inf
+        for p in range(R):
+            for q in range(C):
+                k = lookup(ka[p] + kb[q])
+                both_all[j, p * C + q] = k
+                A[p * M + q] = cost_inf[k]
+            k = lookup(ka[p])
+            alone_a_all[j, p] = k
+            A[p * M + C + p] = cost_inf[k]
+        for q in range(C):
+            k = lookup(kb[q])
+            alone_b_all[j, q] = k
+            A[(R + q) * M + q] = cost_inf[k]
+            for p in range(R):
+                A[(R + q) * M + C + p] = 0.0
+    return A_all, both_all, alone_a_all, alone_b_all, sizes
+
+
+@lru_cache(maxsize=1)
+def _compiled_splits() -> (
+    Callable[..., tuple[FloatArray, IntArray, IntArray, IntArray, IntArray]] | None
+):
+    """:func:`_split_loop` compiled by numba, or None without numba (:func:`_split_problems`
+    then builds each split's matrix with NumPy). Compiled on the first call for the argument
+    types :func:`_split_problems` passes, with the dense key table and without."""
+    numba = numba_module()
+    if numba is None:
+        return None
+    kernel = numba.njit(cache=True, nogil=True)(_split_loop)
+    for size in (1, 0):  # a dense key table and none (the sorted keys)
+        tiny = _tiny_prep()
+        table = tiny.table[: size * tiny.table.size]
+        kernel(
+            tiny.tuples[:1] * tiny.radix,
+            _splits(3),
+            table,
+            tiny.keys,
+            tiny.key_tuple,
+            tiny.cost_inf,
+        )
+    return kernel
 
 
 @cache
