@@ -401,6 +401,20 @@ def test_compiled_split_matrices_equal_the_numpy_ones(
     assert changed >= 10
 
 
+@pytest.mark.parametrize("sizes", [(0, 0, 5, 5, 5), (3, 0, 5, 5), (0, 0, 0, 6, 6)])
+def test_relaxation_with_empty_lists(sizes: tuple[int, ...]) -> None:
+    """Lists without real elements (as in Murty cells whose forced tuples used them up): the
+    rotated passes get an empty 2-D problem to take multipliers from, and still solve."""
+    rng = np.random.default_rng(0)
+    for _ in range(3):
+        p = random_sd_problem(sizes, rng, 0.5)
+        ex = sd_exact(p)
+        assert ex is not None
+        lr = sd_lagrangian(p)
+        assert p.is_feasible(lr.selected)
+        assert lr.lower_bound <= ex.cost + 1e-9 <= lr.cost + 2e-9
+
+
 def test_potentials_certify_the_2d_assignment() -> None:
     """Bellman-Ford potentials of an optimal assignment: dual feasible on every finite entry,
     tight on the assignment, and summing to its cost (LP duality)."""

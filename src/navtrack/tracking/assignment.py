@@ -777,6 +777,8 @@ def _potentials(A: FloatArray, rows: IntArray, cols: IntArray) -> tuple[FloatArr
     cycle and Bellman-Ford settles within ``2 N`` rounds (ended there in any case).
     """
     N = A.shape[0]
+    if N == 0:
+        return np.zeros(0), np.zeros(0)
     match = np.empty(N, dtype=np.int64)
     match[rows] = cols
     back = A[np.arange(N), match]
