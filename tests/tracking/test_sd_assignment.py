@@ -481,11 +481,23 @@ def test_sorted_key_lookup_without_table(monkeypatch: pytest.MonkeyPatch) -> Non
     assert without.cost == with_table.cost
 
 
-def test_rotated_passes_at_most_s_minus_one() -> None:
+def test_passes_over_list_orders() -> None:
+    """One pass per list order: at most C(S, 2) (three for S = 3, however many restarts); by
+    default the S rotations for S = 4 and every pair of lists (ten orders) for S = 5."""
+    from navtrack.tracking import assignment as sd
+
     p = random_sd_problem((5, 5, 5), np.random.default_rng(4), 0.5)
     sol = sd_lagrangian(p, max_iter=7, tol=0.0, restarts=10)
-    assert sol.iterations <= 3 * 7  # three list orders for S = 3, however many restarts
+    assert sol.iterations <= 3 * 7
     assert p.is_feasible(sol.selected)
+    for sizes, density, passes in [((4, 4, 4, 4), 0.5, 4), ((4, 4, 4, 4, 4), 0.3, 10)]:
+        p = random_sd_problem(sizes, np.random.default_rng(4), density)
+        sol = sd_lagrangian(p, max_iter=7, tol=0.0)
+        assert (passes - 1) * 7 < sol.iterations <= passes * 7
+    orders = sd._list_orders(5)
+    kept = {frozenset(o[:2].tolist()) for o in orders}
+    assert len(orders) == len(kept) == 10  # every pair of lists kept once
+    assert all(sorted(o.tolist()) == list(range(5)) for o in orders)
 
 
 @pytest.mark.parametrize(
