@@ -415,6 +415,28 @@ def test_relaxation_with_empty_lists(sizes: tuple[int, ...]) -> None:
         assert lr.lower_bound <= ex.cost + 1e-9 <= lr.cost + 2e-9
 
 
+def test_compiled_pair_costs_equal_the_numpy_ones(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The compiled pass over the tuples gives the same reduced costs, least reduced cost per
+    pair and tuple reaching it as the NumPy path, bit for bit, also with ties and for S = 2."""
+    from navtrack.tracking import assignment as sd
+
+    if sd._compiled_pairs() is None:
+        pytest.skip("numba is not installed")
+    rng = np.random.default_rng(23)
+    for sizes, density in [((4, 5), 1.0), ((6, 7, 8), 1.0), ((5, 5, 5, 5), 0.4), ((4,) * 5, 0.3)]:
+        p = random_sd_problem(sizes, rng, density)
+        prep = sd._prep(p)
+        for scale in (0.0, 1.5):  # u = 0: the singletons' equal costs tie
+            u = rng.normal(0.0, scale, int((p.sizes[2:] + 1).sum()))
+            u[prep.dummies] = 0.0
+            compiled = sd._pair_matrix(prep, u)
+            with monkeypatch.context() as m:
+                m.setattr(sd, "_compiled_pairs", lambda: None)
+                plain = sd._pair_matrix(prep, u)
+            for x, y in zip(compiled, plain, strict=True):
+                np.testing.assert_array_equal(x, y)
+
+
 def test_potentials_certify_the_2d_assignment() -> None:
     """Bellman-Ford potentials of an optimal assignment: dual feasible on every finite entry,
     tight on the assignment, and summing to its cost (LP duality)."""

@@ -735,20 +735,68 @@ def _reduced(prep: _Prep, u: FloatArray, idx: IntArray | None = None, first: int
     return cost - total
 
 
-def _pair_matrix(
-    prep: _Prep, u: FloatArray
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+def _pair_matrix(prep: _Prep, u: FloatArray) -> tuple[FloatArray, FloatArray, IntArray, FloatArray]:
     """The relaxed problem for the multipliers ``u`` (L,) of lists 3..S.
 
-    Returns ``(reduced costs (K,), the same sorted by pair, least reduced cost per pair (G,),
-    the augmented 2-D matrix)``: :attr:`_Prep.dual_matrix` with the pairs' costs filled in.
+    Returns ``(reduced costs (K,), least reduced cost per pair (G,), the first tuple (in pair
+    order) reaching it, the augmented 2-D matrix)``: :attr:`_Prep.dual_matrix` with the pairs'
+    costs filled in. With numba the reduced costs and the pairs' least ones come from one
+    compiled pass over the tuples (:func:`_pair_loop`), the same numbers.
     """
-    red = _reduced(prep, u)
-    rs = red[prep.order]
-    mins = np.minimum.reduceat(rs, prep.starts)
+    kernel = _compiled_pairs()
+    if kernel is not None:
+        red, mins, best = kernel(prep.cost, prep.uidx, u, prep.order, prep.starts)
+    else:
+        red = _reduced(prep, u)
+        rs = red[prep.order]
+        mins = np.minimum.reduceat(rs, prep.starts)
+        pos = np.flatnonzero(rs <= mins[prep.group_sorted])
+        best = prep.order[pos[_run_starts(prep.group_sorted[pos])]]
     A = prep.dual_matrix.copy()
     A.flat[prep.cell_flat] = mins[prep.cell_group]
-    return red, rs, mins, A
+    return red, mins, best, A
+
+
+def _pair_loop(
+    cost: FloatArray, uidx: IntArray, u: FloatArray, order: IntArray, starts: IntArray
+) -> tuple[FloatArray, FloatArray, IntArray]:
+    """:func:`_pair_matrix`'s reduced costs (summed in :func:`_reduced`'s order), least reduced
+    cost per pair and the first tuple reaching it, in scalar loops for numba
+    (:func:`_compiled_pairs`)."""
+    K = cost.size
+    G = starts.size
+    red = np.empty(K)
+    for k in range(K):
+        total = 0.0
+        for r in range(uidx.shape[0]):
+            total = u[uidx[r, k]] if r == 0 else total + u[uidx[r, k]]
+        red[k] = cost[k] - total
+    mins = np.empty(G)
+    best = np.empty(G, dtype=np.int64)
+    for g in range(G):
+        end = starts[g + 1] if g + 1 < G else K
+        least = np.inf
+        arg = -1
+        for p in range(starts[g], end):
+            if red[order[p]] < least:
+                least = red[order[p]]
+                arg = order[p]
+        mins[g] = least
+        best[g] = arg
+    return red, mins, best
+
+
+@lru_cache(maxsize=1)
+def _compiled_pairs() -> Callable[..., tuple[FloatArray, FloatArray, IntArray]] | None:
+    """:func:`_pair_loop` compiled by numba (on the first call, for the read-only arrays of
+    :class:`_Prep` and a writable ``u``), or None without numba."""
+    numba = numba_module()
+    if numba is None:
+        return None
+    kernel = numba.njit(cache=True, nogil=True)(_pair_loop)
+    tiny = _tiny_prep()
+    kernel(tiny.cost, tiny.uidx, np.zeros(2), tiny.order, tiny.starts)
+    return kernel
 
 
 def _dual(prep: _Prep, u: FloatArray) -> tuple[float, IntArray, IntArray]:
@@ -760,13 +808,10 @@ def _dual(prep: _Prep, u: FloatArray) -> tuple[float, IntArray, IntArray]:
 
     Returns ``(lower bound, selected tuples, chosen groups other than (0, 0))``.
     """
-    red, rs, mins, A = _pair_matrix(prep, u)
+    red, mins, best, A = _pair_matrix(prep, u)
     r, c = _lsa(A)
     chosen = prep.cell_lookup[r, c]
     chosen = np.sort(chosen[chosen >= 0])
-    pos = np.flatnonzero(rs <= mins[prep.group_sorted])
-    gp = prep.group_sorted[pos]
-    best = prep.order[pos[_run_starts(gp)]]  # least reduced cost per group
     sel = best[chosen]
     lb = float(mins[chosen].sum() + u.sum())
     neg = prep.free[red[prep.free] < 0]  # tuples of the pair (0, 0) are free in the relaxation
@@ -1097,6 +1142,7 @@ def compile_kernels() -> None:
     timed solve pays for it."""
     _compiled_insert()
     _compiled_splits()
+    _compiled_pairs()
 
 
 def _vary(prep: _Prep, sel: IntArray) -> IntArray:
