@@ -12,7 +12,7 @@ import os
 from functools import lru_cache
 from typing import Any
 
-__all__ = ["HAVE_NUMBA", "numba_module"]
+__all__ = ["HAVE_NUMBA", "jit", "numba_module"]
 
 #: True when numba is installed and not disabled (checked without importing it).
 HAVE_NUMBA = importlib.util.find_spec("numba") is not None and not os.environ.get(
@@ -29,3 +29,10 @@ def numba_module() -> Any:
     import numba
 
     return numba
+
+
+def jit(fn: Any) -> Any:
+    """``fn`` compiled by numba (nopython, without the GIL, cached on disk; compiled on its
+    first call for the argument types it gets), or None without numba."""
+    numba = numba_module()
+    return None if numba is None else numba.njit(cache=True, nogil=True)(fn)

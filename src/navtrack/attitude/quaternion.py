@@ -37,7 +37,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from navtrack._frozen import freeze_arrays
-from navtrack._numba import numba_module
+from navtrack._numba import jit, numba_module
 from navtrack._typing import ArrayLike, FloatArray
 
 _numba: Any = numba_module()  # optional accelerator: propagation as one compiled loop
@@ -300,9 +300,7 @@ def _propagate_loop(
     return out, norm
 
 
-_propagate_compiled: Any = (
-    _numba.njit(cache=True, nogil=True)(_propagate_loop) if _numba is not None else None
-)
+_propagate_compiled: Any = jit(_propagate_loop)
 
 
 @dataclass(frozen=True, slots=True, eq=False)

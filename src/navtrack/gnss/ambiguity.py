@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
-from navtrack._numba import HAVE_NUMBA, numba_module
+from navtrack._numba import HAVE_NUMBA, jit
 from navtrack._typing import FloatArray, IntArray
 
 __all__ = [
@@ -288,8 +288,7 @@ def _kernel(name: str, n: int) -> tuple[Any, bool]:
     if not HAVE_NUMBA or n < COMPILE_MIN_AMBIGUITIES:
         return py, False
     if name not in _COMPILED:
-        numba = numba_module()
-        _COMPILED[name] = py if numba is None else numba.njit(cache=True, nogil=True)(py)
+        _COMPILED[name] = jit(py) or py
     return _COMPILED[name], _COMPILED[name] is not py
 
 

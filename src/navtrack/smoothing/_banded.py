@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from navtrack._numba import numba_module
+from navtrack._numba import jit, numba_module
 from navtrack._typing import FloatArray
 
 _numba: Any = numba_module()  # optional accelerator; everything works without it
@@ -202,10 +202,8 @@ def _solve_refined_py(ab: FloatArray, ut: FloatArray, rhs: FloatArray, refine: i
     return x
 
 
-_cholesky: Any = _numba.njit(cache=True, nogil=True)(_cholesky_py) if _numba is not None else None
-_solve_refined: Any = (
-    _numba.njit(cache=True, nogil=True)(_solve_refined_py) if _numba is not None else None
-)
+_cholesky: Any = jit(_cholesky_py)
+_solve_refined: Any = jit(_solve_refined_py)
 
 
 def inverse_band_from_factor(
@@ -293,9 +291,7 @@ def _takahashi_py(cb: FloatArray, width: int) -> FloatArray:
     return zb
 
 
-_takahashi: Any = (
-    _numba.njit(cache=True, nogil=True)(_takahashi_py) if _numba is not None else _takahashi_py
-)
+_takahashi: Any = jit(_takahashi_py) or _takahashi_py
 
 
 def _band_sums_py(zb: FloatArray, v: FloatArray, m: int) -> FloatArray:
@@ -315,7 +311,7 @@ def _band_sums_py(zb: FloatArray, v: FloatArray, m: int) -> FloatArray:
     return out
 
 
-_band_sums: Any = _numba.njit(cache=True, nogil=True)(_band_sums_py) if _numba is not None else None
+_band_sums: Any = jit(_band_sums_py)
 
 
 def _centred_convolution_py(c: FloatArray, x: FloatArray) -> FloatArray:
@@ -334,9 +330,7 @@ def _centred_convolution_py(c: FloatArray, x: FloatArray) -> FloatArray:
     return e
 
 
-_centred_convolution: Any = (
-    _numba.njit(cache=True, nogil=True)(_centred_convolution_py) if _numba is not None else None
-)
+_centred_convolution: Any = jit(_centred_convolution_py)
 
 
 def centred_convolution(c: FloatArray, x: FloatArray) -> FloatArray:
@@ -378,9 +372,7 @@ def _add_convolution_band_py(ab: FloatArray, c: FloatArray, vs: FloatArray) -> N
                 ab[row, off + s] += vs[s] * cc
 
 
-_add_convolution_band: Any = (
-    _numba.njit(cache=True, nogil=True)(_add_convolution_band_py) if _numba is not None else None
-)
+_add_convolution_band: Any = jit(_add_convolution_band_py)
 
 
 def add_convolution_band(ab: FloatArray, c: FloatArray, vs: FloatArray) -> None:

@@ -41,7 +41,7 @@ from functools import cache, lru_cache
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
-from navtrack._numba import numba_module
+from navtrack._numba import jit
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
 
 __all__ = [
@@ -790,10 +790,9 @@ def _pair_loop(
 def _compiled_pairs() -> Callable[..., tuple[FloatArray, FloatArray, IntArray]] | None:
     """:func:`_pair_loop` compiled by numba (on the first call, for the read-only arrays of
     :class:`_Prep` and a writable ``u``), or None without numba."""
-    numba = numba_module()
-    if numba is None:
+    kernel = jit(_pair_loop)
+    if kernel is None:
         return None
-    kernel = numba.njit(cache=True, nogil=True)(_pair_loop)
     tiny = _tiny_prep()
     kernel(tiny.cost, tiny.uidx, np.zeros(2), tiny.order, tiny.starts)
     return kernel
@@ -1120,10 +1119,9 @@ def _compiled_insert() -> Callable[..., IntArray] | None:
     runs its NumPy passes. Compiled on the first call for the argument types :func:`_insert`
     passes (a writable ``sel``, the read-only arrays of :class:`_Prep`): about a second, a
     tenth of that when loaded from numba's disk cache."""
-    numba = numba_module()
-    if numba is None:
+    kernel = jit(_insert_loop)
+    if kernel is None:
         return None
-    kernel = numba.njit(cache=True, nogil=True)(_insert_loop)
     tiny = _tiny_prep()
     width = tiny.singleton.shape[1]
     args = (
@@ -1306,10 +1304,9 @@ def _compiled_splits() -> (
     """:func:`_split_loop` compiled by numba, or None without numba (:func:`_split_problems`
     then builds each split's matrix with NumPy). Compiled on the first call for the argument
     types :func:`_split_problems` passes, with the dense key table and without."""
-    numba = numba_module()
-    if numba is None:
+    kernel = jit(_split_loop)
+    if kernel is None:
         return None
-    kernel = numba.njit(cache=True, nogil=True)(_split_loop)
     for size in (1, 0):  # a dense key table and none (the sorted keys)
         tiny = _tiny_prep()
         table = tiny.table[: size * tiny.table.size]

@@ -121,7 +121,7 @@ from typing import Literal
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
-from navtrack._numba import numba_module
+from navtrack._numba import jit
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
 from navtrack.tracking.assignment import SdProblem, SdStatus, compile_kernels, sd_assign
 from navtrack.tracking.gating import chi2_threshold, gate
@@ -657,10 +657,9 @@ def _compiled_gauss_newton() -> Callable[..., tuple[FloatArray, FloatArray]] | N
     tenth of that) for the argument types :func:`equivalent_measurement` passes: writable
     ``z``, ``hit``, ``p0``, read-only (cached) sensor positions and whitening.
     """
-    numba = numba_module()
-    if numba is None:
+    kernel = jit(_gauss_newton_range_bearing)
+    if kernel is None:
         return None
-    kernel = numba.njit(cache=True, nogil=True)(_gauss_newton_range_bearing)
     fixed = np.zeros((1, 2)), np.eye(2)[None]
     for a in fixed:
         a.setflags(write=False)
