@@ -18,7 +18,11 @@ from navtrack.experiments.agps import (
     real_data_study,
     simulate_fix_set,
 )
-from navtrack.experiments.agps.simulation import fix_set_problem, solver_config
+from navtrack.experiments.agps.simulation import (
+    fix_set_problem,
+    sensitivity_names,
+    solver_config,
+)
 from navtrack.gnss.agps import AgpsStatus
 
 STAT_KEYS = {"p50_m", "p60_m", "p70_m", "p80_m", "p90_m", "mean_m", "mean_iterations", "n"}
@@ -72,8 +76,10 @@ def test_fix_set_is_seeded_and_its_truth_is_consistent() -> None:
     p2, _, _ = fix_set_problem(params, np.random.default_rng(4))
     np.testing.assert_array_equal(p1.y_m, p2.y_m)
     assert p1.size == len(params.heights_m) * len(params.intervals_min)
-    assert 1000.0 <= meta["base_distance_m"] <= 5000.0
-    assert np.linalg.norm(p1.start_xyz_m[0] - truth) == pytest.approx(meta["base_distance_m"])
+    distance = params.cell_radius_m * meta["cell_fraction"]
+    assert 0.0 <= distance <= params.cell_radius_m
+    assert np.linalg.norm(p1.start_xyz_m[0] - truth) == pytest.approx(distance)
+    assert meta["dop"] <= params.max_dop
     # error-free pseudoranges: Gauss–Newton at the true height recovers the truth to the
     # departure of the f5 surface from the geodetic height (< 0.4 m at 56 m)
     from navtrack.gnss.agps import AgpsConfig, solve_agps
@@ -84,7 +90,8 @@ def test_fix_set_is_seeded_and_its_truth_is_consistent() -> None:
     assert err.max() < 50.0
     run = simulate_fix_set(params, np.random.default_rng(4))
     assert run["error_m"].shape == (3, 4, 11)
-    assert solver_config(params).prior_sigma_m == params.prior_sigma_m
+    assert run["sens_error_m"].shape == (len(sensitivity_names(params)), 2, 11)
+    assert solver_config(params).prior_sigma_m == params.cell_radius_m / 2.0
 
 
 def test_reproduce_agps_reduced(tmp_path: Path) -> None:
@@ -120,8 +127,9 @@ def test_real_data_study_on_the_shared_data(gnss_data: Path) -> None:
         height_offsets_m=(0.0,),
         intervals_min=(2.0, 8.0),
         fixes=5,
-        base_distance_m=(1000.0, 5000.0),
-        config=AgpsConfig(),
+        cell_radius_m=500.0,
+        clock_bias_m=300.0,
+        config=AgpsConfig(max_dop=700.0),
     )
     assert skipped == []
     assert set(arrays["set"].tolist()) == {"0759", "ARL1", "SEPT", "yamatogawa_master", "android"}
@@ -130,15 +138,19 @@ def test_real_data_study_on_the_shared_data(gnss_data: Path) -> None:
     err = arrays["error_m"]
     gn_ok = arrays["status"][:, 0, 0, 0] == AgpsStatus.OK
     assert gn_ok.sum() >= 20
-    # real two-satellite Gauss–Newton fixes land within kilometres of the reference
+    # real two-satellite Gauss–Newton fixes with fine time land within kilometres
     assert np.nanmedian(err[gn_ok, 0, 0, 0]) < 3000.0
     assert not math.isnan(float(np.nanmedian(err[gn_ok, 0, 0, 0])))
+    # the station's own clocks (0759's is milliseconds off) leave Gauss–Newton unchanged
+    station_err = arrays["station_clock"][0]
+    both = gn_ok & np.isfinite(station_err[:, 0, 0])
+    np.testing.assert_allclose(station_err[both, 0, 0], err[both, 0, 0, 0], atol=50.0)
 
 
 def test_parameters_refuse_bad_values(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="nav: navigation file"):
         AgpsExperimentParams(nav=tmp_path / "missing.n")
-    with pytest.raises(ValueError, match="base_distance_m"):
-        AgpsExperimentParams(base_distance_m=(5000.0, 1000.0))
+    with pytest.raises(ValueError, match="cell_radius_m"):
+        AgpsExperimentParams(cell_radius_m=-1.0)
     with pytest.raises(ValueError, match="intervals_min"):
         AgpsExperimentParams(intervals_min=(0.0, 2.0))

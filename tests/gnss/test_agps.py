@@ -3,6 +3,8 @@ against a plain re-implementation of the paper's steps 1–6, MAP vs Gauss–New
 
 from __future__ import annotations
 
+import dataclasses
+
 import math
 from importlib import resources
 
@@ -84,7 +86,7 @@ def test_noise_free_geometry_gives_the_exact_solution(gps_sats, k) -> None:
     t, sat = gps_sats
     truth = _on_height_surface(SITE[0], SITE[1], SITE[2])
     problem = _problem(t, sat, truth, k, SITE[2], _cell(truth, 2500.0, -1500.0))
-    tight = AgpsConfig(eps=1e-9, lm_ellipsoid_scale=(WGS84_A_M + SITE[2]) / 2.0, max_iter=200)
+    tight = AgpsConfig(eps=1e-9, f5_units="m", max_iter=200)
     huge_prior = AgpsConfig(eps=1e-9, prior_sigma_m=1e9)
     for solver, cfg in (("gn", tight), ("lm", tight), ("map", huge_prior)):
         res = solve_agps(problem, solver, cfg)
@@ -141,16 +143,20 @@ def _paper_marquardt(
             mu *= beta
 
 
-@pytest.mark.parametrize("scale", [1.0, (WGS84_A_M + 56.23) / 2.0])
+@pytest.mark.parametrize(
+    ("f5_units", "scale"), [("dimensionless", 1.0), ("m", (WGS84_A_M + 46.0) / 2.0)]
+)
 @pytest.mark.parametrize("cell_m", [4000.0, 1.0e6])
-def test_marquardt_follows_the_papers_steps(gps_sats, scale, cell_m) -> None:
+def test_marquardt_follows_the_papers_steps(gps_sats, f5_units, scale, cell_m) -> None:
     t, sat = gps_sats
     truth = _on_height_surface(SITE[0], SITE[1], SITE[2])
     rng = np.random.default_rng(12)
     noise = rng.normal(0.0, 5.0, (12, 4))
     cell = _cell(truth, cell_m, 0.75 * cell_m)
     prob = _problem(t, sat, truth, 1, 46.0, cell, noise, (2e4, -3e4))
-    res = solve_agps(prob, "lm", AgpsConfig(lm_ellipsoid_scale=scale))
+    # the paper's steps alone: no plausibility checks
+    res = solve_agps(prob, "lm", AgpsConfig(f5_units=f5_units, max_height_residual_m=np.inf,
+                                            max_residual_m=np.inf))  # fmt: skip
     total_rejected = 0
     for i in range(prob.size):
         x, solves, rejected = _paper_marquardt(prob, i, scale)
@@ -245,6 +251,8 @@ def test_singular_and_missing_fixes_are_statuses_never_nan_fixes(gps_sats, solve
         "singular": 2,
         "no_convergence": 0,
         "diverged": 0,
+        "weak_geometry": 0,
+        "implausible": 0,
     }
 
 
@@ -329,21 +337,31 @@ def test_problem_from_measurements_real_fixes_and_bad_indices() -> None:
 
 
 def test_marquardt_needs_the_clocks_the_cell_start_gives(gps_sats) -> None:
-    """Receiver clocks of hundreds of km (real receivers: 0759, SEPT): the paper's zero start
-    leaves Marquardt tens of km off — damping slows the clock steps and the dimensionless height
-    equation does not hold the position — while clocks started from the cell bring it back to
-    the cell's neighbourhood."""
+    """Receiver clocks of hundreds of km (real receivers: 0759, SEPT): with the dimensionless
+    height equation the paper's zero start leaves Marquardt tens of km off — damping slows the
+    clock steps and nothing holds the position — while clocks started from the cell, or the
+    height equation in metres, bring it back to the cell's neighbourhood. The plausibility
+    checks never report the lost fixes ``ok``."""
     t, sat = gps_sats
     truth = _on_height_surface(SITE[0], SITE[1], SITE[2])
     noise = np.random.default_rng(2).normal(0.0, 5.0, (10, 4))
     cell = _cell(truth, 1500.0, 1500.0)
     prob = _problem(t, sat, truth, 1, 56.0, cell, noise, (4.0e5, -1.3e5))
-    zero = solve_agps(prob, "lm")
-    from_cell = solve_agps(prob, "lm", AgpsConfig(clock_start="cell"))
+    printed = AgpsConfig(f5_units="dimensionless", max_height_residual_m=np.inf,
+                         max_residual_m=np.inf)  # fmt: skip
+    zero = solve_agps(prob, "lm", printed)
+    from_cell = solve_agps(prob, "lm", dataclasses.replace(printed, clock_start="cell"))
     err_zero = np.linalg.norm(zero.pos_m - truth, axis=1)
     err_cell = np.linalg.norm(from_cell.pos_m - truth, axis=1)
     assert np.nanmedian(err_zero) > 10_000.0
     assert np.nanmedian(err_cell) < 3_000.0
+    checked = solve_agps(prob, "lm", AgpsConfig(f5_units="dimensionless"))
+    err_checked = np.linalg.norm(checked.pos_m - truth, axis=1)
+    assert not (checked.ok & (err_checked > 3_000.0)).any()
+    assert (checked.status == AgpsStatus.IMPLAUSIBLE).sum() >= 5
+    assert all("from the assumed height" in r for r in checked.reason[checked.status == 6])
+    metres = solve_agps(prob, "lm")
+    assert np.nanmedian(np.linalg.norm(metres.pos_m - truth, axis=1)) < 3_000.0
     # Gauss–Newton's clock steps are exact (the clocks enter linearly): the start does not matter
     gn_zero = solve_agps(prob, "gn")
     gn_cell = solve_agps(prob, "gn", AgpsConfig(clock_start="cell"))

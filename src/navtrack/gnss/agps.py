@@ -65,9 +65,11 @@ __all__ = [
     "AgpsProblem",
     "AgpsResult",
     "AgpsStatus",
+    "F5Units",
     "Solver",
     "assisted_pseudoranges",
     "ellipsoid_residual",
+    "fix_dop",
     "problem_from_measurements",
     "solve_agps",
 ]
@@ -90,9 +92,14 @@ class AgpsStatus(IntEnum):
     SINGULAR = 2
     NO_CONVERGENCE = 3
     DIVERGED = 4
+    WEAK_GEOMETRY = 5
+    IMPLAUSIBLE = 6
 
 
 STATUS_NAMES = tuple(s.name.lower() for s in AgpsStatus)
+
+
+F5Units = Literal["m", "dimensionless"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -110,19 +117,21 @@ class AgpsConfig:
         the pseudorange rows), the stopping rule of both ``gn`` and ``lm``.
     max_iter : int
         Maximum linear solves per fix (the paper gives none).
-    lm_ellipsoid_scale : float
-        Factor on ``f_5`` in Marquardt's objective. The paper writes ``f_5`` dimensionless and
-        ``F = sum f_i^2`` unweighted (1, the default): then the height equation weighs about
-        ``(2 / a)^2 ~ 1e-13`` per m^2 against 1 per m^2 of a pseudorange and the damping, not
-        the height, fixes the weak directions. ``(a + h) / 2`` puts ``f_5`` in metres of
-        height. Gauss–Newton on the square system is invariant to it (``f_5`` in metres is used
-        for its conditioning).
+    f5_units : {"m", "dimensionless"}
+        Scale of the height equation in the objective ``F = sum f_i^2``. ``m`` (default):
+        ``f_5`` times ``(a + h) / 2``, a height residual in metres weighing like a pseudorange.
+        ``dimensionless``: ``f_5`` exactly as printed, which weighs about ``(2 / a)^2 ~ 1e-13``
+        per m^2 against a pseudorange, so that Marquardt's damping, not the assumed height, fixes
+        the weak direction and its fix does not depend on the height at all. The paper's
+        Table II varies with the height, which only the ``m`` reading reproduces
+        (``docs/agps.md``). Gauss–Newton's iterates on the square system do not depend on it;
+        its gradient test and its conditioning use metres.
     prior_sigma_m : float
         ``map``: standard deviation (m, per ECEF axis) of the cell position as a prior of the
-        phone's position: about the cell radius. Default 3000 m, the base-station distance of
-        the simulation (a few km, issue 12).
+        phone's position: about the cell radius.
     sigma_pr_m : float
-        ``map``: standard deviation (m) of a corrected pseudorange.
+        Standard deviation (m) of a corrected pseudorange: the ``map`` weights and the predicted
+        position error ``dop * sigma_pr_m`` that :attr:`max_dop` bounds.
     sigma_height_m : float
         ``map``: standard deviation (m) of the assumed height.
     clock_start : {"zero", "cell"}
@@ -130,34 +139,56 @@ class AgpsConfig:
         the mean over the epoch's two satellites of ``P - |X_S - R_cell|`` (what a receiver
         knows before any iteration; it matters to Marquardt, whose damping also slows the
         clock steps, when the receiver clock is kilometres off).
+    max_dop : float
+        Geometry screen: a fix whose dilution of precision (:func:`fix_dop`, metres of position
+        per metre of pseudorange noise, at the start) exceeds it is ``weak_geometry`` and not
+        solved. Infinite (the default) screens nothing.
+    max_height_residual_m : float
+        A fix further than this from the assumed height (m) is ``implausible``: the height
+        equation is one of the five, so a solution off it has not solved the system. Infinite
+        turns the check off (the paper's statistics count every fix).
+    max_residual_m : float
+        A fix whose pseudorange residuals (root mean square, m) exceed this is ``implausible``:
+        four pseudoranges and five unknowns close exactly at a solution, so residuals of many
+        metres mean the iteration stopped short of it. Infinite turns the check off.
     """
 
     mu1: float = 0.1
     beta: float = 10.0
     eps: float = 0.1
     max_iter: int = 50
-    lm_ellipsoid_scale: float = 1.0
+    f5_units: F5Units = "m"
     prior_sigma_m: float = 3000.0
     sigma_pr_m: float = 5.0
     sigma_height_m: float = 20.0
     clock_start: Literal["zero", "cell"] = "zero"
+    max_dop: float = math.inf
+    max_height_residual_m: float = 50.0
+    max_residual_m: float = 50.0
 
     def __post_init__(self) -> None:
-        for name in ("mu1", "eps", "prior_sigma_m", "sigma_pr_m", "sigma_height_m"):
+        for name in (
+            "mu1",
+            "eps",
+            "prior_sigma_m",
+            "sigma_pr_m",
+            "sigma_height_m",
+        ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"{name}: expected a finite positive number, got {value}")
+        for name in ("max_dop", "max_height_residual_m", "max_residual_m"):
+            value = getattr(self, name)
+            if not value > 0.0:
+                raise ValueError(f"{name}: expected a positive number or inf, got {value}")
         if not self.beta > 1.0:
             raise ValueError(f"beta: growth factor must be > 1, got {self.beta}")
         if self.clock_start not in ("zero", "cell"):
             raise ValueError(f"clock_start: expected 'zero' or 'cell', got {self.clock_start!r}")
+        if self.f5_units not in ("m", "dimensionless"):
+            raise ValueError(f"f5_units: expected 'm' or 'dimensionless', got {self.f5_units!r}")
         if self.max_iter < 1:
             raise ValueError(f"max_iter: expected >= 1, got {self.max_iter}")
-        if not (math.isfinite(self.lm_ellipsoid_scale) and self.lm_ellipsoid_scale > 0.0):
-            raise ValueError(
-                f"lm_ellipsoid_scale: expected a finite positive number, got "
-                f"{self.lm_ellipsoid_scale}"
-            )
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -250,27 +281,42 @@ class AgpsResult:
     solver : str
         ``gn``, ``lm`` or ``map``.
     pos_m : ndarray, shape (B, 3)
-        ECEF position (m): the solution for ``ok``, the last iterate for ``no_convergence``,
-        NaN for the other statuses.
+        ECEF position (m): the solution for ``ok``, ``weak_geometry`` and ``implausible`` (to
+        show what was rejected), the last iterate for ``no_convergence``, NaN for the other
+        statuses.
     clock_m : ndarray, shape (B, 2)
         ``c dt1, c dt2`` (m), NaN where ``pos_m`` is.
     iterations : ndarray of int, shape (B,)
-        Linear solves (Gauss–Newton steps; Marquardt trial steps, accepted or not).
+        Linear solves: the ``k`` of the paper's steps when they stop (Gauss–Newton steps;
+        Marquardt trial steps, accepted or not), the last one taken from an iterate whose
+        gradient already met ``epsilon``.
+    accepted : ndarray of int, shape (B,)
+        Steps that moved the estimate (Gauss–Newton: all; Marquardt: the accepted trials).
     status : ndarray of int8, shape (B,)
         :class:`AgpsStatus`.
     cost : ndarray, shape (B,)
         Objective at the estimate (the solver's weighting).
     height_residual_m : ndarray, shape (B,)
         Ellipsoidal height of the estimate minus the assumed height (m).
+    residual_m : ndarray, shape (B,)
+        Root mean square of the four pseudorange residuals at the estimate (m).
+    dop : ndarray, shape (B,)
+        Dilution of precision of the fix at the start (:func:`fix_dop`).
+    reason : ndarray of str, shape (B,)
+        Why a fix is ``weak_geometry`` or ``implausible`` (empty for the other statuses).
     """
 
     solver: str
     pos_m: FloatArray
     clock_m: FloatArray
     iterations: IntArray
+    accepted: IntArray
     status: np.ndarray
     cost: FloatArray
     height_residual_m: FloatArray
+    residual_m: FloatArray
+    dop: FloatArray
+    reason: np.ndarray
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -369,18 +415,53 @@ XTOL_M = 1e-4
 ``epsilon``."""
 
 
-def _singular_start(problem: AgpsProblem, x0: FloatArray) -> BoolArray:
-    """Fixes whose five equations (height equation in metres) are singular at the start — the
-    same satellite twice, a start at the earth's centre, two epochs of the same geometry — by
-    the singularity test of the Gauss–Newton kernel (``rcond = 1e-12`` on the scaled normal
-    matrix)."""
-    from navtrack.gnss.solve import _singular
-
+def _start_jacobian(problem: AgpsProblem, x0: FloatArray) -> tuple[FloatArray, BoolArray]:
+    """The five equations' Jacobian at the start (height equation in metres, (B, 5, 5)) and the
+    fixes with all of them valid."""
     metric = (WGS84_A_M + problem.height_m) / 2.0
     model = _AgpsModel(problem, metric, 1.0, 1.0, None)
     _, J, _, valid = model(x0, np.arange(problem.size))
-    J = np.where(valid[..., None], J, 0.0)
-    return np.asarray(_singular(np.einsum("bmp,bmq->bpq", J, J), 1e-12) & valid.all(axis=1))
+    return np.where(valid[..., None], J, 0.0), np.asarray(valid.all(axis=1))
+
+
+def _singular_start(J: FloatArray, complete: BoolArray) -> BoolArray:
+    """Fixes whose five equations are singular at the start — the same satellite twice, a start
+    at the earth's centre, two epochs of the same geometry — by the singularity test of the
+    Gauss–Newton kernel (``rcond = 1e-12`` on the scaled normal matrix)."""
+    from navtrack.gnss.solve import _singular
+
+    return np.asarray(_singular(np.einsum("bmp,bmq->bpq", J, J), 1e-12) & complete)
+
+
+def fix_dop(problem: AgpsProblem) -> FloatArray:
+    """Dilution of precision of each fix at its start (the cell, the clocks at zero).
+
+    The four pseudoranges and the height equation make a square system ``A dX = df``; the
+    position error caused by independent pseudorange errors of unit variance has the covariance
+    ``B B^T`` with ``B`` the position rows and pseudorange columns of ``A^-1``. The DOP is
+    ``sqrt(trace(B B^T))``: metres of 3-D position error (root mean square) per metre of
+    pseudorange noise. Two satellites seen twice a few minutes apart give hundreds.
+
+    Parameters
+    ----------
+    problem : AgpsProblem
+
+    Returns
+    -------
+    ndarray, shape (B,)
+        Infinite where the system is singular or a measurement is missing.
+    """
+    x0 = np.zeros((problem.size, 5))
+    x0[:, :3] = problem.start_xyz_m
+    J, complete = _start_jacobian(problem, x0)
+    good = complete & ~_singular_start(J, complete)
+    dop = np.full(problem.size, np.inf)
+    if good.any():
+        # h(X) has Jacobian J; the residual rows f = h - y have the same, and the height row
+        # carries no noise: only the pseudorange columns of the inverse enter.
+        B = np.linalg.inv(J[good])[:, :3, :4]
+        dop[good] = np.sqrt(np.einsum("bij,bij->b", B, B))
+    return dop
 
 
 def solve_agps(
@@ -409,7 +490,10 @@ def solve_agps(
     after an accepted step) runs with ``mu0 = mu_1 / beta``. Gauss–Newton is eq. (7) with the
     same stopping rule. Iterations count linear solves (the paper's measure of computation).
     A fix ends ``diverged`` when its estimate is not finite or not within
-    :data:`navtrack.geodesy.NEAR_SURFACE_NORM_M` of the earth's centre.
+    :data:`navtrack.geodesy.NEAR_SURFACE_NORM_M` of the earth's centre, ``weak_geometry`` when
+    its DOP exceeds ``max_dop``, ``implausible`` when it lies off the assumed height or its
+    pseudoranges do not close (``max_height_residual_m``, ``max_residual_m``), with the reason
+    in :attr:`AgpsResult.reason`.
     """
     from navtrack.gnss.solve import LsqStatus, gauss_newton, marquardt
 
@@ -432,7 +516,7 @@ def solve_agps(
         model = _AgpsModel(p, metric, 1.0, 1.0, None)
         lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=XTOL_M, gtol=cfg.eps)
     elif solver == "lm":
-        scale = np.full(n, cfg.lm_ellipsoid_scale)
+        scale = metric if cfg.f5_units == "m" else np.ones(n)
         model = _AgpsModel(p, scale, 1.0, 1.0, None)
         # The damped matrix is regular; the undamped one of the paper's dimensionless f5 has
         # eigenvalues near 1e-13 of its largest: only rank deficiency to rounding is singular.
@@ -456,11 +540,13 @@ def solve_agps(
         grad_tol = cfg.eps * cfg.sigma_pr_m**-2  # epsilon in metres of pseudorange
         lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=XTOL_M, gtol=grad_tol)
 
+    J0, complete = _start_jacobian(p, x0)
+    singular = _singular_start(J0, complete)
     status = np.full(n, AgpsStatus.OK, dtype=np.int8)
     status[lsq.status == LsqStatus.NO_CONVERGENCE] = AgpsStatus.NO_CONVERGENCE
     if solver != "lm":  # Marquardt's damped steps exist; its final covariance is not used
         status[lsq.status == LsqStatus.SINGULAR] = AgpsStatus.SINGULAR
-    status[_singular_start(p, x0)] = AgpsStatus.SINGULAR
+    status[singular] = AgpsStatus.SINGULAR
     x = lsq.x
     finite = np.asarray(np.isfinite(x).all(axis=1))
     norm = np.linalg.norm(np.where(finite[:, None], x[:, :3], 0.0), axis=1)
@@ -469,19 +555,40 @@ def solve_agps(
     status[off & (status != AgpsStatus.SINGULAR)] = AgpsStatus.DIVERGED
     status[~p.usable.all(axis=1)] = AgpsStatus.MISSING_MEASUREMENT
     keep = (status == AgpsStatus.OK) | (status == AgpsStatus.NO_CONVERGENCE)
-    pos = np.where(keep[:, None], x[:, :3], np.nan)
-    clock = np.where(keep[:, None], x[:, 3:5], np.nan)
+    pos = np.where(keep[:, None], x[:, :3], np.nan)  # weak or implausible fixes keep theirs
     height = np.full(n, np.nan)
     if keep.any():
         height[keep] = ecef_to_geodetic(pos[keep])[:, 2] - p.height_m[keep]
+    with np.errstate(invalid="ignore"):
+        residual = np.sqrt(np.nanmean(lsq.residuals[:, :4] ** 2, axis=1))
+    residual = np.where(keep, residual, np.nan)
+    dop = fix_dop(p)
+    reason = np.full(n, "", dtype=object)
+    weak = (status == AgpsStatus.OK) & (dop > cfg.max_dop)
+    off_height = ~(np.abs(height) <= cfg.max_height_residual_m)
+    open_residuals = ~(residual <= cfg.max_residual_m)
+    implausible = (status == AgpsStatus.OK) & ~weak & (off_height | open_residuals)
+    for i in np.flatnonzero(weak):
+        reason[i] = f"dop {dop[i]:.0f} above {cfg.max_dop:g}"
+    for i in np.flatnonzero(implausible):
+        why = [f"{height[i]:+.0f} m from the assumed height"] if off_height[i] else []
+        if open_residuals[i]:
+            why.append(f"pseudorange residuals {residual[i]:.0f} m rms")
+        reason[i] = "; ".join(why)
+    status[weak] = AgpsStatus.WEAK_GEOMETRY
+    status[implausible] = AgpsStatus.IMPLAUSIBLE
     return AgpsResult(
         solver=solver,
         pos_m=pos,
-        clock_m=clock,
+        clock_m=np.where(keep[:, None], x[:, 3:5], np.nan),
         iterations=lsq.iterations,
+        accepted=lsq.accepted,
         status=status,
         cost=np.where(keep, lsq.cost, np.nan),
         height_residual_m=height,
+        residual_m=residual,
+        dop=dop,
+        reason=reason,
     )
 
 

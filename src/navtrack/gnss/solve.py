@@ -76,6 +76,8 @@ class LsqResult:
     iterations : ndarray of int, shape (B,)
         Iterations used (model evaluations with a step for Gauss–Newton, accepted plus rejected
         trial steps for Marquardt).
+    accepted : ndarray of int, shape (B,)
+        Steps that moved the estimate (all of Gauss–Newton's; Marquardt's accepted trials).
     status : ndarray of int8, shape (B,)
         :class:`LsqStatus` values.
     """
@@ -89,6 +91,7 @@ class LsqResult:
     cost: FloatArray
     dof: IntArray
     iterations: IntArray
+    accepted: IntArray
     status: np.ndarray
 
     def __post_init__(self) -> None:
@@ -152,6 +155,7 @@ def _finish(
     iterations: IntArray,
     status: np.ndarray,
     rcond: float,
+    accepted: IntArray | None = None,
 ) -> LsqResult:
     """Evaluate residuals, covariance and cost at the final estimates."""
     B, P = x.shape
@@ -184,6 +188,7 @@ def _finish(
         cost=cost,
         dof=dof,
         iterations=iterations,
+        accepted=iterations if accepted is None else accepted,
         status=status,
     )
 
@@ -332,6 +337,7 @@ def marquardt(
 
     status = np.full(B, LsqStatus.NO_CONVERGENCE, dtype=np.int8)
     iterations = np.zeros(B, dtype=np.int64)
+    accepted = np.zeros(B, dtype=np.int64)
     n_valid = valid0.sum(axis=1)
     mu = np.full(B, float(mu0))
     active = idx_all.copy()
@@ -357,6 +363,7 @@ def marquardt(
         # step 6: accept; stop if the gradient at x_k was already small
         acc = active[better]
         x[acc] = xt[better]
+        accepted[acc] += 1
         status[acc[small[better]]] = LsqStatus.CONVERGED
         mu[acc] /= beta
         # step 5: reject; stop at x_k if its gradient is small, else grow mu
@@ -377,4 +384,4 @@ def marquardt(
         v_, J_, w_, _ = fun(xb, idx)
         return v_, J_, w_, valid0[idx]
 
-    return _finish(final, x, iterations, status, rcond)
+    return _finish(final, x, iterations, status, rcond, accepted)

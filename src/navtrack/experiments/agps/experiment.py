@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -17,11 +18,13 @@ from typing import Any
 import numpy as np
 
 from navtrack.experiments.agps.real import real_data_study
+from navtrack.experiments.agps.calibration import table_i_misfit
 from navtrack.experiments.agps.simulation import (
     PAPER_SITE_LLH,
     SOLVER_NAMES,
     AgpsExperimentParams,
     default_nav_path,
+    sensitivity_names,
     simulate_fix_set,
     solver_config,
 )
@@ -63,29 +66,41 @@ class AgpsExperiment(Experiment[AgpsExperimentParams, _RunResult]):
             stack("error_m"), stack("iterations"), stack("status"), SOLVER_NAMES, heights, intervals
         )
         true_h = height_key(min(params.heights_m, key=lambda h: abs(h - params.site_llh[2])))
-        near_shape = (0, len(SOLVER_NAMES), len(intervals))
+        sensitivity = {}
+        for v, name in enumerate(sensitivity_names(params)):
 
-        def near(key: str) -> np.ndarray:
-            arr = np.stack([r[key] for r in runs]) if runs else np.zeros(near_shape)
-            return arr[..., None]
+            def variant(key: str, v: int = v) -> np.ndarray:
+                if not runs:
+                    return np.zeros((0, 2, 1, len(heights)))
+                return np.stack([r[key][v] for r in runs])[:, :, None, :]
 
-        near_cell = summarize_cases(
-            near("near_error_m"),
-            near("near_iterations"),
-            near("near_status"),
-            SOLVER_NAMES,
-            [true_h],
-            intervals,
-        )
+            sensitivity[name] = summarize_cases(
+                variant("sens_error_m"),
+                variant("sens_iterations"),
+                variant("sens_status"),
+                ("gn", "lm"),
+                heights,
+                intervals[:1],
+            )
         nav = params.nav if params.nav is not None else default_nav_path()
         return {
             "paper": "Li, Two satellites positioning algorithm based on AGPS system with two "
             "clock bias, ICCET 2010 (paper 1)",
             "nav_file": str(nav),
+            "calibration": {
+                "fitted_on": "Gauss–Newton Table I (66 cells) and Table III",
+                "objective": "rms of log(simulated / printed) over Table I's cells",
+                "table_i_misfit": table_i_misfit(
+                    {h: sim["gn"][h][intervals[0]] for h in heights if h in sim["gn"]}
+                ),
+                "sigma_noise_m": params.sigma_noise_m,
+                "elmask_deg": params.elmask_deg,
+                "max_dop": params.max_dop,
+                "cell_radius_m": params.cell_radius_m,
+            },
             "simulation": sim,
             "findings_simulation": findings(sim, true_h, intervals),
-            "simulation_near_cell": near_cell,
-            "findings_near_cell": findings(near_cell, true_h, intervals),
+            "sensitivity": sensitivity,
             "simulation_pairs": [list(r["sats"]) for r in runs],
         }
 
@@ -102,8 +117,9 @@ class AgpsExperiment(Experiment[AgpsExperimentParams, _RunResult]):
             height_offsets_m=tuple(float(o) for o in offsets),
             intervals_min=params.intervals_min,
             fixes=params.real_fixes,
-            base_distance_m=params.base_distance_m,
-            config=solver_config(params),
+            cell_radius_m=params.cell_radius_m,
+            clock_bias_m=params.clock_bias_m,
+            config=dataclasses.replace(solver_config(params), max_dop=params.real_max_dop),
             elmask_deg=params.elmask_deg,
         )
         heights = [height_key(float(o), offset=True) for o in offsets]
@@ -125,10 +141,13 @@ class AgpsExperiment(Experiment[AgpsExperimentParams, _RunResult]):
                 intervals,
             )
             per_set[name] = {s: sub[s][heights[zero]] for s in SOLVER_NAMES}
-            cc_err, cc_it, cc_st = (a[rows] for a in arrays["lm_cell_clock"])
-            per_set[name]["lm_cell_clock"] = {
-                i: error_statistics(cc_err[:, k], cc_it[:, k], cc_st[:, k])
-                for k, i in enumerate(intervals)
+            sc_err, sc_it, sc_st = (a[rows] for a in arrays["station_clock"])
+            per_set[name]["station_clock"] = {
+                s: {
+                    i: error_statistics(sc_err[:, j, k], sc_it[:, j, k], sc_st[:, j, k])
+                    for k, i in enumerate(intervals)
+                }
+                for j, s in enumerate(SOLVER_NAMES)
             }
         results = {
             "real_data": real,

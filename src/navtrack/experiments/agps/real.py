@@ -3,8 +3,17 @@
 For each shared data set (:data:`REAL_DATA_SETS`: the static stations 0759, ARL1, SEPT, the
 yamatogawa master and the Android GnssLogger phone), the SPP stages of
 :mod:`navtrack.gnss.spp` give corrected GPS L1 C/A pseudoranges and satellite states; the
-assistance corrections (ionosphere, troposphere) are evaluated at a base station placed
-``base_distance_m`` from the reference position (:func:`navtrack.gnss.agps.assisted_pseudoranges`).
+assistance corrections (ionosphere, troposphere) are evaluated at a base station (cell) with
+the reference position uniformly over a disc of ``cell_radius_m`` around it
+(:func:`navtrack.gnss.agps.assisted_pseudoranges`).
+
+Fine-time assistance: an AGPS phone gets GPS time from the network to about a microsecond, so
+its clock biases are known to a few hundred metres before any iteration. Station receivers'
+clocks are milliseconds off (0759's reaches 1355 km). The study therefore removes each epoch's
+receiver clock as the network would know it — the clock of a single point position of all
+satellites in view (:func:`navtrack.gnss.spp.solve_spp`) — and leaves an error
+``U(-clock_bias_m, clock_bias_m)`` per epoch (300 m, as the simulation). The same fixes with
+the station's own clocks are solved too (``station_clock``), an extension beyond an AGPS phone.
 Fixes are sampled without replacement from all (epoch pair at the interval, satellite pair
 usable at both epochs) combinations, then solved at the reference height plus the paper's
 height offsets (its heights minus its true 56 m) with every solver, and compared with the
@@ -13,7 +22,6 @@ reference position.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -125,7 +133,8 @@ def real_data_study(
     height_offsets_m: tuple[float, ...],
     intervals_min: tuple[float, ...],
     fixes: int,
-    base_distance_m: tuple[float, float],
+    cell_radius_m: float,
+    clock_bias_m: float,
     config: AgpsConfig,
     elmask_deg: float = 15.0,
 ) -> tuple[dict[str, Any], list[str]]:
@@ -142,10 +151,12 @@ def real_data_study(
     intervals_min : tuple of float
     fixes : int
         Fixes per data set and interval (fewer when fewer combinations exist).
-    base_distance_m : (float, float)
-        Base-station distance range (m).
+    cell_radius_m : float
+        The reference position lies uniformly over a disc of this radius around the cell (m).
+    clock_bias_m : float
+        Bound of the fine-time assistance error per epoch (m).
     config : AgpsConfig
-        Solver options.
+        Solver options (its ``max_dop`` screens the fixes).
     elmask_deg : float
 
     Returns
@@ -154,9 +165,9 @@ def real_data_study(
         ``error_m``, ``iterations``, ``status`` of shape (n, solvers, intervals, heights),
         padded with NaN / 0 / status -1 where an interval has fewer fixes, and ``set`` (n,)
         the data set of each
-        row; ``lm_cell_clock`` the (error, iterations, status) arrays (n, intervals) of
-        Marquardt with the clocks started from the cell (``clock_start="cell"``) at the height
-        offset nearest 0; ``n_fixes[name][interval]`` counts.
+        row; ``station_clock`` the (error, iterations, status) arrays (n, solvers, intervals)
+        of the same fixes with the station's own clocks at the height offset nearest 0;
+        ``n_fixes[name][interval]`` counts.
     skipped : list of str
         Data sets not run, with the reason.
     """
@@ -172,6 +183,7 @@ def real_data_study(
         code_pseudoranges,
         corrected_measurements,
         satellite_states,
+        solve_spp,
     )
 
     cfg = SppConfig(systems="G", elmask_deg=elmask_deg)
@@ -179,7 +191,6 @@ def real_data_study(
     rows_err, rows_it, rows_st, rows_set = [], [], [], []
     rows_cc: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     zero_h = int(np.argmin(np.abs(np.asarray(height_offsets_m))))
-    cell_clock = dataclasses.replace(config, clock_start="cell")
     counts: dict[str, dict[str, int]] = {}
     skipped: list[str] = []
     for ds in REAL_DATA_SETS:
@@ -189,6 +200,9 @@ def real_data_study(
         obs, nav = _read(gnss_dir, ds)
         pr = code_pseudoranges(obs, cfg)
         meas = corrected_measurements(pr, satellite_states(pr, nav, config=cfg), cfg)
+        network_clock_m = solve_spp(obs, nav, config=cfg).clock_m
+        assist_error_m = rng.uniform(-clock_bias_m, clock_bias_m, network_clock_m.shape)
+        fine_time = (assist_error_m - network_clock_m)[:, None]  # NaN: no network time
         ref = np.asarray(ds.ref_xyz_m)
         lat, lon, h_ref = ecef_to_geodetic(ref)
         rot = enu_rotation(lat, lon)
@@ -197,14 +211,15 @@ def real_data_study(
         for ii, interval in enumerate(intervals_min):
             # cells are drawn per fix; the atmosphere is evaluated at the data set's first cell
             az = rng.uniform(0.0, 2.0 * np.pi)
-            dist = rng.uniform(*base_distance_m)
+            dist = cell_radius_m * math.sqrt(rng.uniform())
             cell = ref + rot.T @ (dist * np.array([math.sin(az), math.cos(az), 0.0]))
-            y = assisted_pseudoranges(meas, cell, cfg)
+            y_station = assisted_pseudoranges(meas, cell, cfg)
+            y = y_station + fine_time
             ep, sv = _pairs(meas.t_gps_s, np.isfinite(y), 60.0 * interval)
             take = rng.permutation(ep.shape[0])[:fixes]
             ep, sv = ep[take], sv[take]
             counts[ds.name][f"{interval:g}"] = int(ep.shape[0])
-            per_interval.append((ii, ep, sv, y))
+            per_interval.append((ii, ep, sv, y, y_station))
         n_max = max((p[1].shape[0] for p in per_interval), default=0)
         if n_max == 0:
             skipped.append(f"{ds.name}: no satellite pair usable at two epochs at any interval")
@@ -213,16 +228,16 @@ def real_data_study(
         its = np.zeros((n_max, n_s, n_i, n_h), dtype=np.int64)
         sts = np.full((n_max, n_s, n_i, n_h), -1, dtype=np.int8)  # -1: padding, no fix
         cc = (
-            np.full((n_max, n_i), np.nan),
-            np.zeros((n_max, n_i), dtype=np.int64),
-            np.full((n_max, n_i), -1, dtype=np.int8),
+            np.full((n_max, n_s, n_i), np.nan),
+            np.zeros((n_max, n_s, n_i), dtype=np.int64),
+            np.full((n_max, n_s, n_i), -1, dtype=np.int8),
         )
-        for ii, ep, sv, y in per_interval:
+        for ii, ep, sv, y, y_station in per_interval:
             n = ep.shape[0]
             if n == 0:
                 continue
             az = rng.uniform(0.0, 2.0 * np.pi, n)
-            dist = rng.uniform(*base_distance_m, n)
+            dist = cell_radius_m * np.sqrt(rng.uniform(size=n))
             enu = np.stack([dist * np.sin(az), dist * np.cos(az), np.zeros(n)], axis=1)
             cells = ref + enu @ rot
             for hh, dh in enumerate(height_offsets_m):
@@ -234,12 +249,15 @@ def real_data_study(
                     err[:n, j, ii, hh] = np.where(ok, d, np.nan)
                     its[:n, j, ii, hh] = res.iterations
                     sts[:n, j, ii, hh] = res.status
-                if hh == zero_h:  # Marquardt with the clocks started from the cell
-                    res = solve_agps(prob, "lm", cell_clock)
+                if hh != zero_h:
+                    continue
+                station = problem_from_measurements(meas, y_station, ep, sv, h_ref + dh, cells)
+                for j, solver in enumerate(SOLVER_NAMES):
+                    res = solve_agps(station, solver, config)  # type: ignore[arg-type]
                     d = np.linalg.norm(res.pos_m - ref, axis=1)
-                    cc[0][:n, ii] = np.where(res.status == AgpsStatus.OK, d, np.nan)
-                    cc[1][:n, ii] = res.iterations
-                    cc[2][:n, ii] = res.status
+                    cc[0][:n, j, ii] = np.where(res.status == AgpsStatus.OK, d, np.nan)
+                    cc[1][:n, j, ii] = res.iterations
+                    cc[2][:n, j, ii] = res.status
         rows_cc.append(cc)
         rows_err.append(err)
         rows_it.append(its)
@@ -252,7 +270,7 @@ def real_data_study(
             "iterations": empty.astype(np.int64),
             "status": empty.astype(np.int8),
             "set": np.array([], dtype=str),
-            "lm_cell_clock": tuple(np.zeros((0, n_i)) for _ in range(3)),
+            "station_clock": tuple(np.zeros((0, n_s, n_i)) for _ in range(3)),
             "n_fixes": counts,
         }, skipped
     return {
@@ -260,6 +278,6 @@ def real_data_study(
         "iterations": np.concatenate(rows_it),
         "status": np.concatenate(rows_st),
         "set": np.array(rows_set),
-        "lm_cell_clock": tuple(np.concatenate([c[k] for c in rows_cc]) for k in range(3)),
+        "station_clock": tuple(np.concatenate([c[k] for c in rows_cc]) for k in range(3)),
         "n_fixes": counts,
     }, skipped

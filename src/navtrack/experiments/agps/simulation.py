@@ -7,9 +7,8 @@ the paper with each solver. 300 runs give the paper's 300 fixes per case.
 
 Error model of a corrected pseudorange (all documented defaults of :class:`AgpsExperimentParams`):
 
-* receiver noise and multipath of a weak-signal phone: white, ``sigma_noise_m`` = 5 m per
-  pseudorange (C/N0 near 25–30 dB-Hz; the shared Android log's code residuals are of that
-  order);
+* receiver noise and multipath of a weak-signal phone: white, ``sigma_noise_m`` per
+  pseudorange (3 m, calibrated on the paper's Gauss–Newton Table I, see below);
 * residual ionosphere after the broadcast model: per satellite, a zenith error
   ``N(0, sigma_iono_zenith_m^2)`` (2 m: about half of a mid-latitude daytime Klobuchar error)
   times the thin-shell obliquity at each epoch;
@@ -20,8 +19,18 @@ Error model of a corrected pseudorange (all documented defaults of :class:`AgpsE
   given to the solver with the satellite position;
 * receiver clock: per epoch ``c dt_k ~ U(-clock_bias_m, clock_bias_m)`` (300 m: fine-time
   assistance of about 1 µs; the solvers start from zero);
-* base station: ``U(base_distance_m)`` (1–5 km, "a few km", issue 12) from the truth in a
-  uniformly random horizontal direction, at the site's height.
+* base station (the cell the fix starts from): the phone uniformly over a disc of radius
+  ``cell_radius_m`` around it, at the site's height (500 m, calibrated as below).
+
+Satellite pair: two GPS satellites above ``elmask_deg`` at the site over all intervals whose
+two-minute fix has a DOP (:func:`navtrack.gnss.agps.fix_dop`) at most ``max_dop``, drawn at
+random among those.
+
+Calibration (:mod:`navtrack.experiments.agps.calibration`): Gauss–Newton has no tunable
+parameter, so the paper's Table I (its 2-min error percentiles and means at the 11 heights)
+fixes the unstated ``sigma_noise_m``, ``elmask_deg`` and ``max_dop``; its Table III (2.000
+iterations) bounds ``cell_radius_m``, the only setting that changes Gauss–Newton's iterations.
+Marquardt's Table II, Table III and Figs. 2–3 are then predictions.
 
 References
 ----------
@@ -32,6 +41,7 @@ J.-z. Li, ICCET 2010, section IV-B (site 39.959103° N, 116.352853° E, 56.23 m;
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from functools import lru_cache
@@ -42,6 +52,8 @@ import numpy as np
 
 from navtrack._typing import FloatArray
 from navtrack.geodesy import C_MPS, azimuth_elevation, enu_rotation, geodetic_to_ecef
+
+from navtrack.gnss.agps import F5Units
 
 if TYPE_CHECKING:
     from navtrack.gnss.agps import AgpsConfig, AgpsProblem
@@ -87,21 +99,26 @@ class AgpsExperimentParams:
         Intervals between the two measurements (min).
     elmask_deg : float
         Satellites must be above this elevation at both epochs.
-    base_distance_m : tuple of float
-        Range of the base-station distance (m), uniform.
-    near_cell_distance_m : tuple of float
-        Sensitivity beyond the paper: the fixes at the true height are solved again from a cell
-        at this distance range (m), in the same direction.
+    max_dop : float
+        Geometry screen of the satellite pair: DOP of its fix at the first interval.
+    cell_radius_m : float
+        The phone lies uniformly over a disc of this radius (m) around the cell.
+    cell_radius_sweep_m : tuple of float
+        Sensitivity: the 2-min fixes re-solved from cells at these radii (same direction,
+        same fraction of the radius).
+    noise_sweep : tuple of float
+        Sensitivity: the 2-min fixes re-solved with the white noise scaled by these factors.
     sigma_noise_m, sigma_iono_zenith_m, sigma_tropo_zenith_m, sigma_orbit_m : float
         Error model (m), see the module docstring.
     clock_bias_m : float
         Receiver clock bias bound (m) per epoch.
-    prior_sigma_m : float
-        ``map`` solver: prior standard deviation of the cell position (m).
-    lm_ellipsoid_scale : float
-        Factor on the height equation in Marquardt's objective
-        (:attr:`navtrack.gnss.agps.AgpsConfig.lm_ellipsoid_scale`): 1 is the paper's
-        dimensionless ``f_5``; 3.19e6 (``(a + h) / 2``) puts it in metres of height.
+    prior_sigma_m : float or None
+        ``map`` solver: prior standard deviation of the cell position per axis (m); None: half
+        the cell radius, the standard deviation per axis of a phone uniform over the disc.
+    f5_units : {"m", "dimensionless"}
+        Scale of the height equation in Marquardt's objective
+        (:attr:`navtrack.gnss.agps.AgpsConfig.f5_units`); the other reading is solved too, as
+        a sensitivity.
     clock_start : {"zero", "cell"}
         Start of the clock biases (:attr:`navtrack.gnss.agps.AgpsConfig.clock_start`; the
         paper: zero).
@@ -110,6 +127,8 @@ class AgpsExperimentParams:
     real_fixes : int
         Fixes per data set and interval in the real-data study (sampled without replacement
         from all satellite and epoch pairs).
+    real_max_dop : float
+        Geometry screen of the real-data fixes (and of ``navtrack agps``).
     """
 
     nav: Path | None = None
@@ -117,23 +136,30 @@ class AgpsExperimentParams:
     heights_m: tuple[float, ...] = PAPER_HEIGHTS_M
     intervals_min: tuple[float, ...] = PAPER_INTERVALS_MIN
     elmask_deg: float = 15.0
-    base_distance_m: tuple[float, float] = (1000.0, 5000.0)
-    near_cell_distance_m: tuple[float, float] = (200.0, 500.0)
-    sigma_noise_m: float = 5.0
+    max_dop: float = 700.0
+    cell_radius_m: float = 500.0
+    cell_radius_sweep_m: tuple[float, ...] = (0.0, 100.0, 250.0, 500.0, 1000.0, 2000.0, 5000.0)
+    noise_sweep: tuple[float, ...] = (0.5, 1.0, 2.0)
+    sigma_noise_m: float = 3.0
     sigma_iono_zenith_m: float = 2.0
     sigma_tropo_zenith_m: float = 0.1
     sigma_orbit_m: float = 1.0
     clock_bias_m: float = 300.0
-    prior_sigma_m: float = 3000.0
-    lm_ellipsoid_scale: float = 1.0
+    prior_sigma_m: float | None = None
+    f5_units: F5Units = "m"
     clock_start: Literal["zero", "cell"] = "zero"
     real_data: bool = True
     real_fixes: int = 300
+    real_max_dop: float = 700.0
 
     def __post_init__(self) -> None:
-        lo, hi = self.base_distance_m
-        if not 0.0 <= lo <= hi:
-            raise ValueError(f"base_distance_m: expected 0 <= lo <= hi, got {self.base_distance_m}")
+        radii = (self.cell_radius_m, *self.cell_radius_sweep_m)
+        if not all(math.isfinite(r) and r >= 0.0 for r in radii):
+            raise ValueError(f"cell_radius_m: expected radii >= 0 m, got {radii}")
+        if not self.max_dop > 0.0 or not self.real_max_dop > 0.0:
+            raise ValueError("max_dop: expected a positive DOP screen")
+        if not all(k >= 0.0 for k in self.noise_sweep):
+            raise ValueError(f"noise_sweep: expected factors >= 0, got {self.noise_sweep}")
         if not self.intervals_min or min(self.intervals_min) <= 0.0:
             raise ValueError(
                 f"intervals_min: expected positive intervals, got {self.intervals_min}"
@@ -147,7 +173,9 @@ class AgpsExperimentParams:
 def solver_config(params: AgpsExperimentParams) -> AgpsConfig:
     """The solver options of the study: the paper's Marquardt parameters, the scale of the
     height equation, the MAP prior and pseudorange sigma (the root sum square of the error
-    model's zenith-level terms, at least 0.1 m)."""
+    model's zenith-level terms, at least 0.1 m). The paper's statistics count every fix: no
+    plausibility checks, and no geometry screen (the simulated pairs are screened when drawn,
+    the real-data study sets its own)."""
     from navtrack.gnss.agps import AgpsConfig
 
     sigma = math.hypot(
@@ -157,10 +185,16 @@ def solver_config(params: AgpsExperimentParams) -> AgpsConfig:
         params.sigma_orbit_m,
     )
     return AgpsConfig(
-        prior_sigma_m=params.prior_sigma_m,
+        prior_sigma_m=(
+            params.prior_sigma_m
+            if params.prior_sigma_m is not None
+            else max(params.cell_radius_m / 2.0, 1.0)
+        ),
         sigma_pr_m=max(sigma, 0.1),
-        lm_ellipsoid_scale=params.lm_ellipsoid_scale,
+        f5_units=params.f5_units,
         clock_start=params.clock_start,
+        max_height_residual_m=math.inf,
+        max_residual_m=math.inf,
     )
 
 
@@ -209,6 +243,28 @@ def _states(
     return st.pos_m, st.valid & (st.svh == 0)
 
 
+def _pair_dops(
+    sat_pos_m: FloatArray, seen: np.ndarray, t_rx: FloatArray, cell: FloatArray, height_m: float
+) -> tuple[np.ndarray, FloatArray]:
+    """All pairs of the satellites ``seen`` and the DOP of their fix over the first interval
+    (epochs 0 and 1), solved from ``cell``."""
+    from navtrack.gnss.agps import AgpsProblem, fix_dop
+
+    i, j = np.triu_indices(seen.size, k=1)
+    pairs = np.stack([seen[i], seen[j]], axis=1)
+    n = pairs.shape[0]
+    pos = np.concatenate([sat_pos_m[0][pairs], sat_pos_m[1][pairs]], axis=1)
+    problem = AgpsProblem(
+        t_gps_s=np.repeat(t_rx[None, :2], n, 0),
+        sat_pos_m=pos,
+        y_m=np.zeros((n, 4)),
+        height_m=np.full(n, height_m),
+        start_xyz_m=np.repeat(cell[None], n, 0),
+        usable=np.ones((n, 4), dtype=bool),
+    )
+    return pairs, fix_dop(problem)
+
+
 def fix_set_problem(
     params: AgpsExperimentParams, rng: np.random.Generator
 ) -> tuple[AgpsProblem, FloatArray, dict[str, Any]]:
@@ -227,7 +283,10 @@ def fix_set_problem(
     truth_m : ndarray, shape (3,)
         The true position (ECEF, m).
     meta : dict
-        ``sats`` (the pair), ``t_gps_s`` (first epoch), ``base_distance_m``.
+        ``sats`` (the pair), ``t_gps_s`` (first epoch), ``cell_direction`` (ECEF unit vector
+        from the truth to the cell) and ``cell_fraction`` (its distance over the cell radius),
+        ``dop`` (the pair's DOP at the first interval), ``noise_m`` (the white noise in
+        ``problem.y_m``, same shape, for the noise sensitivity).
     """
     from navtrack.gnss.agps import AgpsProblem
     from navtrack.gnss.corrections import geometric_range
@@ -236,22 +295,33 @@ def fix_set_problem(
     tables, sats, t_lo, t_hi = _gps_tables(str(nav))
     lat, lon = math.radians(params.site_llh[0]), math.radians(params.site_llh[1])
     truth = geodetic_to_ecef(np.array([lat, lon, params.site_llh[2]]))
+    fraction = math.sqrt(rng.uniform())  # uniform over the disc
+    az = rng.uniform(0.0, 2.0 * np.pi)
+    direction = enu_rotation(lat, lon).T @ np.array([math.sin(az), math.cos(az), 0.0])
+    cell = truth + params.cell_radius_m * fraction * direction
     offsets_s = 60.0 * np.array((0.0, *params.intervals_min))
     span = offsets_s[-1] if offsets_s.size else 0.0
-    for _attempt in range(50):
+    for _attempt in range(100):
         t1 = float(rng.uniform(t_lo, max(t_lo, t_hi - span)))
         t_rx = t1 + offsets_s
         pos, valid = _states(tables, sats, t_rx, truth)
         el = azimuth_elevation(np.where(valid[..., None], pos, 0.0), truth)[..., 1]
         seen = np.flatnonzero((valid & (el >= math.radians(params.elmask_deg))).all(axis=0))
-        if seen.size >= 2:
+        if seen.size < 2:
+            continue
+        pairs, dop = _pair_dops(pos, seen, t_rx, cell, params.site_llh[2])
+        good = np.flatnonzero(dop <= params.max_dop)
+        if good.size:
+            k = int(rng.choice(good))
+            pair, pair_dop = pairs[k], float(dop[k])
             break
     else:
-        raise ValueError(f"nav: no two GPS satellites visible at the site over {span} s in {nav}")
-    pair = rng.choice(seen, size=2, replace=False)
+        raise ValueError(
+            f"nav: no two GPS satellites above {params.elmask_deg:g} deg with a DOP at most "
+            f"{params.max_dop:g} at the site over {span:g} s in 100 draws from {nav}"
+        )
     sat_true = pos[:, pair]  # (E, 2, 3)
     el_pair = el[:, pair]
-    # errors
     orbit = rng.normal(0.0, params.sigma_orbit_m, size=(2, 3))
     iono_zenith = rng.normal(0.0, params.sigma_iono_zenith_m, size=2)
     tropo_zenith = rng.normal(0.0, params.sigma_tropo_zenith_m)
@@ -261,30 +331,47 @@ def fix_set_problem(
     clock = rng.uniform(-params.clock_bias_m, params.clock_bias_m, size=(rho.shape[0], 1))
     y = rho + clock + atmosphere + noise
     sat_given = sat_true + orbit
-    dist = rng.uniform(*params.base_distance_m)
-    az = rng.uniform(0.0, 2.0 * np.pi)
-    enu = dist * np.array([math.sin(az), math.cos(az), 0.0])
-    start = truth + enu_rotation(lat, lon).T @ enu
 
     n_i, n_h = len(params.intervals_min), len(params.heights_m)
-    k = np.repeat(np.arange(1, n_i + 1), n_h)  # second epoch of each fix
-    heights = np.tile(np.asarray(params.heights_m, dtype=float), n_i)
-    n = k.size
+    k2 = np.repeat(np.arange(1, n_i + 1), n_h)  # second epoch of each fix
+    n = k2.size
+
+    def both(a: FloatArray) -> FloatArray:
+        return np.concatenate([np.repeat(a[None, 0], n, 0), a[k2]], axis=1)
+
     problem = AgpsProblem(
-        t_gps_s=np.stack([np.full(n, t_rx[0]), t_rx[k]], axis=1),
-        sat_pos_m=np.concatenate([np.repeat(sat_given[None, 0], n, 0), sat_given[k]], axis=1),
-        y_m=np.concatenate([np.repeat(y[None, 0], n, 0), y[k]], axis=1),
-        height_m=heights,
-        start_xyz_m=np.repeat(start[None], n, 0),
+        t_gps_s=np.stack([np.full(n, t_rx[0]), t_rx[k2]], axis=1),
+        sat_pos_m=both(sat_given),
+        y_m=both(y),
+        height_m=np.tile(np.asarray(params.heights_m, dtype=float), n_i),
+        start_xyz_m=np.repeat(cell[None], n, 0),
         usable=np.ones((n, 4), dtype=bool),
     )
-    meta = {"sats": tuple(sats[i] for i in pair), "t_gps_s": t1, "base_distance_m": dist}
+    meta = {
+        "sats": tuple(sats[i] for i in pair),
+        "t_gps_s": t1,
+        "cell_direction": direction,
+        "cell_fraction": fraction,
+        "dop": pair_dop,
+        "noise_m": both(noise),
+    }
     return problem, truth, meta
+
+
+def sensitivity_names(params: AgpsExperimentParams) -> list[str]:
+    """Names of the sensitivity variants of :func:`simulate_fix_set`: the other ``f5``
+    reading, each cell radius of the sweep, each noise factor."""
+    other = "dimensionless" if params.f5_units == "m" else "m"
+    return [
+        f"f5_{other}",
+        *(f"cell_{r:g}" for r in params.cell_radius_sweep_m),
+        *(f"noise_{k:g}" for k in params.noise_sweep),
+    ]
 
 
 def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> dict[str, Any]:
     """One fix set (:func:`fix_set_problem`) solved for every interval, assumed height and
-    solver.
+    solver, and its first-interval fixes again under each sensitivity variant.
 
     Parameters
     ----------
@@ -297,73 +384,69 @@ def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> 
         ``error_m``, ``horizontal_m``, ``iterations``, ``status``: arrays of shape
         (solvers, intervals, heights) — 3-D and horizontal distance of the fix to the truth (m,
         NaN where not ``ok``), linear solves, :class:`~navtrack.gnss.agps.AgpsStatus`;
-        ``sats`` (the pair), ``t_gps_s`` (first epoch), ``base_distance_m``.
+        ``sens_error_m``, ``sens_iterations``, ``sens_status`` of shape (variants, 2, heights)
+        for Gauss–Newton and Marquardt at the first interval (:func:`sensitivity_names`);
+        ``sats`` (the pair), ``t_gps_s`` (first epoch), ``dop``, ``cell_distance_m``.
     """
-    from navtrack.gnss.agps import AgpsStatus, solve_agps
+    from navtrack.gnss.agps import AgpsProblem, AgpsStatus, solve_agps
 
     problem, truth, meta = fix_set_problem(params, rng)
     n_i, n_h = len(params.intervals_min), len(params.heights_m)
     lat, lon = math.radians(params.site_llh[0]), math.radians(params.site_llh[1])
     config = solver_config(params)
+    rot = enu_rotation(lat, lon)
+
+    def solve(prob: AgpsProblem, solver: str, cfg: AgpsConfig) -> tuple[Any, FloatArray]:
+        res = solve_agps(prob, solver, cfg)  # type: ignore[arg-type]
+        ok = res.status == AgpsStatus.OK
+        return res, np.where(ok[:, None], res.pos_m - truth, np.nan)
+
     shape = (len(SOLVER_NAMES), n_i, n_h)
     out: dict[str, Any] = {
         "error_m": np.full(shape, np.nan),
         "horizontal_m": np.full(shape, np.nan),
         "iterations": np.zeros(shape, dtype=np.int64),
         "status": np.zeros(shape, dtype=np.int8),
-        **meta,
+        "sats": meta["sats"],
+        "t_gps_s": meta["t_gps_s"],
+        "dop": meta["dop"],
+        "cell_distance_m": params.cell_radius_m * meta["cell_fraction"],
     }
-    rot = enu_rotation(lat, lon)
     for j, solver in enumerate(SOLVER_NAMES):
-        res = solve_agps(problem, solver, config)  # type: ignore[arg-type]
-        d = res.pos_m - truth
-        ok = res.status == AgpsStatus.OK
-        err = np.where(ok, np.linalg.norm(d, axis=1), np.nan)
-        horiz = np.where(ok, np.linalg.norm((d @ rot.T)[:, :2], axis=1), np.nan)
-        out["error_m"][j] = err.reshape(n_i, n_h)
-        out["horizontal_m"][j] = horiz.reshape(n_i, n_h)
+        res, d = solve(problem, solver, config)
+        out["error_m"][j] = np.linalg.norm(d, axis=1).reshape(n_i, n_h)
+        out["horizontal_m"][j] = np.linalg.norm((d @ rot.T)[:, :2], axis=1).reshape(n_i, n_h)
         out["iterations"][j] = res.iterations.reshape(n_i, n_h)
         out["status"][j] = res.status.reshape(n_i, n_h)
-    out.update(_near_cell(params, rng, problem, truth, config))
-    return out
 
-
-def _near_cell(
-    params: AgpsExperimentParams,
-    rng: np.random.Generator,
-    problem: AgpsProblem,
-    truth: FloatArray,
-    config: AgpsConfig,
-) -> dict[str, np.ndarray]:
-    """The fixes at the height nearest the truth's, solved from a cell moved to
-    ``near_cell_distance_m`` along the same direction: ``near_error_m``, ``near_iterations``,
-    ``near_status`` of shape (solvers, intervals)."""
-    from navtrack.gnss.agps import AgpsProblem, AgpsStatus, solve_agps
-
-    n_i, n_h = len(params.intervals_min), len(params.heights_m)
-    h0 = int(np.argmin(np.abs(np.asarray(params.heights_m) - params.site_llh[2])))
-    rows = np.arange(n_i) * n_h + h0
-    offset = problem.start_xyz_m[0] - truth
-    dist = rng.uniform(*params.near_cell_distance_m)
-    start = truth + offset * (dist / max(float(np.linalg.norm(offset)), 1e-9))
-    near = AgpsProblem(
-        problem.t_gps_s[rows],
-        problem.sat_pos_m[rows],
-        problem.y_m[rows],
-        problem.height_m[rows],
-        np.repeat(start[None], rows.size, 0),
-        problem.usable[rows],
+    first = slice(0, n_h)  # the fixes of the first interval
+    base = AgpsProblem(
+        problem.t_gps_s[first],
+        problem.sat_pos_m[first],
+        problem.y_m[first],
+        problem.height_m[first],
+        problem.start_xyz_m[first],
+        problem.usable[first],
     )
-    shape = (len(SOLVER_NAMES), n_i)
-    out = {
-        "near_error_m": np.full(shape, np.nan),
-        "near_iterations": np.zeros(shape, dtype=np.int64),
-        "near_status": np.zeros(shape, dtype=np.int8),
-    }
-    for j, solver in enumerate(SOLVER_NAMES):
-        res = solve_agps(near, solver, config)  # type: ignore[arg-type]
-        ok = res.status == AgpsStatus.OK
-        out["near_error_m"][j] = np.where(ok, np.linalg.norm(res.pos_m - truth, axis=1), np.nan)
-        out["near_iterations"][j] = res.iterations
-        out["near_status"][j] = res.status
+    names = sensitivity_names(params)
+    sens_shape = (len(names), 2, n_h)
+    out["sens_error_m"] = np.full(sens_shape, np.nan)
+    out["sens_iterations"] = np.zeros(sens_shape, dtype=np.int64)
+    out["sens_status"] = np.zeros(sens_shape, dtype=np.int8)
+    for v, name in enumerate(names):
+        prob, cfg = base, config
+        kind, value = name.split("_", 1)
+        if kind == "f5":
+            cfg = dataclasses.replace(config, f5_units=value)
+        elif kind == "cell":
+            cell = truth + float(value) * meta["cell_fraction"] * meta["cell_direction"]
+            prob = dataclasses.replace(base, start_xyz_m=np.repeat(cell[None], n_h, 0))
+        else:
+            extra = (float(value) - 1.0) * meta["noise_m"][first]
+            prob = dataclasses.replace(base, y_m=base.y_m + extra)
+        for j, solver in enumerate(("gn", "lm")):
+            res, d = solve(prob, solver, cfg)
+            out["sens_error_m"][v, j] = np.linalg.norm(d, axis=1)
+            out["sens_iterations"][v, j] = res.iterations
+            out["sens_status"][v, j] = res.status
     return out
