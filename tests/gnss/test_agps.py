@@ -4,7 +4,6 @@ against a plain re-implementation of the paper's steps 1–6, MAP vs Gauss–New
 from __future__ import annotations
 
 import dataclasses
-
 import math
 from importlib import resources
 

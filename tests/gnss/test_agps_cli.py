@@ -59,3 +59,61 @@ def test_agps_bad_satellites_and_height() -> None:
     high = [OBS, NAV, "--sats", "G07,G11", "--height", "68400", "--approx", "35.17", "139.63"]
     with pytest.raises(SystemExit, match="outside the earth's range"):
         main(["agps", *high, *EPOCHS])
+
+
+def test_agps_example_is_the_issue_case_and_writes_json(capsys, tmp_path) -> None:
+    out = tmp_path / "fix.json"
+    assert main(["agps", "--example", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "status      ok" in text
+    import json
+
+    fix = json.loads(out.read_text())
+    assert fix["status"] == "ok"
+    assert fix["error_m"] < 100.0  # 12.5 m (Gauss-Newton)
+    # Marquardt on the same fix: the height equation in metres holds the position
+    assert main(["agps", "--example", "--solver", "lm"]) == 0
+    err = float(re.search(r"error       3-D ([0-9.]+) m", capsys.readouterr().out).group(1))  # type: ignore[union-attr]
+    assert err < 1000.0
+
+
+def test_no_ok_fix_more_than_a_kilometre_off_on_the_bundled_stations() -> None:
+    """Every two-satellite fix of the bundled 0759 file at 2, 4 and 8 min from two cells, at
+    the CLI's defaults (Gauss-Newton, DOP screen 700): none is ``ok`` and more than 1 km off."""
+    import numpy as np
+
+    from navtrack.experiments.agps.real import _pairs
+    from navtrack.geodesy import ecef_to_geodetic, enu_rotation
+    from navtrack.gnss.agps import (
+        AgpsConfig,
+        assisted_pseudoranges,
+        problem_from_measurements,
+        solve_agps,
+    )
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.spp import (
+        SppConfig,
+        code_pseudoranges,
+        corrected_measurements,
+        satellite_states,
+    )
+
+    cfg = SppConfig(systems="G")
+    pr = code_pseudoranges(read_obs(OBS), cfg)
+    meas = corrected_measurements(pr, satellite_states(pr, read_nav(NAV), config=cfg), cfg)
+    ref = np.array([float(v) for v in REF])
+    lat, lon, h = ecef_to_geodetic(ref)
+    checked = 0
+    for east, north in ((300.0, -200.0), (1500.0, 2000.0)):
+        cell = ref + enu_rotation(lat, lon).T @ np.array([east, north, 0.0])
+        y = assisted_pseudoranges(meas, cell, cfg)
+        for minutes in (2, 4, 8):
+            ep, sv = _pairs(meas.t_gps_s, np.isfinite(y), 60.0 * minutes)
+            res = solve_agps(problem_from_measurements(meas, y, ep, sv, h, cell), "gn",
+                             AgpsConfig(max_dop=700.0))  # fmt: skip
+            err = np.linalg.norm(res.pos_m - ref, axis=1)
+            assert not (res.ok & (err > 1000.0)).any()
+            assert res.ok.mean() > 0.7
+            checked += res.ok.sum()
+    assert checked > 8000

@@ -44,8 +44,8 @@ __all__ = [
     "ITERATION_EXCESS",
     "RADII_M",
     "calibrate",
-    "gauss_newton_table",
     "main",
+    "solver_table",
     "table_i_misfit",
 ]
 
@@ -64,11 +64,12 @@ ITERATION_EXCESS = 0.1
 the cell radius."""
 
 
-def gauss_newton_table(
-    params: AgpsExperimentParams, runs: int, seed: int
+def solver_table(
+    params: AgpsExperimentParams, runs: int, seed: int, solver: str = "gn"
 ) -> tuple[dict[str, dict[str, Any]], np.ndarray]:
-    """Gauss–Newton's statistics per assumed height at the first interval over ``runs`` fix
-    sets drawn with ``seed``.
+    """A solver's statistics per assumed height at the first interval over ``runs`` fix sets
+    drawn with ``seed`` (the fixes of the reproduction's first ``runs`` runs are not the same:
+    those draw from per-run generators).
 
     Returns
     -------
@@ -90,9 +91,15 @@ def gauss_newton_table(
     def cat(name: str) -> np.ndarray:
         return np.concatenate([getattr(p, name)[:n_h] for p in parts])
 
-    batch = AgpsProblem(*(cat(f) for f in ("t_gps_s", "sat_pos_m", "y_m", "height_m")),
-                        cat("start_xyz_m"), cat("usable"))  # fmt: skip
-    res = solve_agps(batch, "gn", solver_config(params))
+    batch = AgpsProblem(
+        t_gps_s=cat("t_gps_s"),
+        sat_pos_m=cat("sat_pos_m"),
+        y_m=cat("y_m"),
+        height_m=cat("height_m"),
+        start_xyz_m=cat("start_xyz_m"),
+        usable=cat("usable"),
+    )
+    res = solve_agps(batch, solver, solver_config(params))  # type: ignore[arg-type]
     truth = np.repeat(np.asarray(truths), n_h, axis=0)
     ok = res.status == AgpsStatus.OK
     err = np.where(ok, np.linalg.norm(res.pos_m - truth, axis=1), np.nan).reshape(runs, n_h)
@@ -142,8 +149,8 @@ def calibrate(
     true_h = height_key(min(base.heights_m, key=lambda h: abs(h - base.site_llh[2])))
     rows = []
     for values in itertools.product(*grid.values()):
-        params = dataclasses.replace(base, **dict(zip(grid, values, strict=True)))
-        table, _ = gauss_newton_table(params, runs, seed)
+        params = dataclasses.replace(base, **dict(zip(grid, values, strict=True)))  # type: ignore[arg-type]
+        table, _ = solver_table(params, runs, seed)
         rows.append({
             **dict(zip(grid, values, strict=True)),
             "misfit": table_i_misfit(table),
@@ -157,7 +164,7 @@ def calibrate(
     radii = []
     reference = None
     for radius in sorted(radii_m):
-        _, its = gauss_newton_table(dataclasses.replace(tuned, cell_radius_m=radius), runs, seed)
+        _, its = solver_table(dataclasses.replace(tuned, cell_radius_m=radius), runs, seed)
         col = its[:, k_true].astype(float)
         reference = col if reference is None else reference
         diff = col - reference

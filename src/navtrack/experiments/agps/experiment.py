@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from navtrack.experiments.agps.real import real_data_study
 from navtrack.experiments.agps.calibration import table_i_misfit
+from navtrack.experiments.agps.real import real_data_study
 from navtrack.experiments.agps.simulation import (
     PAPER_SITE_LLH,
     SOLVER_NAMES,

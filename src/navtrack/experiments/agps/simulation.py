@@ -52,7 +52,6 @@ import numpy as np
 
 from navtrack._typing import FloatArray
 from navtrack.geodesy import C_MPS, azimuth_elevation, enu_rotation, geodetic_to_ecef
-
 from navtrack.gnss.agps import F5Units
 
 if TYPE_CHECKING:
@@ -437,7 +436,7 @@ def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> 
         prob, cfg = base, config
         kind, value = name.split("_", 1)
         if kind == "f5":
-            cfg = dataclasses.replace(config, f5_units=value)
+            cfg = dataclasses.replace(config, f5_units="m" if value == "m" else "dimensionless")
         elif kind == "cell":
             cell = truth + float(value) * meta["cell_fraction"] * meta["cell_direction"]
             prob = dataclasses.replace(base, start_xyz_m=np.repeat(cell[None], n_h, 0))

@@ -116,7 +116,9 @@ def _sensitivity_table(results: dict[str, Any]) -> list[str]:
     ]
     for name, study in rows.items():
 
-        def get(solver: str, height: str, key: str = "mean_m") -> float | None:
+        def get(
+            solver: str, height: str, key: str = "mean_m", study: dict[str, Any] = study
+        ) -> float | None:
             value = study[solver].get(height, {}).get(first, {}).get(key)
             return None if value is None else float(value)
 
