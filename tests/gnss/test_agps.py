@@ -18,6 +18,7 @@ from navtrack.gnss.agps import (
     AgpsStatus,
     assisted_pseudoranges,
     ellipsoid_residual,
+    fix_dop,
     problem_from_measurements,
     solve_agps,
 )
@@ -367,3 +368,25 @@ def test_marquardt_needs_the_clocks_the_cell_start_gives(gps_sats) -> None:
     np.testing.assert_allclose(gn_zero.pos_m, gn_cell.pos_m, atol=1e-2)
     with pytest.raises(ValueError, match="clock_start"):
         AgpsConfig(clock_start="mean")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("k", [1, 4])
+def test_dop_predicts_the_scatter_of_gauss_newton_fixes(gps_sats, k) -> None:
+    """``fix_dop`` times the pseudorange noise is the rms 3-D error of Gauss–Newton fixes of
+    that noise (2,000 noisy copies of one geometry), and the predicted-error screen turns a
+    fix ``weak_geometry`` with its reason."""
+    t, sat = gps_sats
+    truth = _on_height_surface(SITE[0], SITE[1], SITE[2])
+    sigma = 2.0
+    noise = np.random.default_rng(21).normal(0.0, sigma, (2000, 4))
+    prob = _problem(t, sat, truth, k, SITE[2], _cell(truth, 300.0, -200.0), noise)
+    dop = fix_dop(prob)
+    np.testing.assert_allclose(dop, dop[0], rtol=1e-9)  # one geometry, one start
+    res = solve_agps(prob, "gn", AgpsConfig(max_height_residual_m=np.inf, max_residual_m=np.inf))
+    rms = np.sqrt(np.mean(np.sum((res.pos_m - truth) ** 2, axis=1)))
+    assert rms == pytest.approx(dop[0] * sigma, rel=0.05)  # 2,000 samples: ~2 % standard error
+    screen = AgpsConfig.for_receiver(sigma, max_sigma_m=0.5 * dop[0] * sigma)
+    screened = solve_agps(prob, "gn", screen)
+    assert (screened.status == AgpsStatus.WEAK_GEOMETRY).all()
+    assert screened.reason[0].startswith("predicted error")
+    np.testing.assert_allclose(screened.sigma_m, dop * sigma)

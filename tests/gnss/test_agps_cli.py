@@ -31,7 +31,9 @@ def test_agps_fix_of_a_real_station(capsys, solver) -> None:
 def test_agps_marquardt_reports_iterations_and_status(capsys) -> None:
     code = main(["agps", *BASE, *EPOCHS, "--solver", "lm"])
     out = capsys.readouterr().out
-    assert re.search(r"status      (ok|no_convergence|diverged)   iterations \d+", out)
+    names = "ok|no_convergence|diverged|weak_geometry|implausible"
+    assert re.search(rf"status      ({names})   iterations \d+", out)
+    assert re.search(r"accuracy    dop \d+ x sigma_pr [0-9.]+ m \(single point residuals", out)
     assert code == (0 if "status      ok" in out else 1)
 
 
@@ -77,9 +79,20 @@ def test_agps_example_is_the_issue_case_and_writes_json(capsys, tmp_path) -> Non
     assert err < 1000.0
 
 
-def test_no_ok_fix_more_than_a_kilometre_off_on_the_bundled_stations() -> None:
-    """Every two-satellite fix of the bundled 0759 file at 2, 4 and 8 min from two cells, at
-    the CLI's defaults (Gauss-Newton, DOP screen 700): none is ``ok`` and more than 1 km off."""
+@pytest.mark.parametrize(
+    ("obs", "nav", "ref", "minutes"),
+    [
+        ("07590920.05o", "07590920.05n", REF, (2, 4, 8)),
+        ("SEPT078M_120.21O", "SEPT078M.21P", ["-3962108.673", "3381309.574", "3668678.638"], (1,)),
+        ("pseudoranges_log_2016_08_22_14_45_50.txt", "hour2350.16n",
+         ["-2693671.749", "-4297132.643", "3854726.439"], (1, 2)),
+    ],
+)  # fmt: skip
+def test_no_ok_fix_more_than_a_kilometre_off_on_the_bundled_data(obs, nav, ref, minutes) -> None:
+    """Every two-satellite fix of a bundled file at the given intervals from two cells (0.36 and
+    2.5 km away), at the CLI's defaults (Gauss-Newton, predicted-error screen 300 m with the
+    file's own pseudorange noise): none is ``ok`` and more than 1 km off. The phone log's noise
+    (8 m) leaves no fix predicted within 300 m: all are ``weak_geometry``."""
     import numpy as np
 
     from navtrack.experiments.agps.real import _pairs
@@ -88,10 +101,10 @@ def test_no_ok_fix_more_than_a_kilometre_off_on_the_bundled_stations() -> None:
         AgpsConfig,
         assisted_pseudoranges,
         problem_from_measurements,
+        pseudorange_sigma_m,
         solve_agps,
     )
     from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.rinex.obs import read_obs
     from navtrack.gnss.spp import (
         SppConfig,
         code_pseudoranges,
@@ -99,21 +112,29 @@ def test_no_ok_fix_more_than_a_kilometre_off_on_the_bundled_stations() -> None:
         satellite_states,
     )
 
+    if obs.endswith(".txt"):
+        from navtrack.gnss.android import read_gnsslogger as read
+    else:
+        from navtrack.gnss.rinex.obs import read_obs as read
     cfg = SppConfig(systems="G")
-    pr = code_pseudoranges(read_obs(OBS), cfg)
-    meas = corrected_measurements(pr, satellite_states(pr, read_nav(NAV), config=cfg), cfg)
-    ref = np.array([float(v) for v in REF])
-    lat, lon, h = ecef_to_geodetic(ref)
-    checked = 0
+    pr = code_pseudoranges(read(DATA / obs), cfg)
+    meas = corrected_measurements(pr, satellite_states(pr, read_nav(DATA / nav), config=cfg), cfg)
+    config = AgpsConfig.for_receiver(pseudorange_sigma_m(meas, cfg))
+    ref_xyz = np.array([float(v) for v in ref])
+    lat, lon, h = ecef_to_geodetic(ref_xyz)
+    fixes = ok = 0
     for east, north in ((300.0, -200.0), (1500.0, 2000.0)):
-        cell = ref + enu_rotation(lat, lon).T @ np.array([east, north, 0.0])
+        cell = ref_xyz + enu_rotation(lat, lon).T @ np.array([east, north, 0.0])
         y = assisted_pseudoranges(meas, cell, cfg)
-        for minutes in (2, 4, 8):
-            ep, sv = _pairs(meas.t_gps_s, np.isfinite(y), 60.0 * minutes)
-            res = solve_agps(problem_from_measurements(meas, y, ep, sv, h, cell), "gn",
-                             AgpsConfig(max_dop=700.0))  # fmt: skip
-            err = np.linalg.norm(res.pos_m - ref, axis=1)
+        for m in minutes:
+            ep, sv = _pairs(meas.t_gps_s, np.isfinite(y), 60.0 * m)
+            res = solve_agps(problem_from_measurements(meas, y, ep, sv, h, cell), "gn", config)
+            err = np.linalg.norm(res.pos_m - ref_xyz, axis=1)
             assert not (res.ok & (err > 1000.0)).any()
-            assert res.ok.mean() > 0.7
-            checked += res.ok.sum()
-    assert checked > 8000
+            fixes += res.ok.size
+            ok += int(res.ok.sum())
+    assert fixes > 2000
+    if obs.endswith(".txt"):
+        assert ok == 0
+    else:
+        assert ok > 0.2 * fixes

@@ -45,7 +45,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -71,6 +71,7 @@ __all__ = [
     "ellipsoid_residual",
     "fix_dop",
     "problem_from_measurements",
+    "pseudorange_sigma_m",
     "solve_agps",
 ]
 
@@ -131,7 +132,8 @@ class AgpsConfig:
         phone's position: about the cell radius.
     sigma_pr_m : float
         Standard deviation (m) of a corrected pseudorange: the ``map`` weights and the predicted
-        position error ``dop * sigma_pr_m`` that :attr:`max_dop` bounds.
+        position error ``dop * sigma_pr_m`` that :attr:`max_sigma_m` bounds
+        (:func:`pseudorange_sigma_m` estimates it from a receiver's file).
     sigma_height_m : float
         ``map``: standard deviation (m) of the assumed height.
     clock_start : {"zero", "cell"}
@@ -141,8 +143,11 @@ class AgpsConfig:
         clock steps, when the receiver clock is kilometres off).
     max_dop : float
         Geometry screen: a fix whose dilution of precision (:func:`fix_dop`, metres of position
-        per metre of pseudorange noise, at the start) exceeds it is ``weak_geometry`` and not
-        solved. Infinite (the default) screens nothing.
+        per metre of pseudorange noise, at the start) exceeds it is ``weak_geometry``. Infinite
+        (the default) screens nothing.
+    max_sigma_m : float
+        Accuracy screen: a fix whose predicted 3-D error ``dop * sigma_pr_m`` (m, one sigma)
+        exceeds it is ``weak_geometry``. Infinite (the default) screens nothing.
     max_height_residual_m : float
         A fix further than this from the assumed height (m) is ``implausible``: the height
         equation is one of the five, so a solution off it has not solved the system. Infinite
@@ -163,6 +168,7 @@ class AgpsConfig:
     sigma_height_m: float = 20.0
     clock_start: Literal["zero", "cell"] = "zero"
     max_dop: float = math.inf
+    max_sigma_m: float = math.inf
     max_height_residual_m: float = 50.0
     max_residual_m: float = 50.0
 
@@ -177,7 +183,7 @@ class AgpsConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"{name}: expected a finite positive number, got {value}")
-        for name in ("max_dop", "max_height_residual_m", "max_residual_m"):
+        for name in ("max_dop", "max_sigma_m", "max_height_residual_m", "max_residual_m"):
             value = getattr(self, name)
             if not value > 0.0:
                 raise ValueError(f"{name}: expected a positive number or inf, got {value}")
@@ -189,6 +195,21 @@ class AgpsConfig:
             raise ValueError(f"f5_units: expected 'm' or 'dimensionless', got {self.f5_units!r}")
         if self.max_iter < 1:
             raise ValueError(f"max_iter: expected >= 1, got {self.max_iter}")
+
+    @classmethod
+    def for_receiver(
+        cls, sigma_pr_m: float, max_sigma_m: float = 300.0, **options: Any
+    ) -> AgpsConfig:
+        """The screens of ``navtrack agps`` for a receiver of pseudorange noise ``sigma_pr_m``
+        (:func:`pseudorange_sigma_m`): ``ok`` only for a predicted 3-D error
+        ``dop * sigma_pr_m`` of at most ``max_sigma_m`` (300 m: a kilometre is over three
+        sigma) and residuals closing to ``3 sigma_pr_m``."""
+        return cls(
+            sigma_pr_m=sigma_pr_m,
+            max_sigma_m=max_sigma_m,
+            max_residual_m=3.0 * sigma_pr_m,
+            **options,
+        )
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -302,6 +323,8 @@ class AgpsResult:
         Root mean square of the four pseudorange residuals at the estimate (m).
     dop : ndarray, shape (B,)
         Dilution of precision of the fix at the start (:func:`fix_dop`).
+    sigma_m : ndarray, shape (B,)
+        Predicted 3-D error (m, one sigma): ``dop * sigma_pr_m``.
     reason : ndarray of str, shape (B,)
         Why a fix is ``weak_geometry`` or ``implausible`` (empty for the other statuses).
     """
@@ -316,6 +339,7 @@ class AgpsResult:
     height_residual_m: FloatArray
     residual_m: FloatArray
     dop: FloatArray
+    sigma_m: FloatArray
     reason: np.ndarray
 
     def __post_init__(self) -> None:
@@ -491,9 +515,9 @@ def solve_agps(
     same stopping rule. Iterations count linear solves (the paper's measure of computation).
     A fix ends ``diverged`` when its estimate is not finite or not within
     :data:`navtrack.geodesy.NEAR_SURFACE_NORM_M` of the earth's centre, ``weak_geometry`` when
-    its DOP exceeds ``max_dop``, ``implausible`` when it lies off the assumed height or its
-    pseudoranges do not close (``max_height_residual_m``, ``max_residual_m``), with the reason
-    in :attr:`AgpsResult.reason`.
+    its DOP exceeds ``max_dop`` or its predicted error ``max_sigma_m``, ``implausible`` when it
+    lies off the assumed height or its pseudoranges do not close (``max_height_residual_m``,
+    ``max_residual_m``), with the reason in :attr:`AgpsResult.reason`.
     """
     from navtrack.gnss.solve import LsqStatus, gauss_newton, marquardt
 
@@ -564,12 +588,18 @@ def solve_agps(
     residual = np.where(keep, residual, np.nan)
     dop = fix_dop(p)
     reason = np.full(n, "", dtype=object)
-    weak = (status == AgpsStatus.OK) & (dop > cfg.max_dop)
+    sigma = dop * cfg.sigma_pr_m
+    weak = (status == AgpsStatus.OK) & ((dop > cfg.max_dop) | (sigma > cfg.max_sigma_m))
     off_height = ~(np.abs(height) <= cfg.max_height_residual_m)
     open_residuals = ~(residual <= cfg.max_residual_m)
     implausible = (status == AgpsStatus.OK) & ~weak & (off_height | open_residuals)
     for i in np.flatnonzero(weak):
-        reason[i] = f"dop {dop[i]:.0f} above {cfg.max_dop:g}"
+        reason[i] = (
+            f"dop {dop[i]:.0f} above {cfg.max_dop:g}"
+            if dop[i] > cfg.max_dop
+            else f"predicted error {sigma[i]:.0f} m (dop {dop[i]:.0f} x {cfg.sigma_pr_m:.2g} m) "
+            f"above {cfg.max_sigma_m:g} m"
+        )
     for i in np.flatnonzero(implausible):
         why = [f"{height[i]:+.0f} m from the assumed height"] if off_height[i] else []
         if open_residuals[i]:
@@ -588,6 +618,7 @@ def solve_agps(
         height_residual_m=height,
         residual_m=residual,
         dop=dop,
+        sigma_m=sigma,
         reason=reason,
     )
 
@@ -637,6 +668,37 @@ def assisted_pseudoranges(
     trop = saastamoinen_delay_m(lat, h, el) if cfg.tropo == "saastamoinen" else 0.0 * el
     use = meas.usable & (el >= math.radians(cfg.elmask_deg))
     return np.where(use, meas.y_m - iono - trop, np.nan)
+
+
+def pseudorange_sigma_m(meas: Measurements, config: SppConfig | None = None) -> float:
+    """A receiver's pseudorange noise from its own file: the root mean square of the single
+    point residuals of every epoch with redundancy, scaled by ``sqrt(n / dof)``.
+
+    Parameters
+    ----------
+    meas : Measurements
+        Stage 3 of single point positioning (all satellites, all epochs).
+    config : SppConfig, optional
+
+    Returns
+    -------
+    float
+        Standard deviation (m); NaN when no epoch has more satellites than unknowns.
+
+    Notes
+    -----
+    A station receiver gives a few decimetres (0759: 0.5 m), a phone metres (the shared
+    GnssLogger log: 6 m). The residuals also carry what the broadcast models leave, which is
+    what a two-satellite fix suffers too.
+    """
+    from navtrack.gnss.spp import SppStatus, estimate_position
+
+    est = estimate_position(meas, config)
+    good = (est.status == SppStatus.OK) & (est.dof > 0)
+    if not good.any():
+        return math.nan
+    r = np.where(est.used[good], est.residuals_m[good], 0.0)
+    return float(np.sqrt(np.sum(r**2) / np.sum(est.dof[good])))
 
 
 def problem_from_measurements(
