@@ -37,6 +37,10 @@ class FileFormatError(NavtrackError, ValueError):
         super().__init__(f"{where}: {message}")
 
 
+class CheckpointMismatchError(NavtrackError, ValueError):
+    """An output directory holds checkpoints of another experiment, seed or parameter set."""
+
+
 class MissingDependencyError(NavtrackError, ImportError):
     """An optional dependency needed for the requested feature is not installed."""
 

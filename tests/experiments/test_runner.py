@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from navtrack.errors import CheckpointMismatchError
 from navtrack.experiments import runner
 from navtrack.experiments.runner import replay_run, run_generator, run_monte_carlo
 
@@ -105,7 +106,8 @@ def test_checkpoints_of_another_experiment_are_refused(tmp_path: Path) -> None:
     run_monte_carlo(
         toy_run, 2, 1, {"size": 3}, checkpoint_dir=tmp_path, backend="loop", progress=False
     )
-    with pytest.raises(ValueError, match="refusing to mix"):
+    # a user's input error (an output directory reused), which the CLI reports with exit 2
+    with pytest.raises(CheckpointMismatchError, match="refusing to mix"):
         run_monte_carlo(
             toy_run, 2, 2, {"size": 3}, checkpoint_dir=tmp_path, backend="loop", progress=False
         )

@@ -175,7 +175,9 @@ class _Checkpoints:
         if path.exists():
             old = json.loads(path.read_text())
             if old != manifest:
-                raise ValueError(
+                from navtrack.errors import CheckpointMismatchError
+
+                raise CheckpointMismatchError(
                     f"checkpoint_dir {self.dir} holds runs of {old}; refusing to mix them with "
                     f"{manifest} (use another directory or delete it)"
                 )
