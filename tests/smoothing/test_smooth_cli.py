@@ -46,9 +46,43 @@ def test_smooth_rtklib_pos(gnss_data: Path, tmp_path: Path, capsys: pytest.Captu
     code = main(["smooth", str(pos), "--order", "0,1", "--robust", "huber"])
     assert code == 0
     text = capsys.readouterr().out
-    for col in ("x_m", "y_m", "z_m"):
+    for col in ("e_m", "n_m", "u_m"):  # east/north/up about the mean position by default
         assert f"{col}: status" in text
     assert text.count("sigma_n = ") == 3
+
+
+def test_smooth_pos_output_uses_ok_rows_in_east_north_up(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    """The 0759 solution has 5 ``high_dop`` epochs: they are missing epochs of the smoother,
+    not data; the position is smoothed as east/north/up about the mean of the ok epochs."""
+    from importlib import resources
+
+    data = Path(str(resources.files("navtrack.data")))
+    sol = tmp_path / "sol.csv"
+    assert (
+        main(["pos", str(data / "07590920.05o"), str(data / "07590920.05n"), "--out", str(sol)])
+        == 0
+    )
+    capsys.readouterr()
+    out = tmp_path / "smooth.csv"
+    assert main(["smooth", str(sol), "--order", "0,1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    solution = pd.read_csv(sol)
+    bad = (solution["status"] != "ok").to_numpy()
+    assert bad.sum() == 5
+    assert "status     5 rows not ok taken as missing (high_dop 5)" in text
+    assert "n 120 (missing 5)" in text
+    table = pd.read_csv(out)
+    enu = table[["e_m", "n_m", "u_m"]].to_numpy()
+    assert np.isnan(enu[bad]).all()
+    assert np.isfinite(enu[~bad]).all()
+    np.testing.assert_allclose(enu[~bad].mean(axis=0), 0.0, atol=1e-6)
+    xyz = solution[["x_m", "y_m", "z_m"]].to_numpy()[~bad]
+    dist = np.linalg.norm(xyz - xyz.mean(axis=0), axis=1)
+    np.testing.assert_allclose(np.linalg.norm(enu[~bad], axis=1), dist, atol=1e-6)
+    assert main(["smooth", str(sol), "--order", "0,1", "--frame", "ecef"]) == 0
+    assert "x_m: status" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("estimator", ["exact", "paper"])

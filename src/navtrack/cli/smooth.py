@@ -27,14 +27,22 @@ def register(subparsers: Any) -> None:
         "(Lindenberger): estimate the filtered series, the observation noise sigma_n, the "
         "prediction error sigma_e, sigma_x per epoch, r(1..4) and gross errors, without a-priori "
         "stochastic information. Reads CSV/Parquet tables, navtrack solution tables and RTKLIB "
-        ".pos files; gaps in the time stamps become missing epochs.",
+        ".pos files; gaps in the time stamps become missing epochs, and so do the rows of a "
+        "solution table whose status is not ok.",
     )
     cmd.add_argument("file", type=Path, help="CSV, Parquet, navtrack solution table or RTKLIB .pos")
     cmd.add_argument(
         "--columns",
         nargs="+",
-        help="columns to smooth (comma- or space-separated); default x_m y_m z_m for solution "
-        "files, else every numeric column except the time",
+        help="columns to smooth (comma- or space-separated); default for solution files the "
+        "position in --frame, else every numeric column except the time",
+    )
+    cmd.add_argument(
+        "--frame",
+        default="enu",
+        choices=("enu", "ecef"),
+        help="solution files: smooth east/north/up about the mean position (e_m n_m u_m, "
+        "default) or ECEF x_m y_m z_m",
     )
     cmd.add_argument("--time", help="time column in seconds (default: t_gps_s, t_s, time, t)")
     cmd.add_argument("--order", default="auto", help="'auto' (BIC) or P,D (default auto)")
@@ -117,6 +125,28 @@ def _time_stamps(path: Path, df: Any, column: str) -> Any:
     return t
 
 
+def _local_frame(path: Path, df: Any, ok: Any) -> tuple[Any, list[str]]:
+    """``df`` with ``e_m, n_m, u_m``: the ECEF position about the mean of the ``ok`` rows, in
+    its east/north/up frame; prints the origin."""
+    import math
+
+    import numpy as np
+
+    from navtrack.geodesy import ecef_to_geodetic, enu_rotation
+    from navtrack.io.tables import numeric_column
+
+    xyz = np.column_stack([numeric_column(path, df, c) for c in _POSITION_COLUMNS])
+    origin = np.nanmean(xyz[ok], axis=0)
+    lat, lon, h = ecef_to_geodetic(origin)
+    enu = (xyz - origin) @ enu_rotation(lat, lon).T
+    print(
+        f"frame      east/north/up about the mean position lat {math.degrees(lat):.8f} deg, "
+        f"lon {math.degrees(lon):.8f} deg, h {h:.3f} m (--frame ecef for x/y/z)"
+    )
+    columns = ["e_m", "n_m", "u_m"]
+    return df.assign(**dict(zip(columns, enu.T, strict=True))), columns
+
+
 def run_smooth(args: argparse.Namespace) -> int:
     import numpy as np
     import pandas as pd
@@ -156,10 +186,19 @@ def run_smooth(args: argparse.Namespace) -> int:
         time_col = next((c for c in _TIME_CANDIDATES if c in df.columns), None)
     elif time_col not in df.columns:
         raise SystemExit(f"navtrack smooth: no time column {time_col!r} in {args.file}")
+    not_ok = (
+        (df["status"].astype(str).str.strip() != "ok").to_numpy()
+        if "status" in df.columns
+        else np.zeros(len(df), dtype=bool)
+    )
+    if not_ok.all():
+        raise SystemExit(f"navtrack smooth: {args.file}: no row has status ok")
     if args.columns:
         columns = [c for item in args.columns for c in item.split(",") if c]
     elif all(c in df.columns for c in _POSITION_COLUMNS):
         columns = list(_POSITION_COLUMNS)
+        if args.frame == "enu":
+            df, columns = _local_frame(args.file, df, ~not_ok)
     else:
         columns = [
             c
@@ -177,6 +216,7 @@ def run_smooth(args: argparse.Namespace) -> int:
             f"navtrack smooth: {args.file}: no numeric columns to smooth; give --columns"
         )
     values = np.column_stack([numeric_column(args.file, df, c) for c in columns])
+    values[not_ok] = np.nan
     n_read = values.shape[0]
     if time_col is not None:
         t = _time_stamps(args.file, df, time_col)
@@ -191,6 +231,13 @@ def run_smooth(args: argparse.Namespace) -> int:
         + (f", {inserted} missing epochs inserted into time gaps" if inserted else "")
         + (f" (time column {time_col})" if time_col else " (no time column: equally spaced)")
     )
+    if not_ok.any():
+        counts = df["status"][not_ok].astype(str).str.strip().value_counts()
+        print(
+            f"status     {int(not_ok.sum())} rows not ok taken as missing ("
+            + ", ".join(f"{name} {n}" for name, n in counts.items())
+            + ")"
+        )
     out_cols: dict[str, Any] = {}
     if time_col is not None:
         out_cols[time_col] = t_grid
