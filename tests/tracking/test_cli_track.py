@@ -306,3 +306,41 @@ def test_track_reports_rows_thousands_of_km_apart_with_counts(
     text = capsys.readouterr().out
     assert re.search(r"bad rows skipped +0\n", text)
     assert re.search(r"ids / confirmed tracks +4 / 4\n", text)
+
+
+@pytest.mark.parametrize(
+    ("name", "expected"),
+    [
+        ("SolentAIS_20160112_130211.csv", "ais"),
+        ("OpenSky_Plane_States.csv", "opensky"),
+        ("UAV_Rot.csv", "csv"),
+    ],
+)
+def test_the_layout_is_read_from_the_header(shared_data: Path, name: str, expected: str) -> None:
+    from navtrack.io.tracks import detect_format
+
+    assert detect_format(shared_data / "tracking" / name) == expected
+
+
+def test_track_maps_a_files_own_column_names(
+    shared_data: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The shared UAV log names its columns latitude/longitude/altitude (m): without a map the
+    error names the missing columns; with ``--columns`` the one aircraft is tracked."""
+    uav = str(shared_data / "tracking" / "UAV_Rot.csv")
+    assert main(["track", uav, "--quiet"]) == 2
+    assert "need columns lat, lon" in capsys.readouterr().err
+    columns = "lat=latitude,lon=longitude,alt_m=altitude (m)"
+    assert main(["track", uav, "--columns", columns, "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "format     csv (from the header" in out
+    assert re.search(r"detections +965\n", out)
+    assert re.search(r"tracks started / confirmed +1 / 1\n", out)
+    assert main(["track", uav, "--columns", "lat=latitude,lon=longitud"]) == 2
+    assert "missing column(s) ['longitud']" in capsys.readouterr().err
+    with pytest.raises(SystemExit, match="latt not among"):
+        main(["track", uav, "--columns", "latt=latitude"])
+    with pytest.raises(SystemExit, match="expected NAME=COLUMN"):
+        main(["track", uav, "--columns", "latitude"])
+    with pytest.raises(SystemExit, match="applies to --format csv"):
+        main(["track", uav, "--format", "ais", "--columns", "lat=latitude"])

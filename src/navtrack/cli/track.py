@@ -1,4 +1,5 @@
-"""``navtrack track FILE --format ais|opensky|csv``: multi-target tracking of real detections.
+"""``navtrack track FILE [--format ais|opensky|csv] [--columns NAME=COLUMN,...]``: multi-target
+tracking of real detections (the layout detected from the header unless given).
 
 Detections are converted to a local east/north frame, tracked with their ids hidden, and the
 confirmed tracks are scored against the ids (CLEAR-MOT MOTA/MOTP, id switches, fragmentation,
@@ -41,10 +42,15 @@ def register(subparsers: Any) -> None:
         "--format",
         dest="fmt",
         choices=("ais", "opensky", "csv"),
-        required=True,
         help="ais = Solent AIS CSV; opensky = OpenSky states CSV; csv = generic "
         "(time ISO 8601 UTC, lat/lon deg or x_m/y_m, optional id, alt_m, speed_mps, "
-        "course_deg)",
+        "course_deg); default: detected from the header",
+    )
+    p.add_argument(
+        "--columns",
+        metavar="NAME=COLUMN,...",
+        help="the generic layout's columns in this file, e.g. "
+        "'time=Time,lat=latitude,lon=longitude,alt_m=altitude (m)' (implies --format csv)",
     )
     p.add_argument(
         "--associator",
@@ -115,6 +121,19 @@ def register(subparsers: Any) -> None:
     p.set_defaults(func=run_track)
 
 
+def _column_map(text: str | None) -> dict[str, str]:
+    """``--columns time=Time,lat=latitude`` as a mapping (empty without the option)."""
+    if not text:
+        return {}
+    out: dict[str, str] = {}
+    for item in text.split(","):
+        name, sep, column = item.partition("=")
+        if not sep or not name.strip() or not column.strip():
+            raise SystemExit(f"navtrack track: --columns: expected NAME=COLUMN, got {item!r}")
+        out[name.strip()] = column.strip()
+    return out
+
+
 def _by_format(k: int) -> str:
     """One column of :data:`DEFAULTS` as help text: ``60 for ais, 10 for opensky, ...``."""
     return ", ".join(f"{v[k]:g} for {fmt}" for fmt, v in DEFAULTS.items())
@@ -126,7 +145,8 @@ def run_track(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from navtrack.io.tracks import read_tracks, to_local_enu, velocity_local_enu
+    from navtrack.errors import FileFormatError
+    from navtrack.io.tracks import detect_format, read_tracks, to_local_enu, velocity_local_enu
     from navtrack.tracking.metrics import clear_mot, hota, interpolate_truth
     from navtrack.tracking.tracker import DET_STATUS_NAMES, run_tracker
 
@@ -138,8 +158,19 @@ def run_track(args: argparse.Namespace) -> int:
     ):
         if value is not None and not value > 0:  # also refuses NaN
             raise SystemExit(f"navtrack track: {name} must be a positive number, got {value:g}")
+    columns = _column_map(args.columns)
+    if args.fmt is None:
+        args.fmt = "csv" if columns else detect_format(args.file)
+        print(f"format     {args.fmt} (from the header; --format overrides)")
+    elif columns and args.fmt != "csv":
+        raise SystemExit(f"navtrack track: --columns applies to --format csv, not {args.fmt}")
     clock = time.perf_counter()
-    det = read_tracks(args.file, args.fmt, args.max_range_km, args.max_time_days)
+    try:
+        det = read_tracks(args.file, args.fmt, args.max_range_km, args.max_time_days, columns)
+    except ValueError as exc:
+        if isinstance(exc, FileFormatError):
+            raise
+        raise SystemExit(f"navtrack track: --{exc}") from None
     t_read = time.perf_counter() - clock
     summary: dict[str, Any] = det.summary()
     if len(det) == 0:

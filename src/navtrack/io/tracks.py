@@ -18,6 +18,7 @@ UTF-8 CSV (gzip, binary, JSON, bytes that are not UTF-8) raises :class:`FileForm
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -29,7 +30,9 @@ from navtrack.errors import FileFormatError
 from navtrack.io.tables import last_row_cut, read_csv_text
 
 __all__ = [
+    "GENERIC_COLUMNS",
     "TrackDetections",
+    "detect_format",
     "local_enu_to_geodetic",
     "read_ais_csv",
     "read_opensky_csv",
@@ -301,13 +304,67 @@ def read_opensky_csv(
     )
 
 
+GENERIC_COLUMNS = ("time", "lat", "lon", "x_m", "y_m", "id", "alt_m", "speed_mps", "course_deg")
+"""The columns of the generic layout (:func:`read_track_csv`)."""
+
+#: Header columns that name a layout (:func:`detect_format`), most specific first.
+_SIGNATURES = (
+    ("ais", ("Time", "MMSI", "Latitude_degrees", "Longitude_degrees")),
+    ("opensky", ("time", "icao24", "lat", "lon")),
+)
+
+
+def detect_format(path: StrPath) -> str:
+    """The layout of a tracking file from its header: ``ais`` (Solent AIS), ``opensky``
+    (OpenSky state vectors) or ``csv`` (anything else, read by :func:`read_track_csv`).
+
+    Raises
+    ------
+    FileFormatError
+        An empty or unreadable file.
+    """
+    import csv
+    import io
+
+    text = read_csv_text(path)
+    header = next(csv.reader(io.StringIO(text.split("\n", 1)[0])), [])
+    if not header:
+        raise FileFormatError(path, 1, "empty file (no header)")
+    names = {h.strip() for h in header}
+    return next((fmt for fmt, need in _SIGNATURES if set(need) <= names), "csv")
+
+
 def read_track_csv(
-    path: StrPath, max_range_km: float | None = 1000.0, max_time_days: float | None = 30.0
+    path: StrPath,
+    max_range_km: float | None = 1000.0,
+    max_time_days: float | None = 30.0,
+    columns: Mapping[str, str] | None = None,
 ) -> TrackDetections:
     """Generic layout: ``time`` (ISO 8601 UTC), ``lat`` and ``lon`` (deg) or ``x_m`` and ``y_m``,
     optional ``id``, ``alt_m``, ``speed_mps``, ``course_deg``; other columns are ignored (and
-    listed in ``ignored_columns``)."""
+    listed in ``ignored_columns``).
+
+    ``columns`` maps these names to the file's own (``{"lat": "latitude", "alt_m":
+    "altitude (m)"}``); a name not mapped is looked up as itself.
+
+    Raises
+    ------
+    ValueError
+        ``columns`` maps a name that is not one of :data:`GENERIC_COLUMNS`.
+    FileFormatError
+        A mapped column the file does not have, or no time or position columns.
+    """
     df, cut_last = _read_frame(path)
+    if columns:
+        unknown = sorted(set(columns) - set(GENERIC_COLUMNS))
+        if unknown:
+            raise ValueError(
+                f"columns: {', '.join(unknown)} not among {', '.join(GENERIC_COLUMNS)}"
+            )
+        _require(path, df, list(columns.values()))
+        mapped = set(columns.values())
+        df = df.drop(columns=[c for c in columns if c in df.columns and c not in mapped])
+        df = df.rename(columns={src: name for name, src in columns.items()})
     _require(path, df, ["time"])
     has_ll = "lat" in df.columns and "lon" in df.columns
     has_xy = "x_m" in df.columns and "y_m" in df.columns
@@ -342,29 +399,40 @@ def read_track_csv(
 
 def read_tracks(
     path: StrPath,
-    fmt: str,
+    fmt: str | None = None,
     max_range_km: float | None = 1000.0,
     max_time_days: float | None = 30.0,
+    columns: Mapping[str, str] | None = None,
 ) -> TrackDetections:
     """Read a tracking file of format ``fmt`` in ``{"ais", "opensky", "csv"}``.
 
     Parameters
     ----------
     path : str or path-like
-    fmt : str
+    fmt : str, optional
+        None: detected from the header (:func:`detect_format`); ``csv`` when ``columns`` is
+        given.
     max_range_km : float or None
         Rows farther than this (km) from the median position are skipped (None: no check).
     max_time_days : float or None
         Rows dated farther than this (days) from the median time are skipped (None: no check).
+    columns : mapping, optional
+        The generic layout's names mapped to the file's columns (:func:`read_track_csv`).
 
     Raises
     ------
     FileFormatError
         Content that is not a UTF-8 CSV, or required columns missing.
     """
-    readers = {"ais": read_ais_csv, "opensky": read_opensky_csv, "csv": read_track_csv}
+    if fmt is None:
+        fmt = "csv" if columns else detect_format(path)
+    if fmt == "csv":
+        return read_track_csv(path, max_range_km, max_time_days, columns)
+    if columns:
+        raise ValueError(f"columns: a column map applies to the csv layout, not to {fmt}")
+    readers = {"ais": read_ais_csv, "opensky": read_opensky_csv}
     if fmt not in readers:
-        raise ValueError(f"fmt must be one of {sorted(readers)}, got {fmt!r}")
+        raise ValueError(f"fmt must be one of ais, csv, opensky, got {fmt!r}")
     return readers[fmt](path, max_range_km, max_time_days)
 
 
