@@ -124,9 +124,13 @@ class AgpsExperiment(Experiment[AgpsExperimentParams, _RunResult]):
         )
         heights = [height_key(float(o), offset=True) for o in offsets]
         intervals = [interval_key(i) for i in params.intervals_min]
+        # pooled over the sets with fixes at every interval, so that the intervals compare
+        # the same receivers (the phone log and yamatogawa span 3.4 min)
+        pooled = [n for n, by in arrays["n_fixes"].items() if all(v > 0 for v in by.values())]
+        rows = np.isin(arrays["set"], pooled)
         real = summarize_cases(
-            arrays["error_m"], arrays["iterations"], arrays["status"], SOLVER_NAMES, heights,
-            intervals,
+            arrays["error_m"][rows], arrays["iterations"][rows], arrays["status"][rows],
+            SOLVER_NAMES, heights, intervals,
         )  # fmt: skip
         per_set = {}
         zero = heights.index("+0") if "+0" in heights else 0
@@ -151,6 +155,7 @@ class AgpsExperiment(Experiment[AgpsExperimentParams, _RunResult]):
             }
         results = {
             "real_data": real,
+            "real_data_pooled_sets": pooled,
             "findings_real_data": findings(real, heights[zero], intervals) if real else {},
             "real_data_sets": per_set,
             "real_n_fixes": arrays["n_fixes"],

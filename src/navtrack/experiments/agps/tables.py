@@ -204,7 +204,9 @@ def tables_markdown(results: dict[str, Any]) -> str:
             "",
             "Heights are offsets (m) from each data set's reference height; receiver clocks "
             "known to ±300 m from a full single point solution, as a network's fine time. "
-            "Fixes per data set and interval: "
+            "Pooled tables: the data sets with fixes at every interval ("
+            + ", ".join(results.get("real_data_pooled_sets", []))
+            + "); every set is in the per-set table. Fixes per data set and interval: "
             + "; ".join(
                 f"{name} " + ", ".join(f"{k} min {v}" for k, v in n.items())
                 for name, n in results.get("real_n_fixes", {}).items()
