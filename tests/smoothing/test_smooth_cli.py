@@ -124,3 +124,11 @@ def test_smooth_bad_column(tmp_path: Path, capsys: pytest.CaptureFixture) -> Non
         main(["smooth", str(src), "--columns", "w"])
     assert info.value.code == 2
     assert "navtrack smooth: error: columns w not in" in capsys.readouterr().err
+
+
+def test_smooth_example_is_the_0759_solution(capsys: pytest.CaptureFixture) -> None:
+    assert main(["smooth", "--example", "--order", "0,1"]) == 0
+    text = capsys.readouterr().out
+    assert "example    single point positions of 07590920.05o" in text
+    assert "status     5 rows not ok taken as missing (high_dop 5)" in text
+    assert text.count("n 120 (missing 5)") == 3

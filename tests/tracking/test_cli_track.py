@@ -344,3 +344,13 @@ def test_track_maps_a_files_own_column_names(
         main(["track", uav, "--columns", "latitude"])
     with pytest.raises(SystemExit, match="applies to --format csv"):
         main(["track", uav, "--format", "ais", "--columns", "lat=latitude"])
+
+
+def test_track_example_runs_on_the_bundled_ais_cut(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["track", "--example", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "format     ais (from the header" in out
+    assert re.search(r"detections +4320\n", out)
+    assert re.search(r"ids +79\n", out)
+    mota = float(re.search(r"MOTA +([-0-9.]+)", out).group(1))  # type: ignore[union-attr]
+    assert 0.2 < mota <= 1.0  # scored against the hidden MMSIs

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +32,18 @@ def register(subparsers: Any) -> None:
         ".pos files; gaps in the time stamps become missing epochs, and so do the rows of a "
         "solution table whose status is not ok.",
     )
-    cmd.add_argument("file", type=Path, help="CSV, Parquet, navtrack solution table or RTKLIB .pos")
+    cmd.add_argument(
+        "file",
+        type=Path,
+        nargs="?",
+        help="CSV, Parquet, navtrack solution table or RTKLIB .pos",
+    )
+    cmd.add_argument(
+        "--example",
+        action="store_true",
+        help="smooth the single point positions of the bundled 0759 station file (120 epochs "
+        "at 30 s, 5 of them high_dop)",
+    )
     cmd.add_argument(
         "--columns",
         nargs="+",
@@ -125,6 +138,22 @@ def _time_stamps(path: Path, df: Any, column: str) -> Any:
     return t
 
 
+def _example_solution(folder: Path) -> Path:
+    """The single point solution of the bundled 0759 files, written as ``pos --out`` does."""
+    from navtrack.data import sample_path
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.spp import SppConfig, solution_frame, solve_spp
+    from navtrack.io.solution import write_solution
+
+    obs, nav = sample_path("07590920.05o"), sample_path("07590920.05n")
+    result = solve_spp(read_obs(obs), read_nav(nav), config=SppConfig(systems="G"))
+    path = folder / "0759_spp.csv"
+    write_solution(solution_frame(result), path)
+    print(f"example    single point positions of {obs.name} with {nav.name} ({path.name})")
+    return path
+
+
 def _local_frame(path: Path, df: Any, ok: Any) -> tuple[Any, list[str]]:
     """``df`` with ``e_m, n_m, u_m``: the ECEF position about the mean of the ``ok`` rows, in
     its east/north/up frame; prints the origin."""
@@ -156,7 +185,14 @@ def run_smooth(args: argparse.Namespace) -> int:
     from navtrack.smoothing.ari import AriConfig, fit_ari, regularize_time
     from navtrack.smoothing.identifiability import identifiability_warnings, sigma_bounds
 
-    df = read_table(args.file)
+    with contextlib.ExitStack() as stack:
+        if args.example:
+            if args.file is not None:
+                raise SystemExit("navtrack smooth: give either FILE or --example, not both")
+            args.file = _example_solution(Path(stack.enter_context(tempfile.TemporaryDirectory())))
+        if args.file is None:
+            raise SystemExit("navtrack smooth: give a FILE, or --example")
+        df = read_table(args.file)
     if len(df) == 0:
         from navtrack.errors import FileFormatError
 

@@ -28,6 +28,8 @@ DEFAULTS = {
     "csv": (60.0, 400.0, 500.0),
 }
 MAX_REPORT_FRAMES = 1_000_000  # scoring grid size refused before it is allocated
+EXAMPLE = "SolentAIS_20160112_130211_20min.csv"
+"""The bundled example (``navtrack/data/README.md``)."""
 
 
 def register(subparsers: Any) -> None:
@@ -37,7 +39,12 @@ def register(subparsers: Any) -> None:
         description="Run the GNN or JPDA multi-target tracker on real position reports (ids "
         "hidden from the tracker) and score the confirmed tracks against the ids.",
     )
-    p.add_argument("file", type=Path, help="detections file (CSV)")
+    p.add_argument("file", type=Path, nargs="?", help="detections file (CSV)")
+    p.add_argument(
+        "--example",
+        action="store_true",
+        help=f"track the bundled {EXAMPLE}: 20 minutes of AIS reports of 79 ships in The Solent",
+    )
     p.add_argument(
         "--format",
         dest="fmt",
@@ -158,6 +165,14 @@ def run_track(args: argparse.Namespace) -> int:
     ):
         if value is not None and not value > 0:  # also refuses NaN
             raise SystemExit(f"navtrack track: {name} must be a positive number, got {value:g}")
+    if args.example:
+        if args.file is not None:
+            raise SystemExit("navtrack track: give either FILE or --example, not both")
+        from navtrack.data import sample_path
+
+        args.file = sample_path(EXAMPLE)
+    if args.file is None:
+        raise SystemExit("navtrack track: give a detections FILE, or --example")
     columns = _column_map(args.columns)
     if args.fmt is None:
         args.fmt = "csv" if columns else detect_format(args.file)
