@@ -85,6 +85,10 @@ def test_last_row_cut_mid_line_is_refused(
     assert main(["smooth", str(path)]) == EXIT_BAD_INPUT
     err = capsys.readouterr().err
     assert err.startswith(f"navtrack smooth: error: {path}:{len(_LINES)}: last row cut short")
+    # all fields but no end of line: a value may be cut short ("0.91" -> "0.9"); reported
     whole = tmp_path / "whole.csv"
-    whole.write_text("\n".join(_LINES))  # no end of line, but the row is whole
+    whole.write_text("\n".join(_LINES))
+    assert main(["smooth", str(whole), "--order", "1,1"]) == EXIT_BAD_INPUT
+    assert "no end of line" in capsys.readouterr().err
+    whole.write_text("\n".join(_LINES) + "\n")
     assert main(["smooth", str(whole), "--order", "1,1"]) == 0

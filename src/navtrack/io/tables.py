@@ -60,8 +60,8 @@ def read_table(path: StrPath) -> pd.DataFrame:
     ------
     FileFormatError
         Unknown suffix, content that is not a table of that format, or a CSV whose last row
-        has fewer fields than the header (a file cut mid-line); the message names the file,
-        and the line when there is one.
+        has no end of line (a file cut mid-line, :func:`last_row_cut`); the message names the
+        file, and the line when there is one.
     MissingDependencyError
         A Parquet file without pyarrow installed.
     """
@@ -90,7 +90,10 @@ def read_table(path: StrPath) -> pd.DataFrame:
         lines = _data_lines(text)
         if not text.endswith(("\n", "\r")) and last_row_cut(text, "#"):
             raise FileFormatError(
-                p, int(lines[-1]), "last row cut short by the end of the file (fewer fields)"
+                p,
+                int(lines[-1]),
+                "last row cut short by the end of the file (no end of line; end the file "
+                "with a line break if the row is whole)",
             )
     else:
         raise FileFormatError(
@@ -136,7 +139,9 @@ def read_csv_text(path: StrPath) -> str:
 
 
 def last_row_cut(text: str, comment: str | None = None) -> bool:
-    """True when the last row has fewer fields than the header (a file cut mid-line).
+    """True when the last row looks cut by the end of the file: it has no end of line (every
+    row before it has one) or fewer fields than the header. A field cut short leaves no other
+    trace, so a last row without its end of line is never taken as data.
 
     ``comment`` starts a comment: lines empty before it are not rows (nor the header).
     """
@@ -147,6 +152,8 @@ def last_row_cut(text: str, comment: str | None = None) -> bool:
         lines = [ln for ln in lines if ln.split(comment, 1)[0].strip()]
     if len(lines) < 2:
         return False
+    if not text.endswith(("\n", "\r")):
+        return True
     header = next(csv.reader(lines[:1]))
     last = next(csv.reader(lines[-1:]))
     return len(last) < len(header)

@@ -6,7 +6,8 @@ a tracker, never by it). Rows that cannot be used are *reported and skipped*: th
 and reasons are in ``bad_lines`` / ``bad_reasons``; a file whose required columns are missing
 raises :class:`navtrack.errors.FileFormatError`.
 
-Row checks: a last row with fewer fields than the header (a file cut mid-line), unparsable or
+Row checks: a last row without its end of line or with fewer fields than the header (a file
+cut mid-line), unparsable or
 non-finite time or position, times farther than ``max_time_days`` (default 30 days) from the
 median time of the file (one row dated 1916 among 2016 rows would otherwise stretch the
 tracker's report grid over a century), latitude outside [-90, 90], longitude outside
@@ -184,7 +185,7 @@ def _finish(
         reason[new] = why
 
     if cut_last and n:
-        reason[-1] = "last row has fewer fields than the header (file cut mid-line)"
+        reason[-1] = "last row cut by the end of the file (no end of line or fewer fields)"
     flag(~np.isfinite(t), "time not readable")
     if geo:
         flag(~np.isfinite(lat) | ~np.isfinite(lon), "latitude/longitude not a finite number")
