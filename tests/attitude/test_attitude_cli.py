@@ -49,6 +49,25 @@ def test_reconstruct_from_tables(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert s["calibration"]["bias_rad_s"][0] == pytest.approx(0.002, abs=2e-4)
 
 
+def test_summary_without_out_and_a_pose_table_without_gnss(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    imu, fixes = _write_inputs(tmp_path)
+    args = ["attitude", "reconstruct", str(imu), "--fixes", str(fixes)]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "calibrated bias" in text
+    assert "wrote" not in text
+    out = tmp_path / "pose.csv"
+    assert main([*args, "--out", str(out)]) == 0
+    assert "(no GNSS positions)" in capsys.readouterr().out
+    pose = pd.read_csv(out)
+    # only the columns with values: no empty GNSS columns, no 1980 calendar time
+    assert list(pose) == ["t_s", "qx", "qy", "qz", "qw", "roll_deg", "pitch_deg", "yaw_deg"]
+    assert pose.notna().all().all()
+    np.testing.assert_allclose(np.linalg.norm(pose[["qx", "qy", "qz", "qw"]], axis=1), 1.0)
+
+
 def test_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     imu, fixes = _write_inputs(tmp_path)
     out = str(tmp_path / "pose.csv")

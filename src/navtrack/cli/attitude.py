@@ -37,7 +37,12 @@ def register(subparsers: Any) -> None:
         "estimate as a pose trajectory.",
     )
     rec.add_argument("imu", type=Path, help="BROAD .mat trial or CSV/Parquet with t_s, gyr_*_rad_s")
-    rec.add_argument("--out", type=Path, required=True, help="pose trajectory (.csv or .parquet)")
+    rec.add_argument(
+        "--out",
+        type=Path,
+        help="write the pose trajectory (.csv or .parquet; without --gnss and --t0-gps-s a pose "
+        "table t_s, quaternion, roll/pitch/yaw)",
+    )
     rec.add_argument("--fixes", type=Path, help="camera fixes: t_s, qx, qy, qz, qw [, sigma_rad]")
     rec.add_argument(
         "--simulate-fixes",
@@ -118,16 +123,45 @@ def _read_fixes(path: Path, sigma_rad: float) -> tuple[Any, Any, Any]:
     return df["t_s"].to_numpy(np.float64), q, sig
 
 
+def _write_pose(args: argparse.Namespace, est: Any, t: Any) -> dict[str, Any]:
+    """Write ``--out``: a solution frame when there is a GNSS position or an absolute time,
+    else a pose table of the columns that have values."""
+    import numpy as np
+
+    from navtrack.attitude.trajectory import pose_frame, read_gnss_positions
+    from navtrack.io.solution import write_solution
+
+    t_cam = t - est.time_offset_s
+    gnss = read_gnss_positions(args.gnss) if args.gnss is not None else None
+    offset = args.gnss_offset_s
+    if offset is None:
+        offset = float(gnss.t_s[0] - t_cam[0]) if gnss is not None else 0.0
+    frame = pose_frame(t_cam, est.quat, gnss, gnss_offset_s=offset, t0_gps_s=args.t0_gps_s)
+    if gnss is None and args.t0_gps_s == 0.0:
+        import pandas as pd
+
+        keep = ("qx", "qy", "qz", "qw", "roll_deg", "pitch_deg", "yaw_deg")
+        table = pd.DataFrame({"t_s": t_cam, **{k: frame[k] for k in keep}})
+        if args.out.suffix.lower() == ".parquet":
+            table.to_parquet(args.out, index=False)
+        else:
+            table.to_csv(args.out, index=False, float_format="%.10g")
+        print(f"wrote      {args.out}: {args.estimate}, {t_cam.size} epochs (no GNSS positions)")
+        return {"out": str(args.out), "epochs_with_position": 0}
+    path = write_solution(frame, args.out)
+    n_pos = int(np.count_nonzero(frame["status"] == "ok"))
+    print(f"wrote      {path}: {args.estimate}, {t_cam.size} epochs, {n_pos} with a GNSS position")
+    return {"out": str(path), "epochs_with_position": n_pos}
+
+
 def run_reconstruct(args: argparse.Namespace) -> int:
     import numpy as np
     from scipy.spatial.transform import Rotation
 
     from navtrack.attitude.quaternion import attitude_errors
     from navtrack.attitude.reconstruct import reconstruct
-    from navtrack.attitude.trajectory import pose_frame, read_gnss_positions
-    from navtrack.io.solution import write_solution
 
-    if args.out.suffix.lower() not in (".csv", ".parquet"):
+    if args.out is not None and args.out.suffix.lower() not in (".csv", ".parquet"):
         raise SystemExit("navtrack attitude reconstruct: --out must end in .csv or .parquet")
     if (args.fixes is None) == (not args.simulate_fixes):
         raise SystemExit(
@@ -185,18 +219,8 @@ def run_reconstruct(args: argparse.Namespace) -> int:
                 "max_deg": float(e.max()),
             }
             print(f"{name:<17} error vs optical: mean {e.mean():.3f} deg, max {e.max():.3f} deg")
-    est = recon.estimates[args.estimate]
-    t_cam = t - est.time_offset_s
-    gnss = read_gnss_positions(args.gnss) if args.gnss is not None else None
-    offset = args.gnss_offset_s
-    if offset is None:
-        offset = float(gnss.t_s[0] - t_cam[0]) if gnss is not None else 0.0
-    frame = pose_frame(t_cam, est.quat, gnss, gnss_offset_s=offset, t0_gps_s=args.t0_gps_s)
-    path = write_solution(frame, args.out)
-    n_pos = int(np.count_nonzero(frame["status"] == "ok"))
-    print(f"wrote      {path}: {args.estimate}, {t_cam.size} epochs, {n_pos} with a GNSS position")
-    summary["out"] = str(path)
-    summary["epochs_with_position"] = n_pos
+    if args.out is not None:
+        summary.update(_write_pose(args, recon.estimates[args.estimate], t))
     if args.json is not None:
         args.json.write_text(json.dumps(summary, indent=2) + "\n")
     return 0
