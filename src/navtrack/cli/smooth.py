@@ -83,6 +83,7 @@ def register(subparsers: Any) -> None:
         help="|T| above which an epoch is a gross error (default 3.29)",
     )
     cmd.add_argument("--out", type=Path, help="write filtered series (.csv or .parquet)")
+    cmd.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     cmd.add_argument(
         "--plot", type=Path, metavar="DIR", help="write one PNG per column into this directory"
     )
@@ -179,6 +180,7 @@ def _local_frame(path: Path, df: Any, ok: Any) -> tuple[Any, list[str]]:
 def run_smooth(args: argparse.Namespace) -> int:
     import numpy as np
     import pandas as pd
+    from tqdm import tqdm
 
     from navtrack.experiments import write_json
     from navtrack.io.tables import numeric_column, read_table
@@ -280,7 +282,13 @@ def run_smooth(args: argparse.Namespace) -> int:
     any_gross = np.zeros(t_grid.size, dtype=bool)
     summary: dict[str, Any] = {"file": str(args.file), "epochs": int(t_grid.size), "columns": {}}
     for k, col in enumerate(columns):
-        res = fit_ari(grid[:, k], cfg)
+        with tqdm(
+            desc=f"{col}: " + ("order search" if order is None else f"ARI{order}"),
+            unit=" fits",
+            disable=args.no_progress,
+            leave=False,
+        ) as bar:
+            res = fit_ari(grid[:, k], cfg, progress=bar.update)
         unit = _unit(col)
         if res.estimated:
             r = " ".join(f"{v:.2f}" for v in res.autocorr)

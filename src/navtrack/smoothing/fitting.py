@@ -12,6 +12,7 @@ first ``max(p + d)`` observed epochs, the best refitted with robust weights.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -261,6 +262,7 @@ def fit_ari(
     config: AriConfig | None = None,
     *,
     t: ArrayLike | None = None,
+    progress: Callable[[], None] | None = None,
 ) -> AriResult:
     """Estimate the ARI model, filtered series and gross errors of one series.
 
@@ -275,6 +277,9 @@ def fit_ari(
     t : array_like, shape (n,), optional
         Time stamps; checked to be strictly increasing and uniform (status
         ``non_monotonic_time`` / ``irregular_time`` otherwise; see :func:`regularize_time`).
+    progress : callable, optional
+        Called with no argument after each model fit (the order search fits every candidate
+        twice, then the chosen order once more, robustly), e.g. a progress bar's ``update``.
 
     Returns
     -------
@@ -297,13 +302,15 @@ def fit_ari(
     if status != AriStatus.OK:
         return bad_result(y_arr, status, message)
     with single_threaded_blas():
-        return _select_and_fit(y_arr, cfg)
+        return _select_and_fit(y_arr, cfg, progress or (lambda: None))
 
 
-def _select_and_fit(y_arr: FloatArray, cfg: AriConfig) -> AriResult:
+def _select_and_fit(y_arr: FloatArray, cfg: AriConfig, tick: Callable[[], None]) -> AriResult:
     """Body of :func:`fit_ari` after input checks: order selection, then the robust fit."""
     if cfg.order is not None:
-        return _fit_fixed(y_arr, cfg.order[0], cfg.order[1], cfg, robust=True)
+        res = _fit_fixed(y_arr, cfg.order[0], cfg.order[1], cfg, robust=True)
+        tick()
+        return res
     candidates = [
         (p, d) for d in range(cfg.min_d, cfg.max_d + 1) for p in range(cfg.max_p + 1) if p + d >= 1
     ]
@@ -327,6 +334,7 @@ def _select_and_fit(y_arr: FloatArray, cfg: AriConfig) -> AriResult:
             )
             starts = [warm, *starting_values(yc, p, d, cfg.n_starts)[-1:]]
         res = _fit_fixed(y_sel, p, d, cfg, robust=False, starts=starts)
+        tick()
         if res.estimated:
             found[(p, d)] = res
     # Downward pass: ARI(p, d) again from ARI(p+1, d) without its last coefficient, the better
@@ -344,6 +352,7 @@ def _select_and_fit(y_arr: FloatArray, cfg: AriConfig) -> AriResult:
             phi = np.zeros(p) if float(np.max(np.abs(phi))) < 1e-3 else 0.5 * phi
         start = np.concatenate([phi, [2 * math.log(upper.sigma_n), 2 * math.log(upper.sigma_e)]])
         res = _fit_fixed(y_sel, p, d, cfg, robust=False, starts=[start])
+        tick()
         current = found.get((p, d))
         if res.estimated and (current is None or _better(res, current, cfg)):
             found[(p, d)] = res
@@ -370,6 +379,7 @@ def _select_and_fit(y_arr: FloatArray, cfg: AriConfig) -> AriResult:
     if best_key is None:
         return bad_result(y_arr, AriStatus.SINGULAR, "no candidate order could be fitted")
     final = _fit_fixed(y_arr, best_key[0], best_key[1], cfg, robust=True)
+    tick()
     aic, bic = fits[best_key]
     return _replace(final, aic=aic, bic=bic, candidates=tuple(scores))
 
