@@ -17,6 +17,7 @@ from navtrack.data import sample_path
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
 from navtrack.gnss.spp import SppConfig, SppResult, solution_frame, solve_spp
+from navtrack.plots.canvas import new_figure
 from navtrack.plots.gnss import (
     DOP_CLIP,
     LABEL_SPACING_DEG,
@@ -125,3 +126,27 @@ def test_track_map_names_its_reference() -> None:
     assert "of the reference 50.79117°N 1.10867°W" in fig.axes[0].get_xlabel()
     fig = tracks_figure(np.zeros((3, 2)), res, "t", ref_deg=(math.nan, math.nan))
     assert "x_m/y_m frame" in fig.axes[0].get_xlabel()
+
+
+def test_stanford_panels_share_axes_and_one_colour_scale(tmp_path) -> None:
+    from navtrack.plots.integrity import stanford_axes, stanford_figure, stanford_figure_files
+
+    rng = np.random.default_rng(3)
+    small = tuple(np.abs(rng.normal(0, s, 300)) for s in (1.0, 4.0, 2.0, 6.0))
+    large = tuple(np.abs(rng.normal(0, s, 500)) for s in (3.0, 12.0, 5.0, 20.0))
+    fig = stanford_figure("X", {"a": small, "b": large})
+    panels, bar = fig.axes[:4], fig.axes[4:]
+    assert len(bar) == 1
+    assert "epochs per cell" in bar[0].get_ylabel()
+    # rows share their axes (the larger method's range), every panel the colour scale
+    assert panels[0].get_xlim() == panels[1].get_xlim() == panels[0].get_ylim()
+    assert panels[2].get_xlim() == panels[3].get_xlim()
+    assert panels[0].get_xlim()[1] == pytest.approx(1.05 * max(large[0].max(), large[1].max()))
+    norms = {p.collections[0].norm.vmax for p in panels}
+    assert norms == {500.0}
+    (path,) = stanford_figure_files({"X": {"a": small, "b": large}}, tmp_path)
+    assert path.stat().st_size > 0
+    ax = new_figure((4.0, 4.0)).subplots()
+    mesh = stanford_axes(ax, small[0], small[1], "a", top_m=80.0, max_count=500)
+    assert ax.get_xlim() == (0.0, 80.0)
+    assert mesh.norm.vmax == 500.0
