@@ -150,3 +150,35 @@ def test_stanford_panels_share_axes_and_one_colour_scale(tmp_path) -> None:
     mesh = stanford_axes(ax, small[0], small[1], "a", top_m=80.0, max_count=500)
     assert ax.get_xlim() == (0.0, 80.0)
     assert mesh.norm.vmax == 500.0
+
+
+def test_many_tracks_get_distinct_colours_and_their_ids() -> None:
+    from types import SimpleNamespace
+
+    from navtrack.plots.tracks import track_colours, tracks_figure
+
+    colours = track_colours(106)
+    assert len({tuple(np.round(c, 3)) for c in colours}) == 106
+    # neighbours in order differ strongly (the issue: 106 tracks on ~10 colours)
+    assert np.min(np.abs(np.diff(colours[:, :3], axis=0)).sum(axis=1)) > 0.1
+    ids = np.repeat(np.arange(106), 2)
+    res = SimpleNamespace(track_confirmed=np.ones(212, bool), track_id=ids,
+                          track_x=np.random.default_rng(0).normal(size=(212, 4)))  # fmt: skip
+    ax = tracks_figure(np.zeros((3, 2)), res, "t").axes[0]
+    assert len(ax.lines) == 107  # detections + one line per track
+    assert {t.get_text() for t in ax.texts} == {str(k) for k in range(106)}
+
+
+def test_rtk_figures_carry_the_date(tmp_path) -> None:
+    from types import SimpleNamespace
+
+    from navtrack.plots import rtk
+
+    t = 1.3e9 + np.arange(5.0)
+    assert rtk._title(t) == "RTK solution, 2021-03-17 07:06:40 – 07:06:44 GPST, 5 epochs"
+    pos = np.random.default_rng(1).normal(size=(5, 3))
+    result = SimpleNamespace(t_gps_s=t, status=np.zeros(5, int), pos_m=pos,
+                             ratio=np.full(5, 4.0), n_sats=np.full(5, 8),
+                             slip_mask=np.zeros((5, 3), bool))  # fmt: skip
+    paths = rtk.plot_rtk(result, tmp_path)  # type: ignore[arg-type]
+    assert [p.name for p in paths] == ["rtk_error.png", "rtk_ratio.png", "rtk_sats.png"]

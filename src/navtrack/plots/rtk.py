@@ -29,6 +29,17 @@ _COLOURS = {
 }
 
 
+def _title(t_gps_s: FloatArray) -> str:
+    """``RTK solution, 2010-01-06 09:00:00 - 09:59:59 GPST, 3600 epochs``."""
+    from navtrack.timescale import to_datetime64
+
+    if t_gps_s.size == 0:
+        return "RTK solution, no epochs"
+    first, last = (str(to_datetime64(v))[:19].replace("T", " ") for v in (t_gps_s[0], t_gps_s[-1]))
+    end = last[11:] if last[:10] == first[:10] else last
+    return f"RTK solution, {first} – {end} GPST, {t_gps_s.size} epochs"
+
+
 def plot_rtk(
     result: RtkResult,
     out_dir: StrPath,
@@ -69,6 +80,7 @@ def plot_rtk(
         err = np.asarray(error_m, dtype=float)
         label = "3-D error against the reference (m)"
     paths = []
+    title = _title(result.t_gps_s)
 
     fig = new_figure((8.0, 3.6))
     ax = fig.add_subplot()
@@ -80,6 +92,7 @@ def plot_rtk(
     ax.set_xlabel("time since first epoch (s)")
     ax.set_ylabel(label)
     ax.legend(loc="best", fontsize=8)
+    ax.set_title(title, fontsize=9)
     paths.append(save_figure(fig, d / "rtk_error.png"))
 
     fig = new_figure((8.0, 3.0))
@@ -91,6 +104,7 @@ def plot_rtk(
     ax.set_xlabel("time since first epoch (s)")
     ax.set_ylabel("ratio test s2 / s1")
     ax.legend(loc="best", fontsize=8)
+    ax.set_title(title, fontsize=9)
     paths.append(save_figure(fig, d / "rtk_ratio.png"))
 
     fig = new_figure((8.0, 3.0))
@@ -101,5 +115,6 @@ def plot_rtk(
     ax.bar(t[sel], slips[sel], width=1.0, color="tab:red", label="ambiguities restarted by slips")
     ax.set_xlabel("time since first epoch (s)")
     ax.legend(loc="best", fontsize=8)
+    ax.set_title(title, fontsize=9)
     paths.append(save_figure(fig, d / "rtk_sats.png"))
     return paths

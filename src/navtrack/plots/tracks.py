@@ -13,7 +13,20 @@ from navtrack.plots.canvas import figure_dir, new_figure, save_figure
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["plot_tracks", "tracks_figure"]
+__all__ = ["MAX_LABELLED_TRACKS", "plot_tracks", "track_colours", "tracks_figure"]
+
+MAX_LABELLED_TRACKS = 200
+"""Up to this many confirmed tracks, each is labelled with its id at its last state."""
+
+
+def track_colours(n: int) -> FloatArray:
+    """``n`` RGBA colours for tracks drawn together: hues of the ``turbo`` map stepped by the
+    golden ratio, so that tracks next in order (often next in space) differ strongly and no
+    two of a few hundred share a colour."""
+    from matplotlib import colormaps
+
+    hue = (np.arange(n) * 0.6180339887498949) % 1.0
+    return np.asarray(colormaps["turbo"](0.05 + 0.9 * hue))
 
 
 def plot_tracks(
@@ -72,12 +85,15 @@ def tracks_figure(
     ids = np.asarray(result.track_id)
     x = np.asarray(result.track_x)
     confirmed_ids = np.unique(ids[conf])
-    from matplotlib import colormaps
-
-    cmap = colormaps["tab20"]
+    colours = track_colours(confirmed_ids.size)
     for k, tid in enumerate(confirmed_ids):
         sel = ids == tid
-        ax.plot(x[sel, 0] / 1e3, x[sel, 2] / 1e3, "-", lw=0.9, color=cmap(k % 20))
+        ax.plot(x[sel, 0] / 1e3, x[sel, 2] / 1e3, "-", lw=0.9, color=colours[k])
+        if confirmed_ids.size <= MAX_LABELLED_TRACKS:
+            last = np.flatnonzero(sel)[-1]
+            ax.annotate(
+                str(tid), (x[last, 0] / 1e3, x[last, 2] / 1e3), fontsize=5, color=colours[k]
+            )
     if ref_deg is not None and np.isfinite(ref_deg).all():
         lat, lon = ref_deg
         origin = (
