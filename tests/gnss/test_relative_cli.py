@@ -64,3 +64,17 @@ def test_ppp_refuses_clock_rinex(gnss_data: Path, tmp_path: Path) -> None:
     d = gnss_data / "cssrlib_sept"
     with pytest.raises(SystemExit, match="--clk"):
         main(["ppp", str(d / "SEPT078M.21O"), "--sp3", str(tmp_path / "x.sp3"), "--clk", "c.clk"])
+
+
+def test_ppp_example_presents_the_formal_sd_as_what_it_is(capsys: pytest.CaptureFixture) -> None:
+    from navtrack.cli import main
+
+    assert main(["ppp", "--example"]) == 0
+    out = capsys.readouterr().out
+    assert "epochs         120, updated 120" in out
+    assert "formal sd      E/N/U" in out
+    assert "not an accuracy" in out
+    # against the station's reference: the convergence table after 60 s, metres off in 2 min
+    row = out.split("(m, error vs ref)\n")[1].split()
+    assert float(row[0]) == 60.0
+    assert 0.0 < float(row[3]) < 10.0

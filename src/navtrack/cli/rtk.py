@@ -80,9 +80,15 @@ def register(subparsers: Any) -> None:
         description="Dual-frequency ionosphere-free code and phase, Saastamoinen + estimated "
         "zenith wet delay, float ambiguities, static position (convergence over time).",
     )
-    q.add_argument("obs", type=Path, help="RINEX observation file (dual frequency)")
+    q.add_argument("obs", type=Path, nargs="?", help="RINEX observation file (dual frequency)")
     q.add_argument("nav", nargs="*", type=Path, help="RINEX navigation file(s) (optional)")
-    q.add_argument("--sp3", type=Path, required=True, help="precise orbits and clocks (SP3)")
+    q.add_argument("--sp3", type=Path, help="precise orbits and clocks (SP3)")
+    q.add_argument(
+        "--example",
+        action="store_true",
+        help=f"two minutes of the bundled SEPT station ({PPP_EXAMPLE[0]}) with the bundled CODE "
+        "orbits and clocks, against the station's reference position",
+    )
     q.add_argument(
         "--clk", type=Path, help="clock RINEX (not read yet: refused rather than ignored)"
     )
@@ -93,6 +99,14 @@ def register(subparsers: Any) -> None:
         "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
     )
     q.set_defaults(func=run_ppp)
+
+
+PPP_EXAMPLE = (
+    "SEPT078M_120.21O",
+    "SEPT078M.21P",
+    "COD0MGXFIN_20210780000_01D_05M_ORB_1045-1330.SP3",
+)
+"""The bundled files of ``ppp --example`` (``navtrack/data/README.md``)."""
 
 
 def _base_position(args: argparse.Namespace) -> tuple[FloatArray, str]:
@@ -315,6 +329,18 @@ def run_ppp(args: argparse.Namespace) -> int:
             "navtrack ppp: --clk: clock RINEX files are not read yet; the SP3 clocks are used "
             "when --clk is left out"
         )
+    if args.example:
+        if args.obs is not None or args.sp3 is not None:
+            raise SystemExit("navtrack ppp: give either OBS --sp3 SP3 or --example, not both")
+        from navtrack.cli.pos import EXAMPLE_REF_XYZ_M
+        from navtrack.data import sample_path
+
+        obs, nav, sp3_name = PPP_EXAMPLE
+        args.obs, args.nav, args.sp3 = sample_path(obs), [sample_path(nav)], sample_path(sp3_name)
+        if args.ref is None and args.ref_llh is None and args.ref_pos is None:
+            args.ref = list(EXAMPLE_REF_XYZ_M)
+    if args.obs is None or args.sp3 is None:
+        raise SystemExit("navtrack ppp: give OBS and --sp3 SP3, or --example")
     for path in [args.obs, *args.nav, args.sp3]:
         if not path.is_file():
             raise SystemExit(f"navtrack ppp: file {str(path)!r} not found")
@@ -345,7 +371,11 @@ def run_ppp(args: argparse.Namespace) -> int:
     if last.size:
         x, y, z = result.pos_m[last[-1]]
         e, nn, u = result.sd_enu_m[last[-1]]
-        print(f"final position {x:.4f} {y:.4f} {z:.4f}  (sd E/N/U {e:.3f} {nn:.3f} {u:.3f} m)")
+        print(f"final position {x:.4f} {y:.4f} {z:.4f}")
+        print(
+            f"formal sd      E/N/U {e:.3f} {nn:.3f} {u:.3f} m (the filter's own model, not an "
+            "accuracy: float ambiguities and unmodelled errors are not in it; compare --ref)"
+        )
         print(f"final ZWD      {result.zwd_m[last[-1]]:.3f} m")
     from navtrack.cli.pos import _reference
 
