@@ -335,8 +335,11 @@ def run_ppp(args: argparse.Namespace) -> int:
         from navtrack.cli.pos import EXAMPLE_REF_XYZ_M
         from navtrack.data import sample_path
 
-        obs, nav, sp3_name = PPP_EXAMPLE
-        args.obs, args.nav, args.sp3 = sample_path(obs), [sample_path(nav)], sample_path(sp3_name)
+        args.obs, args.nav, args.sp3 = (
+            sample_path(PPP_EXAMPLE[0]),
+            [sample_path(PPP_EXAMPLE[1])],
+            sample_path(PPP_EXAMPLE[2]),
+        )
         if args.ref is None and args.ref_llh is None and args.ref_pos is None:
             args.ref = list(EXAMPLE_REF_XYZ_M)
     if args.obs is None or args.sp3 is None:

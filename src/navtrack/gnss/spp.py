@@ -60,6 +60,8 @@ from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
 from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
 
 if TYPE_CHECKING:
+    import pandas as pd
+
     from navtrack.gnss.ephemeris import EphemerisTable
     from navtrack.gnss.observations import Observations
     from navtrack.gnss.rinex.nav import NavData
@@ -306,6 +308,15 @@ class SppResult:
         """Number of epochs per status name (all statuses, zeros included)."""
         counts = np.bincount(self.status.astype(np.int64), minlength=len(SppStatus))
         return {name: int(counts[i]) for i, name in enumerate(STATUS_NAMES)}
+
+    def to_frame(self) -> pd.DataFrame:
+        """The solution as a pandas DataFrame, one row per epoch: ``t_gps_s`` and the columns
+        ``pos --out`` writes, as :func:`navtrack.io.solution.read_solution` reads them back."""
+        from navtrack.io.solution import solution_table
+
+        table = solution_table(solution_frame(self))
+        table.insert(0, "t_gps_s", self.t_gps_s)
+        return table
 
 
 # --------------------------------------------------------------------------- chi-square
