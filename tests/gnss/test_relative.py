@@ -48,10 +48,17 @@ def test_double_differences_cancel_receiver_and_satellite_clocks() -> None:
     np.testing.assert_array_equal(D.sum(axis=1), 0.0)
 
 
-def test_common_epochs_match_to_the_millisecond() -> None:
-    ir, ib = common_epochs(np.array([0.0, 1.0, 2.0, 3.0004]), np.array([1.0, 3.0, 5.0]))
-    np.testing.assert_array_equal(ir, [1, 3])
-    np.testing.assert_array_equal(ib, [0, 1])
+def test_each_rover_epoch_takes_the_latest_base_epoch_up_to_its_age() -> None:
+    rover = np.array([0.0, 0.991, 2.0, 2.991, 40.0])
+    base = np.array([1.0, 3.0, 5.0])
+    ir, ib, age = common_epochs(rover, base, sync_s=0.025, max_age_s=30.0)
+    # 0.0: no base before it; 0.991: base 1.0 tagged 9 ms later is the same epoch; 2.0: base
+    # 1.0, 1 s old; 2.991: base 3.0; 40.0: base 5.0 is 35 s old, beyond 30 s
+    np.testing.assert_array_equal(ir, [1, 2, 3])
+    np.testing.assert_array_equal(ib, [0, 0, 1])
+    np.testing.assert_allclose(age, [-0.009, 1.0, -0.009], atol=1e-12)
+    ir, _, _ = common_epochs(rover, base, sync_s=0.0, max_age_s=0.5)
+    np.testing.assert_array_equal(ir, [])  # same tags only, and none are equal
 
 
 def _signals(phase: np.ndarray, doppler: np.ndarray, lli: np.ndarray) -> ReceiverSignals:
@@ -344,9 +351,37 @@ def test_half_rate_rover_uses_common_epochs(yamatogawa) -> None:  # type: ignore
     rover, base, nav, _ = yamatogawa
     even = np.flatnonzero(np.round(rover.t_gps_s) % 2 == 0)
     res = solve_relative(subset_epochs(rover, even), base, nav, YAMA_BASE)
-    ir, _ = common_epochs(rover.t_gps_s[even], base.t_gps_s)
+    ir, _, _ = common_epochs(rover.t_gps_s[even], base.t_gps_s)
     assert res.n_common_epochs == ir.size < base.t_gps_s.size
-    assert any(f"{ir.size} common epochs" in w for w in res.warnings)
+    assert ir.size < even.size  # the rover starts before the base
+    assert any(f"{even.size - ir.size} rover epochs without a base" in w for w in res.warnings)
+
+
+def test_a_sparse_base_serves_every_rover_epoch_with_its_age(yamatogawa) -> None:  # type: ignore[no-untyped-def]
+    """The CORS case: a 1 Hz rover against the same base thinned to 5 s. Every rover epoch
+    within 5 s after a base epoch is solved with the base's age; the float positions stay
+    within decimetres of those against the full-rate base (the phase of a 4 s old base
+    changes by ~1 cm between satellites here: aged bases cost precision, not solutions)."""
+    from navtrack.gnss.spp import subset_epochs
+
+    rover, base, nav, _ = yamatogawa
+    full = solve_relative(rover, base, nav, YAMA_BASE)
+    every5 = np.flatnonzero(np.round(base.t_gps_s) % 5 == 0)
+    sparse = solve_relative(rover, subset_epochs(base, every5), nav, YAMA_BASE)
+    assert sparse.n_common_epochs >= full.n_common_epochs - 5
+    assert np.nanmax(sparse.age_s) <= 5.0 + 0.025
+    assert np.nanmax(sparse.age_s) >= 4.0  # rover epochs between base epochs were used
+    assert np.nanmin(full.age_s) == pytest.approx(0.0, abs=0.025)
+    both = np.isfinite(sparse.float_pos_m).all(axis=1) & np.isfinite(full.float_pos_m).all(axis=1)
+    assert both.sum() >= 180
+    dist = np.linalg.norm(sparse.float_pos_m[both] - full.float_pos_m[both], axis=1)
+    assert np.median(dist) < 0.25
+    # bases older than max_age_s leave the rover epochs without base
+    strict = solve_relative(
+        rover, subset_epochs(base, every5), nav, YAMA_BASE, RtkConfig(max_age_s=1.0)
+    )
+    assert np.nanmax(strict.age_s) <= 1.0
+    assert strict.status_counts()["no_base"] > sparse.status_counts()["no_base"] + 100
 
 
 def test_static_filter_equals_batch_least_squares(gnss_data: Path) -> None:
@@ -366,11 +401,11 @@ def test_static_filter_equals_batch_least_squares(gnss_data: Path) -> None:
     base = _shifted_copy(rover, nav, GSI0759_REF, base_xyz, seed=3)
     cfg = RtkConfig(mode="static", frequencies=2, q_amb_cyc=0.0, fix=False)
     rs, bs = rel.receiver_signals(rover, nav, cfg), rel.receiver_signals(base, nav, cfg)
-    ir, ib = common_epochs(rs.t_gps_s, bs.t_gps_s)
+    ir, ib, age = common_epochs(rs.t_gps_s, bs.t_gps_s)
     js = np.arange(len(rs.sats))
     assert rs.sats == bs.sats
     ep = rel._epoch_inputs(
-        rs, bs, base_xyz, ir, ib, js, js, detect_slips(rs, cfg), detect_slips(bs, cfg), cfg
+        rs, bs, base_xyz, ir, ib, age, js, js, detect_slips(rs, cfg), detect_slips(bs, cfg), cfg
     )
     out = rel._run_filter(ep, cfg)
 

@@ -78,3 +78,22 @@ def test_ppp_example_presents_the_formal_sd_as_what_it_is(capsys: pytest.Capture
     row = out.split("(m, error vs ref)\n")[1].split()
     assert float(row[0]) == 60.0
     assert 0.0 < float(row[3]) < 10.0
+
+
+def test_rtk_example_fixes_the_geonet_baseline(capsys: pytest.CaptureFixture) -> None:
+    """0759 against 3040 (3.3 km, L1+L2, static): the tags sit 0-9 ms apart, every epoch
+    pairs with its base epoch and fixes within 2 cm of RTKLIB's static fixed solution."""
+    import re
+
+    from navtrack.cli import main
+
+    assert main(["rtk", "--example", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "epochs         rover 120, base 120, common 120" in out
+    assert re.search(r"base age       median 0\.00\d s, max 0\.0\d\d s", out)
+    assert "  fix          120" in out
+    row = re.search(r"  fix +([0-9.]+) +([0-9.]+) +([0-9.]+)", out)
+    assert row is not None
+    median, worst = float(row.group(1)), float(row.group(3))
+    assert median < 0.01
+    assert worst < 0.02

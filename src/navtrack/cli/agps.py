@@ -109,28 +109,23 @@ EXAMPLE = (
     "--approx",
     "35.2",
     "139.6",
-    "--ref",
-    "-3976219.188",
-    "3382371.606",
-    "3652511.143",
 )
 """The bundled example: 0759 (GSI, RINEX 2), two satellites ten minutes apart, a cell about
-15 km away, the RTKLIB static solution as reference (``navtrack/data/README.md``)."""
+15 km away; errors against the station's reference (``navtrack/data/README.md``)."""
 
 
 def _example_args(args: argparse.Namespace) -> None:
     """Fill ``args`` from :data:`EXAMPLE` (explicit options other than the files win)."""
-    import importlib.resources
+    from navtrack.data import REFERENCE_XYZ_M, sample_path
 
     if args.obs is not None or args.nav is not None:
         raise SystemExit("navtrack agps: give either OBS NAV or --example, not both")
-    data = Path(str(importlib.resources.files("navtrack.data")))
-    args.obs, args.nav = data / EXAMPLE[0], data / EXAMPLE[1]
+    args.obs, args.nav = sample_path(EXAMPLE[0]), sample_path(EXAMPLE[1])
     args.sats = args.sats or EXAMPLE[3]
     args.epochs = args.epochs or list(EXAMPLE[5:7])
     args.height = float(EXAMPLE[8]) if args.height is None else args.height
     args.approx = args.approx or [float(EXAMPLE[10]), float(EXAMPLE[11])]
-    args.ref = args.ref or [float(v) for v in EXAMPLE[13:16]]
+    args.ref = args.ref or list(REFERENCE_XYZ_M[EXAMPLE[0]])
 
 
 def _gps_time(text: str) -> float:

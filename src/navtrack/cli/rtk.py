@@ -36,9 +36,15 @@ def register(subparsers: Any) -> None:
         description="Double-differenced code and carrier phase, Kalman filter (kinematic) or "
         "least squares (static), integer ambiguities by LAMBDA with the ratio test.",
     )
-    p.add_argument("rover", type=Path, help="rover RINEX observation file")
-    p.add_argument("base", type=Path, help="base RINEX observation file")
-    p.add_argument("nav", nargs="+", type=Path, help="RINEX navigation file(s)")
+    p.add_argument("rover", type=Path, nargs="?", help="rover RINEX observation file")
+    p.add_argument("base", type=Path, nargs="?", help="base RINEX observation file")
+    p.add_argument("nav", nargs="*", type=Path, help="RINEX navigation file(s)")
+    p.add_argument(
+        "--example",
+        action="store_true",
+        help="static L1+L2 baseline of the bundled GEONET stations 0759 (rover) and 3040 (base, "
+        "3.3 km), against 0759's reference",
+    )
     base = p.add_mutually_exclusive_group()
     base.add_argument(
         "--base-pos", nargs=3, type=float, metavar=("X", "Y", "Z"), help="base ECEF metres"
@@ -101,6 +107,9 @@ def register(subparsers: Any) -> None:
     q.set_defaults(func=run_ppp)
 
 
+RTK_EXAMPLE = ("07590920.05o", "30400920.05o", "07590920.05n")
+"""The bundled files of ``rtk --example`` (``navtrack/data/README.md``)."""
+
 PPP_EXAMPLE = (
     "SEPT078M_120.21O",
     "SEPT078M.21P",
@@ -158,6 +167,20 @@ def run_rtk(args: argparse.Namespace) -> int:
     from navtrack.gnss.rinex.nav import read_nav
     from navtrack.gnss.rinex.obs import read_obs
 
+    if args.example:
+        if args.rover is not None:
+            raise SystemExit("navtrack rtk: give either ROVER BASE NAV... or --example, not both")
+        from navtrack.data import REFERENCE_XYZ_M, sample_path
+
+        args.rover, args.base, nav = (sample_path(name) for name in RTK_EXAMPLE)
+        args.nav = [nav]
+        args.static, args.freq = True, 2
+        if args.base_pos is None and args.base_llh is None:
+            args.base_pos = list(REFERENCE_XYZ_M[RTK_EXAMPLE[1]])
+        if args.ref is None and args.ref_llh is None and args.ref_pos is None:
+            args.ref = list(REFERENCE_XYZ_M[RTK_EXAMPLE[0]])
+    if args.rover is None or args.base is None or not args.nav:
+        raise SystemExit("navtrack rtk: give ROVER BASE NAV..., or --example")
     for path in [args.rover, args.base, *args.nav, *([args.sp3] if args.sp3 else [])]:
         if not path.is_file():
             raise SystemExit(f"navtrack rtk: file {str(path)!r} not found")
@@ -283,6 +306,12 @@ def _print_summary(
         f"epochs         rover {result.n_rover_epochs}, base {result.n_base_epochs}, "
         f"common {result.n_common_epochs}"
     )
+    age = result.age_s[np.isfinite(result.age_s)]
+    if age.size:
+        print(
+            f"base age       median {np.median(age):.3f} s, max {age.max():.3f} s "
+            f"(up to {config.max_age_s:g} s used)"
+        )
     for name in status_names:
         if counts[name]:
             print(f"  {name:<12} {counts[name]}")
@@ -332,8 +361,7 @@ def run_ppp(args: argparse.Namespace) -> int:
     if args.example:
         if args.obs is not None or args.sp3 is not None:
             raise SystemExit("navtrack ppp: give either OBS --sp3 SP3 or --example, not both")
-        from navtrack.cli.pos import EXAMPLE_REF_XYZ_M
-        from navtrack.data import sample_path
+        from navtrack.data import REFERENCE_XYZ_M, sample_path
 
         args.obs, args.nav, args.sp3 = (
             sample_path(PPP_EXAMPLE[0]),
@@ -341,7 +369,7 @@ def run_ppp(args: argparse.Namespace) -> int:
             sample_path(PPP_EXAMPLE[2]),
         )
         if args.ref is None and args.ref_llh is None and args.ref_pos is None:
-            args.ref = list(EXAMPLE_REF_XYZ_M)
+            args.ref = list(REFERENCE_XYZ_M[PPP_EXAMPLE[0]])
     if args.obs is None or args.sp3 is None:
         raise SystemExit("navtrack ppp: give OBS and --sp3 SP3, or --example")
     for path in [args.obs, *args.nav, args.sp3]:

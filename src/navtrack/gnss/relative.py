@@ -7,8 +7,10 @@ Stages, as RTKLIB's ``rtkpos`` chains them, over ``(epochs, satellites, frequenc
    ``estimate_position``) give the satellite states, the corrected code, the single point
    position; carrier phase (m), Doppler and loss-of-lock indicators of the same signals are
    added on the same axes.
-2. :func:`common_epochs` — rover and base epochs with the same time tag (nothing is
-   interpolated).
+2. :func:`common_epochs` — each rover epoch paired with the latest base epoch (a base tag up
+   to ``sync_s`` after the rover's counts as the same epoch, receivers tag milliseconds off
+   the grid), used up to ``max_age_s`` old (RTKLIB ``maxage``): a 1 Hz rover runs against a
+   5 or 30 s base, the age in the output and its satellite clock drift in the variance.
 3. :func:`detect_slips` — cycle slips from the loss-of-lock indicator, the Doppler-predicted
    phase change and (dual frequency) the geometry-free combination, per receiver, batched
    over all epochs and satellites.
@@ -144,6 +146,15 @@ class RtkConfig:
     max_outage : int
         A satellite unseen for more than this many epochs restarts its ambiguity (RTKLIB
         ``maxout`` 5).
+    max_age_s : float
+        Base observations are used for rover epochs up to this much later (s; RTKLIB
+        ``maxage`` 30).
+    sync_s : float
+        A base epoch tagged up to this much after a rover epoch is the same epoch (s).
+    clock_stability : float
+        Satellite clock stability (s/s, RTKLIB ``stats-clkstab`` 5e-12): the single
+        difference of a base observation ``age`` seconds old gains ``(c stability age)^2`` of
+        variance.
     ambiguity : AmbiguityConfig
         Ratio test and partial fixing (:func:`navtrack.gnss.ambiguity.resolve_ambiguities`).
     fix : bool
@@ -168,6 +179,9 @@ class RtkConfig:
     slip_doppler_cyc: float = 5.0
     slip_gf_m: float = 0.05
     max_outage: int = 5
+    max_age_s: float = 30.0
+    sync_s: float = 0.025
+    clock_stability: float = 5e-12
     ambiguity: AmbiguityConfig = field(default_factory=AmbiguityConfig)
     fix: bool = True
     direction: str = "forward"
@@ -185,6 +199,10 @@ class RtkConfig:
             )
         if self.max_outage < 0:
             raise ValueError(f"max_outage: expected >= 0, got {self.max_outage}")
+        for name in ("max_age_s", "sync_s", "clock_stability"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"{name}: expected a finite number >= 0, got {value}")
         if self.min_sats < 2:
             raise ValueError(f"min_sats: expected >= 2, got {self.min_sats}")
 
@@ -328,17 +346,35 @@ def receiver_signals(
 
 
 # --------------------------------------------------------------------------- stage 2: epochs
-def common_epochs(t_rover_s: FloatArray, t_base_s: FloatArray) -> tuple[IntArray, IntArray]:
-    """Indices of the rover and base epochs with the same time tag (to 1 ms), ascending.
+def common_epochs(
+    t_rover_s: FloatArray, t_base_s: FloatArray, *, sync_s: float = 0.025, max_age_s: float = 30.0
+) -> tuple[IntArray, IntArray, FloatArray]:
+    """The base epoch of each rover epoch: the latest tagged at most ``sync_s`` after it, if it
+    is at most ``max_age_s`` older.
+
+    Parameters
+    ----------
+    t_rover_s, t_base_s : ndarray, shape (E,) and (B,)
+        Time tags (s), ascending.
+    sync_s : float
+        A base tag this much after the rover's still pairs with it (the same epoch tagged a
+        few milliseconds apart).
+    max_age_s : float
 
     Returns
     -------
     rover_idx, base_idx : ndarray of int, shape (K,)
+        Rover epochs with a base, ascending, and their base epochs.
+    age_s : ndarray, shape (K,)
+        Rover time minus base time (s; down to ``-sync_s``).
     """
-    kr = np.round(np.asarray(t_rover_s) * 1e3).astype(np.int64)
-    kb = np.round(np.asarray(t_base_s) * 1e3).astype(np.int64)
-    _, ir, ib = np.intersect1d(kr, kb, assume_unique=False, return_indices=True)
-    return ir.astype(np.int64), ib.astype(np.int64)
+    tr = np.asarray(t_rover_s, dtype=float)
+    tb = np.asarray(t_base_s, dtype=float)
+    k = np.searchsorted(tb, tr + sync_s, side="right") - 1
+    has = k >= 0
+    age = np.where(has, tr - tb[np.maximum(k, 0)], np.inf)
+    ir = np.flatnonzero(has & (age <= max_age_s))
+    return ir.astype(np.int64), k[ir].astype(np.int64), age[ir]
 
 
 # --------------------------------------------------------------------------- stage 3: slips
@@ -450,6 +486,8 @@ class RtkResult:
         Slips flagged per detector, rover and base together.
     slip_mask : ndarray of bool, shape (E, S)
         A slip reset an ambiguity of that satellite at that epoch.
+    age_s : ndarray, shape (E,)
+        Age of the base observations used (rover minus base time, s; NaN without a base).
     n_rover_epochs, n_base_epochs, n_common_epochs : int
     warnings : tuple of str
         Input problems found (base position far from the base's own SPP, a system without
@@ -469,6 +507,7 @@ class RtkResult:
     n_fixed: IntArray
     slips: Mapping[str, int]
     slip_mask: BoolArray
+    age_s: FloatArray
     n_rover_epochs: int
     n_base_epochs: int
     n_common_epochs: int
@@ -581,6 +620,7 @@ def _epoch_inputs(
     base_xyz_m: FloatArray,
     ir: IntArray,
     ib: IntArray,
+    age_s: FloatArray,
     js_r: IntArray,
     js_b: IntArray,
     slips_r: Slips,
@@ -607,11 +647,15 @@ def _epoch_inputs(
     # phase needs its code (for the ambiguity start value)
     ph = np.where(np.isfinite(co), ph, np.nan)
     k, n_s = ir.size, js_r.size
-    reset = slips_r.any[ir][:, js_r] | slips_b.any[ib][:, js_b]
+    # a base slip restarts the ambiguity once, at the first rover epoch that uses its epoch
+    new_base = np.concatenate([[True], ib[1:] != ib[:-1]])
+    reset = slips_r.any[ir][:, js_r] | (slips_b.any[ib][:, js_b] & new_base[:, None, None])
     half = slips_r.half_cycle[ir][:, js_r] | slips_b.half_cycle[ib][:, js_b]
     sys_id = np.array(["GRECJSI".index(s[0]) for s in rover.sats], dtype=np.int64)[js_r]
     groups = (sys_id[:, None] * 4 + np.arange(n_f)[None, :]).reshape(-1)
-    var = np.broadcast_to((_variance(el_b, cfg) + _variance(el_r, cfg))[..., None], (k, n_s, n_f))
+    drift = (C_MPS * cfg.clock_stability * age_s) ** 2  # the base's satellite clocks, aged
+    var_sd = _variance(el_b, cfg) + _variance(el_r, cfg) + drift[:, None]
+    var = np.broadcast_to(var_sd[..., None], (k, n_s, n_f))
     G = -los_r + dtrop_dh[..., None] * up[:, None, :]
     G = np.repeat(np.where(np.isfinite(G), G, 0.0), n_f, axis=1)
     return _Epochs(
@@ -877,9 +921,14 @@ def solve_relative(
     rover = receiver_signals(rover_obs, nav, cfg, sp3=sp3, ephemeris=tables)
     base = receiver_signals(base_obs, nav, cfg, sp3=sp3, ephemeris=tables)
     names = f"rover {rover_obs.path!r} and base {base_obs.path!r}"
-    ir, ib = common_epochs(rover.t_gps_s, base.t_gps_s)
+    ir, ib, age = common_epochs(
+        rover.t_gps_s, base.t_gps_s, sync_s=cfg.sync_s, max_age_s=cfg.max_age_s
+    )
     if ir.size == 0:
-        raise RelativeInputError(f"{names}: no common epochs (time tags equal to 1 ms)")
+        raise RelativeInputError(
+            f"{names}: no common epochs (no base epoch up to {cfg.max_age_s:g} s before a rover "
+            "epoch)"
+        )
     common = [s for s in rover.sats if s in base.sats]
     if not common:
         raise RelativeInputError(f"{names}: no common satellites of the systems {cfg.systems}")
@@ -896,14 +945,14 @@ def solve_relative(
         )
     slips_r = detect_slips(rover, cfg)
     slips_b = detect_slips(base, cfg)
-    ep = _epoch_inputs(rover, base, base_xyz, ir, ib, js_r, js_b, slips_r, slips_b, cfg)
+    ep = _epoch_inputs(rover, base, base_xyz, ir, ib, age, js_r, js_b, slips_r, slips_b, cfg)
     if cfg.direction == "forward":
         out = _run_filter(ep, cfg, progress)
     else:
         out = _reversed_output(_run_filter(_reversed(ep), cfg, progress))
         if cfg.direction == "combined":
             out = _combine(_run_filter(ep, cfg, progress), out)
-    return _result(rover, common, ir, out, slips_r, slips_b, base, warnings, dist)
+    return _result(rover, common, ir, age, out, slips_r, slips_b, base, warnings, dist)
 
 
 def _input_warnings(
@@ -917,10 +966,10 @@ def _input_warnings(
 ) -> list[str]:
     out = []
     n_r, n_b, n_c = rover.t_gps_s.size, base.t_gps_s.size, ir.size
-    if n_c < n_r or n_c < n_b:
+    if n_c < n_r:
         out.append(
-            f"rover {n_r} and base {n_b} epochs: {n_c} common epochs used "
-            f"(nothing interpolated); {n_r - n_c} rover epochs without base"
+            f"rover {n_r} and base {n_b} epochs: {n_r - n_c} rover epochs without a base epoch "
+            f"up to {cfg.max_age_s:g} s before them (no_base); {n_c} common epochs used"
         )
     sats = [rover.sats[j] for j in js_r]
     for s in dict.fromkeys(x[0] for x in sats):
@@ -939,6 +988,7 @@ def _result(
     rover: ReceiverSignals,
     common: list[str],
     ir: IntArray,
+    age_s: FloatArray,
     out: _FilterOut,
     slips_r: Slips,
     slips_b: Slips,
@@ -967,6 +1017,8 @@ def _result(
     n_fixed[ir] = out.n_fixed
     slip_mask = np.zeros((n_e, n_s), dtype=bool)
     slip_mask[ir] = out.slip
+    age = np.full(n_e, np.nan)
+    age[ir] = age_s
     counts = {k: v + slips_b.counts()[k] for k, v in slips_r.counts().items()}
     counts["ambiguity_resets"] = int(out.slip.sum())
     return RtkResult(
@@ -981,6 +1033,7 @@ def _result(
         n_fixed=n_fixed,
         slips=counts,
         slip_mask=slip_mask,
+        age_s=age,
         n_rover_epochs=n_e,
         n_base_epochs=base.t_gps_s.size,
         n_common_epochs=ir.size,
@@ -993,7 +1046,7 @@ def solution_frame(result: RtkResult) -> dict[str, np.ndarray]:
     """The solution as a solution frame (:func:`navtrack.io.solution.write_solution`): the
     SPP columns ``t_gps_s``, ``x_m``, ``y_m``, ``z_m``, ``sd_e_m``, ``sd_n_m``, ``sd_u_m``,
     ``n_sats``, ``status`` (name), ``excluded`` (empty), then ``quality`` (RTKLIB Q),
-    ``ratio`` and ``n_fixed``."""
+    ``ratio``, ``n_fixed`` and ``age_s`` (age of the base observations)."""
     names = np.array(STATUS_NAMES, dtype=object)[result.status.astype(np.int64)]
     return {
         "t_gps_s": result.t_gps_s,
@@ -1009,4 +1062,5 @@ def solution_frame(result: RtkResult) -> dict[str, np.ndarray]:
         "quality": result.quality,
         "ratio": result.ratio,
         "n_fixed": result.n_fixed,
+        "age_s": result.age_s,
     }
