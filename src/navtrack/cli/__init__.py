@@ -39,17 +39,19 @@ from typing import Any, TextIO
 
 from navtrack import __version__
 
-# Command modules, each with ``register(subparsers)``; kept in the order ``--help`` lists them.
-COMMAND_MODULES = (
-    "navtrack.cli.pos",
-    "navtrack.cli.rinex",
-    "navtrack.cli.track",
-    "navtrack.cli.smooth",
-    "navtrack.cli.reproduce",
-    "navtrack.cli.rtk",
-    "navtrack.cli.agps",
-    "navtrack.cli.attitude",
-)
+# The module of each command, with ``register(subparsers)``, in the order ``--help`` lists them.
+# ``rtk`` also registers ``ppp``.
+COMMANDS = {
+    "pos": "navtrack.cli.pos",
+    "rinex": "navtrack.cli.rinex",
+    "track": "navtrack.cli.track",
+    "smooth": "navtrack.cli.smooth",
+    "reproduce": "navtrack.cli.reproduce",
+    "rtk": "navtrack.cli.rtk",
+    "ppp": "navtrack.cli.rtk",
+    "agps": "navtrack.cli.agps",
+    "attitude": "navtrack.cli.attitude",
+}
 
 EXIT_OK = 0
 EXIT_UNSOLVED = 1
@@ -57,8 +59,15 @@ EXIT_BAD_INPUT = 2
 EXIT_INTERNAL = 3
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The top-level parser with every command registered."""
+def _command_of(argv: Sequence[str]) -> str | None:
+    """The command word of ``argv`` (the first word that is not an option), if any."""
+    return next((w for w in argv if not w.startswith("-")), None)
+
+
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The top-level parser. With ``argv`` naming a command only that command's module is
+    imported (start-up stays at the cost of what the command uses); otherwise (``--help``,
+    no or an unknown command) every command is registered."""
     parser = argparse.ArgumentParser(
         prog="navtrack",
         description="Positioning, navigation integrity and multi-target tracking on real data.",
@@ -72,7 +81,9 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(
         dest="command", metavar="COMMAND", parser_class=_CommandParser
     )
-    for name in COMMAND_MODULES:
+    command = _command_of(argv) if argv is not None else None
+    modules = [COMMANDS[command]] if command in COMMANDS else list(dict.fromkeys(COMMANDS.values()))
+    for name in modules:
         importlib.import_module(name).register(subparsers)
     return parser
 
@@ -135,8 +146,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the process exit code (module notes)."""
     from navtrack.errors import NavtrackError
 
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    words = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(words)
+    args = parser.parse_args(words)
     if not getattr(args, "func", None):
         parser.print_help()
         return EXIT_BAD_INPUT
