@@ -138,3 +138,51 @@ def test_no_ok_fix_more_than_a_kilometre_off_on_the_bundled_data(obs, nav, ref, 
         assert ok == 0
     else:
         assert ok > 0.2 * fixes
+
+
+def test_the_issues_41_km_marquardt_fix_is_implausible() -> None:
+    """The issue's case (G07/G24, 10 min, cell 35.2 N 139.6 E): Marquardt with the printed
+    dimensionless height equation ends 41.9 km off at -32,959 m; it was reported ``ok``."""
+    import math
+
+    import numpy as np
+
+    from navtrack.data import REFERENCE_XYZ_M, sample_path
+    from navtrack.geodesy import geodetic_to_ecef
+    from navtrack.gnss.agps import (
+        AgpsConfig,
+        AgpsStatus,
+        assisted_pseudoranges,
+        problem_from_measurements,
+        pseudorange_sigma_m,
+        solve_agps,
+    )
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.spp import (
+        SppConfig,
+        code_pseudoranges,
+        corrected_measurements,
+        satellite_states,
+    )
+    from navtrack.timescale import gps_seconds
+
+    cfg = SppConfig(systems="G")
+    pr = code_pseudoranges(read_obs(sample_path("07590920.05o")), cfg)
+    nav = read_nav(sample_path("07590920.05n"))
+    meas = corrected_measurements(pr, satellite_states(pr, nav, config=cfg), cfg)
+    cell = geodetic_to_ecef([math.radians(35.2), math.radians(139.6), 68.4])
+    y = assisted_pseudoranges(meas, cell, cfg)
+    times = (gps_seconds("2005-04-02T00:10:00"), gps_seconds("2005-04-02T00:20:00"))
+    epochs = [[int(np.argmin(np.abs(meas.t_gps_s - float(t)))) for t in times]]
+    sats = [[meas.sats.index("G07"), meas.sats.index("G24")]]
+    prob = problem_from_measurements(meas, y, np.array(epochs), np.array(sats), 68.4, cell)
+    sigma = pseudorange_sigma_m(meas, cfg)
+    ref = np.array(REFERENCE_XYZ_M["07590920.05o"])
+    printed = solve_agps(prob, "lm", AgpsConfig.for_receiver(sigma, f5_units="dimensionless"))
+    assert printed.status[0] == AgpsStatus.IMPLAUSIBLE
+    assert np.linalg.norm(printed.pos_m[0] - ref) > 40_000.0
+    assert "from the assumed height" in printed.reason[0]
+    metres = solve_agps(prob, "lm", AgpsConfig.for_receiver(sigma))
+    assert metres.status[0] == AgpsStatus.OK
+    assert np.linalg.norm(metres.pos_m[0] - ref) < 20.0  # 12.5 m, as Gauss-Newton
