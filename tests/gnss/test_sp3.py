@@ -195,9 +195,27 @@ def test_gzip(tmp_path: Path) -> None:
 def test_truncated_file(tmp_path: Path) -> None:
     lines = _bundled_lines()
     path = tmp_path / "trunc.sp3"
-    path.write_text("".join(lines[:-300]))
-    with pytest.raises(FileFormatError, match=r"trunc\.sp3, line \d+: header announces 34 epochs"):
+    path.write_text("".join(lines[:-300]))  # cut inside an epoch
+    with pytest.raises(FileFormatError, match=r"trunc\.sp3, line \d+: last epoch cut short"):
         read_sp3(path)
+
+
+def test_a_trimmed_file_is_read_with_both_epoch_counts_named(tmp_path: Path) -> None:
+    """Public files trimmed to fewer epochs keep their header's count (issue 30: a header of
+    289 epochs over 73): read as found, with a warning."""
+    lines = _bundled_lines()
+    stars = [i for i, ln in enumerate(lines) if ln.startswith("*")]
+    full = read_sp3(sample_path(BUNDLED))
+    assert full.warnings == ()
+    trimmed = tmp_path / "trimmed.sp3"
+    trimmed.write_text("".join(lines[: stars[10]]) + "EOF\n")
+    sp3 = read_sp3(trimmed)
+    assert sp3.t_gps_s.size == 10
+    assert sp3.warnings == ("header announces 34 epochs, the file holds 10; read as found",)
+    np.testing.assert_array_equal(sp3.pos_m, full.pos_m[:10])
+    no_eof = tmp_path / "no_eof.sp3"
+    no_eof.write_text("".join(lines[: stars[10]]))  # whole epochs, no EOF line
+    assert "and has no EOF line" in read_sp3(no_eof).warnings[0]
 
 
 def test_garbage_in_data_line(tmp_path: Path) -> None:

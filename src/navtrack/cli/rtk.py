@@ -217,6 +217,8 @@ def run_rtk(args: argparse.Namespace) -> int:
         from navtrack.gnss.sp3 import read_sp3
 
         sp3 = read_sp3(args.sp3)
+        for why in sp3.warnings:
+            print(f"warning        {args.sp3}: {why}", file=sys.stderr)
     from tqdm import tqdm
 
     n_common = min(len(rover.t_gps_s), len(base.t_gps_s))
@@ -385,6 +387,8 @@ def run_ppp(args: argparse.Namespace) -> int:
     obs = read_obs(args.obs)
     navs = [read_nav(p) for p in args.nav]
     sp3 = read_sp3(args.sp3)
+    for why in sp3.warnings:
+        print(f"warning        {args.sp3}: {why}", file=sys.stderr)
     try:
         result = solve_ppp(obs, navs, sp3, config)
     except ValueError as exc:

@@ -141,6 +141,9 @@ class Sp3:
         position and clock are NaN, so that satellite is missing at that epoch only. A jump
         between two parts of one satellite's orbit excludes that satellite from the file (one
         entry, at the first record after the step).
+    warnings : tuple of str
+        What was read leniently: a header epoch count that disagrees with the records (both
+        counts named).
 
     References
     ----------
@@ -159,6 +162,7 @@ class Sp3:
     clock_sd_s: FloatArray | None = None
     flags: Int8Array | None = None
     implausible: tuple[SkippedLine, ...] = ()
+    warnings: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         n_e, n_s = len(self.t_gps_s), len(self.sats)
@@ -212,6 +216,7 @@ class Sp3:
             "positions_missing": int(np.isnan(self.pos_m[..., 0]).sum()),
             "clocks_missing": int(np.isnan(self.clock_s).sum()),
             "implausible_records": len(self.implausible),
+            "warnings": list(self.warnings),
         }
 
 
@@ -324,15 +329,18 @@ def read_sp3(path: StrPath) -> Sp3:
         if data[k].strip():
             raise FileFormatError(path, i + k + 1, f"unexpected record {data[k][:20]!r}")
     epochs = [_epoch(path, i + k + 1, data[k]) for k in star.tolist()]
-    if len(epochs) != n_epochs:
-        raise FileFormatError(
-            path,
-            len(lines),
-            f"header announces {n_epochs} epochs, file has {len(epochs)}"
-            + ("" if saw_eof else " and no EOF line (truncated file?)"),
-        )
+    if not epochs:
+        raise FileFormatError(path, len(lines), "no epoch records (lines starting with '*')")
     if not saw_eof and len(data) > int(star[-1]) + 1:
         _check_last_epoch(path, data, kinds, star, i)
+    warnings = []
+    if len(epochs) != n_epochs:
+        # trimmed public files keep the original header: read what is there, and say so
+        warnings.append(
+            f"header announces {n_epochs} epochs, the file holds {len(epochs)}"
+            + ("" if saw_eof else " and has no EOF line")
+            + "; read as found"
+        )
     p_rows = _rows(path, chars, kinds, "P", star, sat_col, i)
     v_rows = _rows(path, chars, kinds, "V", star, sat_col, i)
     n_e, n_s = len(epochs), len(sats)
@@ -385,6 +393,7 @@ def read_sp3(path: StrPath) -> Sp3:
         clock_sd_s=clk_sd,
         flags=flags,
         implausible=implausible,
+        warnings=tuple(warnings),
     )
 
 
