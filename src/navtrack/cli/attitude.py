@@ -20,6 +20,10 @@ _FIX_COLUMNS = ("t_s", "qx", "qy", "qz", "qw")
 _ESTIMATE_NAMES = ("propagation", "paper_correction", "calibrated", "filter", "smoother")
 
 
+EXAMPLE = "broad_07_undisturbed_fast_rotation_B_30s.mat"
+"""The bundled example (``navtrack/data/README.md``)."""
+
+
 def register(subparsers: Any) -> None:
     cmd = subparsers.add_parser(
         "attitude",
@@ -36,7 +40,14 @@ def register(subparsers: Any) -> None:
         "calibrate bias/scale/misalignment/timing against the fixes and smooth; write one "
         "estimate as a pose trajectory.",
     )
-    rec.add_argument("imu", type=Path, help="BROAD .mat trial or CSV/Parquet with t_s, gyr_*_rad_s")
+    rec.add_argument(
+        "imu", type=Path, nargs="?", help="BROAD .mat trial or CSV/Parquet with t_s, gyr_*_rad_s"
+    )
+    rec.add_argument(
+        "--example",
+        action="store_true",
+        help=f"30 s of the bundled BROAD trial {EXAMPLE} (fast rotations) with simulated fixes",
+    )
     rec.add_argument(
         "--out",
         type=Path,
@@ -161,6 +172,17 @@ def run_reconstruct(args: argparse.Namespace) -> int:
     from navtrack.attitude.quaternion import attitude_errors
     from navtrack.attitude.reconstruct import reconstruct
 
+    if args.example:
+        if args.imu is not None or args.fixes is not None:
+            raise SystemExit(
+                "navtrack attitude reconstruct: give either IMU (--fixes | --simulate-fixes) or "
+                "--example, not both"
+            )
+        from navtrack.data import sample_path
+
+        args.imu, args.simulate_fixes = sample_path(EXAMPLE), True
+    if args.imu is None:
+        raise SystemExit("navtrack attitude reconstruct: give an IMU file, or --example")
     if args.out is not None and args.out.suffix.lower() not in (".csv", ".parquet"):
         raise SystemExit("navtrack attitude reconstruct: --out must end in .csv or .parquet")
     if (args.fixes is None) == (not args.simulate_fixes):
