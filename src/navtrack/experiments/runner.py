@@ -179,7 +179,8 @@ class _Checkpoints:
 
                 raise CheckpointMismatchError(
                     f"checkpoint_dir {self.dir} holds runs of {old}; refusing to mix them with "
-                    f"{manifest} (use another directory or delete it)"
+                    f"{manifest}: give a new output folder, or delete {self.dir} to start over "
+                    "(the same experiment, seed and parameters resume from it)"
                 )
         else:
             path.write_text(json.dumps(manifest, indent=2) + "\n")
