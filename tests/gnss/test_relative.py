@@ -452,3 +452,36 @@ def test_static_filter_equals_batch_least_squares(gnss_data: Path) -> None:
         rhs[cols] += H.T @ Ri @ z
     x = np.linalg.solve(N, rhs)
     np.testing.assert_allclose(out.float_pos[-1], x[:3], atol=1e-6)
+
+
+def test_a_wrong_integer_fix_is_refused_and_stays_float(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The GEONET 0759/3040 baseline fixes every epoch; forcing each accepted fix one cycle
+    off on one combination (a wrong fix that passed the ratio test) makes every such fix fail
+    the residual or float-position test: no epoch is reported fixed."""
+    from navtrack.data import REFERENCE_XYZ_M, sample_path
+    from navtrack.gnss import relative as rel
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+
+    rover, base = read_obs(sample_path("07590920.05o")), read_obs(sample_path("30400920.05o"))
+    nav = read_nav(sample_path("07590920.05n"))
+    base_xyz = np.array(REFERENCE_XYZ_M["30400920.05o"])
+    cfg = RtkConfig(mode="static", frequencies=2)
+    right = solve_relative(rover, base, nav, base_xyz, cfg)
+    assert right.status_counts()["fix"] == 120
+    assert sum(right.rejection_counts().values()) == 0
+    resolve = rel.resolve_ambiguities
+
+    def one_cycle_off(a_hat, Q, config):  # type: ignore[no-untyped-def]
+        fix = resolve(a_hat, Q, config)
+        if not fix.accepted:
+            return fix
+        z = fix.z.copy()
+        z[-1] += 1  # the best-determined combination, one cycle off
+        return dataclasses.replace(fix, z=z)
+
+    monkeypatch.setattr(rel, "resolve_ambiguities", one_cycle_off)
+    wrong = solve_relative(rover, base, nav, base_xyz, cfg)
+    assert wrong.status_counts()["fix"] == 0
+    refused = wrong.rejection_counts()
+    assert refused["residuals"] + refused["float_position"] == 120

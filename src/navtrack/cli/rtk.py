@@ -319,6 +319,13 @@ def _print_summary(
             print(f"  {name:<12} {counts[name]}")
     n_c = max(result.n_common_epochs, 1)
     print(f"fix rate       {100.0 * counts['fix'] / n_c:.1f} % of the common epochs")
+    refused = {k: v for k, v in result.rejection_counts().items() if v}
+    if refused:
+        print(
+            "fixes refused  "
+            + ", ".join(f"{k} {v}" for k, v in refused.items())
+            + " (ratio test passed; kept float)"
+        )
     s = result.slips
     print(
         f"slips          lli {s['lli']}, doppler {s['doppler']}, geometry-free "

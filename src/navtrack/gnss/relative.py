@@ -44,6 +44,7 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy.special import chdtri
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, IntArray
@@ -60,7 +61,9 @@ if TYPE_CHECKING:
 
 __all__ = [
     "QUALITY",
+    "REJECTION_NAMES",
     "STATUS_NAMES",
+    "FixRejection",
     "ReceiverSignals",
     "RelativeInputError",
     "RtkConfig",
@@ -87,6 +90,24 @@ class RtkStatus(IntEnum):
 
 
 STATUS_NAMES = tuple(s.name.lower() for s in RtkStatus)
+
+
+class FixRejection(IntEnum):
+    """Why a fix the ratio test accepted was not used (the epoch stays float).
+
+    ``residuals``: the phase double differences at the fixed state fail the chi-square test;
+    ``float_position``: the fixed position lies outside the float position's confidence region;
+    ``directions_disagree``: ``combined`` forward and backward fixes farther apart than 4
+    standard deviations.
+    """
+
+    NONE = 0
+    RESIDUALS = 1
+    FLOAT_POSITION = 2
+    DIRECTIONS_DISAGREE = 3
+
+
+REJECTION_NAMES = tuple(r.name.lower() for r in FixRejection)
 
 QUALITY: Mapping[int, int] = MappingProxyType(
     {
@@ -155,6 +176,11 @@ class RtkConfig:
         Satellite clock stability (s/s, RTKLIB ``stats-clkstab`` 5e-12): the single
         difference of a base observation ``age`` seconds old gains ``(c stability age)^2`` of
         variance.
+    fix_test_p : float
+        False-alarm probability of the two tests a fix passes after the ratio test
+        (:class:`FixRejection`): the chi-square of the phase double-difference residuals at the
+        fixed state, and of the fixed position's departure from the float one in the float
+        covariance (3 degrees of freedom).
     ambiguity : AmbiguityConfig
         Ratio test and partial fixing (:func:`navtrack.gnss.ambiguity.resolve_ambiguities`).
     fix : bool
@@ -182,6 +208,7 @@ class RtkConfig:
     max_age_s: float = 30.0
     sync_s: float = 0.025
     clock_stability: float = 5e-12
+    fix_test_p: float = 1e-3
     ambiguity: AmbiguityConfig = field(default_factory=AmbiguityConfig)
     fix: bool = True
     direction: str = "forward"
@@ -199,6 +226,8 @@ class RtkConfig:
             )
         if self.max_outage < 0:
             raise ValueError(f"max_outage: expected >= 0, got {self.max_outage}")
+        if not 0.0 < self.fix_test_p < 1.0:
+            raise ValueError(f"fix_test_p: expected in (0, 1), got {self.fix_test_p}")
         for name in ("max_age_s", "sync_s", "clock_stability"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
@@ -488,6 +517,8 @@ class RtkResult:
         A slip reset an ambiguity of that satellite at that epoch.
     age_s : ndarray, shape (E,)
         Age of the base observations used (rover minus base time, s; NaN without a base).
+    fix_rejected : ndarray of int8, shape (E,)
+        :class:`FixRejection` of an epoch whose ratio-accepted fix was not used (0 otherwise).
     n_rover_epochs, n_base_epochs, n_common_epochs : int
     warnings : tuple of str
         Input problems found (base position far from the base's own SPP, a system without
@@ -508,6 +539,7 @@ class RtkResult:
     slips: Mapping[str, int]
     slip_mask: BoolArray
     age_s: FloatArray
+    fix_rejected: np.ndarray
     n_rover_epochs: int
     n_base_epochs: int
     n_common_epochs: int
@@ -521,6 +553,14 @@ class RtkResult:
     def status_counts(self) -> dict[str, int]:
         """Epochs per status name (all statuses, zeros included)."""
         return {n: int(np.sum(self.status == i)) for i, n in enumerate(STATUS_NAMES)}
+
+    def rejection_counts(self) -> dict[str, int]:
+        """Fixes the ratio test accepted and :class:`FixRejection` refused, per reason."""
+        return {
+            n: int(np.sum(self.fix_rejected == i))
+            for i, n in enumerate(REJECTION_NAMES)
+            if i != FixRejection.NONE
+        }
 
     @property
     def quality(self) -> IntArray:
@@ -688,6 +728,7 @@ class _FilterOut:
         self.n_sats = np.zeros(k, dtype=np.int64)
         self.n_fixed = np.zeros(k, dtype=np.int64)
         self.slip = np.zeros((k, n_s), dtype=bool)
+        self.rejected = np.zeros(k, dtype=np.int8)  # FixRejection of a fix the ratio accepted
 
 
 def _run_filter(ep: _Epochs, cfg: RtkConfig, progress: ProgressFn | None = None) -> _FilterOut:
@@ -800,6 +841,19 @@ def _run_filter(ep: _Epochs, cfg: RtkConfig, progress: ProgressFn | None = None)
         out.ratio[k] = fix.ratio
         if fix.accepted:
             xf, Pf = condition_on_fix(x, P, A, fix)
+            # beyond the ratio test: the fixed state must close the phase DDs and stay within
+            # the float position's uncertainty
+            v = Dp @ np.where(phase_ok, ep.sd_phase[k] - G @ (xf[:3] - ep.x_lin[k]), 0.0)
+            v -= (Dp * ep.lam[None, :]) @ xf[3:]
+            chi2_v = float(v @ np.linalg.solve(R[: ref_p.size, : ref_p.size], v))
+            d = xf[:3] - x[:3]
+            chi2_d = float(d @ np.linalg.solve(P[:3, :3], d))
+            if chi2_v > float(chdtri(ref_p.size, cfg.fix_test_p)):
+                out.rejected[k] = FixRejection.RESIDUALS
+                continue
+            if chi2_d > float(chdtri(3, cfg.fix_test_p)):
+                out.rejected[k] = FixRejection.FLOAT_POSITION
+                continue
             out.pos[k] = xf[:3]
             out.cov[k] = Pf[:3, :3]
             out.status[k] = RtkStatus.FIX
@@ -871,6 +925,7 @@ def _combine(fwd: _FilterOut, bwd: _FilterOut) -> _FilterOut:
         out.pos[rows], out.cov[rows] = out.float_pos[rows], out.float_cov[rows]
         out.status[rows] = RtkStatus.FLOAT
         out.n_fixed[rows] = 0
+        out.rejected[rows] = FixRejection.DIRECTIONS_DISAGREE
     return out
 
 
@@ -1019,6 +1074,8 @@ def _result(
     slip_mask[ir] = out.slip
     age = np.full(n_e, np.nan)
     age[ir] = age_s
+    rejected = np.zeros(n_e, dtype=np.int8)
+    rejected[ir] = out.rejected
     counts = {k: v + slips_b.counts()[k] for k, v in slips_r.counts().items()}
     counts["ambiguity_resets"] = int(out.slip.sum())
     return RtkResult(
@@ -1034,6 +1091,7 @@ def _result(
         slips=counts,
         slip_mask=slip_mask,
         age_s=age,
+        fix_rejected=rejected,
         n_rover_epochs=n_e,
         n_base_epochs=base.t_gps_s.size,
         n_common_epochs=ir.size,
