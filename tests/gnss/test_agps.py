@@ -272,21 +272,15 @@ def test_diverged_fix_is_not_reported(gps_sats) -> None:
 
 
 def _bundled_0759():
+    from navtrack.gnss.agps import gps_measurements
     from navtrack.gnss.rinex.nav import read_nav
     from navtrack.gnss.rinex.obs import read_obs
-    from navtrack.gnss.spp import (
-        SppConfig,
-        code_pseudoranges,
-        corrected_measurements,
-        satellite_states,
-    )
+    from navtrack.gnss.spp import SppConfig
 
     data = resources.files("navtrack.data")
-    obs = read_obs(data / "07590920.05o")
-    nav = read_nav(data / "07590920.05n")
     cfg = SppConfig(systems="G")
-    pr = code_pseudoranges(obs, cfg)
-    return corrected_measurements(pr, satellite_states(pr, nav, config=cfg), cfg), cfg
+    meas = gps_measurements(read_obs(data / "07590920.05o"), read_nav(data / "07590920.05n"), cfg)
+    return meas, cfg
 
 
 # RTKLIB static relative solution of 0759 (src/navtrack/data/README.md)

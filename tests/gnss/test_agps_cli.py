@@ -79,6 +79,20 @@ def test_agps_example_is_the_issue_case_and_writes_json(capsys, tmp_path) -> Non
     assert err < 1000.0
 
 
+def _measurements(obs: str, nav: str):  # type: ignore[no-untyped-def]
+    """GPS measurements of a bundled file (RINEX or GnssLogger) and their SPP options."""
+    from navtrack.gnss.agps import gps_measurements
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.spp import SppConfig
+
+    if obs.endswith(".txt"):
+        from navtrack.gnss.android import read_gnsslogger as read
+    else:
+        from navtrack.gnss.rinex.obs import read_obs as read
+    cfg = SppConfig(systems="G")
+    return gps_measurements(read(DATA / obs), read_nav(DATA / nav), cfg), cfg
+
+
 @pytest.mark.parametrize(
     ("obs", "nav", "ref", "minutes"),
     [
@@ -104,21 +118,8 @@ def test_no_ok_fix_more_than_a_kilometre_off_on_the_bundled_data(obs, nav, ref, 
         pseudorange_sigma_m,
         solve_agps,
     )
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.spp import (
-        SppConfig,
-        code_pseudoranges,
-        corrected_measurements,
-        satellite_states,
-    )
 
-    if obs.endswith(".txt"):
-        from navtrack.gnss.android import read_gnsslogger as read
-    else:
-        from navtrack.gnss.rinex.obs import read_obs as read
-    cfg = SppConfig(systems="G")
-    pr = code_pseudoranges(read(DATA / obs), cfg)
-    meas = corrected_measurements(pr, satellite_states(pr, read_nav(DATA / nav), config=cfg), cfg)
+    meas, cfg = _measurements(obs, nav)
     config = AgpsConfig.for_receiver(pseudorange_sigma_m(meas, cfg))
     ref_xyz = np.array([float(v) for v in ref])
     lat, lon, h = ecef_to_geodetic(ref_xyz)
@@ -147,7 +148,7 @@ def test_the_issues_41_km_marquardt_fix_is_implausible() -> None:
 
     import numpy as np
 
-    from navtrack.data import REFERENCE_XYZ_M, sample_path
+    from navtrack.data import REFERENCE_XYZ_M
     from navtrack.geodesy import geodetic_to_ecef
     from navtrack.gnss.agps import (
         AgpsConfig,
@@ -157,20 +158,9 @@ def test_the_issues_41_km_marquardt_fix_is_implausible() -> None:
         pseudorange_sigma_m,
         solve_agps,
     )
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.rinex.obs import read_obs
-    from navtrack.gnss.spp import (
-        SppConfig,
-        code_pseudoranges,
-        corrected_measurements,
-        satellite_states,
-    )
     from navtrack.timescale import gps_seconds
 
-    cfg = SppConfig(systems="G")
-    pr = code_pseudoranges(read_obs(sample_path("07590920.05o")), cfg)
-    nav = read_nav(sample_path("07590920.05n"))
-    meas = corrected_measurements(pr, satellite_states(pr, nav, config=cfg), cfg)
+    meas, cfg = _measurements("07590920.05o", "07590920.05n")
     cell = geodetic_to_ecef([math.radians(35.2), math.radians(139.6), 68.4])
     y = assisted_pseudoranges(meas, cell, cfg)
     times = (gps_seconds("2005-04-02T00:10:00"), gps_seconds("2005-04-02T00:20:00"))

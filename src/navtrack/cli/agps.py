@@ -154,17 +154,13 @@ def run_agps(args: argparse.Namespace) -> int:
         AgpsConfig,
         AgpsStatus,
         assisted_pseudoranges,
+        gps_measurements,
         problem_from_measurements,
         pseudorange_sigma_m,
         solve_agps,
     )
     from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.spp import (
-        SppConfig,
-        code_pseudoranges,
-        corrected_measurements,
-        satellite_states,
-    )
+    from navtrack.gnss.spp import SppConfig
     from navtrack.timescale import to_datetime64
 
     if args.example:
@@ -197,10 +193,8 @@ def run_agps(args: argparse.Namespace) -> int:
         from navtrack.gnss.rinex.obs import read_obs
 
         obs = read_obs(args.obs)
-    nav = read_nav(args.nav)
     cfg = SppConfig(systems="G")
-    pr = code_pseudoranges(obs, cfg)
-    meas = corrected_measurements(pr, satellite_states(pr, nav, config=cfg), cfg)
+    meas = gps_measurements(obs, read_nav(args.nav), cfg)
     cell = geodetic_to_ecef([math.radians(lat), math.radians(lon), args.height])
     y = assisted_pseudoranges(meas, cell, cfg)
     if args.sigma_pr is not None:

@@ -54,6 +54,8 @@ from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
 from navtrack.geodesy import NEAR_SURFACE_NORM_M, WGS84_A_M, WGS84_F, ecef_to_geodetic
 
 if TYPE_CHECKING:
+    from navtrack.gnss.observations import Observations
+    from navtrack.gnss.rinex.nav import NavData
     from navtrack.gnss.spp import Measurements, SppConfig
 
 __all__ = [
@@ -70,6 +72,7 @@ __all__ = [
     "assisted_pseudoranges",
     "ellipsoid_residual",
     "fix_dop",
+    "gps_measurements",
     "problem_from_measurements",
     "pseudorange_sigma_m",
     "solve_agps",
@@ -621,6 +624,33 @@ def solve_agps(
         sigma_m=sigma,
         reason=reason,
     )
+
+
+def gps_measurements(
+    obs: Observations, nav: NavData, config: SppConfig | None = None
+) -> Measurements:
+    """The GPS L1 C/A pseudoranges and satellite states two-satellite fixes take: stages 1–3 of
+    single point positioning (:func:`navtrack.gnss.spp.code_pseudoranges`,
+    :func:`~navtrack.gnss.spp.satellite_states`, :func:`~navtrack.gnss.spp.corrected_measurements`).
+
+    Parameters
+    ----------
+    obs : Observations
+    nav : NavData
+        Broadcast ephemerides.
+    config : SppConfig, optional
+        Default ``SppConfig(systems="G")``.
+    """
+    from navtrack.gnss.spp import (
+        SppConfig,
+        code_pseudoranges,
+        corrected_measurements,
+        satellite_states,
+    )
+
+    cfg = config or SppConfig(systems="G")
+    pr = code_pseudoranges(obs, cfg)
+    return corrected_measurements(pr, satellite_states(pr, nav, config=cfg), cfg)
 
 
 def assisted_pseudoranges(

@@ -175,16 +175,11 @@ def real_data_study(
     from navtrack.gnss.agps import (
         AgpsStatus,
         assisted_pseudoranges,
+        gps_measurements,
         problem_from_measurements,
         solve_agps,
     )
-    from navtrack.gnss.spp import (
-        SppConfig,
-        code_pseudoranges,
-        corrected_measurements,
-        satellite_states,
-        solve_spp,
-    )
+    from navtrack.gnss.spp import SppConfig, solve_spp
 
     cfg = SppConfig(systems="G", elmask_deg=elmask_deg)
     n_s, n_i, n_h = len(SOLVER_NAMES), len(intervals_min), len(height_offsets_m)
@@ -198,8 +193,7 @@ def real_data_study(
             skipped.append(f"{ds.name}: {ds.obs} or {ds.nav} not found under {gnss_dir}")
             continue
         obs, nav = _read(gnss_dir, ds)
-        pr = code_pseudoranges(obs, cfg)
-        meas = corrected_measurements(pr, satellite_states(pr, nav, config=cfg), cfg)
+        meas = gps_measurements(obs, nav, cfg)
         network_clock_m = solve_spp(obs, nav, config=cfg).clock_m
         assist_error_m = rng.uniform(-clock_bias_m, clock_bias_m, network_clock_m.shape)
         fine_time = (assist_error_m - network_clock_m)[:, None]  # NaN: no network time
