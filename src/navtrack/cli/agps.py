@@ -174,6 +174,8 @@ def run_agps(args: argparse.Namespace) -> int:
     ]  # fmt: skip
     if missing:
         raise SystemExit(f"navtrack agps: missing {', '.join(missing)} (or use --example)")
+    if args.out is not None and args.out.suffix.lower() != ".json":
+        raise SystemExit(f"navtrack agps: --out {args.out}: expected a .json file")
     sats = [s.strip().upper() for s in args.sats.split(",") if s.strip()]
     if len(sats) != 2 or len(set(sats)) != 2:
         raise SystemExit(f"navtrack agps: --sats needs two different satellites, got {args.sats!r}")
@@ -297,8 +299,6 @@ def run_agps(args: argparse.Namespace) -> int:
     if args.out is not None:
         import json
 
-        if args.out.suffix.lower() != ".json":
-            raise SystemExit(f"navtrack agps: --out {args.out}: expected a .json file")
         args.out.write_text(json.dumps(record, indent=2) + "\n")
         print(f"wrote       {args.out}")
     return 0 if res.status[0] == AgpsStatus.OK else 1
