@@ -1146,3 +1146,43 @@ def test_v3_epoch_record_cut_in_its_clock_field(tmp_path: Path) -> None:
     _raises_at(cut, 34, r"receiver clock offset '-0\.1234' cut short")
     lenient = read_obs(cut, lenient=True)
     assert 34 in [s.line for s in lenient.skipped]
+
+
+@pytest.mark.parametrize(
+    ("name", "systems", "codes"),
+    [
+        ("SEPT078M_120.21O", "GE", {"C1C"}),
+        ("SEPT078M_120.21O", None, {"C1C", "L1C", "S1C"}),
+        ("SEPT078M_120.21O", "J", None),
+        ("07590920.05o", None, {"C1", "L2"}),
+    ],
+)
+def test_a_selective_read_equals_the_same_part_of_a_full_read(name, systems, codes) -> None:  # type: ignore[no-untyped-def]
+    full = read_obs(sample_path(name))
+    part = read_obs(sample_path(name), systems=systems, codes=codes)
+    assert set(part.codes) == (set(full.codes) if codes is None else codes & set(full.codes))
+    assert all(s[0] in (systems or s[0]) for s in part.sats)
+    assert set(part.sats) == {s for s in full.sats if s[0] in (systems or s[0])}
+    js = [full.sats.index(s) for s in part.sats]
+    ks = [full.codes.index(c) for c in part.codes]
+    for attr in ("values", "lli", "ssi"):
+        np.testing.assert_array_equal(getattr(part, attr), getattr(full, attr)[:, js][:, :, ks])
+    np.testing.assert_array_equal(part.t_gps_s, full.t_gps_s)
+
+
+def test_a_selective_read_skips_unread_fields_but_not_the_structure(tmp_path: Path) -> None:
+    lines = _lines("SEPT078M_120.21O")
+    body = next(i for i, ln in enumerate(lines) if "END OF HEADER" in ln)
+    k = next(i for i in range(body, len(lines)) if lines[i].startswith("G"))
+
+    def write(path: Path, line: str) -> Path:
+        path.write_text("\n".join([*lines[:k], line, *lines[k + 1 :]]) + "\n")
+        return path
+
+    bad_field = write(tmp_path / "field.21O", lines[k][:3] + "x" * 16 + lines[k][19:])
+    with pytest.raises(FileFormatError, match="malformed observation field 1"):
+        read_obs(bad_field)
+    assert read_obs(bad_field, codes={"L2W"}).codes == ("L2W",)  # field 1 (C1C) not decoded
+    bad_sat = write(tmp_path / "sat.21O", "X" + lines[k][1:])
+    with pytest.raises(FileFormatError, match="X"):
+        read_obs(bad_sat, codes={"L2W"})  # an unknown system is structure

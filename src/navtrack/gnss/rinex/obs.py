@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import itertools
 import re
+from collections.abc import Collection
 from dataclasses import dataclass, field, replace
 from os import fspath
 
@@ -81,7 +82,13 @@ class _Scan:
     skipped: list[SkippedLine] = field(default_factory=list)
 
 
-def read_obs(path: StrPath, *, lenient: bool = False) -> Observations:
+def read_obs(
+    path: StrPath,
+    *,
+    lenient: bool = False,
+    systems: str | None = None,
+    codes: Collection[str] | None = None,
+) -> Observations:
     """Read a RINEX observation file (2.10, 2.11, 3.00-3.05, 4.0x; plain, gzip, bzip2, ``.Z``,
     Hatanaka).
 
@@ -94,6 +101,14 @@ def read_obs(path: StrPath, *, lenient: bool = False) -> Observations:
         satellite systems, satellites whose system has no observation types, surplus lines,
         epochs cut short by the end of the file) are skipped and listed in
         ``Observations.skipped``; a malformed header still raises.
+    systems : str, optional
+        Keep only these systems' satellites (``"GE"``); default all.
+    codes : collection of str, optional
+        Keep only these observation codes (``{"C1C", "L1C"}``); default all. The fields of the
+        other systems and codes are not decoded (a read that asks for what it uses costs a
+        fraction of a full one); the structure of the whole file (epoch records, satellite
+        lines, line counts, identifiers) is still checked, but a malformed field of an unread
+        code is not found.
 
     Returns
     -------
@@ -150,7 +165,7 @@ def read_obs(path: StrPath, *, lenient: bool = False) -> Observations:
         _scan_v3(path, lines, body, end, seg0, scan, lenient)
     else:
         _scan_v2(path, lines, body, end, seg0, scan, lenient)
-    return _assemble(path, header, seg0, scan, v3, lenient)
+    return _assemble(path, header, seg0, scan, v3, lenient, systems, codes)
 
 
 # ----------------------------------------------------------------------------------- header
@@ -764,6 +779,22 @@ def _decode(fields: np.ndarray) -> tuple[FloatArray, Int8Array, Int8Array, np.nd
     return value, lli, ssi, blank, bad
 
 
+def _decode_some(
+    fields: np.ndarray, which: np.ndarray
+) -> tuple[FloatArray, Int8Array, Int8Array, np.ndarray, np.ndarray]:
+    """:func:`_decode` of the fields ``which`` only, scattered back to all fields: the others
+    are NaN with indicators -1, never ``bad``, and ``blank`` where all 16 characters are."""
+    n = len(fields)
+    words = np.ascontiguousarray(fields).view(_U8)
+    blank = (words[:, 0] == _BLANKS) & (words[:, 1] == _BLANKS)
+    value = np.full(n, np.nan)
+    lli = np.full(n, -1, dtype=np.int8)
+    ssi = np.full(n, -1, dtype=np.int8)
+    bad = np.zeros(n, dtype=bool)
+    value[which], lli[which], ssi[which], _, bad[which] = _decode(fields[which])
+    return value, lli, ssi, blank, bad
+
+
 def _indicator(c: np.ndarray) -> Int8Array:
     """Digit -> 0..9, blank -> -1, anything else -> -2 (bad)."""
     out = c.astype(np.int8) - np.int8(48)
@@ -787,14 +818,19 @@ def _assemble(
     scan: _Scan,
     v3: bool,
     lenient: bool,
+    want_systems: str | None = None,
+    want_codes: Collection[str] | None = None,
 ) -> Observations:
     n_e = len(scan.t_cal_s)
     codes: list[str] = []
     for seg in segments:
         for types in seg.obs_types.values():
             codes.extend(c for c in types if c not in codes)
+    # each field's code indexes ``codes``; ``kept`` maps it to the output's codes (-1: dropped)
     code_index = {c: k for k, c in enumerate(codes)}
-    n_c = len(codes)
+    out_codes = [c for c in codes if want_codes is None or c in want_codes]
+    kept = np.array([out_codes.index(c) if c in out_codes else -1 for c in codes] + [-1])
+    n_c = len(out_codes)
     n_sys = len(SYSTEMS)
 
     lead = 3 if v3 else 0
@@ -852,6 +888,8 @@ def _assemble(
                     report_at.setdefault(m, scan.epoch_line[epoch_of_line[m]])
     sats = sorted({n for n in names if n is not None})
     sat_col = {s: k for k, s in enumerate(sats)}
+    out_sats = [s for s in sats if want_systems is None or s[0] in want_systems]
+    out_col = np.array([out_sats.index(s) if s in out_sats else -1 for s in sats] + [-1])
     uniq_col = np.array([sat_col.get(n, -1) if n else -1 for n in names] or [0], dtype=np.int64)
     uniq_sys = np.array([SYSTEMS.index(n[0]) if n else 0 for n in names] or [0], dtype=np.int64)
     if v3:
@@ -880,7 +918,12 @@ def _assemble(
     if not v3:
         code[:, 5:] = -1  # RINEX 2 lines hold 5 fields (80 columns)
 
-    value, lli, ssi, blank, bad = _decode(mat[:, lead:].reshape(n_lines * n_f, _FIELD))
+    fields = mat[:, lead:].reshape(n_lines * n_f, _FIELD)
+    if want_systems is None and want_codes is None:
+        value, lli, ssi, blank, bad = _decode(fields)
+    else:  # decode the wanted fields only; blanks of all (they check the structure)
+        wanted = (kept[code] >= 0) & (out_col[sat_of_line] >= 0)[:, None]
+        value, lli, ssi, blank, bad = _decode_some(fields, np.flatnonzero(wanted.ravel()))
     value = value.reshape(n_lines, n_f)
     value[value == 0.0] = np.nan  # "missing observations are written as 0.0 or blanks"
     lli, ssi = lli.reshape(n_lines, n_f), ssi.reshape(n_lines, n_f)
@@ -925,11 +968,14 @@ def _assemble(
             usable[m] = False
             skipped.append(SkippedLine(line=int(line_no[m]), reason=reason))
 
-    values = np.full((n_e, len(sats), n_c), np.nan)
-    lli_out = np.full((n_e, len(sats), n_c), -1, dtype=np.int8)
-    ssi_out = np.full((n_e, len(sats), n_c), -1, dtype=np.int8)
-    put = (code >= 0) & ~blank & usable[:, None]
-    cell = (epoch_of_line * len(sats) + sat_of_line)[:, None] * n_c + code
+    n_s = len(out_sats)
+    values = np.full((n_e, n_s, n_c), np.nan)
+    lli_out = np.full((n_e, n_s, n_c), -1, dtype=np.int8)
+    ssi_out = np.full((n_e, n_s, n_c), -1, dtype=np.int8)
+    out_sat = out_col[sat_of_line]
+    out_code = kept[code]
+    put = (out_code >= 0) & (out_sat >= 0)[:, None] & ~blank & usable[:, None]
+    cell = (epoch_of_line * n_s + out_sat)[:, None] * n_c + out_code
     target = cell[put]
     if (scale != 1.0).any():
         value = value / scale[row[:, None], col]
@@ -953,8 +999,8 @@ def _assemble(
         t_gps_s=t_gps,
         epoch_flag=np.asarray(scan.flag, dtype=np.int8),
         clock_offset_s=np.asarray(scan.clock_s, dtype=float),
-        sats=tuple(sats),
-        codes=tuple(codes),
+        sats=tuple(out_sats),
+        codes=tuple(out_codes),
         values=values,
         lli=lli_out,
         ssi=ssi_out,
