@@ -485,3 +485,27 @@ def test_glonass_only_synthetic_recovery() -> None:
     assert np.max(np.linalg.norm(res.pos_m - rcv, axis=1)) < 1e-3
     np.testing.assert_allclose(res.clock_m, clock, atol=1e-3)
     assert res.clock_groups == ("R",)
+
+
+@pytest.mark.parametrize(
+    ("name", "nav", "config"),
+    [
+        ("SEPT078M_120.21O", "SEPT078M.21P", SppConfig(systems="GEJ")),
+        ("SEPT078M_120.21O", "SEPT078M.21P", SppConfig(systems="GE", iono="ionofree")),
+        ("07590920.05o", "07590920.05n", SppConfig(systems="G")),
+    ],
+)
+def test_reading_only_the_codes_spp_takes_gives_the_same_solution(name, nav, config) -> None:  # type: ignore[no-untyped-def]
+    from navtrack.data import sample_path
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.spp import observation_codes
+
+    navs = read_nav(sample_path(nav))
+    full = solve_spp(read_obs(sample_path(name)), navs, config=config)
+    codes = observation_codes(config)
+    part_obs = read_obs(sample_path(name), systems=config.systems, codes=codes)
+    assert set(part_obs.codes) <= codes
+    part = solve_spp(part_obs, navs, config=config)
+    np.testing.assert_array_equal(part.status, full.status)
+    np.testing.assert_array_equal(part.pos_m, full.pos_m)

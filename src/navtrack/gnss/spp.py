@@ -419,6 +419,23 @@ def select_pseudoranges(
     return pr, cn0, used
 
 
+def observation_codes(config: SppConfig | None = None) -> frozenset[str]:
+    """Every observation code :func:`code_pseudoranges` may take for a configuration: the
+    pseudorange codes of its systems' bands (:data:`CODE_PRIORITY`) and their signal strengths.
+    A reader given them (``read_obs(path, systems=..., codes=...)``) decodes nothing else."""
+    cfg = config or SppConfig()
+    codes: set[str] = set()
+    for sys in cfg.systems:
+        if cfg.iono == "ionofree":
+            bands = IONOFREE_BANDS.get(sys, ())
+        else:
+            bands = (PRIMARY_BAND[sys],) if sys in PRIMARY_BAND else ()
+        for band in bands:
+            for code in CODE_PRIORITY.get(sys, {}).get(band, ()):
+                codes.update((code, "S" + code[1:]))
+    return frozenset(codes)
+
+
 # --------------------------------------------------------------------------- stage 1: signals
 @dataclass(frozen=True, slots=True, eq=False)
 class Pseudoranges:
