@@ -426,10 +426,11 @@ def observation_codes(config: SppConfig | None = None) -> frozenset[str]:
     cfg = config or SppConfig()
     codes: set[str] = set()
     for sys in cfg.systems:
+        bands: tuple[str, ...] = ()
         if cfg.iono == "ionofree":
             bands = IONOFREE_BANDS.get(sys, ())
-        else:
-            bands = (PRIMARY_BAND[sys],) if sys in PRIMARY_BAND else ()
+        elif sys in PRIMARY_BAND:
+            bands = (PRIMARY_BAND[sys],)
         for band in bands:
             for code in CODE_PRIORITY.get(sys, {}).get(band, ()):
                 codes.update((code, "S" + code[1:]))
