@@ -191,15 +191,20 @@ def _is_android(path: Path) -> bool:
     return False
 
 
-def _read_inputs(args: argparse.Namespace) -> tuple[Observations, list[NavData], Sp3 | None]:
+def _read_inputs(
+    args: argparse.Namespace, config: SppConfig
+) -> tuple[Observations, list[NavData], Sp3 | None]:
+    """The observations (of the configured systems' pseudorange codes only), navigation data
+    and precise orbits."""
     if args.android:
         from navtrack.gnss.android import read_gnsslogger
 
         obs = read_gnsslogger(args.obs)
     else:
         from navtrack.gnss.rinex.obs import read_obs
+        from navtrack.gnss.spp import observation_codes
 
-        obs = read_obs(args.obs)
+        obs = read_obs(args.obs, systems=config.systems, codes=observation_codes(config))
     from navtrack.gnss.rinex.nav import read_nav
 
     navs = [read_nav(p) for p in args.nav]
@@ -284,7 +289,7 @@ def run_pos(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise SystemExit(f"navtrack pos: {exc}") from None
 
-    obs, navs, sp3 = _read_inputs(args)
+    obs, navs, sp3 = _read_inputs(args, config)
     n_epochs = len(obs.t_gps_s)
     if n_epochs == 0:
         print(f"navtrack pos: {args.obs}: no observation epochs", file=sys.stderr)
