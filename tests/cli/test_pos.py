@@ -227,3 +227,26 @@ def test_long_files_are_solved_in_blocks(tmp_path: Path, monkeypatch: pytest.Mon
     monkeypatch.setattr(spp, "CHUNK_EPOCHS", 25)
     assert main(["pos", "--example", "--out", str(blocks)]) == 0
     assert whole.read_text() == blocks.read_text()
+
+
+def test_summary_median_equals_nanmedian_without_importing_numpy_ma() -> None:
+    import subprocess
+    import sys
+
+    import numpy as np
+
+    from navtrack.cli.pos import _median
+
+    rng = np.random.default_rng(0)
+    for n in (1, 2, 5, 6, 101):
+        x = np.append(rng.normal(size=n), [np.nan] * 3)
+        assert _median(x) == np.nanmedian(x)
+    assert np.isnan(_median(np.full(3, np.nan)))
+    # a run without a reference (error percentiles use np.quantile, which imports numpy.ma)
+    code = (
+        "import sys; from navtrack.cli import main; from navtrack.data import sample_path; "
+        "main(['pos', str(sample_path('07590920.05o')), str(sample_path('07590920.05n')), "
+        "'--no-progress']); print('numpy.ma' in sys.modules, file=sys.stderr)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stderr.strip().splitlines()[-1] == "False"

@@ -91,6 +91,18 @@ def register(subparsers: Any) -> None:
     p.set_defaults(func=run_pos)
 
 
+def _median(values: FloatArray) -> float:
+    """Median of the finite values (NaN when none), from a sort: ``np.median`` and
+    ``np.nanmedian`` import ``numpy.ma`` (12 ms of every run's start-up)."""
+    import numpy as np
+
+    v = np.sort(values[np.isfinite(values)])
+    if v.size == 0:
+        return float("nan")
+    mid = v.size // 2
+    return float(v[mid]) if v.size % 2 else float(0.5 * (v[mid - 1] + v[mid]))
+
+
 def _raim_config(args: argparse.Namespace) -> Any:
     """The RaimConfig of ``--raim/--pfa/--pmd`` (None for ``off``)."""
     if args.raim == "off":
@@ -120,10 +132,7 @@ def _print_raim_summary(result: SppResult) -> None:
             + " ".join(f"{result.sats[j]}:{per_sat[j]}" for j in np.flatnonzero(per_sat))
         )
     if np.isfinite(integ.hpl_m).any():
-        print(
-            f"  HPL/VPL      median {np.nanmedian(integ.hpl_m):.2f} / "
-            f"{np.nanmedian(integ.vpl_m):.2f} m"
-        )
+        print(f"  HPL/VPL      median {_median(integ.hpl_m):.2f} / {_median(integ.vpl_m):.2f} m")
 
 
 def add_reference_options(p: argparse.ArgumentParser, *, trajectory: bool = False) -> None:
@@ -333,7 +342,7 @@ def run_pos(args: argparse.Namespace) -> int:
         ok = result.status == 0
         print(
             f"satellites     {np.mean(result.n_sats[ok]):.1f} used per solved epoch; "
-            f"PDOP median {np.nanmedian(result.dop[ok, 1]):.2f}"
+            f"PDOP median {_median(result.dop[ok, 1]):.2f}"
         )
     if ref is not None and solved:
         source = getattr(args, "ref_source", "--ref-llh" if args.ref is None else "--ref")
