@@ -78,6 +78,14 @@ def register(subparsers: Any) -> None:
         f"{EXAMPLE_REF_SOURCE}",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    net = p.add_argument_group(
+        "network",
+        "several observation files (a station network): one Parquet dataset partitioned by "
+        "station under --out DIR/positions, per-station summaries in DIR/stations.csv, resumable; "
+        "navigation files given serve every station, else those beside each file",
+    )
+    net.add_argument("--workers", type=int, metavar="N", help="a local Dask cluster of N workers")
+    net.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler")
     # --- integrity monitoring (navtrack.integrity.raim)
     p.add_argument(
         "--raim",
@@ -283,10 +291,6 @@ def run_pos(args: argparse.Namespace) -> int:
             "navtrack pos: no navigation file given: positions need broadcast ephemerides "
             "(RINEX NAV) or precise orbits (--sp3)"
         )
-    ref = _reference(args)
-    out_problem = _check_output(args.out)
-    if out_problem:
-        print(f"navtrack pos: cannot write --out: {out_problem}; solving anyway", file=sys.stderr)
     args.android = _is_android(args.obs)
     systems = "".join(dict.fromkeys(args.systems.upper()))
     # phone pseudoranges are far noisier than RTKLIB's receiver model assumes: C/N0 weights
@@ -297,6 +301,17 @@ def run_pos(args: argparse.Namespace) -> int:
         )
     except ValueError as exc:
         raise SystemExit(f"navtrack pos: {exc}") from None
+    from navtrack.cli.network import network_jobs, run_network
+
+    jobs = None if args.android else network_jobs(args)
+    if jobs is not None:
+        return run_network(args, jobs, config)
+    if args.workers is not None or args.scheduler is not None:
+        raise SystemExit("navtrack pos: --workers/--scheduler need several observation files")
+    ref = _reference(args)
+    out_problem = _check_output(args.out)
+    if out_problem:
+        print(f"navtrack pos: cannot write --out: {out_problem}; solving anyway", file=sys.stderr)
 
     obs, navs, sp3 = _read_inputs(args, config)
     n_epochs = len(obs.t_gps_s)

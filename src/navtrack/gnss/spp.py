@@ -45,13 +45,15 @@ DOPs); J. Sanz Subirana et al., *GNSS Data Processing* vol. I, ESA TM-23, 2013, 
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import IntEnum
 from functools import lru_cache
 from types import MappingProxyType
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -221,6 +223,15 @@ class SppConfig:
             raise ValueError(f"elmask_deg: expected 0 <= mask < 90, got {self.elmask_deg}")
         if not 0.0 <= self.chi2_alpha < 1.0:
             raise ValueError(f"chi2_alpha: expected 0 <= alpha < 1, got {self.chi2_alpha}")
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickled as its constructor's keywords (the read-only mappings as dicts), so that a
+        configuration travels to Dask workers."""
+        fields: dict[str, Any] = {
+            f.name: dict(v) if isinstance(v := getattr(self, f.name), Mapping) else v
+            for f in dataclasses.fields(self)
+        }
+        return (functools.partial(type(self), **fields), ())
 
 
 @dataclass(frozen=True, slots=True, eq=False)
