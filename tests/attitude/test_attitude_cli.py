@@ -90,5 +90,5 @@ def test_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
         main(["attitude", "reconstruct", str(imu), "--out", out])
     with pytest.raises(SystemExit, match="needs a BROAD"):
         main(["attitude", "reconstruct", str(imu), "--simulate-fixes", "--out", out])
-    with pytest.raises(SystemExit, match=r"\.csv or \.parquet"):
+    with pytest.raises(SystemExit, match=r"unknown format '\.kml' \(use \.csv, \.parquet\)"):
         main(["attitude", "reconstruct", str(imu), "--fixes", str(fixes), "--out", "x.kml"])

@@ -183,8 +183,9 @@ def run_reconstruct(args: argparse.Namespace) -> int:
         args.imu, args.simulate_fixes = sample_path(EXAMPLE), True
     if args.imu is None:
         raise SystemExit("navtrack attitude reconstruct: give an IMU file, or --example")
-    if args.out is not None and args.out.suffix.lower() not in (".csv", ".parquet"):
-        raise SystemExit("navtrack attitude reconstruct: --out must end in .csv or .parquet")
+    from navtrack.cli.outputs import check_outputs
+
+    check_outputs("navtrack attitude reconstruct", args.out, (".csv", ".parquet"))
     if (args.fixes is None) == (not args.simulate_fixes):
         raise SystemExit(
             "navtrack attitude reconstruct: give exactly one of --fixes and --simulate-fixes"

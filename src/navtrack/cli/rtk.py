@@ -184,11 +184,10 @@ def run_rtk(args: argparse.Namespace) -> int:
     for path in [args.rover, args.base, *args.nav, *([args.sp3] if args.sp3 else [])]:
         if not path.is_file():
             raise SystemExit(f"navtrack rtk: file {str(path)!r} not found")
-    from navtrack.cli.pos import _check_output
+    from navtrack.cli.outputs import check_outputs
+    from navtrack.io.solution import FORMATS
 
-    out_problem = _check_output(args.out)
-    if out_problem:
-        print(f"navtrack rtk: cannot write --out: {out_problem}; solving anyway", file=sys.stderr)
+    check_outputs("navtrack rtk", args.out, FORMATS, args.plot)
     try:
         config = RtkConfig(
             mode="static" if args.static else "kinematic",
@@ -260,9 +259,6 @@ def run_rtk(args: argparse.Namespace) -> int:
         )
         print(f"figures        {', '.join(str(p) for p in paths)}")
     if args.out is not None:
-        if out_problem:
-            print(f"navtrack rtk: solution NOT written: {out_problem}", file=sys.stderr)
-            return 1
         from navtrack.io.solution import write_solution
 
         try:
@@ -384,9 +380,10 @@ def run_ppp(args: argparse.Namespace) -> int:
     for path in [args.obs, *args.nav, args.sp3]:
         if not path.is_file():
             raise SystemExit(f"navtrack ppp: file {str(path)!r} not found")
-    from navtrack.cli.pos import _check_output
+    from navtrack.cli.outputs import check_outputs
+    from navtrack.io.solution import FORMATS
 
-    out_problem = _check_output(args.out)
+    check_outputs("navtrack ppp", args.out, FORMATS)
     try:
         config = PppConfig(systems=args.systems.upper(), elmask_deg=args.elmask)
     except ValueError as exc:
@@ -428,9 +425,6 @@ def run_ppp(args: argparse.Namespace) -> int:
             print(f"  {t:14.0f}  {h:10.3f}  {u:7.3f}  {d:7.3f}")
     code = 0 if last.size else 1
     if args.out is not None:
-        if out_problem:
-            print(f"navtrack ppp: solution NOT written: {out_problem}", file=sys.stderr)
-            return 1
         from navtrack.io.solution import write_solution
 
         try:

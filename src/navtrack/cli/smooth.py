@@ -182,11 +182,13 @@ def run_smooth(args: argparse.Namespace) -> int:
     import pandas as pd
     from tqdm import tqdm
 
+    from navtrack.cli.outputs import check_outputs
     from navtrack.experiments import write_json
     from navtrack.io.tables import numeric_column, read_table
     from navtrack.smoothing.ari import AriConfig, fit_ari, regularize_time
     from navtrack.smoothing.identifiability import identifiability_warnings, sigma_bounds
 
+    check_outputs("navtrack smooth", args.out, (".csv", ".parquet"), args.plot)
     with contextlib.ExitStack() as stack:
         if args.example:
             if args.file is not None:

@@ -173,6 +173,9 @@ def run_track(args: argparse.Namespace) -> int:
         args.file = sample_path(EXAMPLE)
     if args.file is None:
         raise SystemExit("navtrack track: give a detections FILE, or --example")
+    from navtrack.cli.outputs import check_outputs
+
+    check_outputs("navtrack track", args.out, (".csv", ".parquet"), args.plot)
     columns = _column_map(args.columns)
     if args.fmt is None:
         args.fmt = "csv" if columns else detect_format(args.file)
