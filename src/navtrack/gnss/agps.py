@@ -481,8 +481,12 @@ def fix_dop(problem: AgpsProblem) -> FloatArray:
     x0 = np.zeros((problem.size, 5))
     x0[:, :3] = problem.start_xyz_m
     J, complete = _start_jacobian(problem, x0)
-    good = complete & ~_singular_start(J, complete)
-    dop = np.full(problem.size, np.inf)
+    return _dop(J, complete & ~_singular_start(J, complete))
+
+
+def _dop(J: FloatArray, good: BoolArray) -> FloatArray:
+    """:func:`fix_dop` of the start Jacobians ``J`` (B, 5, 5), infinite where not ``good``."""
+    dop = np.full(J.shape[0], np.inf)
     if good.any():
         # h(X) has Jacobian J; the residual rows f = h - y have the same, and the height row
         # carries no noise: only the pseudorange columns of the inverse enter.
@@ -589,7 +593,7 @@ def solve_agps(
     with np.errstate(invalid="ignore"):
         residual = np.sqrt(np.nanmean(lsq.residuals[:, :4] ** 2, axis=1))
     residual = np.where(keep, residual, np.nan)
-    dop = fix_dop(p)
+    dop = _dop(J0, complete & ~singular)
     reason = np.full(n, "", dtype=object)
     sigma = dop * cfg.sigma_pr_m
     weak = (status == AgpsStatus.OK) & ((dop > cfg.max_dop) | (sigma > cfg.max_sigma_m))
