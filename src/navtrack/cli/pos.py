@@ -1,12 +1,14 @@
 """``navtrack pos OBS NAV...``: single point positions of a RINEX file or an Android raw log.
 
 Reads the observations (RINEX 2/3 or Android GnssLogger), the navigation file(s) and optionally
-an SP3 file, solves every epoch by weighted least squares (:func:`navtrack.gnss.spp.solve_spp`),
-prints a summary (epochs, solved, count of each status, and with a reference the mean, RMS and
-95 % of the horizontal, vertical and 3D errors), writes the solution with ``--out`` (CSV,
-Parquet, NMEA GGA, KML, GPX by suffix) and figures with ``--plot``. The exit code is 1 when no
-epoch could be solved, the input cannot be read, or the requested ``--out`` file could not be
-written (the summary is still printed: a script must not mistake a missing file for success).
+an SP3 file, keeps the epochs ``--ts/--te/--ti`` select, solves them by weighted least squares
+(:func:`navtrack.gnss.spp.solve_spp`), prints a summary (epochs, solved, count of each status,
+and with a reference the mean, RMS and 95 % of the horizontal, vertical and 3D errors), writes
+the solution with ``--out`` (CSV, Parquet, RTKLIB .pos, NMEA GGA+RMC, KML, GPX by suffix) and
+figures with ``--plot``. ``--conf`` reads an RTKLIB option file; options given on the command
+line win over it. An output that cannot be written (unknown suffix, missing directory, missing
+extra) is refused before anything is read (exit 2). The exit code is 1 when no epoch could be
+solved, the input cannot be read, or the ``--out`` file could not be written.
 """
 
 from __future__ import annotations
@@ -32,6 +34,13 @@ EXAMPLE_NAV = "SEPT078M.21P"
 EXAMPLE_REF_XYZ_M = (-3962108.673, 3381309.574, 3668678.638)
 EXAMPLE_REF_SOURCE = "station SEPT, cssrlib's xyz_ref (src/navtrack/data/README.md)"
 WEIGHTINGS = ("rtklib", "elevation", "cn0", "equal")
+# Settings of --systems/--elmask/--iono when neither the command line nor --conf gives them.
+DEFAULT_SYSTEMS = "GREJC"
+DEFAULT_ELMASK_DEG = 15.0
+DEFAULT_IONO = "klobuchar"
+# Optional packages some outputs need, with the extra that installs them.
+_PLOT_EXTRA = ("matplotlib", "plot")
+_PARQUET_EXTRA = ("pyarrow", "parquet")
 
 
 def register(subparsers: Any) -> None:
@@ -39,20 +48,23 @@ def register(subparsers: Any) -> None:
         "pos",
         help="single point positioning of a RINEX observation file or an Android raw log",
         description="Single point positions (weighted least squares, multi-GNSS with inter-system "
-        "biases, Klobuchar + Saastamoinen, RTKLIB-compatible defaults) of every epoch.",
+        "biases, Klobuchar + Saastamoinen, RTKLIB's models and weights) of every epoch. "
+        "Differs from RTKLIB 2.4.3 by default in one point: the Galileo group delay is the one "
+        "of the ephemeris used, as the ICD specifies; RTKLIB takes that of the satellite's "
+        "first record (often F/NAV, BGD 0), which moves multi-GNSS positions by ~0.5 m "
+        "(--rtklib-compatible reproduces it; docs/integrity.md).",
     )
     p.add_argument("obs", nargs="?", type=Path, help="RINEX observation file or GnssLogger log")
     p.add_argument("nav", nargs="*", type=Path, help="RINEX navigation file(s)")
     p.add_argument("--sp3", type=Path, help="precise orbits/clocks (SP3) instead of broadcast")
     p.add_argument(
-        "--systems", default="GREJC", help="systems to use, e.g. GEJ (default: all present)"
+        "--systems", help=f"systems to use, e.g. GEJ (default {DEFAULT_SYSTEMS}: all present)"
     )
     p.add_argument(
         "--elmask",
         type=float,
-        default=15.0,
         metavar="DEG",
-        help="elevation mask in degrees (default 15)",
+        help=f"elevation mask in degrees (default {DEFAULT_ELMASK_DEG:g})",
     )
     p.add_argument(
         "--weighting",
@@ -63,12 +75,35 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--iono",
         choices=("klobuchar", "ionofree", "off"),
-        default="klobuchar",
-        help="ionosphere: broadcast Klobuchar, dual-frequency iono-free, or none",
+        help=f"ionosphere: broadcast Klobuchar, dual-frequency iono-free, or none "
+        f"(default {DEFAULT_IONO})",
+    )
+    p.add_argument(
+        "--conf",
+        type=Path,
+        metavar="FILE",
+        help="RTKLIB option file (rnx2rtkp -k): elevation mask, systems, ionosphere, "
+        "troposphere, ephemeris, frequency, GDOP limit; other options must keep RTKLIB's "
+        "defaults; command-line options win",
+    )
+    p.add_argument(
+        "--ts",
+        nargs="+",
+        metavar="TIME",
+        help="first epoch, GPST: 2005/04/02 00:10:00 (as RTKLIB's -ts) or ISO 8601",
+    )
+    p.add_argument("--te", nargs="+", metavar="TIME", help="last epoch, GPST (as --ts)")
+    p.add_argument(
+        "--ti",
+        type=float,
+        metavar="SEC",
+        help="interval: keep only epochs on this grid of the GPS week (RTKLIB's -ti)",
     )
     add_reference_options(p)
     p.add_argument(
-        "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
+        "--out",
+        type=Path,
+        help="write the solution (.csv, .parquet, .pos RTKLIB, .nmea GGA+RMC, .kml, .gpx)",
     )
     p.add_argument("--plot", type=Path, metavar="DIR", help="write figures into this directory")
     p.add_argument(
@@ -213,8 +248,17 @@ def _read_inputs(args: argparse.Namespace) -> tuple[Observations, list[NavData],
     return obs, navs, sp3
 
 
+def _missing_extra(package: str, extra: str) -> str | None:
+    """Why an optional package is missing (with the extra installing it), or None."""
+    import importlib.util
+
+    if importlib.util.find_spec(package) is None:
+        return f"needs the package {package!r}; install it with `pip install 'navtrack[{extra}]'`"
+    return None
+
+
 def _check_output(path: Path | None) -> str | None:
-    """Why the output path cannot be written (checked before the solve), or None."""
+    """Why the output path cannot be written (checked before reading), or None."""
     if path is None:
         return None
     from navtrack.io.solution import FORMATS
@@ -222,6 +266,10 @@ def _check_output(path: Path | None) -> str | None:
     parent = path.parent if str(path.parent) else Path(".")
     if path.suffix.lower() not in FORMATS:
         return f"unknown output format {path.suffix!r} (use {', '.join(FORMATS)})"
+    if path.suffix.lower() == ".parquet":
+        missing = _missing_extra(*_PARQUET_EXTRA)
+        if missing:
+            return f".parquet {missing}"
     if not parent.is_dir():
         return f"directory {str(parent)!r} does not exist"
     if path.is_dir():
@@ -245,7 +293,7 @@ def _error_stats(pos_m: FloatArray, ref: tuple[float, float, float]) -> dict[str
 def run_pos(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from navtrack.gnss.spp import STATUS_NAMES, SppConfig, solution_frame
+    from navtrack.gnss.spp import STATUS_NAMES, solution_frame
 
     if args.example:
         if args.obs is not None:
@@ -272,22 +320,24 @@ def run_pos(args: argparse.Namespace) -> int:
     ref = _reference(args)
     out_problem = _check_output(args.out)
     if out_problem:
-        print(f"navtrack pos: cannot write --out: {out_problem}; solving anyway", file=sys.stderr)
+        raise SystemExit(f"navtrack pos: cannot write --out {str(args.out)!r}: {out_problem}")
+    if args.plot is not None and (missing := _missing_extra(*_PLOT_EXTRA)):
+        raise SystemExit(f"navtrack pos: --plot {missing}")
+    window = _time_window(args)
     args.android = _is_android(args.obs)
-    systems = "".join(dict.fromkeys(args.systems.upper()))
-    # phone pseudoranges are far noisier than RTKLIB's receiver model assumes: C/N0 weights
-    weighting = args.weighting or ("cn0" if args.android else "rtklib")
-    try:
-        config = SppConfig(
-            systems=systems, elmask_deg=args.elmask, weighting=weighting, iono=args.iono
-        )
-    except ValueError as exc:
-        raise SystemExit(f"navtrack pos: {exc}") from None
+    config = _config(args)
 
     obs, navs, sp3 = _read_inputs(args)
+    n_read = len(obs.t_gps_s)
+    if window is not None:
+        from navtrack.gnss.spp import subset_epochs
+        from navtrack.timescale import select_epochs
+
+        obs = subset_epochs(obs, np.flatnonzero(select_epochs(obs.t_gps_s, *window)))
     n_epochs = len(obs.t_gps_s)
     if n_epochs == 0:
-        print(f"navtrack pos: {args.obs}: no observation epochs", file=sys.stderr)
+        why = " selected by --ts/--te/--ti" if window is not None and n_read else ""
+        print(f"navtrack pos: {args.obs}: no observation epochs{why}", file=sys.stderr)
         return 1
     if sp3 is None and not any(nav.tables for nav in navs):
         print(f"navtrack pos: {', '.join(map(str, args.nav))}: no ephemerides", file=sys.stderr)
@@ -307,9 +357,14 @@ def run_pos(args: argparse.Namespace) -> int:
     )
     print(
         f"systems        {used_systems or '-'}  (clocks: {', '.join(result.clock_groups)}; "
-        f"weighting {weighting}, elevation mask {args.elmask:g} deg)"
+        f"weighting {config.weighting}, elevation mask {config.elmask_deg:g} deg)"
     )
-    print(f"epochs         {n_epochs}")
+    for model, setting in (("ionosphere", config.iono), ("troposphere", config.tropo)):
+        if setting == "off":
+            print(f"warning        {model} model switched off")
+    if args.conf is not None:
+        print(f"options        {args.conf} (RTKLIB option file)")
+    print(f"epochs         {n_epochs}" + (f" of {n_read} (--ts/--te/--ti)" if window else ""))
     if obs.skipped:
         reasons = Counter(sk.reason for sk in obs.skipped)
         listed = "; ".join(f"{r}: {n}" for r, n in reasons.most_common())
@@ -355,20 +410,20 @@ def run_pos(args: argparse.Namespace) -> int:
     table = solution_frame(result)
     status_code = 0 if solved else 1
     if args.out is not None:
-        if out_problem:
-            print(f"navtrack pos: solution NOT written: {out_problem}", file=sys.stderr)
-            status_code = 1
-        else:
-            from navtrack.io.solution import write_solution
+        from navtrack.io.solution import write_solution
 
-            try:
-                path = write_solution(
-                    table, args.out, talker="GN" if len(used_systems) > 1 else "GP"
-                )
-                print(f"written        {path}")
-            except OSError as exc:
-                print(f"navtrack pos: solution NOT written: {exc}", file=sys.stderr)
-                status_code = 1
+        try:
+            path = write_solution(
+                table,
+                args.out,
+                talker="GN" if len(used_systems) > 1 else "GP",
+                nmea_rmc=True,
+                header=_pos_header(args, obs, config),
+            )
+            print(f"written        {path}")
+        except OSError as exc:
+            print(f"navtrack pos: solution NOT written: {exc}", file=sys.stderr)
+            status_code = 1
     if args.plot is not None:
         from navtrack.plots.gnss import plot_solution
 
@@ -378,10 +433,104 @@ def run_pos(args: argparse.Namespace) -> int:
             ref_xyz_m=ref,
             azel=(result.azel_rad, list(result.sats)),
             max_gdop=config.max_gdop,
-            elmask_deg=args.elmask,
+            elmask_deg=config.elmask_deg,
         )
         print(f"figures        {', '.join(str(p) for p in paths)}")
     return status_code
+
+
+def _time_window(args: argparse.Namespace) -> tuple[float | None, float | None, float] | None:
+    """``(start, end, interval)`` of ``--ts/--te/--ti`` in GPS seconds, or None without them."""
+    from navtrack.timescale import parse_gpst
+
+    if args.ts is None and args.te is None and args.ti is None:
+        return None
+    bounds: list[float | None] = []
+    for name, words in (("--ts", args.ts), ("--te", args.te)):
+        if words is not None and len(words) > 2:
+            raise SystemExit(f"navtrack pos: {name}: expected a date and a time, got {words}")
+        try:
+            bounds.append(None if words is None else parse_gpst(" ".join(words)))
+        except ValueError as exc:
+            raise SystemExit(f"navtrack pos: {name}: {exc}") from None
+    if args.ti is not None and not (args.ti >= 0.0 and math.isfinite(args.ti)):
+        raise SystemExit(f"navtrack pos: --ti {args.ti:g}: expected an interval >= 0 s")
+    start, end = bounds
+    if start is not None and end is not None and end < start:
+        raise SystemExit("navtrack pos: --te is before --ts")
+    return start, end, args.ti or 0.0
+
+
+def _config(args: argparse.Namespace) -> SppConfig:
+    """The solver settings: command line first, then ``--conf``, then navtrack's defaults."""
+    from navtrack.gnss.spp import SppConfig
+
+    conf = None
+    if args.conf is not None:
+        from navtrack.io.rtklib_conf import read_conf
+
+        if not args.conf.is_file():
+            raise SystemExit(f"navtrack pos: --conf file {str(args.conf)!r} not found")
+        from navtrack.errors import FileFormatError
+
+        try:
+            conf = read_conf(args.conf)
+        except FileFormatError as exc:
+            raise SystemExit(f"navtrack pos: {exc}") from None
+        if conf.precise_ephemeris and args.sp3 is None:
+            raise SystemExit(
+                f"navtrack pos: {args.conf}, line {conf.lines['pos1-sateph']}: "
+                "pos1-sateph=precise needs the SP3 file (--sp3)"
+            )
+
+    def pick(cli: Any, name: str, default: Any) -> Any:
+        from_conf = None if conf is None else getattr(conf, name)
+        return cli if cli is not None else from_conf if from_conf is not None else default
+
+    systems = pick(args.systems, "systems", DEFAULT_SYSTEMS)
+    # phone pseudoranges are far noisier than RTKLIB's receiver model assumes: C/N0 weights
+    weighting = args.weighting or ("cn0" if args.android else "rtklib")
+    defaults = SppConfig()
+    try:
+        return SppConfig(
+            systems="".join(dict.fromkeys(systems.upper())),
+            elmask_deg=pick(args.elmask, "elmask_deg", DEFAULT_ELMASK_DEG),
+            weighting=weighting,
+            iono=pick(args.iono, "iono", DEFAULT_IONO),
+            tropo=pick(None, "tropo", defaults.tropo),
+            max_gdop=pick(None, "max_gdop", defaults.max_gdop),
+        )
+    except ValueError as exc:
+        raise SystemExit(f"navtrack pos: {exc}") from None
+
+
+def _pos_header(args: argparse.Namespace, obs: Observations, config: SppConfig) -> list[str]:
+    """Header lines of a ``.pos`` file: program, inputs, epochs and options, as RTKLIB's."""
+    from navtrack import __version__
+    from navtrack.timescale import to_datetime64, week_tow
+
+    def when(t: float) -> str:
+        week, tow = week_tow(t)
+        text = str(to_datetime64(t).astype("datetime64[ms]")).replace("-", "/").replace("T", " ")
+        return f"{text[:-2]} GPST (week{int(week)} {float(tow):.1f}s)"
+
+    files = [args.obs, *args.nav, *([args.sp3] if args.sp3 else [])]
+    t = obs.t_gps_s
+    return [
+        f"program   : navtrack {__version__}",
+        *(f"inp file  : {f}" for f in files),
+        *([f"obs start : {when(t[0])}", f"obs end   : {when(t[-1])}"] if t.size else []),
+        "pos mode  : Single",
+        f"elev mask : {config.elmask_deg:.1f} deg",
+        f"ionos opt : {_IONO_NAMES[config.iono]}",
+        f"tropo opt : {'Saastamoinen' if config.tropo == 'saastamoinen' else 'OFF'}",
+        f"ephemeris : {'Precise' if args.sp3 else 'Broadcast'}",
+        f"navi sys  : {' '.join(_SYSTEM_NAMES[s] for s in config.systems if s in _SYSTEM_NAMES)}",
+    ]
+
+
+_IONO_NAMES = {"klobuchar": "Broadcast", "ionofree": "Iono-Free LC", "off": "OFF"}
+_SYSTEM_NAMES = {"G": "GPS", "R": "GLONASS", "E": "Galileo", "J": "QZSS", "C": "BeiDou"}
 
 
 def _solve(

@@ -1486,8 +1486,8 @@ def solution_frame(result: SppResult) -> dict[str, np.ndarray]:
     satellites integrity monitoring excluded; empty without it), ``gdop``, ``hdop``, ``vdop``,
     the ECEF position covariance as RTKLIB writes it, ``sdx_m``, ``sdy_m``, ``sdz_m`` (standard
     deviations) and ``sdxy_m``, ``sdyz_m``, ``sdzx_m`` (signed square roots of the covariances,
-    ``sign(c) sqrt(|c|)``), and one ``isb_<sys>_m`` per further clock group; with integrity monitoring also
-    ``raim_status`` (name), ``hpl_m``, ``vpl_m``, ``test_stat`` and ``threshold``
+    ``sign(c) sqrt(|c|)``), and one ``isb_<sys>_m`` per further clock group; with integrity
+    monitoring also ``raim_status`` (name), ``hpl_m``, ``vpl_m``, ``test_stat`` and ``threshold``
     (:class:`navtrack.integrity.raim.IntegrityResult`).
     """
     sd = np.sqrt(np.einsum("eii->ei", result.cov_enu_m2))

@@ -472,9 +472,7 @@ def _cov_from_signed_sqrt(sd: FloatArray) -> FloatArray:
 
 
 # The legend and column header rnx2rtkp writes above ECEF solutions (solution format xyz).
-_XYZ_LEGEND = (
-    "(x/y/z-ecef=WGS84,Q=1:fix,2:float,3:sbas,4:dgps,5:single,6:ppp,ns=# of satellites)"
-)
+_XYZ_LEGEND = "(x/y/z-ecef=WGS84,Q=1:fix,2:float,3:sbas,4:dgps,5:single,6:ppp,ns=# of satellites)"
 _XYZ_COLUMNS = (
     "  GPST                      x-ecef(m)      y-ecef(m)      z-ecef(m)   Q  ns   sdx(m)   sdy(m)"
     "   sdz(m)  sdxy(m)  sdyz(m)  sdzx(m) age(s)  ratio"
@@ -493,9 +491,11 @@ def format_pos(
     Parameters
     ----------
     cols : mapping of str to ndarray
-        As :func:`navtrack.io.solution.solution_columns` returns, n rows: ``x_m``, ``y_m``, ``z_m``, ``n_sats``, and when present ``q`` or ``quality`` (RTKLIB's
-        Q; 5, single, otherwise), ``clock_m`` (receiver clock offset times c), ``sdx_m`` ... ``sdzx_m`` (RTKLIB's signed square roots of
-        the ECEF covariance; 0 otherwise), ``age_s`` and ``ratio``.
+        As :func:`navtrack.io.solution.solution_columns` returns, n rows: ``x_m``, ``y_m``,
+        ``z_m``, ``n_sats``, and when present ``q`` or ``quality`` (RTKLIB's Q; 5, single,
+        otherwise), ``clock_m`` (receiver clock offset times c), ``sdx_m`` ... ``sdzx_m``
+        (RTKLIB's signed square roots of the ECEF covariance; 0 otherwise), ``age_s`` and
+        ``ratio``.
     t_gps_s : ndarray, shape (n,)
         Receiver time tags (GPS s). Like RTKLIB, the file gives the GPS time of the solution:
         the time tag minus the estimated receiver clock offset ``clock_m / c``, rounded to the
