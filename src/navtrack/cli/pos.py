@@ -408,6 +408,7 @@ def run_pos(args: argparse.Namespace) -> int:
         )
 
     table = solution_frame(result)
+    table.update(_velocity_columns(obs, result, navs, sp3, config, solved))
     status_code = 0 if solved else 1
     if args.out is not None:
         from navtrack.io.solution import write_solution
@@ -437,6 +438,34 @@ def run_pos(args: argparse.Namespace) -> int:
         )
         print(f"figures        {', '.join(str(p) for p in paths)}")
     return status_code
+
+
+def _velocity_columns(
+    obs: Observations,
+    result: SppResult,
+    navs: list[NavData],
+    sp3: Sp3 | None,
+    config: SppConfig,
+    solved: int,
+) -> dict[str, FloatArray]:
+    """``ve_mps``, ``vn_mps``, ``vu_mps`` and ``drift_mps`` from the Doppler measurements
+    (NaN without them), with a summary line."""
+    import numpy as np
+
+    from navtrack.gnss.velocity import doppler_velocity
+
+    vel = doppler_velocity(obs, result, navs, sp3=sp3, config=config)
+    n_vel = int(np.isfinite(vel.vel_mps[result.status == 0, 0]).sum())
+    if solved and n_vel == 0:
+        print("warning        no Doppler measurements used: velocity columns are empty")
+    elif solved:
+        print(f"velocity       {n_vel} of {solved} solved epochs (Doppler)")
+    return {
+        "ve_mps": vel.vel_enu_mps[:, 0],
+        "vn_mps": vel.vel_enu_mps[:, 1],
+        "vu_mps": vel.vel_enu_mps[:, 2],
+        "drift_mps": vel.drift_mps,
+    }
 
 
 def _time_window(args: argparse.Namespace) -> tuple[float | None, float | None, float] | None:

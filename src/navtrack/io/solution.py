@@ -92,6 +92,8 @@ _CSV_DECIMALS = {
 # RTKLIB solution quality Q -> NMEA GGA fix quality (NMEA 0183: 1 GPS fix, 2 differential,
 # 4 RTK fixed, 5 RTK float). PPP (Q=6) has no NMEA code; its ambiguities are float, so 5.
 _RTKLIB_Q_TO_GGA = {1: 4, 2: 5, 3: 2, 4: 2, 5: 1, 6: 5}
+# One knot in m/s (1852 m per hour).
+_KNOT_MPS = 1852.0 / 3600.0
 _HEX = tuple(f"{i:02X}" for i in range(256))
 # GGA fix quality -> RMC mode indicator (NMEA 0183 v2.3+).
 _GGA_TO_MODE = {1: "A", 2: "D", 4: "R", 5: "F"}
@@ -502,9 +504,10 @@ def nmea_gga(
     """GGA sentences (with ``$`` and checksum, without line ends) of a solution table, each
     followed by an RMC sentence when ``rmc`` is true.
 
-    RMC carries the UTC date; its status is A (valid) or V (void), speed and course are empty,
-    and the mode indicator (NMEA 2.3) follows the GGA quality: A autonomous, D differential,
-    R RTK fixed, F RTK float, N not valid.
+    RMC carries the UTC date; its status is A (valid) or V (void), speed over ground (knots)
+    and course (degrees true) come from ``ve_mps``/``vn_mps`` where the table has them (empty
+    otherwise), and the mode indicator (NMEA 2.3) follows the GGA quality: A autonomous,
+    D differential, R RTK fixed, F RTK float, N not valid.
 
     Parameters
     ----------
@@ -570,13 +573,29 @@ def nmea_gga(
         )
         iso = np.datetime_as_string(days).tolist()  # YYYY-MM-DD
         rmcs = [
-            f"{talker}RMC,{t},{'A' if qq else 'V'},{w},,,{d[8:10]}{d[5:7]}{d[2:4]},,,"
+            f"{talker}RMC,{t},{'A' if qq else 'V'},{w},{v},{d[8:10]}{d[5:7]}{d[2:4]},,,"
             f"{_GGA_TO_MODE.get(qq, 'N')}"
-            for t, w, qq, d in zip(times, where, qual, iso, strict=True)
+            for t, w, qq, v, d in zip(times, where, qual, _speed_course(cols, ok), iso, strict=True)
         ]
         bodies = [b for pair in zip(bodies, rmcs, strict=True) for b in pair]
     sums = nmea_checksums(bodies).tolist()
     return [f"${b}*{_HEX[c]}" for b, c in zip(bodies, sums, strict=True)]
+
+
+def _speed_course(cols: Mapping[str, np.ndarray], ok: BoolArray) -> list[str]:
+    """RMC speed over ground (knots) and course (degrees true, clockwise from north) fields of
+    the valid rows with an east/north velocity; ``","`` (both empty) elsewhere."""
+    n = len(ok)
+    if "ve_mps" not in cols or "vn_mps" not in cols:
+        return [","] * n
+    ve, vn = _float(cols["ve_mps"]), _float(cols["vn_mps"])
+    knots = np.hypot(ve, vn) / _KNOT_MPS
+    course = np.degrees(np.arctan2(ve, vn)) % 360.0
+    have = ok & np.isfinite(knots)
+    return [
+        f"{k:.3f},{c:.2f}" if h else ","
+        for k, c, h in zip(knots.tolist(), course.tolist(), have.tolist(), strict=True)
+    ]
 
 
 # --------------------------------------------------------------------------------------------
