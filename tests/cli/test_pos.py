@@ -46,7 +46,8 @@ def test_example_prints_summary_and_writes_csv(
     res = _library_result()
     lines = out.read_text().splitlines()
     sd = ["sdx_m", "sdy_m", "sdz_m", "sdxy_m", "sdyz_m", "sdzx_m"]
-    assert lines[0].split(",") == [*SOLUTION_COLUMNS, "gdop", "hdop", "vdop", *sd, "isb_E_m"]
+    vel = ["ve_mps", "vn_mps", "vu_mps", "drift_mps"]
+    assert lines[0].split(",") == [*SOLUTION_COLUMNS, "gdop", "hdop", "vdop", *sd, "isb_E_m", *vel]
     rows = list(csv.DictReader(lines))
     assert len(rows) == 120
 

@@ -206,3 +206,30 @@ def test_nmea_rmc_and_kml_time_stamps(tmp_path: Path) -> None:
     t = pd.to_datetime(whens)
     assert t[0] == pd.Timestamp("2005-04-01T23:59:47Z")
     assert (np.diff(t.asi8) > 0).all()
+
+
+def test_velocity_columns_and_rmc_speed(gnss_data: Path, tmp_path: Path) -> None:
+    """On a moving receiver with Doppler (Yamatogawa rover) the CSV has the velocity columns
+    and each RMC sentence's speed (knots) and course are those of ve_mps/vn_mps."""
+    pynmea2 = pytest.importorskip("pynmea2")
+    from navtrack.io.solution import read_solution
+
+    d = gnss_data / "gogps_yamatogawa"
+    inputs = [str(d / "yamatogawa_rover.obs"), str(d / "yamatogawa_rover.nav"), "--no-progress"]
+    csv, nmea = tmp_path / "r.csv", tmp_path / "r.nmea"
+    for out in (csv, nmea):
+        assert main(["pos", *inputs, "--out", str(out)]) == 0
+    table = read_solution(csv)
+    ve, vn = table["ve_mps"].to_numpy(), table["vn_mps"].to_numpy()
+    assert np.isfinite(ve).all()
+    rmc = [pynmea2.parse(ln) for ln in nmea.read_text().splitlines() if ln[3:6] == "RMC"]
+    knots = np.array([float(m.spd_over_grnd) for m in rmc])
+    course = np.array([float(m.true_course) for m in rmc])
+    np.testing.assert_allclose(knots, np.hypot(ve, vn) * 3600 / 1852, rtol=0, atol=1e-3)
+    expected = np.degrees(np.arctan2(ve, vn)) % 360
+    assert np.all(np.abs((course - expected + 180) % 360 - 180) < 0.01)
+
+
+def test_no_doppler_is_a_summary_warning(capsys: pytest.CaptureFixture[str]) -> None:
+    main(["pos", OBS, NAV, "--systems", "G", "--no-progress"])
+    assert "no Doppler measurements used: velocity columns are empty" in capsys.readouterr().out
