@@ -21,8 +21,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     from navtrack._typing import FloatArray
     from navtrack.gnss.accuracy import ErrorStats
+    from navtrack.gnss.ephemeris import EphemerisTable
     from navtrack.gnss.observations import Observations
     from navtrack.gnss.rinex.nav import NavData
     from navtrack.gnss.sp3 import Sp3
@@ -52,7 +55,7 @@ def register(subparsers: Any) -> None:
         "Differs from RTKLIB 2.4.3 by default in one point: the Galileo group delay is the one "
         "of the ephemeris used, as the ICD specifies; RTKLIB takes that of the satellite's "
         "first record (often F/NAV, BGD 0), which moves multi-GNSS positions by ~0.5 m "
-        "(--rtklib-compatible reproduces it; docs/integrity.md).",
+        "(--rtklib-compatible reproduces it; docs/rtklib-users.md).",
     )
     p.add_argument("obs", nargs="?", type=Path, help="RINEX observation file or GnssLogger log")
     p.add_argument("nav", nargs="*", type=Path, help="RINEX navigation file(s)")
@@ -85,6 +88,12 @@ def register(subparsers: Any) -> None:
         help="RTKLIB option file (rnx2rtkp -k): elevation mask, systems, ionosphere, "
         "troposphere, ephemeris, frequency, GDOP limit; other options must keep RTKLIB's "
         "defaults; command-line options win",
+    )
+    p.add_argument(
+        "--rtklib-compatible",
+        action="store_true",
+        help="take each satellite's group delay from its first navigation record, as RTKLIB "
+        "2.4.3 does (Galileo F/NAV: none), to match an existing RTKLIB pipeline",
     )
     p.add_argument(
         "--ts",
@@ -343,7 +352,15 @@ def run_pos(args: argparse.Namespace) -> int:
         print(f"navtrack pos: {', '.join(map(str, args.nav))}: no ephemerides", file=sys.stderr)
         return 1
     raim = _raim_config(args)
-    result = _solve(obs, navs, sp3, config, progress=not args.no_progress, raim=raim)
+    tables = None
+    if args.rtklib_compatible:
+        from navtrack.gnss.ephemeris import first_record_group_delays
+        from navtrack.gnss.spp import navigation_tables
+
+        tables = first_record_group_delays(navigation_tables(navs))
+    result = _solve(
+        obs, navs, sp3, config, progress=not args.no_progress, raim=raim, ephemeris=tables
+    )
     counts = result.status_counts()
     solved = counts["ok"]
     # the systems of satellites that entered a solution, not those merely observed
@@ -570,13 +587,22 @@ def _solve(
     *,
     progress: bool,
     raim: Any = None,
+    ephemeris: Mapping[str, EphemerisTable] | None = None,
 ) -> SppResult:
     """Solve all epochs, with a progress bar on files of more than one block."""
     from navtrack.gnss.spp import CHUNK_EPOCHS, solve_spp
 
     n = len(obs.t_gps_s)
     if not progress or n <= CHUNK_EPOCHS:
-        return solve_spp(obs, navs, sp3=sp3, config=config, chunk_epochs=CHUNK_EPOCHS, raim=raim)
+        return solve_spp(
+            obs,
+            navs,
+            sp3=sp3,
+            config=config,
+            chunk_epochs=CHUNK_EPOCHS,
+            raim=raim,
+            ephemeris=ephemeris,
+        )
     from tqdm import tqdm
 
     with tqdm(total=n, unit="epoch", desc="solving", file=sys.stderr, disable=None) as bar:
@@ -588,4 +614,5 @@ def _solve(
             chunk_epochs=CHUNK_EPOCHS,
             progress=lambda done, _: bar.update(done - bar.n),
             raim=raim,
+            ephemeris=ephemeris,
         )
