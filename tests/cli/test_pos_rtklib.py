@@ -160,6 +160,7 @@ def test_time_window_iso_and_rtklib_forms_agree(
 def test_bad_time_window_refused(capsys: pytest.CaptureFixture[str]) -> None:
     assert "--ts" in _refused(["pos", OBS, NAV, "--ts", "yesterday"], capsys)
     assert "--ti" in _refused(["pos", OBS, NAV, "--ti", "-30"], capsys)
+    assert "before --ts" in _refused(["pos", "--ts", "2005/04/02", "00:10:00", OBS, NAV], capsys)
 
 
 def test_missing_extras_refused_before_reading(

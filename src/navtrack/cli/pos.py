@@ -494,7 +494,10 @@ def _time_window(args: argparse.Namespace) -> tuple[float | None, float | None, 
     bounds: list[float | None] = []
     for name, words in (("--ts", args.ts), ("--te", args.te)):
         if words is not None and len(words) > 2:
-            raise SystemExit(f"navtrack pos: {name}: expected a date and a time, got {words}")
+            raise SystemExit(
+                f"navtrack pos: {name}: expected a date and a time, got {' '.join(words)} "
+                "(give the input files before --ts/--te)"
+            )
         try:
             bounds.append(None if words is None else parse_gpst(" ".join(words)))
         except ValueError as exc:
