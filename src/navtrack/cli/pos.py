@@ -304,6 +304,8 @@ def run_pos(args: argparse.Namespace) -> int:
 
     from navtrack.gnss.spp import STATUS_NAMES, solution_frame
 
+    # first: a greedy --ts/--te may have taken the input files
+    window = _time_window(args)
     if args.example:
         if args.obs is not None:
             raise SystemExit("navtrack pos: give either OBS NAV... or --example, not both")
@@ -332,7 +334,6 @@ def run_pos(args: argparse.Namespace) -> int:
         raise SystemExit(f"navtrack pos: cannot write --out {str(args.out)!r}: {out_problem}")
     if args.plot is not None and (missing := _missing_extra(*_PLOT_EXTRA)):
         raise SystemExit(f"navtrack pos: --plot {missing}")
-    window = _time_window(args)
     args.android = _is_android(args.obs)
     config = _config(args)
 
