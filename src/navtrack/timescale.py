@@ -22,7 +22,7 @@ import datetime as _dt
 
 import numpy as np
 
-from navtrack._typing import ArrayLike, FloatArray, IntArray
+from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
 
 GPS_EPOCH = np.datetime64("1980-01-06T00:00:00", "ns")
 SECONDS_PER_WEEK = 604800.0
@@ -147,3 +147,62 @@ def to_gps(t_s: ArrayLike, time_system: str) -> FloatArray:
         case "UTC" | "GLO":
             return utc_to_gps(t)
     raise ValueError(f"time_system: unknown time system {time_system!r}")
+
+
+#: Tolerance (s) of the epoch selection of :func:`select_epochs`: receiver time tags a few ms
+#: off the whole second are still on the grid (RTKLIB's ``-ts/-te/-ti`` keep them too; the
+#: 0759 file has tags 1-5 ms late).
+EPOCH_TOL_S = 0.025
+
+
+def parse_gpst(text: str) -> float:
+    """GPS seconds of a GPST calendar time written as RTKLIB writes it
+    (``2005/04/02 00:10:00``) or in ISO 8601 (``2005-04-02T00:10:00``).
+
+    Raises
+    ------
+    ValueError
+        The text is neither form.
+    """
+    iso = text.strip().replace("/", "-").replace(" ", "T", 1)
+    try:
+        return float(gps_seconds(np.datetime64(iso, "ns")))
+    except ValueError:
+        raise ValueError(
+            f"cannot read time {text!r}: expected 'YYYY/MM/DD HH:MM:SS' or ISO 8601"
+        ) from None
+
+
+def select_epochs(
+    t_gps_s: ArrayLike,
+    start_s: float | None = None,
+    end_s: float | None = None,
+    interval_s: float | None = None,
+    tol_s: float = EPOCH_TOL_S,
+) -> BoolArray:
+    """Epochs within ``[start_s, end_s]`` whose time of week is a multiple of ``interval_s``
+    (each within ``tol_s``): RTKLIB's ``-ts``, ``-te`` and ``-ti``.
+
+    Parameters
+    ----------
+    t_gps_s : array-like, shape (n,)
+        Epoch times, GPS s.
+    start_s, end_s : float, optional
+        First and last time kept (GPS s); None: open.
+    interval_s : float, optional
+        Interval (s) of the kept epochs on the GPS week's grid; None or 0: every epoch.
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+    """
+    t = np.asarray(t_gps_s, dtype=float)
+    keep = np.ones(t.shape, dtype=bool)
+    if start_s is not None:
+        keep &= t >= start_s - tol_s
+    if end_s is not None:
+        keep &= t <= end_s + tol_s
+    if interval_s:
+        _, tow = week_tow(t)
+        keep &= np.abs(np.remainder(tow + interval_s / 2, interval_s) - interval_s / 2) <= tol_s
+    return keep

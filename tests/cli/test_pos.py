@@ -45,7 +45,9 @@ def test_example_prints_summary_and_writes_csv(
     assert "reference      -3962108.673 3381309.574 3668678.638 (ECEF m; station SEPT, " in text
     res = _library_result()
     lines = out.read_text().splitlines()
-    assert lines[0].split(",") == [*SOLUTION_COLUMNS, "gdop", "hdop", "vdop", "isb_E_m"]
+    sd = ["sdx_m", "sdy_m", "sdz_m", "sdxy_m", "sdyz_m", "sdzx_m"]
+    vel = ["ve_mps", "vn_mps", "vu_mps", "drift_mps"]
+    assert lines[0].split(",") == [*SOLUTION_COLUMNS, "gdop", "hdop", "vdop", *sd, "isb_E_m", *vel]
     rows = list(csv.DictReader(lines))
     assert len(rows) == 120
 
@@ -103,9 +105,9 @@ def test_track_formats(tmp_path: Path) -> None:
     np.testing.assert_allclose([float(f[9]) for f in fields], llh[:, 2], rtol=0, atol=5e-4)
     assert {f[6] for f in fields} == {"1"}
 
-    coords = re.search(r"<coordinates>(.*?)</coordinates>", paths[".kml"].read_text(), re.S)
-    assert coords is not None
-    kml = np.array([[float(v) for v in c.split(",")[:2]] for c in coords.group(1).split()])
+    coords = re.findall(r"<gx:coord>(.*?)</gx:coord>", paths[".kml"].read_text())
+    assert len(coords) == 120
+    kml = np.array([[float(v) for v in c.split()[:2]] for c in coords])
     np.testing.assert_allclose(kml, np.stack([lon, lat], axis=1), rtol=0, atol=5e-10)
 
     pts = re.findall(
@@ -167,13 +169,20 @@ def test_reference_in_wrong_units_is_refused(capsys: pytest.CaptureFixture[str])
     assert "degrees" in _refused(llh, capsys)
 
 
-def test_unwritable_output_still_solves(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    rc = main(["pos", "--example", "--out", str(tmp_path / "missing" / "x.csv")])
-    assert rc == 1
-    captured = capsys.readouterr()
-    assert "solved         120" in captured.out
-    assert "does not exist" in captured.err
-    assert "NOT written" in captured.err
+def test_unwritable_output_refused_before_reading(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A bad --out (missing directory, unknown suffix) exits 2 before the observations are
+    read: the reader is replaced by one that fails the test if it is called."""
+    import navtrack.gnss.rinex.obs
+
+    def no_reading(*_: object, **__: object) -> None:
+        raise AssertionError("the observations were read")
+
+    monkeypatch.setattr(navtrack.gnss.rinex.obs, "read_obs", no_reading)
+    for out, why in ((tmp_path / "missing" / "x.csv", "does not exist"), ("x.pos2", ".pos2")):
+        message = _refused(["pos", "--example", "--out", str(out)], capsys)
+        assert why in message
 
 
 def test_missing_inputs(capsys: pytest.CaptureFixture[str]) -> None:

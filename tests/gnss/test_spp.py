@@ -61,28 +61,12 @@ def _run(gnss_data: Path, name: str, ephemeris=None, **cfg: object):  # type: ig
 
 
 def _rtklib_gettgd_tables(nav):  # type: ignore[no-untyped-def]
-    """Ephemeris tables whose group delays (TGD, BGDs) are, for every record of a satellite,
-    those of its first record by transmission time: what RTKLIB 2.4.3's ``gettgd``
-    (``pntpos.c``) applies, since it takes the first record of the satellite in ``nav->eph``
-    (sorted by ``ttr``, then ``toe``, by ``uniqnav``) whatever ephemeris ``seleph`` chose. In
-    SEPT078M.21P that first record is an F/NAV one (BGD(E5b,E1) = 0) for several Galileo
-    satellites, so RTKLIB applies no group delay to their E1 pseudoranges."""
-    from navtrack.gnss.ephemeris import EphemerisTable, ephemeris_tables
+    """The group delays RTKLIB 2.4.3's ``gettgd`` (``pntpos.c``) applies: those of each
+    satellite's first record (SEPT078M.21P: F/NAV, BGD(E5b,E1) = 0, for several Galileo
+    satellites)."""
+    from navtrack.gnss.ephemeris import ephemeris_tables, first_record_group_delays
 
-    out = {}
-    for sys, t in ephemeris_tables(nav).items():
-        cols = dict(t.columns)
-        toc, tot = t.get("toc_gps_s"), t.get("tot_sow")
-        ttr = toc + (tot - toc % 604800 + 302400) % 604800 - 302400
-        order = np.lexsort((t.get("toe_gps_s"), ttr))
-        for name in ("tgd", "bgd_e5a", "bgd_e5b", "tgd1", "tgd2"):
-            if name in cols:
-                col = np.array(cols[name], dtype=float)
-                for sat in np.unique(t.sat):
-                    col[t.sat == sat] = col[order[t.sat[order] == sat][0]]
-                cols[name] = col
-        out[sys] = EphemerisTable(sys, t.sat, cols)
-    return out
+    return first_record_group_delays(ephemeris_tables(nav))
 
 
 def _rtklib(gnss_data: Path, name: str):  # type: ignore[no-untyped-def]

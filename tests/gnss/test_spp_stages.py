@@ -349,9 +349,19 @@ def test_solution_frame_columns() -> None:
         "gdop",
         "hdop",
         "vdop",
+        "sdx_m",
+        "sdy_m",
+        "sdz_m",
+        "sdxy_m",
+        "sdyz_m",
+        "sdzx_m",
         "isb_E_m",
     ]
     np.testing.assert_array_equal(frame["x_m"], res.pos_m[:, 0])
+    # RTKLIB's signed square roots of the ECEF covariance: sdzx holds cov(z, x)
+    np.testing.assert_allclose(frame["sdx_m"] ** 2, res.cov[:, 0, 0], rtol=1e-12)
+    zx = res.cov[:, 2, 0]
+    np.testing.assert_allclose(np.sign(frame["sdzx_m"]) * frame["sdzx_m"] ** 2, zx, rtol=1e-12)
     np.testing.assert_array_equal(frame["n_sats"], res.n_sats)
     np.testing.assert_array_equal(frame["sd_u_m"], np.sqrt(res.cov_enu_m2[:, 2, 2]))
     np.testing.assert_array_equal(frame["isb_E_m"], res.isb_m[:, 0])

@@ -32,7 +32,7 @@ from navtrack.io.solution import (
 )
 
 GPX_NS = {"g": "http://www.topografix.com/GPX/1/1"}
-KML_NS = {"k": "http://www.opengis.net/kml/2.2"}
+KML_NS = {"k": "http://www.opengis.net/kml/2.2", "gx": "http://www.google.com/kml/ext/2.2"}
 FAILED_ROWS = (3, 4, 10, 59)  # 59: the last epoch of the cut
 
 
@@ -288,9 +288,13 @@ def test_gpx_with_gpxpy(solution: pd.DataFrame, tmp_path: Path) -> None:
 def test_kml_structure(solution: pd.DataFrame, tmp_path: Path) -> None:
     out = write_solution(solution, tmp_path / "sol.kml")
     root = ET.parse(out).getroot()
-    coords = root.find("k:Document/k:Placemark/k:LineString/k:coordinates", KML_NS).text.split()
-    assert len(coords) == len(solution) - len(FAILED_ROWS)
-    lon, lat = map(float, coords[0].split(","))
+    track = root.find("k:Document/k:Placemark/gx:Track", KML_NS)
+    coords = [c.text for c in track.findall("gx:coord", KML_NS)]
+    whens = [w.text for w in track.findall("k:when", KML_NS)]
+    assert len(coords) == len(whens) == len(solution) - len(FAILED_ROWS)
+    # time stamps in UTC: 12:00:01 GPST in 2021 is 11:59:43 UTC (18 leap seconds)
+    assert pd.Timestamp(whens[1]).tz_convert(None) == pd.Timestamp("2021-03-19T11:59:43")
+    lon, lat = map(float, coords[0].split()[:2])
     table = solution_table(solution)
     assert lon == pytest.approx(table["lon_deg"][0], abs=1e-9)
     assert lat == pytest.approx(table["lat_deg"][0], abs=1e-9)
@@ -351,7 +355,7 @@ def test_empty_and_single_epoch_frames(tmp_path: Path) -> None:
     assert back["time_gps"][0] == expected.isoformat() + ".000"
     assert back["t_gps_s"][0] == pytest.approx(t, abs=1e-6)
     root = ET.parse(write_solution(one, tmp_path / "one.kml")).getroot()
-    assert root.find("k:Document/k:Placemark/k:Point/k:coordinates", KML_NS) is not None
+    assert len(root.findall("k:Document/k:Placemark/gx:Track/gx:coord", KML_NS)) == 1
     root = ET.parse(write_solution(one, tmp_path / "one.gpx")).getroot()
     assert len(root.findall("g:trk/g:trkseg/g:trkpt", GPX_NS)) == 1
 

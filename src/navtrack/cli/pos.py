@@ -1,12 +1,14 @@
 """``navtrack pos OBS NAV...``: single point positions of a RINEX file or an Android raw log.
 
 Reads the observations (RINEX 2/3 or Android GnssLogger), the navigation file(s) and optionally
-an SP3 file, solves every epoch by weighted least squares (:func:`navtrack.gnss.spp.solve_spp`),
-prints a summary (epochs, solved, count of each status, and with a reference the mean, RMS and
-95 % of the horizontal, vertical and 3D errors), writes the solution with ``--out`` (CSV,
-Parquet, NMEA GGA, KML, GPX by suffix) and figures with ``--plot``. The exit code is 1 when no
-epoch could be solved, the input cannot be read, or the requested ``--out`` file could not be
-written (the summary is still printed: a script must not mistake a missing file for success).
+an SP3 file, keeps the epochs ``--ts/--te/--ti`` select, solves them by weighted least squares
+(:func:`navtrack.gnss.spp.solve_spp`), prints a summary (epochs, solved, count of each status,
+and with a reference the mean, RMS and 95 % of the horizontal, vertical and 3D errors), writes
+the solution with ``--out`` (CSV, Parquet, RTKLIB .pos, NMEA GGA+RMC, KML, GPX by suffix) and
+figures with ``--plot``. ``--conf`` reads an RTKLIB option file; options given on the command
+line win over it. An output that cannot be written (unknown suffix, missing directory, missing
+extra) is refused before anything is read (exit 2). The exit code is 1 when no epoch could be
+solved, the input cannot be read, or the ``--out`` file could not be written.
 """
 
 from __future__ import annotations
@@ -19,8 +21,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     from navtrack._typing import FloatArray
     from navtrack.gnss.accuracy import ErrorStats
+    from navtrack.gnss.ephemeris import EphemerisTable
     from navtrack.gnss.observations import Observations
     from navtrack.gnss.rinex.nav import NavData
     from navtrack.gnss.sp3 import Sp3
@@ -29,9 +34,12 @@ if TYPE_CHECKING:
 EXAMPLE_OBS = "SEPT078M_120.21O"
 EXAMPLE_NAV = "SEPT078M.21P"
 # cssrlib's xyz_ref of station SEPT (src/navtrack/data/README.md)
-EXAMPLE_REF_XYZ_M = (-3962108.673, 3381309.574, 3668678.638)
 EXAMPLE_REF_SOURCE = "station SEPT, cssrlib's xyz_ref (src/navtrack/data/README.md)"
 WEIGHTINGS = ("rtklib", "elevation", "cn0", "equal")
+# Settings of --systems/--elmask/--iono when neither the command line nor --conf gives them.
+DEFAULT_SYSTEMS = "GREJC"
+DEFAULT_ELMASK_DEG = 15.0
+DEFAULT_IONO = "klobuchar"
 
 
 def register(subparsers: Any) -> None:
@@ -39,20 +47,23 @@ def register(subparsers: Any) -> None:
         "pos",
         help="single point positioning of a RINEX observation file or an Android raw log",
         description="Single point positions (weighted least squares, multi-GNSS with inter-system "
-        "biases, Klobuchar + Saastamoinen, RTKLIB-compatible defaults) of every epoch.",
+        "biases, Klobuchar + Saastamoinen, RTKLIB's models and weights) of every epoch. "
+        "Differs from RTKLIB 2.4.3 by default in one point: the Galileo group delay is the one "
+        "of the ephemeris used, as the ICD specifies; RTKLIB takes that of the satellite's "
+        "first record (often F/NAV, BGD 0), which moves multi-GNSS positions by ~0.5 m "
+        "(--rtklib-compatible reproduces it; docs/rtklib-users.md).",
     )
     p.add_argument("obs", nargs="?", type=Path, help="RINEX observation file or GnssLogger log")
     p.add_argument("nav", nargs="*", type=Path, help="RINEX navigation file(s)")
     p.add_argument("--sp3", type=Path, help="precise orbits/clocks (SP3) instead of broadcast")
     p.add_argument(
-        "--systems", default="GREJC", help="systems to use, e.g. GEJ (default: all present)"
+        "--systems", help=f"systems to use, e.g. GEJ (default {DEFAULT_SYSTEMS}: all present)"
     )
     p.add_argument(
         "--elmask",
         type=float,
-        default=15.0,
         metavar="DEG",
-        help="elevation mask in degrees (default 15)",
+        help=f"elevation mask in degrees (default {DEFAULT_ELMASK_DEG:g})",
     )
     p.add_argument(
         "--weighting",
@@ -63,12 +74,41 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--iono",
         choices=("klobuchar", "ionofree", "off"),
-        default="klobuchar",
-        help="ionosphere: broadcast Klobuchar, dual-frequency iono-free, or none",
+        help=f"ionosphere: broadcast Klobuchar, dual-frequency iono-free, or none "
+        f"(default {DEFAULT_IONO})",
+    )
+    p.add_argument(
+        "--conf",
+        type=Path,
+        metavar="FILE",
+        help="RTKLIB option file (rnx2rtkp -k): elevation mask, systems, ionosphere, "
+        "troposphere, ephemeris, frequency, GDOP limit; other options must keep RTKLIB's "
+        "defaults; command-line options win",
+    )
+    p.add_argument(
+        "--rtklib-compatible",
+        action="store_true",
+        help="take each satellite's group delay from its first navigation record, as RTKLIB "
+        "2.4.3 does (Galileo F/NAV: none), to match an existing RTKLIB pipeline",
+    )
+    p.add_argument(
+        "--ts",
+        nargs="+",
+        metavar="TIME",
+        help="first epoch, GPST: 2005/04/02 00:10:00 (as RTKLIB's -ts) or ISO 8601",
+    )
+    p.add_argument("--te", nargs="+", metavar="TIME", help="last epoch, GPST (as --ts)")
+    p.add_argument(
+        "--ti",
+        type=float,
+        metavar="SEC",
+        help="interval: keep only epochs on this grid of the GPS week (RTKLIB's -ti)",
     )
     add_reference_options(p)
     p.add_argument(
-        "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
+        "--out",
+        type=Path,
+        help="write the solution (.csv, .parquet, .pos RTKLIB, .nmea GGA+RMC, .kml, .gpx)",
     )
     p.add_argument("--plot", type=Path, metavar="DIR", help="write figures into this directory")
     p.add_argument(
@@ -235,26 +275,6 @@ def _read_inputs(
     return obs, navs, sp3
 
 
-def _check_output(path: Path | None) -> str | None:
-    """Why the output path cannot be written (checked before the solve), or None."""
-    if path is None:
-        return None
-    from navtrack.io.solution import FORMATS
-
-    parent = path.parent if str(path.parent) else Path(".")
-    if path.suffix.lower() not in FORMATS:
-        return f"unknown output format {path.suffix!r} (use {', '.join(FORMATS)})"
-    if not parent.is_dir():
-        return f"directory {str(parent)!r} does not exist"
-    if path.is_dir():
-        return f"{str(path)!r} is a directory"
-    import os
-
-    if not os.access(parent, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
-        return f"no permission to write {str(path)!r}"
-    return None
-
-
 def _error_stats(pos_m: FloatArray, ref: tuple[float, float, float]) -> dict[str, ErrorStats]:
     import numpy as np
 
@@ -267,8 +287,10 @@ def _error_stats(pos_m: FloatArray, ref: tuple[float, float, float]) -> dict[str
 def run_pos(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from navtrack.gnss.spp import STATUS_NAMES, SppConfig, solution_frame
+    from navtrack.gnss.spp import STATUS_NAMES, solution_frame
 
+    # first: a greedy --ts/--te may have taken the input files
+    window = _time_window(args)
     if args.example:
         if args.obs is not None:
             raise SystemExit("navtrack pos: give either OBS NAV... or --example, not both")
@@ -277,7 +299,9 @@ def run_pos(args: argparse.Namespace) -> int:
         args.obs = sample_path(EXAMPLE_OBS)
         args.nav = [sample_path(EXAMPLE_NAV)]
         if args.ref is None and args.ref_llh is None:
-            args.ref = list(EXAMPLE_REF_XYZ_M)
+            from navtrack.data import REFERENCE_XYZ_M
+
+            args.ref = list(REFERENCE_XYZ_M[EXAMPLE_OBS])
             args.ref_source = EXAMPLE_REF_SOURCE
     if args.obs is None:
         raise SystemExit("navtrack pos: give OBS and NAV files, or --example")
@@ -292,37 +316,47 @@ def run_pos(args: argparse.Namespace) -> int:
             "(RINEX NAV) or precise orbits (--sp3)"
         )
     args.android = _is_android(args.obs)
-    systems = "".join(dict.fromkeys(args.systems.upper()))
-    # phone pseudoranges are far noisier than RTKLIB's receiver model assumes: C/N0 weights
-    weighting = args.weighting or ("cn0" if args.android else "rtklib")
-    try:
-        config = SppConfig(
-            systems=systems, elmask_deg=args.elmask, weighting=weighting, iono=args.iono
-        )
-    except ValueError as exc:
-        raise SystemExit(f"navtrack pos: {exc}") from None
+    config = _config(args)
     from navtrack.cli.network import network_jobs, run_network
 
     jobs = None if args.android else network_jobs(args)
     if jobs is not None:
+        if window is not None:
+            raise SystemExit("navtrack pos: --ts/--te/--ti are for one station")
         return run_network(args, jobs, config)
     if args.workers is not None or args.scheduler is not None:
         raise SystemExit("navtrack pos: --workers/--scheduler need several observation files")
     ref = _reference(args)
-    out_problem = _check_output(args.out)
-    if out_problem:
-        print(f"navtrack pos: cannot write --out: {out_problem}; solving anyway", file=sys.stderr)
+    from navtrack.cli.outputs import check_outputs
+    from navtrack.io.solution import FORMATS
+
+    check_outputs("navtrack pos", args.out, FORMATS, args.plot)
 
     obs, navs, sp3 = _read_inputs(args, config)
+    n_read = len(obs.t_gps_s)
+    if window is not None:
+        from navtrack.gnss.spp import subset_epochs
+        from navtrack.timescale import select_epochs
+
+        obs = subset_epochs(obs, np.flatnonzero(select_epochs(obs.t_gps_s, *window)))
     n_epochs = len(obs.t_gps_s)
     if n_epochs == 0:
-        print(f"navtrack pos: {args.obs}: no observation epochs", file=sys.stderr)
+        why = " selected by --ts/--te/--ti" if window is not None and n_read else ""
+        print(f"navtrack pos: {args.obs}: no observation epochs{why}", file=sys.stderr)
         return 1
     if sp3 is None and not any(nav.tables for nav in navs):
         print(f"navtrack pos: {', '.join(map(str, args.nav))}: no ephemerides", file=sys.stderr)
         return 1
     raim = _raim_config(args)
-    result = _solve(obs, navs, sp3, config, progress=not args.no_progress, raim=raim)
+    tables = None
+    if args.rtklib_compatible:
+        from navtrack.gnss.ephemeris import first_record_group_delays
+        from navtrack.gnss.spp import navigation_tables
+
+        tables = first_record_group_delays(navigation_tables(navs))
+    result = _solve(
+        obs, navs, sp3, config, progress=not args.no_progress, raim=raim, ephemeris=tables
+    )
     counts = result.status_counts()
     solved = counts["ok"]
     # the systems of satellites that entered a solution, not those merely observed
@@ -336,9 +370,14 @@ def run_pos(args: argparse.Namespace) -> int:
     )
     print(
         f"systems        {used_systems or '-'}  (clocks: {', '.join(result.clock_groups)}; "
-        f"weighting {weighting}, elevation mask {args.elmask:g} deg)"
+        f"weighting {config.weighting}, elevation mask {config.elmask_deg:g} deg)"
     )
-    print(f"epochs         {n_epochs}")
+    for model, setting in (("ionosphere", config.iono), ("troposphere", config.tropo)):
+        if setting == "off":
+            print(f"warning        {model} model switched off")
+    if args.conf is not None:
+        print(f"options        {args.conf} (RTKLIB option file)")
+    print(f"epochs         {n_epochs}" + (f" of {n_read} (--ts/--te/--ti)" if window else ""))
     if obs.skipped:
         reasons = Counter(sk.reason for sk in obs.skipped)
         listed = "; ".join(f"{r}: {n}" for r, n in reasons.most_common())
@@ -382,22 +421,23 @@ def run_pos(args: argparse.Namespace) -> int:
         )
 
     table = solution_frame(result)
+    table.update(_velocity_columns(obs, result, navs, sp3, config, solved))
     status_code = 0 if solved else 1
     if args.out is not None:
-        if out_problem:
-            print(f"navtrack pos: solution NOT written: {out_problem}", file=sys.stderr)
-            status_code = 1
-        else:
-            from navtrack.io.solution import write_solution
+        from navtrack.io.solution import write_solution
 
-            try:
-                path = write_solution(
-                    table, args.out, talker="GN" if len(used_systems) > 1 else "GP"
-                )
-                print(f"written        {path}")
-            except OSError as exc:
-                print(f"navtrack pos: solution NOT written: {exc}", file=sys.stderr)
-                status_code = 1
+        try:
+            path = write_solution(
+                table,
+                args.out,
+                talker="GN" if len(used_systems) > 1 else "GP",
+                nmea_rmc=True,
+                header=_pos_header(args, obs, config),
+            )
+            print(f"written        {path}")
+        except OSError as exc:
+            print(f"navtrack pos: solution NOT written: {exc}", file=sys.stderr)
+            status_code = 1
     if args.plot is not None:
         from navtrack.plots.gnss import plot_solution
 
@@ -407,10 +447,135 @@ def run_pos(args: argparse.Namespace) -> int:
             ref_xyz_m=ref,
             azel=(result.azel_rad, list(result.sats)),
             max_gdop=config.max_gdop,
-            elmask_deg=args.elmask,
+            elmask_deg=config.elmask_deg,
         )
         print(f"figures        {', '.join(str(p) for p in paths)}")
     return status_code
+
+
+def _velocity_columns(
+    obs: Observations,
+    result: SppResult,
+    navs: list[NavData],
+    sp3: Sp3 | None,
+    config: SppConfig,
+    solved: int,
+) -> dict[str, FloatArray]:
+    """``ve_mps``, ``vn_mps``, ``vu_mps`` and ``drift_mps`` from the Doppler measurements
+    (NaN without them), with a summary line."""
+    import numpy as np
+
+    from navtrack.gnss.velocity import doppler_velocity
+
+    vel = doppler_velocity(obs, result, navs, sp3=sp3, config=config)
+    n_vel = int(np.isfinite(vel.vel_mps[result.status == 0, 0]).sum())
+    if solved and n_vel == 0:
+        print("warning        no Doppler measurements used: velocity columns are empty")
+    elif solved:
+        print(f"velocity       {n_vel} of {solved} solved epochs (Doppler)")
+    return {
+        "ve_mps": vel.vel_enu_mps[:, 0],
+        "vn_mps": vel.vel_enu_mps[:, 1],
+        "vu_mps": vel.vel_enu_mps[:, 2],
+        "drift_mps": vel.drift_mps,
+    }
+
+
+def _time_window(args: argparse.Namespace) -> tuple[float | None, float | None, float] | None:
+    """``(start, end, interval)`` of ``--ts/--te/--ti`` in GPS seconds, or None without them."""
+    from navtrack.timescale import parse_gpst
+
+    if args.ts is None and args.te is None and args.ti is None:
+        return None
+    bounds: list[float | None] = []
+    for name, words in (("--ts", args.ts), ("--te", args.te)):
+        if words is not None and len(words) > 2:
+            raise SystemExit(
+                f"navtrack pos: {name}: expected a date and a time, got {' '.join(words)} "
+                "(give the input files before --ts/--te)"
+            )
+        try:
+            bounds.append(None if words is None else parse_gpst(" ".join(words)))
+        except ValueError as exc:
+            raise SystemExit(f"navtrack pos: {name}: {exc}") from None
+    if args.ti is not None and not (args.ti >= 0.0 and math.isfinite(args.ti)):
+        raise SystemExit(f"navtrack pos: --ti {args.ti:g}: expected an interval >= 0 s")
+    start, end = bounds
+    if start is not None and end is not None and end < start:
+        raise SystemExit("navtrack pos: --te is before --ts")
+    return start, end, args.ti or 0.0
+
+
+def _config(args: argparse.Namespace) -> SppConfig:
+    """The solver settings: command line first, then ``--conf``, then navtrack's defaults."""
+    from navtrack.gnss.spp import SppConfig
+
+    conf = None
+    if args.conf is not None:
+        from navtrack.io.rtklib_conf import read_conf
+
+        if not args.conf.is_file():
+            raise SystemExit(f"navtrack pos: --conf file {str(args.conf)!r} not found")
+        from navtrack.errors import FileFormatError
+
+        try:
+            conf = read_conf(args.conf)
+        except FileFormatError as exc:
+            raise SystemExit(f"navtrack pos: {exc}") from None
+        if conf.precise_ephemeris and args.sp3 is None:
+            raise SystemExit(
+                f"navtrack pos: {args.conf}, line {conf.lines['pos1-sateph']}: "
+                "pos1-sateph=precise needs the SP3 file (--sp3)"
+            )
+
+    def pick(cli: Any, name: str, default: Any) -> Any:
+        from_conf = None if conf is None else getattr(conf, name)
+        return cli if cli is not None else from_conf if from_conf is not None else default
+
+    systems = pick(args.systems, "systems", DEFAULT_SYSTEMS)
+    # phone pseudoranges are far noisier than RTKLIB's receiver model assumes: C/N0 weights
+    weighting = args.weighting or ("cn0" if args.android else "rtklib")
+    defaults = SppConfig()
+    try:
+        return SppConfig(
+            systems="".join(dict.fromkeys(systems.upper())),
+            elmask_deg=pick(args.elmask, "elmask_deg", DEFAULT_ELMASK_DEG),
+            weighting=weighting,
+            iono=pick(args.iono, "iono", DEFAULT_IONO),
+            tropo=pick(None, "tropo", defaults.tropo),
+            max_gdop=pick(None, "max_gdop", defaults.max_gdop),
+        )
+    except ValueError as exc:
+        raise SystemExit(f"navtrack pos: {exc}") from None
+
+
+def _pos_header(args: argparse.Namespace, obs: Observations, config: SppConfig) -> list[str]:
+    """Header lines of a ``.pos`` file: program, inputs, epochs and options, as RTKLIB's."""
+    from navtrack import __version__
+    from navtrack.timescale import to_datetime64, week_tow
+
+    def when(t: float) -> str:
+        week, tow = week_tow(t)
+        text = str(to_datetime64(t).astype("datetime64[ms]")).replace("-", "/").replace("T", " ")
+        return f"{text[:-2]} GPST (week{int(week)} {float(tow):.1f}s)"
+
+    files = [args.obs, *args.nav, *([args.sp3] if args.sp3 else [])]
+    t = obs.t_gps_s
+    return [
+        f"program   : navtrack {__version__}",
+        *(f"inp file  : {f}" for f in files),
+        *([f"obs start : {when(t[0])}", f"obs end   : {when(t[-1])}"] if t.size else []),
+        "pos mode  : Single",
+        f"elev mask : {config.elmask_deg:.1f} deg",
+        f"ionos opt : {_IONO_NAMES[config.iono]}",
+        f"tropo opt : {'Saastamoinen' if config.tropo == 'saastamoinen' else 'OFF'}",
+        f"ephemeris : {'Precise' if args.sp3 else 'Broadcast'}",
+        f"navi sys  : {' '.join(_SYSTEM_NAMES[s] for s in config.systems if s in _SYSTEM_NAMES)}",
+    ]
+
+
+_IONO_NAMES = {"klobuchar": "Broadcast", "ionofree": "Iono-Free LC", "off": "OFF"}
+_SYSTEM_NAMES = {"G": "GPS", "R": "GLONASS", "E": "Galileo", "J": "QZSS", "C": "BeiDou"}
 
 
 def _solve(
@@ -421,13 +586,22 @@ def _solve(
     *,
     progress: bool,
     raim: Any = None,
+    ephemeris: Mapping[str, EphemerisTable] | None = None,
 ) -> SppResult:
     """Solve all epochs, with a progress bar on files of more than one block."""
     from navtrack.gnss.spp import CHUNK_EPOCHS, solve_spp
 
     n = len(obs.t_gps_s)
     if not progress or n <= CHUNK_EPOCHS:
-        return solve_spp(obs, navs, sp3=sp3, config=config, chunk_epochs=CHUNK_EPOCHS, raim=raim)
+        return solve_spp(
+            obs,
+            navs,
+            sp3=sp3,
+            config=config,
+            chunk_epochs=CHUNK_EPOCHS,
+            raim=raim,
+            ephemeris=ephemeris,
+        )
     from tqdm import tqdm
 
     with tqdm(total=n, unit="epoch", desc="solving", file=sys.stderr, disable=None) as bar:
@@ -439,4 +613,5 @@ def _solve(
             chunk_epochs=CHUNK_EPOCHS,
             progress=lambda done, _: bar.update(done - bar.n),
             raim=raim,
+            ephemeris=ephemeris,
         )

@@ -29,6 +29,7 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.geodesy import C_MPS
+from navtrack.timescale import SECONDS_PER_WEEK
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -654,6 +655,32 @@ def ephemeris_tables(nav: NavData | Mapping[str, pd.DataFrame]) -> dict[str, Eph
         )
         for sys, cols in nav.tables.items()
     }
+
+
+def first_record_group_delays(tables: Mapping[str, EphemerisTable]) -> dict[str, EphemerisTable]:
+    """Tables whose group delays (``tgd``, ``bgd_e5a``, ``bgd_e5b``, ``tgd1``, ``tgd2``) are,
+    for every record of a satellite, those of its first record by transmission time (then
+    ``toe``): RTKLIB 2.4.3's choice, whatever ephemeris it uses for the epoch. Where that first
+    record is a Galileo F/NAV one its ``BGD(E5b,E1)`` is 0, so RTKLIB applies no group delay to
+    the E1 pseudorange (docs/integrity.md). For matching an RTKLIB pipeline only
+    (``navtrack pos --rtklib-compatible``); the ICD's choice is the default.
+    """
+    out = {}
+    for sys, t in tables.items():
+        cols = dict(t.columns)
+        toc, tot = t.get("toc_gps_s"), t.get("tot_sow")
+        # transmission time: the week of toc, wrapped to within half a week of it
+        ttr = toc + (tot - toc % SECONDS_PER_WEEK + SECONDS_PER_WEEK / 2) % SECONDS_PER_WEEK
+        ttr -= SECONDS_PER_WEEK / 2
+        order = np.lexsort((t.get("toe_gps_s"), ttr))
+        for name in ("tgd", "bgd_e5a", "bgd_e5b", "tgd1", "tgd2"):
+            if name in cols:
+                col = np.array(cols[name], dtype=float)
+                for sat in np.unique(t.sat):
+                    col[t.sat == sat] = col[order[t.sat[order] == sat][0]]
+                cols[name] = col
+        out[sys] = EphemerisTable(sys, t.sat, cols)
+    return out
 
 
 def merge_tables(tables: list[dict[str, EphemerisTable]]) -> dict[str, EphemerisTable]:

@@ -431,8 +431,9 @@ def select_pseudoranges(
 
 
 def observation_codes(config: SppConfig | None = None) -> frozenset[str]:
-    """Every observation code :func:`code_pseudoranges` may take for a configuration: the
-    pseudorange codes of its systems' bands (:data:`CODE_PRIORITY`) and their signal strengths.
+    """Every observation code single point positioning may take for a configuration: the
+    pseudorange codes of its systems' bands (:data:`CODE_PRIORITY`), their signal strengths
+    (:func:`code_pseudoranges`) and Dopplers (:func:`navtrack.gnss.velocity.doppler_velocity`).
     A reader given them (``read_obs(path, systems=..., codes=...)``) decodes nothing else."""
     cfg = config or SppConfig()
     codes: set[str] = set()
@@ -444,7 +445,7 @@ def observation_codes(config: SppConfig | None = None) -> frozenset[str]:
             bands = (PRIMARY_BAND[sys],)
         for band in bands:
             for code in CODE_PRIORITY.get(sys, {}).get(band, ()):
-                codes.update((code, "S" + code[1:]))
+                codes.update((code, "S" + code[1:], "D" + code[1:]))
     return frozenset(codes)
 
 
@@ -1509,6 +1510,11 @@ def concatenate_results(parts: list[SppResult]) -> SppResult:
     )
 
 
+# RTKLIB's covariance columns and the ECEF covariance element each one holds.
+_RTKLIB_SD_COLUMNS = ("sdx_m", "sdy_m", "sdz_m", "sdxy_m", "sdyz_m", "sdzx_m")
+_RTKLIB_SD_INDICES = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0))
+
+
 def solution_frame(result: SppResult) -> dict[str, np.ndarray]:
     """The solution as a solution frame (plain arrays, no pandas), one row per epoch, all
     statuses: the input of :func:`navtrack.io.solution.write_solution`,
@@ -1518,9 +1524,11 @@ def solution_frame(result: SppResult) -> dict[str, np.ndarray]:
     Columns: ``t_gps_s`` (GPS s), ``x_m``, ``y_m``, ``z_m`` (ECEF, m; NaN where no estimate
     exists), ``clock_m``, ``sd_e_m``, ``sd_n_m``, ``sd_u_m`` (formal standard deviations, m),
     ``n_sats`` (used), ``pdop``, ``status`` (name), ``excluded`` (space-separated ids of the
-    satellites integrity monitoring excluded; empty without it), ``gdop``, ``hdop``, ``vdop``
-    and one ``isb_<sys>_m`` per further clock group; with integrity monitoring also
-    ``raim_status`` (name), ``hpl_m``, ``vpl_m``, ``test_stat`` and ``threshold``
+    satellites integrity monitoring excluded; empty without it), ``gdop``, ``hdop``, ``vdop``,
+    the ECEF position covariance as RTKLIB writes it, ``sdx_m``, ``sdy_m``, ``sdz_m`` (standard
+    deviations) and ``sdxy_m``, ``sdyz_m``, ``sdzx_m`` (signed square roots of the covariances,
+    ``sign(c) sqrt(|c|)``), and one ``isb_<sys>_m`` per further clock group; with integrity
+    monitoring also ``raim_status`` (name), ``hpl_m``, ``vpl_m``, ``test_stat`` and ``threshold``
     (:class:`navtrack.integrity.raim.IntegrityResult`).
     """
     sd = np.sqrt(np.einsum("eii->ei", result.cov_enu_m2))
@@ -1542,6 +1550,9 @@ def solution_frame(result: SppResult) -> dict[str, np.ndarray]:
         "hdop": result.dop[:, 2],
         "vdop": result.dop[:, 3],
     }
+    c = result.cov
+    for name, (i, j) in zip(_RTKLIB_SD_COLUMNS, _RTKLIB_SD_INDICES, strict=True):
+        cols[name] = np.sign(c[:, i, j]) * np.sqrt(np.abs(c[:, i, j]))
     for k, g in enumerate(result.clock_groups[1:]):
         cols[f"isb_{g}_m"] = result.isb_m[:, k]
     if result.integrity is not None:

@@ -1,4 +1,4 @@
-"""Reader for RTKLIB solution files (``.pos``).
+"""Reader and writer of RTKLIB solution files (``.pos``).
 
 RTKLIB's post-processors (``rnx2rtkp``, RTKPOST) and RTKNAVI write one solution per line after a
 header of ``%`` comment lines. The last header line names the columns; the layout depends on the
@@ -15,8 +15,9 @@ output options:
   ``ratio`` (ambiguity validation ratio) and optional velocity columns.
 
 The reader follows the column header, so every combination of these options reads without
-configuration. It was written from the solution format as the RTKLIB manual's file-format
-appendix describes it and from the files in ``shared/data/gnss``; no RTKLIB code was used.
+configuration. :func:`format_pos` writes RTKLIB's default ECEF layout. Both were written from the
+solution format as the RTKLIB manual's file-format appendix describes it and from the files in
+``shared/data/gnss``; no RTKLIB code was used.
 
 References
 ----------
@@ -26,7 +27,7 @@ T. Takasu, *RTKLIB ver. 2.4.2 Manual*, 2013, appendix B (solution file format).
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from os import fspath
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -34,13 +35,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from navtrack import geodesy, timescale
-from navtrack._typing import FloatArray, StrPath
+from navtrack._typing import BoolArray, FloatArray, StrPath
 from navtrack.errors import FileFormatError
 
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["read_pos", "to_solution_frame"]
+__all__ = ["format_pos", "read_pos", "to_solution_frame"]
 
 # Column labels of RTKLIB solution files -> navtrack names (docs/vocabulary.md).
 _KNOWN = {
@@ -468,3 +469,75 @@ def _cov_from_signed_sqrt(sd: FloatArray) -> FloatArray:
     cov[:, 1, 2] = cov[:, 2, 1] = cross[:, 1]
     cov[:, 2, 0] = cov[:, 0, 2] = cross[:, 2]
     return cov
+
+
+# The legend and column header rnx2rtkp writes above ECEF solutions (solution format xyz).
+_XYZ_LEGEND = "(x/y/z-ecef=WGS84,Q=1:fix,2:float,3:sbas,4:dgps,5:single,6:ppp,ns=# of satellites)"
+_XYZ_COLUMNS = (
+    "  GPST                      x-ecef(m)      y-ecef(m)      z-ecef(m)   Q  ns   sdx(m)   sdy(m)"
+    "   sdz(m)  sdxy(m)  sdyz(m)  sdzx(m) age(s)  ratio"
+)
+_SD_COLUMNS = ("sdx_m", "sdy_m", "sdz_m", "sdxy_m", "sdyz_m", "sdzx_m")
+# RTKLIB's solution quality of a single point solution.
+_Q_SINGLE = 5
+
+
+def format_pos(
+    cols: Mapping[str, np.ndarray], t_gps_s: FloatArray, ok: BoolArray, header: Sequence[str] = ()
+) -> str:
+    """The text of an RTKLIB solution file (ECEF, GPST, ``hms`` time, 3 decimals) of the valid
+    rows of a solution table, as ``rnx2rtkp`` writes it with ``out-solformat=xyz``.
+
+    Parameters
+    ----------
+    cols : mapping of str to ndarray
+        As :func:`navtrack.io.solution.solution_columns` returns, n rows: ``x_m``, ``y_m``,
+        ``z_m``, ``n_sats``, and when present ``q`` or ``quality`` (RTKLIB's Q; 5, single,
+        otherwise), ``clock_m`` (receiver clock offset times c), ``sdx_m`` ... ``sdzx_m``
+        (RTKLIB's signed square roots of the ECEF covariance; 0 otherwise), ``age_s`` and
+        ``ratio``.
+    t_gps_s : ndarray, shape (n,)
+        Receiver time tags (GPS s). Like RTKLIB, the file gives the GPS time of the solution:
+        the time tag minus the estimated receiver clock offset ``clock_m / c``, rounded to the
+        millisecond.
+    ok : ndarray of bool, shape (n,)
+        Rows with a solution; the others are left out, as RTKLIB leaves them out.
+    header : sequence of str
+        Header lines above the legend (written after ``% ``), e.g. the input files and options.
+
+    Returns
+    -------
+    str
+        The file's text; :func:`read_pos` reads it back.
+
+    References
+    ----------
+    T. Takasu, *RTKLIB ver. 2.4.2 Manual*, 2013, appendix B (solution file format).
+    """
+    idx = np.flatnonzero(ok)
+    n = len(ok)
+
+    def column(name: str, default: float) -> FloatArray:
+        values = np.asarray(cols[name], dtype=float) if name in cols else np.full(n, default)
+        return np.where(np.isfinite(values), values, default)[idx]
+
+    q_name = "quality" if "quality" in cols else "q"
+    q = column(q_name, _Q_SINGLE).astype(np.int64)
+    ns = column("n_sats", 0.0).astype(np.int64)
+    xyz = np.stack([column(c, np.nan) for c in ("x_m", "y_m", "z_m")], axis=-1)
+    sd = np.stack([column(c, 0.0) for c in _SD_COLUMNS], axis=-1)
+    age = column("age_s", 0.0)
+    ratio = column("ratio", 0.0)
+    t_sol = np.round(t_gps_s[idx] - column("clock_m", 0.0) / geodesy.C_MPS, 3)
+    iso = np.datetime_as_string(timescale.to_datetime64(t_sol), unit="ms")
+    times = np.strings.replace(np.strings.replace(iso, "-", "/"), "T", " ")
+    lines = [f"% {h}".rstrip() for h in header]
+    lines += ["%", f"% {_XYZ_LEGEND}", f"%{_XYZ_COLUMNS}"]
+    for i in range(idx.size):
+        s = sd[i]
+        lines.append(
+            f"{times[i]} {xyz[i, 0]:14.4f} {xyz[i, 1]:14.4f} {xyz[i, 2]:14.4f} {q[i]:3d}"
+            f" {ns[i]:3d} {s[0]:8.4f} {s[1]:8.4f} {s[2]:8.4f} {s[3]:8.4f} {s[4]:8.4f}"
+            f" {s[5]:8.4f} {age[i]:6.2f} {ratio[i]:6.1f}"
+        )
+    return "\n".join(lines) + "\n"

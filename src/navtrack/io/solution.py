@@ -1,4 +1,4 @@
-"""Positioning solution files: CSV and Parquet tables, NMEA GGA, KML and GPX tracks.
+"""Positioning solution files: CSV and Parquet tables, RTKLIB .pos, NMEA GGA/RMC, KML and GPX.
 
 A *solution frame* is a pandas DataFrame, or any mapping of column names to 1-D arrays, with
 one row per epoch (see :func:`solution_columns` for its columns). :func:`write_solution` picks
@@ -29,6 +29,7 @@ import numpy as np
 from navtrack import geodesy, timescale
 from navtrack._typing import BoolArray, FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError, MissingDependencyError
+from navtrack.io.rtklib import format_pos
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -70,7 +71,7 @@ SOLUTION_COLUMNS = (
 )
 
 #: File suffixes :func:`write_solution` understands.
-FORMATS = (".csv", ".parquet", ".nmea", ".kml", ".gpx")
+FORMATS = (".csv", ".parquet", ".pos", ".nmea", ".kml", ".gpx")
 
 # Decimals written to CSV: 0.1 mm for metres (lat/lon 1e-9 deg ~ 0.1 mm), 1 us for tow_s.
 _CSV_DECIMALS = {
@@ -91,6 +92,8 @@ _CSV_DECIMALS = {
 # RTKLIB solution quality Q -> NMEA GGA fix quality (NMEA 0183: 1 GPS fix, 2 differential,
 # 4 RTK fixed, 5 RTK float). PPP (Q=6) has no NMEA code; its ambiguities are float, so 5.
 _RTKLIB_Q_TO_GGA = {1: 4, 2: 5, 3: 2, 4: 2, 5: 1, 6: 5}
+# One knot in m/s (1852 m per hour).
+_KNOT_MPS = 1852.0 / 3600.0
 _HEX = tuple(f"{i:02X}" for i in range(256))
 # GGA fix quality -> RMC mode indicator (NMEA 0183 v2.3+).
 _GGA_TO_MODE = {1: "A", 2: "D", 4: "R", 5: "F"}
@@ -298,6 +301,7 @@ def write_solution(
     ok_status: object = "ok",
     talker: str = "GP",
     nmea_rmc: bool = False,
+    header: Sequence[str] = (),
 ) -> Path:
     """Write a solution frame in the format its file suffix names.
 
@@ -316,6 +320,10 @@ def write_solution(
             metres to 0.1 mm, degrees to 1e-9, DOP to 0.001; missing values are empty fields.
         ``.parquet``
             The same table at full precision (needs pandas and pyarrow, extra ``parquet``).
+        ``.pos``
+            RTKLIB's solution file as ``rnx2rtkp`` writes it by default (GPST, ECEF, Q, ns,
+            ``sdx`` ... ``sdzx``, age, ratio; :func:`navtrack.io.rtklib.format_pos`); epochs
+            without a valid fix are left out, as RTKLIB leaves them out.
         ``.nmea``
             One ``$..GGA`` sentence per epoch: UTC time (GPST minus leap seconds) to 0.01 s,
             latitude/longitude as ``ddmm.mmmmmm``/``dddmm.mmmmmm``, fix quality 1 for valid
@@ -323,9 +331,11 @@ def write_solution(
             3/4->2, 5->1, 6->5), 0 and
             empty position fields otherwise, satellites used, HDOP from a ``hdop`` column when
             there is one, **otherwise PDOP** in the HDOP field, altitude = ellipsoidal height
-            with geoid separation 0. GGA carries no date (``nmea_rmc=True`` adds RMC).
+            with geoid separation 0. GGA carries no date (``nmea_rmc=True`` adds RMC, with
+            speed and course from ``ve_mps``/``vn_mps`` when the frame has them).
         ``.kml``
-            KML 2.2 document with the valid epochs as one ``LineString`` clamped to the ground.
+            KML 2.2 document with the valid epochs as one time-stamped ``gx:Track`` (UTC
+            ``when`` per epoch) clamped to the ground.
         ``.gpx``
             GPX 1.1 track; one ``trkseg`` per run of consecutive valid epochs, ``time`` in UTC,
             ``ele`` = ellipsoidal height with ``geoidheight`` 0, ``fix`` 3d, ``sat``, ``pdop``
@@ -340,6 +350,8 @@ def write_solution(
         NMEA talker id (two letters; ``"GN"`` for multi-GNSS).
     nmea_rmc : bool, default False
         NMEA only: follow each GGA with an RMC sentence, which carries the UTC date.
+    header : sequence of str
+        ``.pos`` only: header lines (input files, options) written above the column header.
 
     Returns
     -------
@@ -375,10 +387,12 @@ def write_solution(
         llh = np.stack([cols["lat_deg"], cols["lon_deg"], cols["h_m"]], axis=-1)
         ok = ok_mask(cols["status"], ok_status) & np.isfinite(llh).all(axis=1)
         t = _float(df["t_gps_s"])
-        if suffix == ".nmea":
+        if suffix == ".pos":
+            text = format_pos(cols, t, ok, header)
+        elif suffix == ".nmea":
             text = "".join(s + "\r\n" for s in nmea_gga(cols, t, ok, talker=talker, rmc=nmea_rmc))
         elif suffix == ".kml":
-            text = _kml(cols, ok)
+            text = _kml(cols, t, ok)
         else:
             text = _gpx(cols, t, ok)
     with _open_for_writing(p) as fh:
@@ -490,9 +504,10 @@ def nmea_gga(
     """GGA sentences (with ``$`` and checksum, without line ends) of a solution table, each
     followed by an RMC sentence when ``rmc`` is true.
 
-    RMC carries the UTC date; its status is A (valid) or V (void), speed and course are empty,
-    and the mode indicator (NMEA 2.3) follows the GGA quality: A autonomous, D differential,
-    R RTK fixed, F RTK float, N not valid.
+    RMC carries the UTC date; its status is A (valid) or V (void), speed over ground (knots)
+    and course (degrees true) come from ``ve_mps``/``vn_mps`` where the table has them (empty
+    otherwise), and the mode indicator (NMEA 2.3) follows the GGA quality: A autonomous,
+    D differential, R RTK fixed, F RTK float, N not valid.
 
     Parameters
     ----------
@@ -558,13 +573,29 @@ def nmea_gga(
         )
         iso = np.datetime_as_string(days).tolist()  # YYYY-MM-DD
         rmcs = [
-            f"{talker}RMC,{t},{'A' if qq else 'V'},{w},,,{d[8:10]}{d[5:7]}{d[2:4]},,,"
+            f"{talker}RMC,{t},{'A' if qq else 'V'},{w},{v},{d[8:10]}{d[5:7]}{d[2:4]},,,"
             f"{_GGA_TO_MODE.get(qq, 'N')}"
-            for t, w, qq, d in zip(times, where, qual, iso, strict=True)
+            for t, w, qq, v, d in zip(times, where, qual, _speed_course(cols, ok), iso, strict=True)
         ]
         bodies = [b for pair in zip(bodies, rmcs, strict=True) for b in pair]
     sums = nmea_checksums(bodies).tolist()
     return [f"${b}*{_HEX[c]}" for b, c in zip(bodies, sums, strict=True)]
+
+
+def _speed_course(cols: Mapping[str, np.ndarray], ok: BoolArray) -> list[str]:
+    """RMC speed over ground (knots) and course (degrees true, clockwise from north) fields of
+    the valid rows with an east/north velocity; ``","`` (both empty) elsewhere."""
+    n = len(ok)
+    if "ve_mps" not in cols or "vn_mps" not in cols:
+        return [","] * n
+    ve, vn = _float(cols["ve_mps"]), _float(cols["vn_mps"])
+    knots = np.hypot(ve, vn) / _KNOT_MPS
+    course = np.degrees(np.arctan2(ve, vn)) % 360.0
+    have = ok & np.isfinite(knots)
+    return [
+        f"{k:.3f},{c:.2f}" if h else ","
+        for k, c, h in zip(knots.tolist(), course.tolist(), have.tolist(), strict=True)
+    ]
 
 
 # --------------------------------------------------------------------------------------------
@@ -578,10 +609,14 @@ def _utc_iso(t_gps_s: FloatArray) -> np.ndarray:
     return np.char.add(np.datetime_as_string(utc), "Z")
 
 
-def _kml(cols: Mapping[str, np.ndarray], ok: BoolArray) -> str:
+def _kml(cols: Mapping[str, np.ndarray], t_gps_s: FloatArray, ok: BoolArray) -> str:
     lat = _float(cols["lat_deg"])[ok]
     lon = _float(cols["lon_deg"])[ok]
-    coords = " ".join(f"{a:.9f},{b:.9f}" for a, b in zip(lon.tolist(), lat.tolist(), strict=True))
+    whens = "".join(f"<when>{w}</when>\n" for w in _utc_iso(t_gps_s[ok]).tolist())
+    coords = "".join(
+        f"<gx:coord>{b:.9f} {a:.9f} 0</gx:coord>\n"
+        for a, b in zip(lat.tolist(), lon.tolist(), strict=True)
+    )
     n, n_ok = len(ok), int(ok.sum())
     first = cols["time_gps"][0] if n else ""
     last = cols["time_gps"][-1] if n else ""
@@ -591,7 +626,7 @@ def _kml(cols: Mapping[str, np.ndarray], ok: BoolArray) -> str:
     )
     return (
         '<?xml version="1.0" encoding="UTF-8"?>\n'
-        '<kml xmlns="http://www.opengis.net/kml/2.2">\n'
+        '<kml xmlns="http://www.opengis.net/kml/2.2" xmlns:gx="http://www.google.com/kml/ext/2.2">\n'
         "<Document>\n"
         "<name>navtrack solution</name>\n"
         f"<description>{desc}</description>\n"
@@ -601,15 +636,8 @@ def _kml(cols: Mapping[str, np.ndarray], ok: BoolArray) -> str:
             ""
             if n_ok == 0
             else "<Placemark>\n<name>track</name>\n<styleUrl>#track</styleUrl>\n"
-            + (
-                # A KML LineString needs two or more coordinate tuples.
-                f"<Point>\n<coordinates>{coords}</coordinates>\n</Point>\n"
-                if n_ok == 1
-                else "<LineString>\n<tessellate>1</tessellate>\n"
-                "<altitudeMode>clampToGround</altitudeMode>\n"
-                f"<coordinates>{coords}</coordinates>\n</LineString>\n"
-            )
-            + "</Placemark>\n"
+            "<gx:Track>\n<altitudeMode>clampToGround</altitudeMode>\n"
+            f"{whens}{coords}</gx:Track>\n</Placemark>\n"
         )
         + "</Document>\n</kml>\n"
     )
