@@ -259,3 +259,25 @@ def test_summary_median_equals_nanmedian_without_importing_numpy_ma() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stderr.strip().splitlines()[-1] == "False"
+
+
+def test_a_model_or_system_the_inputs_leave_out_is_a_warning(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Issue 34: ``--sp3`` without a navigation file switched the ionosphere off silently;
+    ``--systems E`` on a GPS-only file said only ``too_few_sats``."""
+    from navtrack.data import sample_path
+
+    sept, sp3 = (
+        sample_path("SEPT078M_120.21O"),
+        sample_path("COD0MGXFIN_20210780000_01D_05M_ORB_1045-1330.SP3"),
+    )
+    assert main(["pos", str(sept), "--sp3", str(sp3), "--systems", "G", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "warning        ionosphere not modelled: no navigation file" in out
+    obs, nav = sample_path("07590920.05o"), sample_path("07590920.05n")
+    assert main(["pos", str(obs), str(nav), "--systems", "E", "--no-progress"]) == 1
+    out = capsys.readouterr().out
+    assert "warning        --systems E: not in 07590920.05o (it holds G)" in out
+    assert main(["pos", str(obs), str(nav), "--no-progress"]) == 0
+    assert "not modelled" not in capsys.readouterr().out

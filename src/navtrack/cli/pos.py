@@ -275,6 +275,29 @@ def _read_inputs(
     return obs, navs, sp3
 
 
+def _input_warnings(
+    args: argparse.Namespace, config: SppConfig, obs: Observations, navs: list[NavData]
+) -> list[str]:
+    """What the inputs leave out of the model or the solution: a broadcast ionosphere without
+    parameters, a system asked for that the file does not hold."""
+    from navtrack.gnss.spp import _klobuchar_params
+
+    out = []
+    if config.iono == "klobuchar" and not any(_klobuchar_params(n.iono) is not None for n in navs):
+        given = "no navigation file" if not navs else "no ionosphere parameters in the navigation"
+        out.append(
+            f"ionosphere not modelled: {given} (Klobuchar needs them); give a NAV file or "
+            "--iono ionofree"
+        )
+    if args.systems:
+        present = set(obs.header.obs_types or {}) | {s[0] for s in obs.sats}
+        absent = [s for s in dict.fromkeys(args.systems.upper()) if s not in present]
+        if absent:
+            held = "".join(s for s in "GRECJI" if s in present) or "none"
+            out.append(f"--systems {''.join(absent)}: not in {args.obs.name} (it holds {held})")
+    return out
+
+
 def _error_stats(pos_m: FloatArray, ref: tuple[float, float, float]) -> dict[str, ErrorStats]:
     import numpy as np
 
@@ -375,6 +398,8 @@ def run_pos(args: argparse.Namespace) -> int:
     for model, setting in (("ionosphere", config.iono), ("troposphere", config.tropo)):
         if setting == "off":
             print(f"warning        {model} model switched off")
+    for why in _input_warnings(args, config, obs, navs):
+        print(f"warning        {why}")
     if args.conf is not None:
         print(f"options        {args.conf} (RTKLIB option file)")
     print(f"epochs         {n_epochs}" + (f" of {n_read} (--ts/--te/--ti)" if window else ""))
