@@ -154,3 +154,20 @@ def test_parameters_refuse_bad_values(tmp_path: Path) -> None:
         AgpsExperimentParams(cell_radius_m=-1.0)
     with pytest.raises(ValueError, match="intervals_min"):
         AgpsExperimentParams(intervals_min=(0.0, 2.0))
+
+
+def test_a_folder_of_other_parameters_is_refused_with_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 34: rerunning into a folder of an earlier run with other parameters printed
+    "internal error ... this is a navtrack defect" (exit 3)."""
+    from navtrack.cli import EXIT_BAD_INPUT, main
+
+    base = ["reproduce", "agps", "--out", str(tmp_path), "--runs", "2", "--no-figures",
+            "--no-progress", "--set", "real_data=false"]  # fmt: skip
+    assert main(base) == 0
+    assert main([*base, "--set", "sigma_noise_m=1"]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert "give a new output folder" in err
+    assert "defect" not in err
+    assert main(base) == 0  # the same parameters resume

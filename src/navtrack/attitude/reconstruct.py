@@ -17,6 +17,7 @@ so it can be evaluated (and written) on the camera clock: :meth:`Reconstruction.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -129,6 +130,7 @@ def reconstruct(
     fix_quat: ArrayLike,
     fix_sigma_rad: ArrayLike,
     config: ReconstructionConfig | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> Reconstruction:
     """Run the whole chain on one recording.
 
@@ -140,12 +142,16 @@ def reconstruct(
     fix_quat : (m, 4) fix attitudes (body -> reference, scalar-last, unit)
     fix_sigma_rad : (m,) per-axis fix standard deviations, rad
     config : ReconstructionConfig or None
+    progress : callable, optional
+        Called with the name of each stage as it starts (``propagation``,
+        ``paper_correction``, ``calibration``, ``smoother``), e.g. to advance a progress bar.
 
     Returns
     -------
     Reconstruction
     """
     cfg = ReconstructionConfig() if config is None else config
+    step = progress or (lambda stage: None)
     t = np.asarray(t_s, dtype=np.float64)
     w = np.asarray(gyr_rad_s, dtype=np.float64)
     d = delta_angles(t, w)
@@ -161,13 +167,17 @@ def reconstruct(
         raise ValueError("fix_t_s: fix time stamps must increase strictly")
     start = int(np.clip(np.searchsorted(t, ft[0]), 0, t.size - 1))
     first = Rotation.from_quat(fq[0])
+    step("propagation")
     plain = propagate(first, d, start=start, method=cfg.method, order=cfg.order)
     pred = interpolate_attitude(t, plain.quat, w, ft)
     e_s, e_v = attitude_errors(Rotation.from_quat(pred), Rotation.from_quat(fq))
     q_c = correction_quaternion(e_s, e_v, cfg.correction)
+    step("paper_correction")
     corrected = propagate(q_c * first, d, start=start, method=cfg.method, order=cfg.order)
+    step("calibration")
     cal = calibrate_gyro(t, w, ft, fq, fs, cfg.calibration)
     nominal, rates = calibrated_propagation(t, w, cal, float(ft[0]), fq[0])
+    step("smoother")
     sm = smooth_attitude(t, nominal, rates, ft + cal.time_offset_s, fq, fs, cfg.smoother)
     estimates = {
         "propagation": Estimate(plain.quat, w, 0.0),

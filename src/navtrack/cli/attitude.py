@@ -91,6 +91,7 @@ def register(subparsers: Any) -> None:
         "has no absolute time)",
     )
     rec.add_argument("--json", type=Path, help="write the summary as JSON")
+    rec.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     rec.set_defaults(func=run_reconstruct)
     cmd.set_defaults(func=lambda args: cmd.print_help() or 2)
 
@@ -207,10 +208,18 @@ def run_reconstruct(args: argparse.Namespace) -> int:
         ft, fq, fs = sights.t_stamp_s[fixes.ok], fixes.quat[fixes.ok], fixes.sigma_rad[fixes.ok]
     else:
         ft, fq, fs = _read_fixes(args.fixes, args.fix_sigma_rad)
-    try:
-        recon = reconstruct(t, gyr, ft, fq, fs)
-    except ValueError as exc:
-        raise SystemExit(f"navtrack attitude reconstruct: {args.imu}: {exc}") from None
+    from tqdm import tqdm
+
+    with tqdm(total=4, unit=" stages", disable=args.no_progress, leave=False) as bar:
+
+        def stage(name: str) -> None:
+            bar.set_description(name)
+            bar.update(1)
+
+        try:
+            recon = reconstruct(t, gyr, ft, fq, fs, progress=stage)
+        except ValueError as exc:
+            raise SystemExit(f"navtrack attitude reconstruct: {args.imu}: {exc}") from None
     cal = recon.calibration
     summary["fixes"] = int(ft.size)
     summary["calibration"] = {

@@ -297,8 +297,11 @@ def write_figures(results: dict[str, Any], out_dir: Path) -> list[Path]:
             where = "offset" if study_key == "real_data" else "height"
             ax.set_title(f"{study_key.replace('_', ' ')}, {where}: {height} m")
             ax.set_ylabel("mean error / m")
-            ax.set_ylim(bottom=0.0)
-            ax.grid(alpha=0.3)
+            if study_key == "real_data":  # receivers and readings spread over decades
+                ax.set_yscale("log")
+            else:
+                ax.set_ylim(bottom=0.0)
+            ax.grid(alpha=0.3, which="both")
         axes[-1].set_xlabel("interval between the measurements / min")
         axes[0].legend()
         paths.append(save_figure(fig, out_dir / f"{name}.png"))
