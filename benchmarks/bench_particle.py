@@ -29,7 +29,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=100)
     ap.add_argument("--batch", type=int, default=50)
-    ap.add_argument("--proposal", default="ip_jpda", choices=["ip_jpda", "kp", "ip_gnn", "ip_gnn_joint"])
+    ap.add_argument(
+        "--proposal", default="ip_jpda", choices=["ip_jpda", "kp", "ip_gnn", "ip_gnn_joint"]
+    )
     ap.add_argument("--rule", default="wo", choices=["so", "to", "wo"])
     ap.add_argument("--clutter", action="store_true", help="Pd = 0.9, λV = 0.5 (else Pd = 1)")
     args = ap.parse_args()

@@ -94,7 +94,7 @@ class FovealParams:
     """
 
     q: float = 0.01
-    truth_q: float = 0.0
+    truth_q: float = 0.01
     noise: Literal["continuous", "discrete"] = "continuous"
     R: float = 0.05
     dt_s: float = 1.0
@@ -106,7 +106,7 @@ class FovealParams:
     speed_mps: float = 1.0
     pd_clutter: float = 0.9
     clutter_rate: float = 0.5
-    threshold_m: float = 2.0
+    threshold_m: float = 4.0
     last_steps: int = 10
     table5_rule: Literal["so", "to", "wo"] = "wo"
     resample_fraction: float = 0.5
