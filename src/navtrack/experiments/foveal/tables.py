@@ -150,8 +150,12 @@ def tables_markdown(results: dict[str, Any]) -> str:
 
 
 def summary_lines(results: dict[str, Any]) -> list[str]:
-    """Console lines: the three tables, one line per row."""
-    out = []
+    """Console lines: the calibration, then the three tables, one line per row."""
+    par = results["parameters"]
+    out = [
+        f"threshold_m={par['threshold_m']} truth_q={par['truth_q']} spacing_m={par['spacing_m']} "
+        "(defaults fitted on table3 KP; every other cell is a prediction)"
+    ]
     for key in ("table3", "table4"):
         for q in ("ip_jpda", "kp"):
             cells = " ".join(
