@@ -88,6 +88,10 @@ class FovealParams:
         Control rule of Table 5 (the paper does not say; WO, its best rule).
     resample_fraction : float
         ``N_T / N_part`` (paper: not given).
+    gnn_gate : float
+        Gate of the paper's IP-GNN on ``(z - h(x))² / R`` (not given; 9 = three standard
+        deviations; ``inf``: no gate, every partition assigned when there are enough
+        measurements).
     gain_check : bool
         Run the gain-rule check (:func:`~navtrack.experiments.foveal.gains.gain_check`) in the
         ``extra`` step (26 one-scan optimisations, about 20 s).
@@ -110,6 +114,7 @@ class FovealParams:
     last_steps: int = 10
     table5_rule: Literal["so", "to", "wo"] = "wo"
     resample_fraction: float = 0.5
+    gnn_gate: float = 9.0
     gain_check: bool = True
 
     def __post_init__(self) -> None:
@@ -132,6 +137,7 @@ class FovealParams:
             n_particles=self.n_particles,
             proposal=proposal,
             resample_fraction=self.resample_fraction,
+            gnn_gate=self.gnn_gate,
         )
 
     def sensor(self, condition: str) -> FovealSensor:
