@@ -22,13 +22,16 @@ import time
 import numpy as np
 
 from navtrack.experiments.foveal import FovealParams, converged, simulate_truth, track_foveal
+from navtrack.tracking.models import constant_velocity
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=100)
     ap.add_argument("--batch", type=int, default=50)
-    ap.add_argument("--proposal", default="ip_jpda", choices=["ip_jpda", "kp", "ip_gnn"])
+    ap.add_argument(
+        "--proposal", default="ip_jpda", choices=["ip_jpda", "kp", "ip_gnn", "ip_gnn_joint"]
+    )
     ap.add_argument("--rule", default="wo", choices=["so", "to", "wo"])
     ap.add_argument("--clutter", action="store_true", help="Pd = 0.9, λV = 0.5 (else Pd = 1)")
     args = ap.parse_args()
@@ -36,9 +39,9 @@ def main() -> None:
     cfg = p.config(args.proposal)
     sensor = p.sensor("clutter" if args.clutter else "no_clutter")
     rng = np.random.default_rng(0)
-    x0 = np.asarray(p.x0_three).reshape(-1, 2)
+    motion = constant_velocity(1, p.truth_q, p.noise)
     truths = np.stack(
-        [simulate_truth(x0, cfg.motion, p.dt_s, p.steps, rng) for _ in range(args.runs)]
+        [simulate_truth(p.x0(3), motion, p.dt_s, p.steps, rng) for _ in range(args.runs)]
     )
     ok = []
     c0 = time.process_time()

@@ -21,12 +21,14 @@ from navtrack.tracking.particle import (
     JmpdState,
     StepStatus,
     association_hypotheses,
+    gnn_assignment,
     hypothesis_count,
     ip_gnn_log_likelihoods,
     jmpd_init,
     jmpd_step,
     joint_log_likelihood,
     kmeans_permute,
+    measurement_distances,
     systematic_resample,
     target_log_likelihoods,
     weighted_estimates,
@@ -50,10 +52,11 @@ def _grid_posterior(m: np.ndarray, P: np.ndarray, z: float, c: float, d: float, 
     return ex, vx, ev
 
 
-@pytest.mark.parametrize("proposal", ["kp", "ip_jpda", "ip_gnn"])
+@pytest.mark.parametrize("proposal", ["kp", "ip_jpda", "ip_gnn", "ip_gnn_joint"])
 def test_one_target_no_clutter_matches_exact_posterior(proposal):
     rng = np.random.default_rng(7)
-    cfg = JmpdConfig(n_particles=40_000, proposal=proposal)
+    # without a gate the paper's GNN is exact for one target (a gate truncates the posterior)
+    cfg = JmpdConfig(n_particles=40_000, proposal=proposal, gnn_gate=np.inf)
     sensor = FovealSensor(R=0.05)
     m0, P0 = np.array([0.0, 1.0]), np.diag([1.0, 0.1])
     state = jmpd_init(m0[None, None], P0, cfg, rng)
@@ -245,7 +248,7 @@ def test_scan_simulation_counts_detections_and_clutter():
     assert constant_velocity(1, 0.01).dim_x == sensor.dim_x
 
 
-@pytest.mark.parametrize("proposal", ["kp", "ip_jpda", "ip_gnn"])
+@pytest.mark.parametrize("proposal", ["kp", "ip_jpda", "ip_gnn", "ip_gnn_joint"])
 def test_scan_without_measurements_is_all_missed(proposal):
     # Pd < 1: an empty scan is feasible (every target missed), weights stay equal
     rng = np.random.default_rng(0)
@@ -254,6 +257,54 @@ def test_scan_without_measurements_is_all_missed(proposal):
     step = jmpd_step(state, _scan([]), [1.0], [0.0], FovealSensor(0.05, 0.9, 0.5), cfg, rng)
     assert step.status[0] == StepStatus.OK
     np.testing.assert_allclose(step.state.log_weights, -math.log(20))
+
+
+def test_gnn_assignment_hand_worked():
+    # gate 9. Particle 0: both partitions nearest to z0 (1 and 0.25); one-to-one the least total
+    # is t0->z1, t1->z0 (4 + 0.25) against t0->z0, t1->z1 (1 + 16) or one left unassigned
+    # (>= 0.25 + 9). Particle 1: z1 is outside both gates, so one partition takes z0 and the
+    # other is unassigned: t0->z0 (1 + 9) beats t1->z0 (2 + 9). Row 1 has one measurement only:
+    # t1 takes it (0.25 + 9 against 1 + 9).
+    D2 = np.array(
+        [
+            [[[1.0, 4.0], [0.25, 16.0]], [[1.0, 20.0], [2.0, 30.0]]],
+            [[[1.0, np.inf], [0.25, np.inf]], [[10.0, np.inf], [12.0, np.inf]]],
+        ]
+    )
+    valid = np.array([[True, True], [True, False]])
+    best = gnn_assignment(D2, valid, gate=9.0)
+    np.testing.assert_array_equal(best, [[[1, 0], [0, -1]], [[-1, 0], [-1, -1]]])
+
+
+def test_measurement_distances_are_normalised_residuals():
+    sensor = FovealSensor(0.05)
+    particles = np.array([[[[0.5, 1.0], [2.0, 1.0]]]])  # (1, 1, 2, 2)
+    scan = FovealScan(np.array([[0.1, 0.7]]), np.array([[True, False]]), np.full((1, 2), -1))
+    D2 = measurement_distances(particles, scan, [2.0], [1.0], sensor)
+    h = np.arctan(2.0 * (np.array([0.5, 2.0]) - 1.0))
+    np.testing.assert_allclose(D2[0, 0, :, 0], (0.1 - h) ** 2 / 0.05)
+    assert np.all(np.isinf(D2[0, 0, :, 1]))
+
+
+def test_paper_gnn_differs_from_the_most_likely_joint_hypothesis():
+    # two partitions near one measurement, the other measurement far: the paper's GNN assigns
+    # one-to-one within the gate; the joint hypothesis may call the far one clutter instead.
+    rng = np.random.default_rng(3)
+    sensor = FovealSensor(0.05, 0.9, 0.5)
+    particles = rng.normal(0, 1, (1, 200, 2, 2))
+    scan = FovealScan(np.array([[0.0, 0.6]]), np.array([[True, True]]), np.full((1, 2), -1))
+    L = target_log_likelihoods(particles, scan, [1.0], [0.0], sensor)
+    _, joint, _ = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
+    D2 = measurement_distances(particles, scan, [1.0], [0.0], sensor)
+    gnn = gnn_assignment(D2, scan.valid, 9.0)
+    assert np.any(gnn != joint)
+    # where both assign both partitions, the GNN's pair has the least summed distance
+    both = np.all(gnn[0] >= 0, axis=-1)
+    assert np.any(both)
+    g, D = gnn[0][both], D2[0][both]
+    d_gnn = np.take_along_axis(D, g[..., None], -1)[..., 0].sum(-1)
+    d_swap = np.take_along_axis(D, (1 - g)[..., None], -1)[..., 0].sum(-1)
+    assert np.all(d_gnn <= d_swap)
 
 
 def test_gnn_assignment_is_the_best_hypothesis_per_row():

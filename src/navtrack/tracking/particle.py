@@ -14,7 +14,8 @@ Stages (each a small function, batched over ``B`` and ``N``):
   target and measurement;
 * :func:`association_hypotheses` / :func:`joint_log_likelihood` — the sum over the feasible
   joint association hypotheses of step 8;
-* :func:`ip_jpda_log_likelihoods` (Table 2, step 1b-c) and :func:`ip_gnn_log_likelihoods` —
+* :func:`ip_jpda_log_likelihoods` (Table 2, step 1b-c), :func:`gnn_assignment` (the paper's GNN:
+  gated one-to-one assignment of least total distance) and :func:`ip_gnn_log_likelihoods` —
   partition weights of the independent-partition proposals, and :func:`resample_partitions`
   (Table 2, steps 2-3) giving the bias terms;
 * :func:`kmeans_permute` — step 10; :func:`systematic_resample` — step 12.
@@ -30,6 +31,8 @@ References
    partition sorting).
 .. [4] Y. Bar-Shalom, T. E. Fortmann, *Tracking and Data Association*, Academic Press 1988,
    section 9.4 (JPDA joint-event likelihood with Poisson clutter).
+.. [5] S. Blackman, R. Popoli, *Design and Analysis of Modern Tracking Systems*, Artech House
+   1999, section 6.4 (GNN: gated one-to-one assignment of least total distance).
 """
 
 from __future__ import annotations
@@ -57,6 +60,7 @@ __all__ = [
     "StepStatus",
     "association_hypotheses",
     "effective_sample_size",
+    "gnn_assignment",
     "hypothesis_count",
     "ip_gnn_log_likelihoods",
     "ip_jpda_log_likelihoods",
@@ -64,6 +68,7 @@ __all__ = [
     "jmpd_step",
     "joint_log_likelihood",
     "kmeans_permute",
+    "measurement_distances",
     "predict_particles",
     "predicted_estimates",
     "resample_partitions",
@@ -77,8 +82,8 @@ __all__ = [
 #: 136; 6 targets, 6 measurements: 13 327; 7 targets, 7 measurements: 130 922).
 MAX_HYPOTHESES = 20_000
 
-Proposal = Literal["kp", "ip_jpda", "ip_gnn"]
-_PROPOSALS = ("kp", "ip_jpda", "ip_gnn")
+Proposal = Literal["kp", "ip_jpda", "ip_gnn", "ip_gnn_joint"]
+_PROPOSALS = ("kp", "ip_jpda", "ip_gnn", "ip_gnn_joint")
 
 _LOG_TINY = math.log(np.finfo(float).tiny)
 
@@ -112,9 +117,16 @@ class JmpdConfig:
         Time between scans, s (paper: 1).
     n_particles : int
         ``N_part`` (paper: 400); >= 1.
-    proposal : {"kp", "ip_jpda", "ip_gnn"}
+    proposal : {"kp", "ip_jpda", "ip_gnn", "ip_gnn_joint"}
         Kinematic prior, or an independent-partition proposal with JPDA or GNN partition weights
-        (paper section V).
+        (paper section V). ``ip_gnn`` is the paper's GNN: per particle, the gated one-to-one
+        assignment of measurements to partitions of least total normalised distance
+        (:func:`gnn_assignment`); ``ip_gnn_joint`` takes instead each particle's most likely
+        joint association hypothesis with its miss and clutter terms (a variant, not the
+        paper's).
+    gnn_gate : float
+        Gate of ``ip_gnn`` on the normalised squared distance ``(z - h(x))² / R`` (the paper does
+        not give it; 9 = three standard deviations). A partition left unassigned costs the gate.
     resample_fraction : float
         ``N_T = resample_fraction * n_particles``: resample when ``N_eff < N_T`` (Table 1 step
         12; the paper does not give ``N_T``; 0.5 is the common choice).
@@ -134,6 +146,7 @@ class JmpdConfig:
     proposal: Proposal = "ip_jpda"
     resample_fraction: float = 0.5
     kmeans_iterations: int = 3
+    gnn_gate: float = 9.0
 
     def __post_init__(self) -> None:
         if isinstance(self.n_particles, bool) or int(self.n_particles) != self.n_particles:
@@ -148,6 +161,8 @@ class JmpdConfig:
             raise ValueError(f"resample_fraction must be in (0, 1], got {self.resample_fraction}")
         if self.kmeans_iterations < 0:
             raise ValueError(f"kmeans_iterations must be >= 0, got {self.kmeans_iterations}")
+        if not self.gnn_gate > 0:
+            raise ValueError(f"gnn_gate must be > 0, got {self.gnn_gate}")
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -331,8 +346,8 @@ def joint_log_likelihood(
         prod_{t missed} (1 - Pd) λ^(number of clutter measurements)`` (Bar-Shalom & Fortmann
         9.4; the Poisson clutter-count factor and ``V^-M`` are common to all particles).
     best : (B, N, T) int
-        The most likely hypothesis of each particle (GNN): measurement index assigned to each
-        target, ``-1`` when not detected.
+        The most likely hypothesis of each particle (proposal ``ip_gnn_joint``): measurement
+        index assigned to each target, ``-1`` when not detected.
     n_hypotheses : int
         Hypotheses enumerated for the row with the most measurements.
 
@@ -410,16 +425,64 @@ def ip_jpda_log_likelihoods(L: FloatArray, sensor: FovealSensor) -> FloatArray:
     return np.asarray(np.logaddexp(detected, missed))
 
 
-def ip_gnn_log_likelihoods(L: FloatArray, best: IntArray) -> FloatArray:
-    """Partition log-weights of IP-GNN: each target's term of the best joint assignment.
+def measurement_distances(
+    particles: FloatArray, scan: FovealScan, c: ArrayLike, d: ArrayLike, sensor: FovealSensor
+) -> FloatArray:
+    """Normalised squared distances ``(z_j - h(x_t))² / R`` of every particle's partitions.
+
+    ``particles (B, N, T, n)``, ``scan.z (B, M)``, ``c, d (B,)`` -> ``(B, N, T, M)``, ``inf``
+    for padding measurements.
+    """
+    c = np.asarray(c, dtype=float)[:, None, None, None]
+    d = np.asarray(d, dtype=float)[:, None, None, None]
+    r = scan.z[:, None, None, :] - sensor.h(particles[..., None, :], c, d)
+    return np.asarray(np.where(scan.valid[:, None, None, :], r * r / sensor.R, np.inf))
+
+
+def gnn_assignment(D2: FloatArray, valid: BoolArray, gate: float) -> IntArray:
+    """Gated one-to-one assignment of least total distance, per particle (the paper's GNN).
+
+    Parameters
+    ----------
+    D2 : (B, N, T, M) float
+        Normalised squared distances (:func:`measurement_distances`); the valid measurements
+        of each row come first.
+    valid : (B, M) bool
+    gate : float
+        A pair with ``D2 >= gate`` cannot be assigned; a partition left unassigned costs
+        ``gate`` (Blackman & Popoli's non-assignment cost).
+
+    Returns
+    -------
+    (B, N, T) int
+        Measurement assigned to each partition, ``-1`` when none: the assignment minimising
+        ``sum_assigned D2 + gate * (number unassigned)``, found exactly by enumerating the
+        one-to-one assignments (:func:`association_hypotheses`).
+    """
+    B, N, T, _ = D2.shape
+    counts = valid.sum(axis=-1)
+    best = np.full((B, N, T), -1, dtype=np.int64)
+    for m in np.unique(counts):
+        rows = np.flatnonzero(counts == m)
+        H = association_hypotheses(T, int(m))
+        D = D2[rows][..., : int(m)]
+        gated = np.where(D < gate, D, np.inf)  # noqa: SIM300 (D is an array)
+        C = np.concatenate([gated, np.full((*D.shape[:-1], 1), gate)], axis=-1)
+        cost = C[..., np.arange(T), np.where(H < 0, int(m), H)].sum(axis=-1)  # (G, N, N_H)
+        best[rows] = H[np.argmin(cost, axis=-1)]
+    return best
+
+
+def ip_gnn_log_likelihoods(L: FloatArray, assignment: IntArray) -> FloatArray:
+    """Partition log-weights of IP-GNN: each partition's term under its assignment.
 
     Parameters
     ----------
     L : (B, N, T, M + 1)
-    best : (B, N, T) int
-        Most likely joint hypothesis of each particle (:func:`joint_log_likelihood`): with the
-        cost ``-log`` of the likelihood terms this is the one-to-one assignment of least total
-        distance (Blackman & Popoli's GNN, found here exactly by enumeration).
+    assignment : (B, N, T) int
+        Measurement assigned to each partition of each particle, ``-1`` when none: the paper's
+        GNN (:func:`gnn_assignment`) or the most likely joint hypothesis
+        (:func:`joint_log_likelihood`, proposal ``ip_gnn_joint``).
 
     Returns
     -------
@@ -427,7 +490,7 @@ def ip_gnn_log_likelihoods(L: FloatArray, best: IntArray) -> FloatArray:
         ``log Pd g(z_j|x_t)`` of the assigned measurement, ``log(1 - Pd)`` when unassigned.
     """
     M = L.shape[-1] - 1
-    cols = np.where(best < 0, M, best)
+    cols = np.where(assignment < 0, M, assignment)
     return np.take_along_axis(L, cols[..., None], axis=-1)[..., 0]
 
 
@@ -678,6 +741,11 @@ def jmpd_step(
         else:
             if config.proposal == "ip_jpda":
                 log_part = ip_jpda_log_likelihoods(L, sensor)
+            elif config.proposal == "ip_gnn":
+                D2 = measurement_distances(pred, scan, c, d, sensor)
+                log_part = ip_gnn_log_likelihoods(
+                    L, gnn_assignment(D2, scan.valid, config.gnn_gate)
+                )
             else:
                 _, best, _ = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
                 log_part = ip_gnn_log_likelihoods(L, best)

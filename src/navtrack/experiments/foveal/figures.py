@@ -11,10 +11,19 @@ from navtrack.plots.canvas import figure_dir, new_figure, save_figure
 
 __all__ = ["write_figures"]
 
-_NAMES = {"ip_jpda": "IP-JPDA", "kp": "KP", "ip_gnn": "IP-GNN"}
+_NAMES = {"ip_jpda": "IP-JPDA", "kp": "KP", "ip_gnn": "IP-GNN", "ip_gnn_joint": "IP-GNN joint"}
+#: The paper's ASE axes (m²): Figs. 1-2 (three targets) 0-6, Fig. 3 (two targets) 0-3.
+ASE_YLIM_M2 = {"table3": 6.0, "table4": 6.0, "table5": 3.0}
 
 
-def _ase_panel(ax: Any, table: dict[str, Any], proposal: str, title: str) -> None:
+def _paper_axes(ax: Any, ymax: float, steps: int) -> None:
+    ax.set_xlim(0, max(30, steps))
+    ax.set_ylim(0, ymax)
+    ax.set_xlabel("time index k")
+    ax.set_ylabel("ASE of position, converged runs (m²)")
+
+
+def _ase_panel(ax: Any, table: dict[str, Any], proposal: str, title: str, ymax: float) -> None:
     styles = {"so": ":", "to": "--", "wo": "-"}
     for rule, row in table.items():
         ase = np.asarray(row[proposal]["ase_m2"], dtype=float)
@@ -23,8 +32,7 @@ def _ase_panel(ax: Any, table: dict[str, Any], proposal: str, title: str) -> Non
         k = np.arange(1, ase.shape[1] + 1)
         for t in range(ase.shape[0]):
             ax.plot(k, ase[t], styles[rule], color=f"C{t}", label=f"t{t + 1} ({rule.upper()})")
-    ax.set_xlabel("time index k")
-    ax.set_ylabel("ASE of position, converged runs (m²)")
+        _paper_axes(ax, ymax, ase.shape[1])
     ax.set_title(title)
     ax.legend(fontsize=6, ncol=3)
 
@@ -36,19 +44,19 @@ def write_figures(results: dict[str, Any], runs: list[dict[str, Any]], out_dir: 
     for n, key, what in ((1, "table3", "no clutter"), (2, "table4", "clutter")):
         fig = new_figure((10, 4))
         for i, prop in enumerate(("ip_jpda", "kp")):
-            _ase_panel(fig.add_subplot(1, 2, i + 1), results[key], prop, f"{_NAMES[prop]}, {what}")
+            ax = fig.add_subplot(1, 2, i + 1)
+            _ase_panel(ax, results[key], prop, f"{_NAMES[prop]}, {what}", ASE_YLIM_M2[key])
         paths.append(save_figure(fig, out / f"fig{n}_ase_{key}.png"))
     fig = new_figure((10, 4))
     for i, cond in enumerate(("no_clutter", "clutter")):
         ax = fig.add_subplot(1, 2, i + 1)
-        for prop, style in (("ip_gnn", "--"), ("ip_jpda", "-")):
+        for prop, style in (("ip_gnn", "--"), ("ip_jpda", "-"), ("ip_gnn_joint", ":")):
             ase = np.asarray(results["table5"][prop][cond]["ase_m2"], dtype=float)
             for t in range(ase.shape[0] if ase.size else 0):
                 k = np.arange(1, ase.shape[1] + 1)
                 ax.plot(k, ase[t], style, color=f"C{t}", label=f"t{t + 1} ({_NAMES[prop]})")
+                _paper_axes(ax, ASE_YLIM_M2["table5"], ase.shape[1])
         ax.set_title("Pd = 1, λV = 0" if cond == "no_clutter" else "Pd = 0.9, λV = 0.5")
-        ax.set_xlabel("time index k")
-        ax.set_ylabel("ASE of position, converged runs (m²)")
         ax.legend(fontsize=7)
     paths.append(save_figure(fig, out / "fig3_ase_table5.png"))
     if runs:
