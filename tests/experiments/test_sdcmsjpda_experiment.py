@@ -117,3 +117,20 @@ def test_gate_clutter_puts_m_false_measurements_in_each_gate() -> None:
     box = SdCmsjpdaParams(clutter_model="box", clutter_halfwidth_sigma=4.0)
     sb = simulate_scans(box, truth, 1e-9, np.random.default_rng(7))
     assert abs(sb.valid.sum(axis=-1).mean() - box.clutter_rate) < 0.2
+
+
+def test_calibrated_baseline_diverges_as_printed() -> None:
+    """The default scenario is the calibration's choice (docs/multisensor.md): sequential
+    MSJPDA's divergences at P_D = 0.58 in 12 runs fall in the 95 % binomial interval of the
+    paper's 17 of 50 (Table 1), 1 to 7; the readings before the calibration gave 0."""
+    from navtrack.experiments.runner import run_generator
+    from navtrack.experiments.sdcmsjpda import paper3_run
+    from navtrack.experiments.sdcmsjpda.calibration import binomial_interval
+
+    params = SdCmsjpdaParams(pd_values=(0.58,), algorithms=("sequential",))
+    runs = 12
+    n = sum(paper3_run(params, run_generator(0, i))["0.58"]["sequential"]["diverged"]
+            for i in range(runs))  # fmt: skip
+    lo, hi = binomial_interval(17, runs)
+    assert (lo, hi) == (1, 7)
+    assert lo <= n <= hi, n

@@ -98,7 +98,7 @@ def calibrate(
     base = SdCmsjpdaParams() if base is None else base
     pds = [f"{p:g}" for p in base.pd_values]
     intervals = {p: binomial_interval(PAPER_TABLE1["sequential"][p], runs) for p in pds}
-    rows = []
+    rows: list[dict[str, Any]] = []
     for params in grid_params(base):
         mc = run_monte_carlo(
             _run, runs, seed, params, name="sdcmsjpda-calibration", workers=workers,
