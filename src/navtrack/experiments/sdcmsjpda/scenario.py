@@ -92,8 +92,8 @@ class SdCmsjpdaParams:
     clutter_model: Literal["gate", "box", "region"] = "gate"
     clutter_halfwidth_sigma: float = 6.0
     accel_sigma_mps2: float = 1.0
-    init_sigma_pos_m: float = 300.0
-    init_sigma_vel_mps: float = 30.0
+    init_sigma_pos_m: float = 1000.0
+    init_sigma_vel_mps: float = 100.0
     gate_probability: float = 0.99
     divergence_m: float = 2000.0
     divergence_window: int = 10
