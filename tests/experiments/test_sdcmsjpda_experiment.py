@@ -25,7 +25,10 @@ def test_reduced_reproduction_writes_results(tmp_path: Path) -> None:
     are those of its per-step curves; the ML-fused reading tracks like parallel (their
     tuple updates agree to the linearisation order) and the stacked trackers stay within
     the sensors' accuracy (sensor 3 alone: 0.01 rad x 44 km = 440 m across the beam)."""
-    params = SdCmsjpdaParams(pd_values=(0.97, 0.58), n_steps=25)
+    # the initial spread before the calibration (300 m, 30 m/s): no track lost in two runs
+    params = SdCmsjpdaParams(
+        pd_values=(0.97, 0.58), n_steps=25, init_sigma_pos_m=300.0, init_sigma_vel_mps=30.0
+    )
     reproduce(
         "sdcmsjpda",
         ReproduceOptions(
