@@ -101,19 +101,20 @@ def test_one_target_no_clutter_pd1_matches_centralised_ekf() -> None:
     r = run_fusion("sequential", scans, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
     np.testing.assert_allclose(r.x[:, 0], np.array(xs_q), rtol=1e-9, atol=1e-6)
     # the literal eqs. 24-32 mix single-sensor corrections: consistent, not identical
-    r = run_fusion("sdcmsjpda_weighted", scans, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
+    lit = FusionConfig((1.0,) * 3, (1e-9,) * 3, gate_probability=1.0, false_per_gate=1.8)
+    r = run_fusion("sdcmsjpda", scans, SENSORS, MOTION, X0, P0, lit, t0_s=0.0)
     err = np.hypot(*(r.x[:, 0, [0, 2]] - truth[:, [0, 2]]).T)
     err_c = np.hypot(*(np.array(xs_c)[:, [0, 2]] - truth[:, [0, 2]]).T)
     assert np.sqrt(np.mean(err[5:] ** 2)) < 3.0 * np.sqrt(np.mean(err_c[5:] ** 2))
     assert np.all(np.linalg.eigvalsh(r.P[:, 0]) > 0)
 
 
-def test_single_sensor_sdcmsjpda_weighted_is_the_ekf() -> None:
+def test_single_sensor_sdcmsjpda_is_the_ekf() -> None:
     """With one sensor, b = 0 (P_D = P_G = 1) and one measurement, eq. 24 is the EKF update."""
     _, scans = _one_target_scans(5, np.random.default_rng(1))
     one = MultiScans(scans.z[:, 2:], scans.valid[:, 2:], scans.t_s[:, 2:])
-    cfg = FusionConfig((1.0,), (1e-9,), gate_probability=1.0)
-    r = run_fusion("sdcmsjpda_weighted", one, SENSORS[2:], MOTION, X0, P0, cfg, t0_s=0.0)
+    cfg = FusionConfig((1.0,), (1e-9,), gate_probability=1.0, false_per_gate=1.8)
+    r = run_fusion("sdcmsjpda", one, SENSORS[2:], MOTION, X0, P0, cfg, t0_s=0.0)
     x, P = X0[0], P0[0]
     for k in range(5):
         dt = 0.0 if k == 0 else 1.0
@@ -122,6 +123,63 @@ def test_single_sensor_sdcmsjpda_weighted_is_the_ekf() -> None:
         x, P = u.x, u.P
     np.testing.assert_allclose(r.x[-1, 0], x, rtol=1e-9)
     np.testing.assert_allclose(r.P[-1, 0], P, rtol=1e-7)
+
+
+def test_literal_sdcmsjpda_two_sensors_two_measurements_by_hand() -> None:
+    """Eqs. 24-32 as printed on one target, two position sensors, one measurement each (dt =
+    0: the prediction is the prior). Worked by hand: the single-sensor marginals, the four
+    tuples' ``β(L) = β¹(l₁) β²(l₂)``, eq. 26's ``e_s = exp(-d²/2)`` and
+    ``b = 2 m (1 - P_D P_G) / (γ P_D)`` (n_z = 2: ``(2π/γ) / π``), eq. 25's weights, eq.
+    24's tuple estimates, and the covariance (31-32) as the moments of the mixture of the
+    prediction (weight ``β(L) β₀(L)``) and the single-sensor updates (``β(L) w_s(L)``)."""
+    from navtrack.tracking.multisensor import fusion_step, nonparametric_b
+
+    sens = [linear_position(4, (0, 2), 50.0), linear_position(4, (0, 2), 100.0)]
+    motion = constant_velocity(2, 1.0)
+    x = np.array([0.0, 10.0, 0.0, -5.0])
+    P = np.diag([100.0**2, 10.0**2, 80.0**2, 10.0**2])
+    z = [np.array([[60.0, -30.0]]), np.array([[-90.0, 120.0]])]
+    pd, pg, m, lam = 0.9, 0.99, 1.8, 1e-5
+    cfg = FusionConfig((pd, pd), (lam, lam), pg, false_per_gate=m)
+    gamma = -2.0 * np.log(1.0 - pg)  # chi-square(2) quantile
+    b = 2.0 * m * (1.0 - pd * pg) / (gamma * pd)
+    assert nonparametric_b(cfg, 2) == pytest.approx(b, rel=1e-12)
+    assert b == pytest.approx(0.0473382, rel=1e-5)  # 3.6 * 0.109 / (9.21034 * 0.9)
+    H = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]])
+    e, Ks, nus, Ss, beta1 = [], [], [], [], []
+    for s, model in enumerate(sens):
+        S = H @ P @ H.T + model.R
+        nu = z[s][0] - H @ x
+        d2 = nu @ np.linalg.solve(S, nu)
+        g = pd * np.exp(-0.5 * d2) / (2 * np.pi * np.sqrt(np.linalg.det(S))) / lam
+        beta1.append(g / (1.0 - pd * pg + g))  # single-sensor marginal of the detection
+        e.append(np.exp(-0.5 * d2))
+        Ks.append(P @ H.T @ np.linalg.inv(S))
+        nus.append(nu)
+        Ss.append(S)
+    comps = []  # (weight, mean, covariance) of the mixture
+    for l1, l2 in itertools.product((0, 1), repeat=2):
+        bL = (beta1[0] if l1 else 1 - beta1[0]) * (beta1[1] if l2 else 1 - beta1[1])
+        den = b + l1 * e[0] + l2 * e[1]
+        comps.append((bL * b / den, x, P))  # eq. 28
+        for s, used in enumerate((l1, l2)):
+            if used:
+                w = e[s] / den  # eq. 25
+                comps.append((bL * w, x + Ks[s] @ nus[s], P - Ks[s] @ Ss[s] @ Ks[s].T))
+    wsum = sum(c[0] for c in comps)
+    assert wsum == pytest.approx(1.0)
+    xm = sum(c[0] * c[1] for c in comps)
+    Pm = sum(c[0] * (c[2] + np.outer(c[1] - xm, c[1] - xm)) for c in comps)
+    xn, Pn, _ = fusion_step("sdcmsjpda", x[None], P[None], z, [0.0, 0.0], sens, motion, cfg)
+    np.testing.assert_allclose(xn[0], xm, rtol=1e-10, atol=1e-9)
+    np.testing.assert_allclose(Pn[0], Pm, rtol=1e-10, atol=1e-6)
+    # eq. 24 mixes the two sensors' corrections instead of fusing them: the estimate lies
+    # between the prediction and the single-sensor updates, not at the stacked update
+    xs, _, _ = fusion_step("parallel", x[None], P[None], z, [0.0, 0.0], sens, motion, cfg)
+    assert np.linalg.norm(xn[0] - xs[0]) > 1.0
+    with pytest.raises(ValueError, match="false_per_gate"):
+        fusion_step("sdcmsjpda", x[None], P[None], z, [0.0, 0.0], sens, motion,
+                    FusionConfig((pd, pd), (lam, lam), pg))  # fmt: skip
 
 
 def _scaled(eps: float):
@@ -154,7 +212,7 @@ def test_equivalent_measurement_update_is_the_centralised_ekf_to_first_order(
         scans = MultiScans(z, np.ones((K, 3, 1), bool), t)
         P0s = eps**2 * P0
         a = run_fusion("parallel", scans, sens, MOTION, X0, P0s, cfg, t0_s=0.0)
-        b = run_fusion("sdcmsjpda", scans, sens, MOTION, X0, P0s, cfg, t0_s=0.0)
+        b = run_fusion("sdcmsjpda_fused", scans, sens, MOTION, X0, P0s, cfg, t0_s=0.0)
         sd = np.sqrt(a.P[:, 0, [0, 2], [0, 2]])
         dev.append(np.max(np.abs(b.x[:, 0, [0, 2]] - a.x[:, 0, [0, 2]]) / sd))
         dP = np.abs(b.P[:, 0] - a.P[:, 0]).max(axis=(1, 2))
@@ -390,7 +448,7 @@ def test_silent_sensor_is_counted_and_tracking_continues() -> None:
     valid = scans.valid.copy()
     valid[10:50, 2] = False  # sensor 3 reports nothing for 40 scans
     silent = MultiScans(np.where(valid[..., None], scans.z, np.nan), valid, scans.t_s)
-    cfg = FusionConfig((0.97,) * 3, (1e-7,) * 3)
+    cfg = FusionConfig((0.97,) * 3, (1e-7,) * 3, false_per_gate=1.8)
     for alg in ALGORITHMS:
         r = run_fusion(alg, silent, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
         np.testing.assert_array_equal(r.empty_scans, [0, 0, 40])
@@ -456,7 +514,7 @@ def test_all_sensors_silent_for_a_while() -> None:
     valid = scans.valid.copy()
     valid[15:20] = False
     quiet = MultiScans(np.where(valid[..., None], scans.z, np.nan), valid, scans.t_s)
-    cfg = FusionConfig((0.97,) * 3, (1e-7,) * 3)
+    cfg = FusionConfig((0.97,) * 3, (1e-7,) * 3, false_per_gate=1.8)
     for alg in ALGORITHMS:
         r = run_fusion(alg, quiet, SENSORS, MOTION, X0, P0, cfg, t0_s=0.0)
         np.testing.assert_array_equal(r.longest_silence, [5, 5, 5])

@@ -17,19 +17,21 @@ All four trackers predict with :func:`~navtrack.tracking.kalman.kf_predict`, gat
     (``l_s = 0``: sensor ``s`` has no detection of it); the update of a tuple is the stacked
     (centralised) EKF update with all its measurements; the posterior is the moment-matched
     mixture over tuples.
-``sdcmsjpda`` (Zhang, Xiong & He 2005, eqs. 3-32)
+``sdcmsjpda`` (Zhang, Xiong & He 2005, eqs. 3-32 as printed)
     The same S-tuples and joint events (the S-D assignment rule: each measurement from one
-    source, one measurement per sensor per tuple); each tuple becomes ONE equivalent
-    measurement, the maximum-likelihood fusion of its detections
-    (:func:`equivalent_measurement`: Gauss-Newton fit of the position to the tuple's
-    range-bearing measurements, covariance ``(Σ_s J_sᵀ R_s⁻¹ J_s)⁻¹``), and JPDA runs on the
-    equivalent measurements: the tuple's update is the (linear) Kalman update with it; see
+    source, one measurement per sensor per tuple); the measurements of a tuple are combined
+    "according to their weight in the assignment, decided by their likelihood value": eqs.
+    24-32, the tuple estimate ``X̂ + Σ_s w_s K_s ν_s`` with eq. 25's weights and eq. 26's
+    nonparametric ``e`` and ``b`` (``FusionConfig.false_per_gate`` is eq. 26's ``m``); see
     Notes.
-``sdcmsjpda_weighted``
-    The literal reading of eqs. 24-28 as extracted: the tuple estimate is a weighted sum of
-    single-sensor corrections (PDA weights within the tuple); see Notes.
+``sdcmsjpda_fused``
+    The prose's other reading: each tuple becomes ONE equivalent measurement, the
+    maximum-likelihood fusion of its detections (:func:`equivalent_measurement`: Gauss-Newton
+    fit of the position to the tuple's range-bearing measurements, covariance
+    ``(Σ_s J_sᵀ R_s⁻¹ J_s)⁻¹``), and JPDA runs on the equivalent measurements: the tuple's
+    update is the (linear) Kalman update with it; see Notes.
 ``sdcmsjpda_joint``
-    ``sdcmsjpda`` with the joint likelihood of each S-tuple, ``N(ν_L; 0, S_L)`` with ``S_L``
+    ``sdcmsjpda_fused`` with the joint likelihood of each S-tuple, ``N(ν_L; 0, S_L)`` with ``S_L``
     the joint innovation covariance of the tuple's sensors, cross-covariances
     ``H_i P̂ H_jᵀ`` through the common prediction included (eq. 14's "combined innovation
     covariance of all sensors"), in place of eq. 15's product of the members' Gaussians; the
@@ -56,8 +58,8 @@ Reading of the paper's equations (the extraction lost their layout):
   per-sensor joint events, so ``β_t(L) = Π_s β_t^s(l_s)`` exactly, with ``β^s`` the
   single-sensor JPDA marginals (:func:`~navtrack.tracking.jpda.jpda_marginals`); the tests
   check this against the explicit enumeration of eq. 21. ``parallel``, ``sdcmsjpda`` and
-  ``sdcmsjpda_weighted`` share these marginals and differ in the tuple update only.
-* The equivalent measurement (``sdcmsjpda``). The abstract ("all of measurements in each
+  ``sdcmsjpda_fused`` share these marginals and differ in the tuple update only.
+* The equivalent measurement (``sdcmsjpda_fused``). The abstract ("all of measurements in each
   assignment are combined into one equivalent measurement ... the joint association probability
   of each equivalent measurement is calculated"), section 3.1 ("a equivalent measurement is
   gained in each combination ... the multisensor joint association probability of each
@@ -72,18 +74,19 @@ Reading of the paper's equations (the extraction lost their layout):
   update is linearised at the tuple's ML position, the stacked EKF at the prediction; the tests
   check both facts). A single detection's equivalent measurement is its polar-to-Cartesian
   conversion with the linearised covariance.
-* The weighted reading (``sdcmsjpda_weighted``). Eqs. 24-28 as extracted write the tuple
-  estimate as ``X_L = X̂ + Σ_s w_s K_s ν_s`` with the single-sensor gains ``K_s`` and
-  innovations ``ν_s``, ``w_s = e_s / (b + Σ_{i∈L} e_i)``, ``β_0(L) = b / (b + Σ e_i)`` (eqs.
-  25, 28); eq. 26 is the PDA weight of Bar-Shalom & Fortmann (6.4), used in its parametric form
-  scaled by ``λ |2πS|^{1/2} / P_D``: ``e_s = P_D,s N(ν_s; 0, S_s) / λ_s`` and
-  ``b = 1 - P̄_D P_G`` (``P̄_D`` the mean detection probability of the sensors). Eqs. 31-32
-  are the covariance of that mixture: ``P_L = β_0 P̂ + Σ_s w_s (P̂ - K_s S_s K_sᵀ)`` plus the
-  spread of the corrections about their mean, then the spread of the ``X_L`` over the tuples.
-  The weights sum to at most 1, so a tuple of three detections moves the state about as far as
-  one sensor would: the sensors of a tuple are alternatives, not fused, which contradicts the
-  prose above; it is kept because it is what the equations' symbols say, and the reproduction
-  reports both.
+* The literal form (``sdcmsjpda``), eqs. 24-32 as printed. The tuple estimate is
+  ``X_L = X̂ + Σ_{s∈L} w_s K_s ν_s`` (eq. 24, ``K_s``, ``ν_s`` the single-sensor gain and
+  innovation at the prediction, eqs. 27, 29), ``w_s = e_s / (b + Σ_{i∈L} e_i)`` (eq. 25),
+  ``β_0(L) = b / (b + Σ_{i∈L} e_i)`` (eq. 28) and eq. 26's nonparametric PDA terms
+  (Bar-Shalom & Fortmann (6.4)): ``e_s = exp(-ν_sᵀ S_s⁻¹ ν_s / 2)`` and
+  ``b = m (2π/γ)^{n_z/2} (1 - P_D P_G) / (c_{n_z} P_D)``, ``m`` the expected number of false
+  measurements in the gate, ``γ`` the gate threshold, ``c_{n_z}`` the volume of the unit
+  ``n_z``-ball (π for range-bearing); with sensors of different ``P_D`` the mean is used (the
+  paper's sensors share one). The state is ``Σ_L β(L) X_L`` over the tuples' marginals; eqs.
+  31-32 are the covariance of that mixture: ``P_L = β_0 P̂ + Σ_s w_s (P̂ - K_s S_s K_sᵀ)``
+  plus the spread of the corrections about their mean, then the spread of the ``X_L`` over the
+  tuples. The weights sum to at most 1, so a tuple of three detections moves the state about
+  as far as one sensor would: the sensors of a tuple are weighted alternatives, not fused.
 * The joint tuple likelihood (``sdcmsjpda_joint``). Eq. 15 multiplies the members'
   ``N(z_s; ẑ_s, S_s)``, each at the prediction: the sensors are taken as independent given
   the prediction, but their innovations share the prediction error, so they are correlated
@@ -114,7 +117,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Literal
 
@@ -150,12 +153,13 @@ __all__ = [
     "MultiScans",
     "equivalent_measurement",
     "fusion_step",
+    "nonparametric_b",
     "run_fusion",
     "tuple_marginals",
 ]
 
 Algorithm = Literal[
-    "sequential", "parallel", "sdcmsjpda", "sd_gnn", "sdcmsjpda_weighted", "sdcmsjpda_joint"
+    "sequential", "parallel", "sdcmsjpda", "sd_gnn", "sdcmsjpda_fused", "sdcmsjpda_joint"
 ]
 #: The fusion trackers, in the order of the reproduction's tables.
 ALGORITHMS: tuple[Algorithm, ...] = (
@@ -163,7 +167,7 @@ ALGORITHMS: tuple[Algorithm, ...] = (
     "parallel",
     "sdcmsjpda",
     "sd_gnn",
-    "sdcmsjpda_weighted",
+    "sdcmsjpda_fused",
     "sdcmsjpda_joint",
 )
 
@@ -186,6 +190,10 @@ class FusionConfig:
     max_tuples : int
         Largest number of gated S-tuples of one target (guard against a combinatorial blow-up;
         more raise ``ValueError`` naming the target and scan).
+    false_per_gate : float or None
+        Eq. 26's ``m``, the expected number of false measurements in a gate, > 0: the
+        nonparametric ``b`` of ``sdcmsjpda`` (which needs it); the other trackers use
+        ``clutter_density``.
     """
 
     pd: tuple[float, ...]
@@ -193,6 +201,7 @@ class FusionConfig:
     gate_probability: float = 0.99
     time_tolerance_s: float = 1e-6
     max_tuples: int = 20_000
+    false_per_gate: float | None = None
 
     def __post_init__(self) -> None:
         if len(self.pd) != len(self.clutter_density) or not self.pd:
@@ -206,6 +215,8 @@ class FusionConfig:
             raise ValueError(f"gate_probability must be in (0, 1], got {self.gate_probability}")
         if self.time_tolerance_s < 0 or self.max_tuples < 1:
             raise ValueError("time_tolerance_s must be >= 0 and max_tuples >= 1")
+        if self.false_per_gate is not None and not self.false_per_gate > 0:
+            raise ValueError(f"false_per_gate must be > 0, got {self.false_per_gate}")
 
     def jpda(self, s: int) -> JpdaConfig:
         """The single-sensor JPDA configuration of sensor ``s``."""
@@ -291,6 +302,7 @@ class _SensorTerms:
     S: FloatArray  # (S, T, m, m)
     K: FloatArray  # (S, T, n, m)
     innovation: FloatArray  # (S, T, M, m), M = the most measurements of a sensor
+    d2: FloatArray  # (S, T, M) squared Mahalanobis distances (inf outside gate / padding)
     log_w: FloatArray  # (S, T, M+1) log of the eq. 21 factors (-inf outside gate / padding)
     beta: FloatArray  # (S, T, M+1) single-sensor JPDA marginals
     n_meas: IntArray  # (S,) measurements of each sensor
@@ -349,7 +361,8 @@ def _sensor_terms(
     beta = np.zeros_like(W)
     beta[at] = bc
     n_meas = np.array([len(zs) for zs in z], dtype=np.int64)
-    return _SensorTerms(Z, H, Sg, K, g.innovation, log_w, beta, n_meas)
+    d2 = np.where(valid, g.d2, np.inf)
+    return _SensorTerms(Z, H, Sg, K, g.innovation, d2, log_w, beta, n_meas)
 
 
 def tuple_marginals(
@@ -427,20 +440,34 @@ def _stacked(
     return x, P
 
 
-def _weighted_update(
+def nonparametric_b(config: FusionConfig, dim_z: int) -> float:
+    """Eq. 26's ``b = m (2π/γ)^{n_z/2} (1 - P_D P_G) / (c_{n_z} P_D)`` (module notes), ``P_D``
+    the sensors' mean, ``γ`` the chi-square gate threshold of ``P_G``."""
+    if config.false_per_gate is None:
+        raise ValueError("sdcmsjpda needs FusionConfig.false_per_gate (eq. 26's m)")
+    pd = float(np.mean(config.pd))
+    pg = config.gate_probability
+    gamma = chi2_threshold(pg, dim_z)
+    c = math.pi ** (dim_z / 2) / math.gamma(dim_z / 2 + 1)  # volume of the unit ball
+    return config.false_per_gate * (2 * math.pi / gamma) ** (dim_z / 2) * (1 - pd * pg) / (c * pd)
+
+
+def _literal_update(
     xp: FloatArray,
     Pp: FloatArray,
     L: IntArray,
     beta: FloatArray,
     terms: _SensorTerms,
-    config: FusionConfig,
+    b: float,
     t: int,
 ) -> tuple[FloatArray, FloatArray]:
-    """``sdcmsjpda_weighted`` update of target ``t``: eqs. 24-32 read literally (module notes)."""
+    """``sdcmsjpda`` update of target ``t`` over its tuples ``L`` of marginals ``beta``: eqs.
+    24-32 as printed (module notes), the mixture of the prediction and the single-sensor
+    updates ``(s, j)`` each weighted by ``Σ_L β(L) w_s(L)``."""
     S_ = L.shape[1]
     sidx = np.arange(S_)
-    e = np.where(L > 0, np.exp(terms.log_w[sidx, t, L]), 0.0)  # P_D N / λ per sensor
-    b = 1.0 - float(np.mean(config.pd)) * config.gate_probability
+    d2 = terms.d2[sidx, t, np.maximum(L - 1, 0)] if terms.d2.shape[-1] else np.zeros(L.shape)
+    e = np.where(L > 0, np.exp(-0.5 * d2), 0.0)  # eq. 26
     den = b + e.sum(axis=1)
     w = e / den[:, None]  # eq. 25
     M1 = terms.log_w.shape[-1]
@@ -895,11 +922,12 @@ def fusion_step(
     if n_tuples.max() > config.max_tuples:
         t = int(np.argmax(n_tuples))
         raise ValueError(f"target {t}: {n_tuples[t]} gated S-tuples > max_tuples")
-    if algorithm == "sdcmsjpda_weighted":
+    if algorithm == "sdcmsjpda":
+        b = nonparametric_b(config, sensors[0].dim_z)
         xn, Pn = np.empty_like(xp), np.empty_like(Pp)
         for t in range(T):
             mine = target == t
-            xn[t], Pn[t] = _weighted_update(xp, Pp, L[mine], beta[mine], terms, config, t)
+            xn[t], Pn[t] = _literal_update(xp, Pp, L[mine], beta[mine], terms, b, t)
         return xn, Pn, False
     if algorithm == "parallel":
         xs, Ps = _stacked(xp, Pp, target, L, terms, sensors)
@@ -965,7 +993,10 @@ def run_fusion(
     Ps = np.empty((K, *P.shape))
     gaps = 0
     elapsed = 0.0
-    if algorithm.startswith("sdcmsjpda"):  # a one-off compilation is no part of a step's time
+    if algorithm in (
+        "sdcmsjpda_fused",
+        "sdcmsjpda_joint",
+    ):  # a one-off compilation is no part of a step's time
         _compiled_gauss_newton()
     elif algorithm == "sd_gnn":
         compile_kernels()
@@ -991,12 +1022,10 @@ def run_fusion(
         cfg = (
             config
             if centralised
-            else FusionConfig(
-                tuple(config.pd[int(s)] for s in order),
-                tuple(config.clutter_density[int(s)] for s in order),
-                config.gate_probability,
-                config.time_tolerance_s,
-                config.max_tuples,
+            else replace(
+                config,
+                pd=tuple(config.pd[int(s)] for s in order),
+                clutter_density=tuple(config.clutter_density[int(s)] for s in order),
             )
         )
         c0 = time.thread_time()

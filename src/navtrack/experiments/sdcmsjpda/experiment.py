@@ -32,6 +32,28 @@ PAPER_TABLE1 = {
 }
 #: Paper 3, section 4: mean time per step on a 2.0 GHz PC, ms.
 PAPER_MS_PER_STEP = {"sequential": 25.1, "sdcmsjpda": 28.2}
+#: Steps (1-based, inclusive) after the crossing at about step 31 whose error per run and
+#: target the post-crossing figure shows.
+POST_CROSSING_STEPS = (46, 80)
+
+#: What each tracker of the tables implements (written to results.json).
+ALGORITHM_EQUATIONS = {
+    "sequential": "sequential MSJPDA (Pao & Frei 1995): single-sensor JPDA per sensor in turn",
+    "parallel": "parallel MSJPDA (Pao & Frei 1995): joint S-tuple events, stacked EKF update",
+    "sdcmsjpda": (
+        "SD-CMSJPDA as printed: S-tuple events and marginals (eqs. 3-22, Poisson form of eq. "
+        "21), tuple estimate X + sum_s w_s K_s nu_s (eq. 24), w_s = e_s / (b + sum e_i) (eq. "
+        "25), eq. 26 nonparametric e_s = exp(-d_s^2 / 2), b = m (2 pi / gamma) (1 - Pd PG) / "
+        "(pi Pd) with m = clutter_rate and gamma the PG gate threshold, beta_0 (eq. 28), "
+        "covariance eqs. 31-32"
+    ),
+    "sd_gnn": "S-D assignment GNN: best joint event by (S+1)-D assignment, stacked EKF update",
+    "sdcmsjpda_fused": (
+        "SD-CMSJPDA, ML-fused reading: the tuple's equivalent measurement is the maximum-"
+        "likelihood fusion of its detections (not eqs. 24-26); its association equals parallel"
+    ),
+    "sdcmsjpda_joint": "sdcmsjpda_fused with the joint tuple likelihood (diagnostic, not eq. 15)",
+}
 
 
 def summarize_runs(params: SdCmsjpdaParams, runs: Sequence[_RunResult]) -> dict[str, Any]:
@@ -52,6 +74,8 @@ def summarize_runs(params: SdCmsjpdaParams, runs: Sequence[_RunResult]) -> dict[
             else:
                 pos = vel = np.full(params.n_steps, np.nan)
             ms = [row["ms_per_step"] for row in rows if np.isfinite(row["ms_per_step"])]
+            a, b = POST_CROSSING_STEPS
+            tail = [np.asarray(row["pos_err_per_target_m"])[a - 1 : b] for row in ok]
             per[alg] = {
                 "diverged": int(div.sum()),
                 "failed": sum(bool(row["failed"]) for row in rows),
@@ -61,6 +85,9 @@ def summarize_runs(params: SdCmsjpdaParams, runs: Sequence[_RunResult]) -> dict[
                 "rms_pos_per_step_m": pos,
                 "rms_vel_per_step_mps": vel,
                 "ms_per_step": float(np.mean(ms)) if ms else float("nan"),
+                "post_crossing_err_per_run_m": [
+                    np.mean(e, axis=0).tolist() for e in tail if e.size
+                ],
             }
         by_pd[key] = per
     return {
@@ -74,9 +101,38 @@ def summarize_runs(params: SdCmsjpdaParams, runs: Sequence[_RunResult]) -> dict[
         "clutter_density_per_m_rad": list(clutter_density(params, 2, _truth(params))),
         "ms_per_step_note": "CPU time of the fusion step (time.thread_time), mean over runs",
         "by_pd": by_pd,
+        "algorithm_equations": {a: ALGORITHM_EQUATIONS[a] for a in params.algorithms},
+        "diverged_by_threshold": _diverged_by_threshold(params, runs),
         "paper_table1": PAPER_TABLE1,
         "paper_ms_per_step": PAPER_MS_PER_STEP,
     }
+
+
+#: Divergence thresholds of the sensitivity table, m (the rule's window unchanged).
+SENSITIVITY_DIVERGENCE_M = (1000.0, 2000.0, 5000.0)
+
+
+def _diverged_by_threshold(
+    params: SdCmsjpdaParams, runs: Sequence[_RunResult]
+) -> dict[str, dict[str, dict[str, int]]]:
+    """Divergences per threshold of :data:`SENSITIVITY_DIVERGENCE_M`, ``P_D`` and algorithm,
+    from the runs' per-target errors (the same runs under other divergence rules)."""
+    out: dict[str, dict[str, dict[str, int]]] = {}
+    w = params.divergence_window
+    for dm in SENSITIVITY_DIVERGENCE_M:
+        per_pd: dict[str, dict[str, int]] = {}
+        for pd in params.pd_values:
+            key = f"{pd:g}"
+            per_pd[key] = {
+                alg: sum(
+                    bool(r[key][alg]["failed"])
+                    or bool(np.any(np.mean(r[key][alg]["pos_err_per_target_m"][-w:], 0) > dm))
+                    for r in runs
+                )
+                for alg in params.algorithms
+            }
+        out[f"{dm:g}"] = per_pd
+    return out
 
 
 def _truth(params: SdCmsjpdaParams) -> FloatArray:
@@ -145,6 +201,28 @@ def tables_markdown(results: dict[str, Any]) -> str:
         paper = PAPER_MS_PER_STEP.get(alg)
         cells.append(f"{ms:.2f}" + (f" [paper {paper}]" if paper else ""))
         lines.append(f"| {alg} | " + " | ".join(cells) + " |")
+    if set(PAPER_MS_PER_STEP) <= set(algs):
+        seq, sd = (np.mean([by_pd[p][a]["ms_per_step"] for p in pds]) for a in PAPER_MS_PER_STEP)
+        paper_ratio = PAPER_MS_PER_STEP["sdcmsjpda"] / PAPER_MS_PER_STEP["sequential"]
+        lines += [
+            "",
+            f"Time per step, sdcmsjpda / sequential: {sd / seq:.2f} [paper {paper_ratio:.2f}].",
+        ]
+    lines += [
+        "",
+        "## Sensitivity to the divergence threshold (same runs): divergences per Pd",
+        "",
+        "| algorithm | " + " | ".join(f"{d} m" for d in results["diverged_by_threshold"]) + " |",
+        "|---|" + "---|" * len(results["diverged_by_threshold"]),
+    ]
+    for alg in algs:
+        cells = [
+            " / ".join(str(per[p][alg]) for p in pds)
+            for per in results["diverged_by_threshold"].values()
+        ]
+        lines.append(f"| {alg} | " + " | ".join(cells) + " |")
+    lines += ["", "## What each algorithm implements", ""]
+    lines += [f"- `{a}`: {results['algorithm_equations'][a]}" for a in algs]
     return "\n".join(lines) + "\n"
 
 
@@ -169,7 +247,27 @@ def write_figures(outcome: Outcome[SdCmsjpdaParams, _RunResult], out_dir: Path) 
             ax.legend(fontsize=8)
             paths.append(save_figure(fig, d / f"fig{n}_rms_{what}_pd{p}.png"))
             n += 1
+    paths.append(_post_crossing_figure(outcome.results, d))
     return paths
+
+
+def _post_crossing_figure(results: dict[str, Any], d: Path) -> Path:
+    """Sequential MSJPDA's mean position error over :data:`POST_CROSSING_STEPS` of every
+    converged run and target, sorted, one curve per ``P_D``: whether a few runs whose tracks
+    coalesced or swapped (still under the divergence rule) carry the RMS."""
+    from navtrack.plots.canvas import new_figure, save_figure
+
+    fig = new_figure((6.4, 3.8))
+    ax = fig.add_subplot()
+    for p, per in results["by_pd"].items():
+        err = np.sort(np.ravel(per["sequential"]["post_crossing_err_per_run_m"]))[::-1]
+        ax.semilogy(np.arange(1, err.size + 1), err, marker=".", label=f"P_D = {p}")
+    a, b = POST_CROSSING_STEPS
+    ax.set_xlabel("run x target, by decreasing error")
+    ax.set_ylabel(f"mean position error, steps {a}-{b}, m")
+    ax.set_title("Sequential MSJPDA after the crossing (converged runs)")
+    ax.legend(fontsize=8)
+    return save_figure(fig, d / "sequential_post_crossing.png")
 
 
 def summary_lines(results: dict[str, Any]) -> list[str]:

@@ -73,9 +73,10 @@ class SdCmsjpdaParams:
         mean position error of either target over the last ``divergence_window`` scans exceeds
         this (m) — the track is lost or swapped onto the other target.
     divergence_window : scans of that rule.
-    algorithms : the fusion trackers run: the issue's four and the weighted reading by default;
-        ``sdcmsjpda_joint`` (the joint tuple likelihood, a diagnostic, not eq. 15) on request;
-        a subset for quick studies of other settings
+    algorithms : the fusion trackers run: sequential, parallel, ``sdcmsjpda`` (eqs. 24-32 as
+        printed, eq. 26's ``m`` = ``clutter_rate``), S-D GNN and the ML-fused reading
+        ``sdcmsjpda_fused`` by default; ``sdcmsjpda_joint`` (the joint tuple likelihood, a
+        diagnostic, not eq. 15) on request; a subset for quick studies of other settings
     """
 
     pd_values: tuple[float, ...] = (0.97, 0.76, 0.58)
@@ -91,8 +92,8 @@ class SdCmsjpdaParams:
     clutter_model: Literal["gate", "box", "region"] = "gate"
     clutter_halfwidth_sigma: float = 6.0
     accel_sigma_mps2: float = 1.0
-    init_sigma_pos_m: float = 300.0
-    init_sigma_vel_mps: float = 30.0
+    init_sigma_pos_m: float = 1000.0
+    init_sigma_vel_mps: float = 100.0
     gate_probability: float = 0.99
     divergence_m: float = 2000.0
     divergence_window: int = 10
@@ -101,7 +102,7 @@ class SdCmsjpdaParams:
         "parallel",
         "sdcmsjpda",
         "sd_gnn",
-        "sdcmsjpda_weighted",
+        "sdcmsjpda_fused",
     )
 
     def __post_init__(self) -> None:
@@ -261,7 +262,9 @@ def paper3_run(params: SdCmsjpdaParams, rng: np.random.Generator) -> dict[str, A
     for pd in params.pd_values:
         scans = simulate_scans(params, truth, pd, rng)
         xi = x0 + rng.standard_normal(x0.shape) * np.array([sp, sv, sp, sv])
-        config = FusionConfig((pd,) * len(sens), lam, params.gate_probability)
+        config = FusionConfig(
+            (pd,) * len(sens), lam, params.gate_probability, false_per_gate=params.clutter_rate
+        )
         per: dict[str, Any] = {}
         for alg in params.algorithms:
             try:
