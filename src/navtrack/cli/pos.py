@@ -14,6 +14,7 @@ solved, the input cannot be read, or the ``--out`` file could not be written.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 from collections import Counter
@@ -617,26 +618,25 @@ def _solve(
     from navtrack.gnss.spp import CHUNK_EPOCHS, solve_spp
 
     n = len(obs.t_gps_s)
-    if not progress or n <= CHUNK_EPOCHS:
-        return solve_spp(
-            obs,
-            navs,
-            sp3=sp3,
-            config=config,
-            chunk_epochs=CHUNK_EPOCHS,
-            raim=raim,
-            ephemeris=ephemeris,
-        )
-    from tqdm import tqdm
+    with contextlib.ExitStack() as stack:
+        report = None
+        if progress and n > CHUNK_EPOCHS:
+            from tqdm import tqdm
 
-    with tqdm(total=n, unit="epoch", desc="solving", file=sys.stderr, disable=None) as bar:
+            bar = stack.enter_context(
+                tqdm(total=n, unit="epoch", desc="solving", file=sys.stderr, disable=None)
+            )
+
+            def report(done: int, _total: int) -> None:
+                bar.update(done - bar.n)
+
         return solve_spp(
             obs,
             navs,
             sp3=sp3,
             config=config,
             chunk_epochs=CHUNK_EPOCHS,
-            progress=lambda done, _: bar.update(done - bar.n),
+            progress=report,
             raim=raim,
             ephemeris=ephemeris,
         )
