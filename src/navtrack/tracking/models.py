@@ -180,7 +180,9 @@ class LinearMotion:
 
     def f(self, x: FloatArray, dt: float) -> FloatArray:
         """Propagate states ``x (..., dim_x)`` by ``dt`` seconds."""
-        return np.asarray(x, dtype=float) @ self.F(dt).T
+        x = np.asarray(x, dtype=float)
+        # one (rows, dim_x) product: a stack of small matrices would be multiplied one by one
+        return np.asarray((x.reshape(-1, self.dim_x) @ self.F(dt).T).reshape(x.shape))
 
     def jacobian(self, x: FloatArray, dt: float) -> FloatArray:
         """``F`` broadcast to ``x.shape[:-1] + (dim_x, dim_x)``."""

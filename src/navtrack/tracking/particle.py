@@ -535,9 +535,9 @@ def predict_particles(
     particles: FloatArray, motion: LinearMotion, dt: float, rng: np.random.Generator
 ) -> FloatArray:
     """Sample every partition from the kinematic prior ``x' = F x + n``, ``n ~ N(0, Q)``."""
-    S = _sqrt_psd(motion.Q(dt))
-    noise = rng.standard_normal(particles.shape) @ S.T
-    return np.asarray(motion.f(particles, dt) + noise)
+    n = particles.shape[-1]
+    noise = rng.standard_normal((particles.size // n, n)) @ _sqrt_psd(motion.Q(dt)).T
+    return np.asarray(motion.f(particles, dt) + noise.reshape(particles.shape))
 
 
 def resample_partitions(
@@ -572,9 +572,15 @@ def resample_partitions(
     lw = log_prior[:, :, None] + log_partition  # (B, N, T)
     idx = systematic_resample(np.moveaxis(lw, 1, 2), rng)  # (B, T, N)
     idx = np.moveaxis(idx, 1, 2)  # (B, N, T)
-    new = np.take_along_axis(particles, idx[..., None], axis=1)
-    bias = np.take_along_axis(log_partition, idx, axis=1)
-    return new, bias, idx
+    chosen = _partition_index(idx)
+    return particles[chosen], log_partition[chosen], idx
+
+
+def _partition_index(idx: IntArray) -> tuple[IntArray, IntArray, IntArray]:
+    """Index of ``a[b, idx[b, i, t], t]`` for arrays ``a (B, N, T, ...)``: partition ``t`` of
+    particle ``idx[b, i, t]``."""
+    B, _, T = idx.shape
+    return (np.arange(B)[:, None, None], idx, np.arange(T)[None, None, :])
 
 
 # ------------------------------------------------------------------------------ estimates
@@ -584,10 +590,11 @@ def weighted_estimates(
     particles: FloatArray, log_weights: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
     """Weighted mean ``(B, T, n)`` and covariance ``(B, T, n, n)`` of each target's partition."""
-    w = np.exp(log_weights)[:, :, None, None]
-    x = np.sum(w * particles, axis=1)
-    e = particles - x[:, None]
-    P = np.einsum("bi,bitj,bitk->btjk", np.exp(log_weights), e, e)
+    B, N, T, n = particles.shape
+    w = np.exp(log_weights)[:, None, :]  # (B, 1, N)
+    x = (w @ particles.reshape(B, N, T * n)).reshape(B, T, n)
+    e = np.moveaxis(particles - x[:, None], 1, -1)  # (B, T, n, N)
+    P = (e * w[:, None]) @ np.swapaxes(e, -1, -2)
     return x, P
 
 
@@ -635,19 +642,23 @@ def kmeans_permute(
     T, n = particles.shape[-2:]
     if T == 1 or iterations == 0:
         return particles
+    B, N = particles.shape[:2]
     perms = _permutations(T)
+    # select[s * T + t, p] = 1 when permutation p moves source partition s to target t
+    select = np.zeros((T * T, len(perms)))
+    select[perms * T + np.arange(T), np.arange(len(perms))[:, None]] = 1.0
     scale = np.where(np.arange(n) % 2 == 0, 1.0, dt * dt)
-    w = np.exp(log_weights)[:, :, None, None]
+    w = np.exp(log_weights)[:, None, :]  # (B, 1, N)
+    rows = (np.arange(B)[:, None, None], np.arange(N)[None, :, None])
     x = particles
     for _ in range(iterations):
-        mu = np.sum(w * x, axis=1) * scale  # (B, T, n)
+        mu = (w @ x.reshape(B, N, T * n)).reshape(B, T, n) * scale
         # sum_t |x_perm(t) - mu_t|² = const - 2 sum_t x_perm(t) · mu_t
-        C = np.einsum("bisk,btk->bist", x, mu)  # (B, N, T_src, T_dst)
-        cost = -C[:, :, perms, np.arange(T)].sum(axis=-1)  # (B, N, T!)
-        best = np.argmin(cost, axis=-1)
+        C = x.reshape(B, N * T, n) @ np.swapaxes(mu, -1, -2)  # (B, N T_src, T_dst)
+        best = np.argmax(C.reshape(B, N, T * T) @ select, axis=-1)  # (B, N)
         if not np.any(best):
             break
-        x = np.take_along_axis(x, perms[best][..., None], axis=2)
+        x = x[(*rows, perms[best])]
     return np.asarray(x)
 
 
@@ -750,7 +761,7 @@ def jmpd_step(
                 _, best, _ = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
                 log_part = ip_gnn_log_likelihoods(L, best)
             pred, log_bias, idx = resample_partitions(pred, state.log_weights, log_part, rng)
-            L = np.take_along_axis(L, idx[..., None], axis=1)
+            L = L[_partition_index(idx)]
             loglik, _, n_h = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
             with np.errstate(invalid="ignore"):
                 log_w = loglik - log_bias.sum(axis=-1)
