@@ -50,11 +50,25 @@ def shared_data_problem(root: Path) -> str | None:
     return None
 
 
+def _in_ci() -> bool:
+    return os.environ.get("CI", "").lower() == "true"
+
+
 def pytest_configure(config: pytest.Config) -> None:
     """Under ``CI=true``, refuse to start when the shared data are missing."""
     problem = shared_data_problem(SHARED_DATA)
-    if os.environ.get("CI", "").lower() == "true" and problem is not None:
+    if _in_ci() and problem is not None:
         raise pytest.UsageError(f"CI=true but {problem}; the tests needing them would skip")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Outside CI, ``slow`` tests are skipped unless a ``-m`` expression selects the tests."""
+    if _in_ci() or config.getoption("markexpr"):
+        return
+    skip = pytest.mark.skip(reason="slow: runs under CI=true or when selected with -m slow")
+    for item in items:
+        if "slow" in item.keywords:
+            item.add_marker(skip)
 
 
 @pytest.fixture(scope="session")

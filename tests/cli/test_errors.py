@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 import navtrack.cli.rinex
-from navtrack.cli import EXIT_BAD_INPUT, EXIT_INTERNAL, build_parser, main
+from navtrack.cli import EXIT_BAD_INPUT, EXIT_INTERNAL, main
 from navtrack.data import sample_path
 
 SRC = Path(navtrack.cli.__file__).resolve().parents[2]
@@ -66,9 +66,13 @@ def test_unexpected_exception_is_short_unless_debug(
         ("reproduce", "--seed", "0"),
     ],
 )
-def test_help_states_defaults(command: str, option: str, default: str) -> None:
-    sub = build_parser()._subparsers._group_actions[0].choices[command]  # type: ignore[union-attr]
-    text = " ".join(sub.format_help().split())
+def test_help_states_defaults(
+    command: str, option: str, default: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as done:
+        main([command, "--help"])
+    assert done.value.code == 0
+    text = " ".join(capsys.readouterr().out.split())
     start = text.index(option + " ", text.index("options:"))
     end = text.find(" --", start + len(option) + 1)
     entry = text[start : end if end > 0 else None]

@@ -3,6 +3,7 @@ real-data study on few fixes; the statistics and the verdicts on constructed tab
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -80,14 +81,20 @@ def test_fix_set_is_seeded_and_its_truth_is_consistent() -> None:
     assert 0.0 <= distance <= params.cell_radius_m
     assert np.linalg.norm(p1.start_xyz_m[0] - truth) == pytest.approx(distance)
     assert meta["dop"] <= params.max_dop
-    # error-free pseudoranges: Gauss–Newton at the true height recovers the truth to the
-    # departure of the f5 surface from the geodetic height (< 0.4 m at 56 m)
-    from navtrack.gnss.agps import AgpsConfig, solve_agps
+    # error-free pseudoranges: Gauss–Newton recovers the truth exactly once the height given is
+    # the one whose f5 surface passes through the truth; that height departs from the geodetic
+    # 56 m by less than h e² (0.38 m)
+    from scipy.optimize import brentq
 
-    res = solve_agps(p1, "gn", AgpsConfig(eps=1e-6))
+    from navtrack.gnss.agps import AgpsConfig, ellipsoid_residual, solve_agps
+
+    h_f5 = brentq(lambda h: float(ellipsoid_residual(truth, h)), 0.0, 100.0, xtol=1e-9)
+    assert abs(h_f5 - 56.0) < 56.0 * 6.69438e-3
     at_true = np.flatnonzero(p1.height_m == 56.0)
+    on_surface = dataclasses.replace(p1, height_m=np.where(p1.height_m == 56.0, h_f5, p1.height_m))
+    res = solve_agps(on_surface, "gn", AgpsConfig(eps=1e-9))
     err = np.linalg.norm(res.pos_m[at_true] - truth, axis=1)
-    assert err.max() < 50.0
+    assert err.max() < 1e-3
     run = simulate_fix_set(params, np.random.default_rng(4))
     assert run["error_m"].shape == (3, 4, 11)
     assert run["sens_error_m"].shape == (len(sensitivity_names(params)), 2, 11)
