@@ -2,9 +2,9 @@
 
 Solves the same stations three ways in this run, each from an empty output folder: the plain
 in-process loop (one station after another), Dask's in-process threaded scheduler (the
-default), and a local Dask cluster of ``--workers`` processes; prints wall time, stations and
-epochs per second, and the speed-up over the loop. Then reruns the cluster job on its own folder
-to show the resume (every station loaded from its checkpoint).
+default), and Dask's multiprocessing scheduler on ``--workers`` processes; prints wall time,
+stations and epochs per second, and the speed-up over the loop. Then reruns the process job on its
+own folder to show the resume (every station loaded from its checkpoint).
 
 Stations: the shared data's observation files (``--shared``), or ``--copies N`` copies of the
 bundled 120-epoch SEPT file (``--full``: of the shared 900-epoch one), each in its own folder
@@ -29,6 +29,7 @@ from pathlib import Path
 from navtrack.data import sample_path
 from navtrack.experiments.runner import run_monte_carlo
 from navtrack.gnss import network
+from navtrack.gnss.rinex.obs import read_obs
 from navtrack.gnss.spp import SppConfig
 
 _DEFAULT_SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -81,17 +82,14 @@ def main() -> None:
         for label, run in (
             ("loop", lambda out: _loop(jobs, config, out)),
             ("dask threads", lambda out: network.solve_network(jobs, config, out, progress=False)),
-            (f"cluster {args.workers}", lambda out: network.solve_network(
+            (f"processes {args.workers}", lambda out: network.solve_network(
                 jobs, config, out, workers=args.workers, progress=False)),
         ):  # fmt: skip
             out = root / label.replace(" ", "_")
             clock = time.perf_counter()
             run(out)
             rows.append((label, time.perf_counter() - clock))
-        epochs = sum(
-            len(__import__("navtrack.gnss.rinex.obs", fromlist=["x"]).read_obs(j.obs).t_gps_s)
-            for j in jobs
-        )
+        epochs = sum(len(read_obs(j.obs).t_gps_s) for j in jobs)
         base = rows[0][1]
         print(f"{len(jobs)} stations, {epochs} epochs; load average {os.getloadavg()[0]:.1f}")
         print("backend             wall s  stations/s  epochs/s  speed-up over the loop")
@@ -99,7 +97,7 @@ def main() -> None:
             rate = f"{len(jobs) / wall:11.1f} {epochs / wall:9.0f}"
             print(f"{label:<18} {wall:7.2f} {rate} {base / wall:8.2f}")
         clock = time.perf_counter()
-        again = network.solve_network(jobs, config, root / f"cluster_{args.workers}",
+        again = network.solve_network(jobs, config, root / f"processes_{args.workers}",
                                       workers=args.workers, progress=False)  # fmt: skip
         print(f"resume: {again.runs.counts['resumed']} of {len(jobs)} stations from checkpoints "
               f"in {time.perf_counter() - clock:.2f} s")  # fmt: skip

@@ -45,7 +45,7 @@ def test_loop_and_dask_threads_give_identical_results() -> None:
     assert loop.n_ok == 7
 
 
-def test_local_cluster_two_workers_gives_identical_results() -> None:
+def test_two_worker_processes_and_a_cluster_give_identical_results() -> None:
     pytest.importorskip("distributed")
     cloudpickle = pytest.importorskip("cloudpickle")
     # Workers cannot import this test module by name: ship toy_run by value.
@@ -55,17 +55,17 @@ def test_local_cluster_two_workers_gives_identical_results() -> None:
     try:
         params = {"size": 2}
         loop = run_monte_carlo(toy_run, 5, 9, params, backend="loop", progress=False)
-        cluster = run_monte_carlo(toy_run, 5, 9, params, workers=2, progress=False)
+        processes = run_monte_carlo(toy_run, 5, 9, params, workers=2, progress=False)
         # an existing cluster, reached by its scheduler address
-        with LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=None) as lc:
+        with LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=":0") as lc:
             remote = run_monte_carlo(
                 toy_run, 5, 9, params, scheduler=lc.scheduler_address, progress=False
             )
     finally:
         cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
-    assert cluster.backend == "dask-local-cluster"
+    assert processes.backend == "dask-processes"
     assert remote.backend == "dask-scheduler"
-    assert _results(cluster) == _results(loop)
+    assert _results(processes) == _results(loop)
     assert _results(remote) == _results(loop)
 
 

@@ -125,7 +125,9 @@ def register(subparsers: Any) -> None:
         "station under --out DIR/positions, per-station summaries in DIR/stations.csv, resumable; "
         "navigation files given serve every station, else those beside each file",
     )
-    net.add_argument("--workers", type=int, metavar="N", help="a local Dask cluster of N workers")
+    net.add_argument(
+        "--workers", type=int, metavar="N", help="N local worker processes (Dask multiprocessing)"
+    )
     net.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler")
     # --- integrity monitoring (navtrack.integrity.raim)
     p.add_argument(

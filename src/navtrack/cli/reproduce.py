@@ -30,7 +30,9 @@ def register(subparsers: Any) -> None:
     cmd.add_argument("--out", type=Path, help="output directory (required to run)")
     cmd.add_argument("--runs", type=int, help="Monte Carlo runs (default: the experiment's)")
     cmd.add_argument("--seed", type=int, default=0, help="root seed (default 0)")
-    cmd.add_argument("--workers", type=int, help="start a local Dask cluster with N workers")
+    cmd.add_argument(
+        "--workers", type=int, help="run on N local worker processes (Dask multiprocessing)"
+    )
     cmd.add_argument("--scheduler", help="address of an existing Dask scheduler (tcp://...)")
     cmd.add_argument(
         "--set",

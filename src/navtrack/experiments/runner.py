@@ -8,8 +8,10 @@ run can be replayed alone with :func:`run_generator` / :func:`replay_run`.
 Execution goes through Dask when it is installed (extra ``navtrack[dask]``):
 
 * default: in-process, Dask's local threaded scheduler, no cluster;
-* ``workers=N``: a ``distributed.LocalCluster`` of ``N`` single-threaded worker processes;
-* ``scheduler="tcp://host:port"``: an existing Dask cluster.
+* ``workers=N``: Dask's multiprocessing scheduler on a pool of ``N`` local worker processes
+  (forked where the platform forks, so they start without importing anything again);
+* ``scheduler="tcp://host:port"``: an existing Dask cluster (``dask scheduler`` and
+  ``dask worker``, or any ``distributed`` deployment).
 
 Without Dask the runs execute in a plain in-process loop with identical results; the result's
 ``backend`` says which path ran. Each finished run is checkpointed under ``DIR/runs/`` (one
@@ -98,7 +100,7 @@ class MonteCarloResult:
     records : tuple of RunRecord
     seed : int
     backend : str
-        ``"dask-threads"``, ``"dask-local-cluster"``, ``"dask-scheduler"`` or ``"loop"``.
+        ``"dask-threads"``, ``"dask-processes"``, ``"dask-scheduler"`` or ``"loop"``.
     note : str
         Why that backend ran (e.g. "dask is not installed").
     counts : dict of str to int
@@ -239,7 +241,7 @@ def run_monte_carlo(
     checkpoint_dir : path, optional
         Directory whose ``runs/`` subfolder holds one checkpoint per finished run.
     workers : int, optional
-        Start a ``distributed.LocalCluster`` with this many worker processes.
+        Run on this many local worker processes (Dask's multiprocessing scheduler).
     scheduler : str, optional
         Address of an existing Dask scheduler (``tcp://host:port``).
     backend : {"auto", "loop"}
@@ -301,8 +303,8 @@ def run_monte_carlo(
         chosen = "dask-scheduler"
         note = f"existing Dask cluster at {scheduler}"
     elif workers is not None:
-        chosen = "dask-local-cluster"
-        note = f"distributed.LocalCluster with {workers} worker processes"
+        chosen = "dask-processes"
+        note = f"Dask multiprocessing scheduler on {workers} local worker processes"
     else:
         chosen = "dask-threads"
         note = "in-process Dask threaded scheduler (no cluster)"
@@ -312,8 +314,10 @@ def run_monte_carlo(
                 finished(_execute(fn, seed, i, params))
         elif chosen == "dask-threads":
             _run_dask_local(fn, seed, params, pending, finished)
+        elif chosen == "dask-processes":
+            _run_dask_processes(fn, seed, params, pending, finished, workers or 1)
         else:
-            _run_distributed(fn, seed, params, pending, finished, workers, scheduler)
+            _run_distributed(fn, seed, params, pending, finished, scheduler)
     finally:
         bar.close()
     ordered = tuple(records[i] for i in range(n_runs))
@@ -345,32 +349,50 @@ def _run_dask_local(
             finished(record)
 
 
+def _run_dask_processes(
+    fn: RunFunction,
+    seed: int,
+    params: Any,
+    pending: list[int],
+    finished: Callable[[RunRecord], None],
+    workers: int,
+) -> None:
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    import dask
+
+    task = dask.delayed(_execute, pure=False)
+    # One pool for every batch; batches of several tasks per worker keep the workers busy
+    # between the checkpoints.
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context()) as pool:
+        for batch in _batches(pending, 8 * workers):
+            try:
+                outs = dask.compute(
+                    *[task(fn, seed, i, params) for i in batch], scheduler="processes", pool=pool
+                )
+            except Exception as exc:  # a worker died: its pool cannot run the batch
+                message = f"{type(exc).__name__}: {exc}"
+                outs = tuple(RunRecord(i, RunStatus.ERROR, None, message) for i in batch)
+            for record in outs:
+                finished(record)
+
+
 def _run_distributed(
     fn: RunFunction,
     seed: int,
     params: Any,
     pending: list[int],
     finished: Callable[[RunRecord], None],
-    workers: int | None,
     scheduler: str | None,
 ) -> None:
     try:
-        from distributed import Client, LocalCluster, as_completed
+        from distributed import Client, as_completed
     except ImportError as exc:
         from navtrack.errors import MissingDependencyError
 
         raise MissingDependencyError("distributed", "dask", "Dask clusters") from exc
-    cluster = None
-    if scheduler is None:
-        cluster = LocalCluster(
-            n_workers=workers or 1,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-        )
-        client = Client(cluster)
-    else:
-        client = Client(scheduler)
+    client = Client(scheduler)
     try:
         futures = {client.submit(_execute, fn, seed, i, params, pure=False): i for i in pending}
         for future in as_completed(futures):
@@ -382,5 +404,3 @@ def _run_distributed(
             finished(record)
     finally:
         client.close()
-        if cluster is not None:
-            cluster.close()

@@ -1,9 +1,9 @@
 """Single point positions of a network of stations: many observation files in one job.
 
-Each station is one run of the Monte Carlo runner (:mod:`navtrack.experiments.runner`): in-process
-by default, on a local Dask cluster (``workers``) or an existing one (``scheduler``), with a
-checkpoint per finished station so that an interrupted job resumes where it stopped. Every
-station's solution is written to one Parquet dataset partitioned by station
+Each station is one run of the Monte Carlo runner (:mod:`navtrack.experiments.runner`):
+in-process by default, on local worker processes (``workers``) or an existing Dask cluster
+(``scheduler``), with a checkpoint per finished station so that an interrupted job resumes where
+it stopped. Every station's solution is written to one Parquet dataset partitioned by station
 (``OUT/positions/station=NAME/part.parquet``, the columns of ``pos --out``; read it whole with
 ``pandas.read_parquet(OUT / "positions")``), its summary to
 ``OUT/stations.csv``.
