@@ -19,10 +19,15 @@ Printed, all from timings of this run (median of ``--repeat`` runs after one war
 Needs ``rnx2rtkp`` on the PATH (``apt-get install rtklib``) and the shared data
 (``NAVTRACK_SHARED_DATA`` or ``../shared/data``); cases whose inputs are missing are skipped.
 
+``--day OBS NAV`` adds a 24 h RINEX 3 station and its navigation file (any daily pair from a
+public archive, e.g. an IGS/MGEX ``*_01D_30S_MO.rnx`` with ``BRDC00IGS_R_*_01D_MN.rnx``): cases
+``day_gps``, ``day_gej`` (GPS + Galileo + QZSS, RTKLIB's ``spp_gej`` options) and ``day_1h_gps``
+(its first 120 epochs). No stored RTKLIB reference exists for it; RTKLIB's output is not checked.
+
 Usage::
 
     PYTHONPATH=src python benchmarks/bench_pos.py [--repeat 7] [--only sept078_gej ...]
-        [--cuts 50 100 200 450 900] [--threads 1] [--accuracy]
+        [--cuts 50 100 200 450 900] [--threads 1] [--accuracy] [--day OBS NAV]
 
 ``--accuracy`` also prints, per run, the epochs solved and 3D RMS against the reference next to
 RTKLIB's, and the median / max per-epoch distance to RTKLIB's own solution (in-process).
@@ -102,6 +107,13 @@ class Case:
     def available(self) -> bool:
         """True when the inputs and the RTKLIB option file exist."""
         return self.obs.is_file() and self.nav.is_file() and (CONF / f"{self.conf}.conf").is_file()
+
+    def epochs(self) -> int:
+        """Epoch records of the observation file (from the stored reference when there is one)."""
+        if self.name in REFERENCE["runs"]:
+            return int(REFERENCE["runs"][self.name]["epochs"])
+        with self.obs.open() as f:
+            return sum(line.startswith(">") for line in f)
 
 
 CASES = (
@@ -219,7 +231,7 @@ def bench_cases(cases: Sequence[Case], env: dict[str, str], repeat: int, tmp: Pa
     for case in cases:
         nt_out, rtk_out = tmp / f"{case.name}.csv", tmp / f"{case.name}.pos"
         t_nt, t_rtk = time_pair(case.navtrack(nt_out), case.rtklib(rtk_out), env, repeat)
-        epochs = REFERENCE["runs"][case.name]["epochs"]
+        epochs = case.epochs()
         print(
             f"{case.name:<14} {epochs:>6} {_row(t_nt, t_rtk)}  {matches_reference(case, rtk_out)}",
             flush=True,
@@ -314,6 +326,9 @@ def main() -> None:
     )
     ap.add_argument("--threads", default="1", help="BLAS/OpenMP threads of both processes")
     ap.add_argument("--accuracy", action="store_true", help="also print the accuracy table")
+    ap.add_argument(
+        "--day", nargs=2, type=Path, metavar=("OBS", "NAV"), help="a 24 h RINEX 3 station"
+    )
     args = ap.parse_args()
     if args.accuracy:
         accuracy(args.only or list(REFERENCE["runs"]))
@@ -334,11 +349,21 @@ def main() -> None:
         f"median of {args.repeat} alternating runs each; navtrack byte-compiled; "
         f"load average {os.getloadavg()[0]:.1f}"
     )
-    cases = [c for c in CASES if not args.only or c.name in args.only]
-    missing = [c.name for c in cases if not c.available()]
-    if missing:
-        print(f"skipped (inputs not found): {', '.join(missing)}")
     with tempfile.TemporaryDirectory() as tmp:
+        day: list[Case] = []
+        if args.day:
+            obs, nav = args.day
+            hour = Path(tmp) / "day_1h.rnx"
+            cut_rinex3(obs, 120, hour)
+            day = [
+                Case("day_gps", obs, nav, "G", "spp_gps"),
+                Case("day_gej", obs, nav, "GEJ", "spp_gej"),
+                Case("day_1h_gps", hour, nav, "G", "spp_gps"),
+            ]
+        cases = [c for c in (*CASES, *day) if not args.only or c.name in args.only]
+        missing = [c.name for c in cases if not c.available()]
+        if missing:
+            print(f"skipped (inputs not found): {', '.join(missing)}")
         bench_cases([c for c in cases if c.available()], env, args.repeat, Path(tmp))
         if args.cuts and CASES[0].available():
             bench_cuts(CASES[0], args.cuts, env, args.repeat, Path(tmp))

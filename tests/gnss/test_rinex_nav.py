@@ -12,6 +12,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from navtrack.data import sample_path
@@ -254,6 +255,21 @@ def test_sept_galileo_inav_and_fnav_both_kept(gnss_data: Path) -> None:
     assert nav.iono["GAL"].tolist() == [0.4550e2, 0.5859e-1, 0.2228e-2]
     assert nav.iono["QZSB"].tolist() == [0.9011e5, -0.4915e5, -0.8520e6, -0.2163e7]
     assert nav.leap_seconds == 18
+
+
+def test_selected_systems_only(gnss_data: Path) -> None:
+    path = gnss_data / "cssrlib_sept/SEPT078M.21P"
+    full = read_nav(path)
+    ge = read_nav(path, systems="ge")
+    assert set(full.ephemerides) > {"G", "E"}
+    assert set(ge.ephemerides) == {"G", "E"}
+    for s in "GE":
+        pd.testing.assert_frame_equal(ge.ephemerides[s], full.ephemerides[s])
+    assert ge.iono.keys() == full.iono.keys()  # the header is read whole
+    # a RINEX 2 file holds one system: all of it or nothing
+    gps2 = sample_path("07590920.05n")
+    assert len(read_nav(gps2, systems="G").ephemerides["G"]) == _record_starts(gps2)
+    assert read_nav(gps2, systems="E").ephemerides == {}
 
 
 def test_old_galileo_records() -> None:

@@ -255,7 +255,7 @@ def _read_inputs(
     args: argparse.Namespace, config: SppConfig
 ) -> tuple[Observations, list[NavData], Sp3 | None]:
     """The observations (of the configured systems' pseudorange codes only), navigation data
-    and precise orbits."""
+    (of those systems only) and precise orbits."""
     if args.android:
         from navtrack.gnss.android import read_gnsslogger
 
@@ -267,7 +267,7 @@ def _read_inputs(
         obs = read_obs(args.obs, systems=config.systems, codes=observation_codes(config))
     from navtrack.gnss.rinex.nav import read_nav
 
-    navs = [read_nav(p) for p in args.nav]
+    navs = [read_nav(p, systems=config.systems) for p in args.nav]
     sp3 = None
     if args.sp3 is not None:
         from navtrack.gnss.sp3 import read_sp3
@@ -371,7 +371,13 @@ def run_pos(args: argparse.Namespace) -> int:
         print(f"navtrack pos: {args.obs}: no observation epochs{why}", file=sys.stderr)
         return 1
     if sp3 is None and not any(nav.tables for nav in navs):
-        print(f"navtrack pos: {', '.join(map(str, args.nav))}: no ephemerides", file=sys.stderr)
+        for why in _input_warnings(args, config, obs, navs):
+            print(f"warning        {why}")
+        print(
+            f"navtrack pos: {', '.join(map(str, args.nav))}: no ephemerides of the systems "
+            f"{config.systems}",
+            file=sys.stderr,
+        )
         return 1
     raim = _raim_config(args)
     tables = None

@@ -127,7 +127,8 @@ def _solve_station(index: int, rng: np.random.Generator, params: Any) -> dict[st
     job = jobs[index]
     clock = time.perf_counter()
     obs = read_obs(job.obs, systems=config.systems, codes=observation_codes(config))
-    result = solve_spp(obs, [read_nav(p) for p in job.navs], config=config)
+    navs = [read_nav(p, systems=config.systems) for p in job.navs]
+    result = solve_spp(obs, navs, config=config)
     table = result.to_frame()
     folder = Path(out_dir) / "positions" / f"station={job.name}"
     folder.mkdir(parents=True, exist_ok=True)

@@ -118,6 +118,14 @@ def doppler_velocity(
     if pr.sats != result.sats:
         raise ValueError("result: its satellites are not those of obs and config")
     doppler = _doppler_hz(obs, list(pr.sats), "".join(pr.systems))
+    if not np.isfinite(doppler).any():  # no Doppler in the file: no satellite states needed
+        nan = np.full((pr.t_gps_s.size, 3), np.nan)
+        return DopplerVelocity(
+            vel_mps=nan,
+            vel_enu_mps=nan.copy(),
+            drift_mps=nan[:, 0].copy(),
+            n_doppler=np.zeros(pr.t_gps_s.size, dtype=np.int64),
+        )
     shifted = [
         satellite_states(
             dataclasses.replace(pr, t_gps_s=pr.t_gps_s + dt),

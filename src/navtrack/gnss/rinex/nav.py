@@ -266,13 +266,17 @@ class NavData:
         }
 
 
-def read_nav(path: StrPath, *, lenient: bool = False) -> NavData:
+def read_nav(path: StrPath, *, systems: str | None = None, lenient: bool = False) -> NavData:
     """Read a RINEX 2.x/3.x navigation file.
 
     Parameters
     ----------
     path : str or path-like
         Navigation file, plain or compressed (gzip, bzip2, ``.Z``).
+    systems : str, optional
+        System letters to decode (e.g. ``"GE"``); the records of the other systems are passed
+        over unread (a daily multi-GNSS file holds ten times more of them than of GPS). Default:
+        every system.
     lenient : bool
         When true, a damaged record (unreadable number, unknown system letter, missing lines)
         is skipped and listed in :attr:`NavData.skipped`; when false (default) it raises.
@@ -314,7 +318,7 @@ def read_nav(path: StrPath, *, lenient: bool = False) -> NavData:
         if not lenient:
             raise FileFormatError(path, len(lines), reason)
         lines.pop()
-    groups, skipped = _parse_records(path, lines, header.end, v2, system, lenient)
+    groups, skipped = _parse_records(path, lines, header.end, v2, system, lenient, systems)
     if cut:
         skipped.append(SkippedLine(len(lines) + 1, reason))
     tables = _tables(groups)
@@ -422,6 +426,7 @@ def _parse_records(
     v2: bool,
     file_system: str,
     lenient: bool,
+    systems: str | None = None,
 ) -> tuple[dict[str, tuple[_Group, FloatArray]], list[SkippedLine]]:
     # Record boundaries: a record's first line has the satellite in columns 1-3 (RINEX 3: a
     # system letter in column 1; RINEX 2: the PRN in columns 1-2); continuation lines start
@@ -437,8 +442,11 @@ def _parse_records(
             raise FileFormatError(path, start + 1, msg)
         skipped.append(SkippedLine(start + 1, msg))
     groups: dict[str, _Group] = {}
-    ends = [*starts[1:], n] if starts else []
-    for i0, i1 in zip(starts, ends, strict=True):
+    records = list(zip(starts, [*starts[1:], n], strict=False))  # none without starts
+    if systems is not None:
+        wanted = set(systems.upper())
+        records = [r for r in records if (file_system if v2 else lines[r[0]][0]) in wanted]
+    for i0, i1 in records:
         try:
             sys_letter, sat, n_lines, t_cal = _record_head(path, lines, i0, i1, v2, file_system)
         except FileFormatError as exc:
