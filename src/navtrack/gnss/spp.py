@@ -916,7 +916,7 @@ class _PseudorangeModel:
         rho, los = geometric_range(rs, rcv[:, None, :])
         llh = ecef_to_geodetic(rcv)
         rot = enu_rotation(llh[:, 0], llh[:, 1])  # (b, 3, 3)
-        enu = np.einsum("bij,bsj->bsi", rot, los)
+        enu = los @ np.swapaxes(rot, -1, -2)  # rot @ los per satellite
         az = np.mod(np.arctan2(enu[..., 0], enu[..., 1]), 2.0 * np.pi)
         el = np.arcsin(np.clip(enu[..., 2], -1.0, 1.0))
         # inside the earth (start from the centre): no mask, no atmosphere (el = 90 deg)
@@ -1167,7 +1167,7 @@ def estimate_position(
     status[~observed] = SppStatus.TOO_FEW_SATS
 
     geo = model.geometry(lsq.x, np.arange(idx.size))
-    los_enu = np.einsum("eij,esj->esi", geo.rot, geo.los)
+    los_enu = geo.los @ np.swapaxes(geo.rot, -1, -2)
     return Estimate(
         epochs=idx,
         x=lsq.x,
@@ -1416,7 +1416,7 @@ def dops(los_enu: FloatArray, used: BoolArray) -> FloatArray:
     n_e = los_enu.shape[0]
     H = np.concatenate([-los_enu, np.ones((*los_enu.shape[:2], 1))], axis=-1)
     H = np.where(used[..., None], H, 0.0)
-    N = np.einsum("esi,esj->eij", H, H)
+    N = np.swapaxes(H, -1, -2) @ H
     out = np.full((n_e, 4), np.nan)
     ok = used.sum(axis=1) >= 4
     ok[ok] = np.abs(np.linalg.det(N[ok])) > 1e-12

@@ -160,8 +160,9 @@ def _solve_epochs(
     yy = np.where(use, y, 0.0)
     n = use.sum(axis=1)
     ok = n >= _N_UNKNOWNS
-    normal = np.einsum("esi,esj->eij", h, h)
+    ht = np.swapaxes(h, -1, -2)
+    normal = ht @ h
     normal[~ok] = np.eye(_N_UNKNOWNS)
-    x = np.linalg.solve(normal, np.einsum("esi,es->ei", h, yy)[..., None])[..., 0]
+    x = np.linalg.solve(normal, ht @ yy[..., None])[..., 0]
     x[~ok] = np.nan
     return x[:, :3], x[:, 3], n
