@@ -33,7 +33,6 @@ import argparse
 import importlib
 import os
 import sys
-import traceback
 from collections.abc import Sequence
 from typing import Any, TextIO
 
@@ -210,6 +209,8 @@ def _strip_prefix(message: str, name: str) -> str:
 
 def _report(name: str, message: str, exc: BaseException, debug: bool) -> None:
     if debug:
+        import traceback
+
         traceback.print_exception(exc, file=sys.stderr)
     print(f"{name}: error: {message}", file=sys.stderr)
 

@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import bz2
-import gzip
+import importlib
 import zlib
-from collections.abc import Callable
 from dataclasses import dataclass
 from os import fspath
 from pathlib import Path
@@ -16,10 +14,8 @@ from navtrack.errors import FileFormatError, MissingDependencyError
 _GZIP_MAGIC = b"\x1f\x8b"
 _LZW_MAGIC = b"\x1f\x9d"
 _BZ2_MAGIC = b"BZh"
-_DECOMPRESSORS: tuple[tuple[bytes, str, Callable[[bytes], bytes]], ...] = (
-    (_GZIP_MAGIC, "gzip", gzip.decompress),
-    (_BZ2_MAGIC, "bzip2", bz2.decompress),
-)
+# magic bytes, name, standard-library module (imported when a file needs it)
+_DECOMPRESSORS = ((_GZIP_MAGIC, "gzip", "gzip"), (_BZ2_MAGIC, "bzip2", "bz2"))
 
 
 def read_bytes(path: StrPath) -> bytes:
@@ -37,10 +33,10 @@ def read_bytes(path: StrPath) -> bytes:
     raw = Path(path).read_bytes()
     if raw.startswith(_LZW_MAGIC):
         raw = _hatanaka_decompress(path, raw)
-    for magic, name, decompress in _DECOMPRESSORS:
+    for magic, name, module in _DECOMPRESSORS:
         if raw.startswith(magic):
             try:
-                raw = decompress(raw)
+                raw = importlib.import_module(module).decompress(raw)
             except (OSError, EOFError, ValueError, zlib.error) as exc:
                 # zlib.error (bad deflate data) is not an OSError; a cut stream is an EOFError
                 message = f"damaged compressed file ({name}: {exc})"
