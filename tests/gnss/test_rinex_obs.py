@@ -1186,3 +1186,18 @@ def test_a_selective_read_skips_unread_fields_but_not_the_structure(tmp_path: Pa
     bad_sat = write(tmp_path / "sat.21O", "X" + lines[k][1:])
     with pytest.raises(FileFormatError, match="X"):
         read_obs(bad_sat, codes={"L2W"})  # an unknown system is structure
+    # lines of a system not asked for are not decoded, yet their structure is still checked
+    n_types = len(read_obs(sample_path("SEPT078M_120.21O")).header.obs_types["G"])
+    full_width = lines[k].ljust(3 + 16 * n_types)
+    surplus = write(tmp_path / "surplus.21O", full_width + "  20000000.000  ")
+    with pytest.raises(FileFormatError, match="more observations than observation types"):
+        read_obs(surplus, systems="E")
+    padded = write(tmp_path / "padded.21O", full_width + " " * 16)
+    assert (
+        read_obs(padded, systems="E").sats
+        == read_obs(sample_path("SEPT078M_120.21O"), systems="E").sats
+    )
+    twice = tmp_path / "twice.21O"
+    twice.write_text("\n".join([*lines[:k], lines[k], lines[k], *lines[k + 2 :]]) + "\n")
+    with pytest.raises(FileFormatError, match="appears twice in one epoch"):
+        read_obs(twice, systems="E")

@@ -834,9 +834,7 @@ def _assemble(
     n_sys = len(SYSTEMS)
 
     lead = 3 if v3 else 0
-    mat = _matrix(scan.data, lead)
-    n_lines = mat.shape[0]
-    n_f = (mat.shape[1] - lead) // _FIELD
+    n_lines = len(scan.data)
     lines_per_epoch = np.asarray(scan.n_lines, dtype=np.int64)
     epoch_of_line = np.repeat(np.arange(n_e), lines_per_epoch)
     seg_of_line = np.repeat(np.asarray(scan.segment, dtype=np.int64), lines_per_epoch)
@@ -849,7 +847,10 @@ def _assemble(
 
     # Satellite of each data line.
     if v3:
-        raw_ids = np.ascontiguousarray(mat[:, :3]).view("S3").ravel()
+        heads = b"".join([row[:3] for row in scan.data])
+        if len(heads) != 3 * n_lines:  # a line shorter than its satellite id
+            heads = b"".join([row[:3].ljust(3) for row in scan.data])
+        raw_ids = np.frombuffer(heads, dtype="S3")
         offset = np.zeros(n_lines, dtype=np.int64)
         part = np.zeros(n_lines, dtype=np.int64)
     else:
@@ -900,6 +901,21 @@ def _assemble(
         sat_of_line = uniq_col[inverse][rec_of_line] if n_lines else np.zeros(0, np.int64)
         sys_of_line = np.zeros(n_lines, dtype=np.int64)  # RINEX 2: one type list for all
 
+    # Lines whose fields are decoded: RINEX 3 lines of other systems than those asked for are
+    # checked from their satellite and length only (below).
+    if v3 and want_systems is not None:
+        letter = raw_ids.view(np.uint8).reshape(-1, 3)[:, 0]
+        other = np.isin(letter, np.frombuffer(SYSTEMS.encode(), np.uint8)) & ~np.isin(
+            letter, np.frombuffer(want_systems.upper().encode(), np.uint8)
+        )
+        decode = np.flatnonzero(~other)
+        mat = _matrix([scan.data[i] for i in decode.tolist()], lead)
+    else:
+        decode = np.arange(n_lines)
+        mat = _matrix(scan.data, lead)
+    n_dec = mat.shape[0]
+    n_f = (mat.shape[1] - lead) // _FIELD
+
     # Code of each field: table rows are (segment, system), columns the field position.
     width = max((len(t) for seg in segments for t in seg.obs_types.values()), default=0)
     width += n_f + 5
@@ -913,30 +929,42 @@ def _assemble(
             table[r, : len(types)] = [code_index[c] for c in types]
             scale[r, : len(types)] = [seg.scale.get((sys, c), 1.0) for c in types]
     row = seg_of_line * n_sys + sys_of_line
-    col = offset[:, None] + np.arange(n_f)
-    code = table[row[:, None], col]
+    col = offset[decode, None] + np.arange(n_f)
+    code = table[row[decode, None], col]
     if not v3:
         code[:, 5:] = -1  # RINEX 2 lines hold 5 fields (80 columns)
 
-    fields = mat[:, lead:].reshape(n_lines * n_f, _FIELD)
+    fields = mat[:, lead:].reshape(n_dec * n_f, _FIELD)
     if want_systems is None and want_codes is None:
         value, lli, ssi, blank, bad = _decode(fields)
     else:  # decode the wanted fields only; blanks of all (they check the structure)
-        wanted = (kept[code] >= 0) & (out_col[sat_of_line] >= 0)[:, None]
+        wanted = (kept[code] >= 0) & (out_col[sat_of_line[decode]] >= 0)[:, None]
         value, lli, ssi, blank, bad = _decode_some(fields, np.flatnonzero(wanted.ravel()))
-    value = value.reshape(n_lines, n_f)
+    value = value.reshape(n_dec, n_f)
     value[value == 0.0] = np.nan  # "missing observations are written as 0.0 or blanks"
-    lli, ssi = lli.reshape(n_lines, n_f), ssi.reshape(n_lines, n_f)
-    blank, bad = blank.reshape(n_lines, n_f), bad.reshape(n_lines, n_f)
+    lli, ssi = lli.reshape(n_dec, n_f), ssi.reshape(n_dec, n_f)
+    blank, bad = blank.reshape(n_dec, n_f), bad.reshape(n_dec, n_f)
 
     for m in np.flatnonzero(bad.any(axis=1)).tolist():
         k = int(np.argmax(bad[m]))
         text = (
             mat[m, lead + _FIELD * k : lead + _FIELD * (k + 1)].tobytes().decode("ascii", "replace")
         )
-        problem.setdefault(m, f"malformed observation field {k + 1}: {text!r}")
-    surplus = ~blank & (code < 0)
-    for m in np.flatnonzero(surplus.any(axis=1) & declared[row]).tolist():
+        problem.setdefault(int(decode[m]), f"malformed observation field {k + 1}: {text!r}")
+    surplus = (~blank & (code < 0)).any(axis=1)
+    if n_dec < n_lines:  # a line not decoded: text beyond its system's last field
+        n_types = (table >= 0).sum(axis=1)
+        skipped_rows = np.setdiff1d(np.arange(n_lines), decode)
+        limit = lead + _FIELD * n_types[row[skipped_rows]]
+        length = np.fromiter(map(len, map(scan.data.__getitem__, skipped_rows.tolist())), np.int64)
+        beyond = length > limit
+        for k in np.flatnonzero(beyond).tolist():  # trailing blanks do not count
+            beyond[k] = len(scan.data[int(skipped_rows[k])].rstrip(b" ")) > limit[k]
+        too_long = np.zeros(n_lines, dtype=bool)
+        too_long[decode] = surplus
+        too_long[skipped_rows] = beyond
+        surplus = too_long
+    for m in np.flatnonzero(surplus & declared[row]).tolist():
         problem.setdefault(
             m,
             "more observations than observation types"
@@ -972,13 +1000,13 @@ def _assemble(
     values = np.full((n_e, n_s, n_c), np.nan)
     lli_out = np.full((n_e, n_s, n_c), -1, dtype=np.int8)
     ssi_out = np.full((n_e, n_s, n_c), -1, dtype=np.int8)
-    out_sat = out_col[sat_of_line]
+    out_sat = out_col[sat_of_line[decode]]
     out_code = kept[code]
-    put = (out_code >= 0) & (out_sat >= 0)[:, None] & ~blank & usable[:, None]
-    cell = (epoch_of_line * n_s + out_sat)[:, None] * n_c + out_code
+    put = (out_code >= 0) & (out_sat >= 0)[:, None] & ~blank & usable[decode, None]
+    cell = (epoch_of_line[decode] * n_s + out_sat)[:, None] * n_c + out_code
     target = cell[put]
     if (scale != 1.0).any():
-        value = value / scale[row[:, None], col]
+        value = value / scale[row[decode, None], col]
     values.reshape(-1)[target] = value[put]
     lli_out.reshape(-1)[target] = lli[put]
     ssi_out.reshape(-1)[target] = ssi[put]
