@@ -275,14 +275,10 @@ def _solve_fixed(B: FloatArray, fixed: np.ndarray, cols: IntArray) -> tuple[IntA
 # the pass climbs on from there with a smaller step factor (``_WARM_ALPHA``) instead of
 # starting again at zero.
 #
-# Defaults (45 multiplier updates per pass; every rotation for S <= 4, every pair of lists
-# for S >= 5; recovery every 3 iterations; step factor 2 for the first pass and 0.5 for the
-# warm-started ones) were chosen on the benchmark problems of seed 13 (40 per size) and
-# judged on those of seed 2026.  Every pair at S = 4 (six passes instead of four) lowered the
-# mean excess at 10^4 only from 0.50 to 0.40 % for a third more time, which the 10x bar
-# against milp there does not leave; at S = 5 (ten passes instead of five) it lowered 8^5 from
-# 0.59 to 0.41 % and 7^5 from 0.60 to 0.29 % (seed 13), judged 0.77 -> 0.48 % and 0.56 ->
-# 0.45 % (seed 2026), where milp is 25-30x slower than the relaxation.
+# Defaults: 45 multiplier updates per pass; every rotation for S <= 4, every pair of lists for
+# S >= 5; recovery every 3 iterations; step factor 2 for the first pass and 0.5 for the
+# warm-started ones. How they were chosen and judged: docs/multisensor.md, "S-D relaxation
+# defaults".
 #
 # Cost: on the 4-list benchmark problems (~4400 tuples) a solve is ~180 multiplier updates,
 # ~60 recoveries and as many local searches; the variation (its 2-D assignments), the recovery
@@ -1419,7 +1415,7 @@ def _lagrangian(
     return ub, best_sel, min(lb, ub), it, best_u
 
 
-_WARM_ALPHA = 0.5  # step factor of the warm-started passes (module notes)
+_WARM_ALPHA = 0.5  # step factor of the warm-started passes (docs/multisensor.md)
 
 
 def _list_orders(S: int) -> list[IntArray]:
@@ -1435,7 +1431,7 @@ def _list_orders(S: int) -> list[IntArray]:
     return rotations + others
 
 
-_MAX_ITER = 45  # multiplier updates per pass (module notes)
+_MAX_ITER = 45  # multiplier updates per pass (docs/multisensor.md)
 
 
 def sd_lagrangian(
