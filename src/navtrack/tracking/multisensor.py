@@ -516,9 +516,9 @@ def equivalent_measurement(
     once, at the end. With numba installed (extra ``speed``) and range-bearing sensors that
     share one ``position_index`` (:func:`~navtrack.tracking.models.range_bearing_group`), the
     same loop runs compiled, one tuple at a time in scalar arithmetic
-    (:func:`_gauss_newton_range_bearing`; the tests check both paths against each other): on
-    the paper's scenario it takes a step from 2.2 to 1.5 ms, the few hundred small NumPy calls
-    of the batched loop being most of its cost.
+    (:func:`_gauss_newton_range_bearing`; the tests check both paths against each other),
+    sparing the few hundred small NumPy calls that are most of the batched loop's cost
+    (``benchmarks/bench_fusion.py`` times both).
 
     Parameters
     ----------
