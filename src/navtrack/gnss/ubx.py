@@ -1,0 +1,601 @@
+"""u-blox UBX raw receiver logs -> :class:`Observations` and broadcast navigation data.
+
+:func:`read_ubx` reads a binary UBX log as recorded from a u-blox receiver (M8T, M8P, F9P, X20P,
+...; UBX protocol 17 and later) and returns a :class:`UbxLog`:
+
+* ``RXM-RAWX`` (0x02 0x15) -> :class:`~navtrack.gnss.observations.Observations`: per epoch and
+  signal the pseudorange ``C`` (m), carrier phase ``L`` (cycles), Doppler ``D`` (Hz, RINEX sign)
+  and ``S`` the carrier-to-noise density (dB-Hz), under RINEX 3.04 signal codes (table
+  :data:`SIGNALS`). Time tags are the receiver's (``week``, ``rcvTow``), not snapped to a grid.
+  The loss-of-lock indicator is built from the tracking state as RINEX defines it: bit 0
+  (cycle slip possible) when the lock time is 0, shorter than the time since the signal's
+  previous observation, lower than at that observation, when the half-cycle subtraction
+  state changed, at a receiver clock reset and at a signal's first observation; bit 1
+  (half-cycle ambiguity) while the receiver has not resolved the half cycle (``trkStat`` bit 2
+  clear).
+* ``RXM-SFRBX`` (0x02 0x13) -> :class:`~navtrack.gnss.rinex.nav.NavData`: GPS and QZSS LNAV
+  subframes 1-3 become one ephemeris record per issue (IODC = IODE of both subframes), and
+  GPS subframe 4 page 18 the Klobuchar parameters, the GPS-UTC polynomial and the leap
+  seconds. Galileo I/NAV, BeiDou D1/D2, GLONASS strings, SBAS and the modernised messages are
+  not decoded: their words are counted in :attr:`UbxLog.undecoded` by system, so a log whose
+  navigation data cannot serve those systems says so (give a RINEX navigation file for them).
+
+The framing (synchronisation, length, message class and id, resynchronisation after garbage
+and NMEA or RTCM sentences interleaved in the log) is pyubx2's; the two payloads are decoded
+here with NumPy record types laid out as the u-blox interface description gives them, and each
+message's checksum is verified with pyubx2's :func:`pyubx2.calc_checksum`. A message with a bad
+checksum or a length that contradicts its own count is refused (``FileFormatError`` naming the
+byte offset) or, with ``lenient=True``, skipped and listed in :attr:`UbxLog.skipped`.
+
+Phase validity follows RTKLIB 2.4.3's ``convbin``, so that converted files agree with it: the
+phase is dropped when ``trkStat`` bit 1 (carrier phase valid) is clear, when the receiver
+writes -0.5 cycles (its marker of an unusable value) and when the phase standard deviation
+exceeds ``max_cp_std_cycles`` (default 0.020 cycles: ``cpStdev`` index 5 of 0.004 cycles, the
+``CPSTD_VALID`` of RTKLIB's ``ublox.c``); the pseudorange when ``trkStat`` bit 0 is clear.
+BeiDou GEO phases (C01-C05, C59-C63) are shifted by +0.5 cycles as RTKLIB does (ublox.c
+1.28: u-blox reports them half a cycle off the other BeiDou satellites).
+
+References
+----------
+u-blox, "u-blox F9 HPG 1.32 Interface Description" (UBX-22008968), sections 3.2 (frame,
+checksum), 3.17.6 (UBX-RXM-RAWX), 3.17.9 (UBX-RXM-SFRBX), 1.5.4 (signal identifiers);
+"u-blox 8 / M8 Receiver description" (UBX-13003221) 10.2 (navigation data words);
+IS-GPS-200N 20.3.2 and 20.3.3 (LNAV subframes 1-4); IS-QZSS-PNT-005 (QZSS LNAV);
+RINEX 3.04 table A2 (LLI) and section 5.1 (codes).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from os import fspath
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from navtrack._typing import StrPath
+from navtrack.errors import FileFormatError
+from navtrack.gnss.observations import Observations, ObsHeader, SkippedLine
+from navtrack.gnss.rinex.nav import NavData, _toe_gps_s
+from navtrack.timescale import SECONDS_PER_WEEK
+
+__all__ = ["SIGNALS", "UbxLog", "is_ubx", "read_ubx"]
+
+# UBX gnssId -> RINEX system letter
+_SYSTEM = {0: "G", 1: "S", 2: "E", 3: "C", 5: "J", 6: "R", 7: "I"}
+SIGNALS: Mapping[tuple[int, int], str] = MappingProxyType(
+    {
+        (0, 0): "G1C", (0, 3): "G2L", (0, 4): "G2S", (0, 6): "G5I", (0, 7): "G5Q",
+        (1, 0): "S1C",
+        (2, 0): "E1C", (2, 1): "E1B", (2, 3): "E5I", (2, 4): "E5Q", (2, 5): "E7I",
+        (2, 6): "E7Q",
+        (3, 0): "C2I", (3, 1): "C2I", (3, 2): "C7I", (3, 3): "C7I", (3, 5): "C1P",
+        (3, 6): "C1D", (3, 7): "C5P", (3, 8): "C5D",
+        (5, 0): "J1C", (5, 1): "J1Z", (5, 4): "J2S", (5, 5): "J2L", (5, 8): "J5I",
+        (5, 9): "J5Q",
+        (6, 0): "R1C", (6, 2): "R2C",
+        (7, 0): "I5A",
+    }
+)  # fmt: skip
+"""(gnssId, sigId) of RXM-RAWX -> system letter and RINEX 3.04 band + attribute (BeiDou B1I is
+``2I`` as RINEX 3.02-3.04 write it; D1 and D2 navigation of B1I/B2I share one code)."""
+
+_RAWX_HEAD = np.dtype(
+    [
+        ("rcvTow", "<f8"), ("week", "<u2"), ("leapS", "i1"), ("numMeas", "u1"),
+        ("recStat", "u1"), ("version", "u1"), ("reserved", "V2"),
+    ]
+)  # fmt: skip
+_RAWX_MEAS = np.dtype(
+    [
+        ("prMes", "<f8"), ("cpMes", "<f8"), ("doMes", "<f4"), ("gnssId", "u1"), ("svId", "u1"),
+        ("sigId", "u1"), ("freqId", "u1"), ("locktime", "<u2"), ("cno", "u1"),
+        ("prStdev", "u1"), ("cpStdev", "u1"), ("doStdev", "u1"), ("trkStat", "u1"),
+        ("reserved", "V1"),
+    ]
+)  # fmt: skip
+_SFRBX_HEAD = np.dtype(
+    [
+        ("gnssId", "u1"), ("svId", "u1"), ("sigId", "u1"), ("freqId", "u1"), ("numWords", "u1"),
+        ("chn", "u1"), ("version", "u1"), ("reserved", "V1"),
+    ]
+)  # fmt: skip
+_RAWX = (0x02, 0x15)
+_SFRBX = (0x02, 0x13)
+_CP_STD_UNIT_CYC = 0.004  # cpStdev: 0.004 cycles per count (4 bits)
+_PI = 3.1415926535898  # the value of pi IS-GPS-200 20.3.3.4.3 fixes for the orbit
+# URA index -> nominal URA (m) the user applies, IS-GPS-200N 20.3.3.3.1.3 (2^(1+N/2) rounded to
+# 0.1 m up to N = 6, 2^(N-2) above); index 15 means no accuracy prediction (NaN)
+_URA_M = (2.0, 2.8, 4.0, 5.7, 8.0, 11.3, 16.0, 32.0, 64.0, 128.0, 256.0, 512.0, 1024.0, 2048.0,
+          4096.0)  # fmt: skip
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class UbxLog:
+    """What a UBX log holds.
+
+    Attributes
+    ----------
+    obs : Observations
+        The ``RXM-RAWX`` epochs (``header.version`` 0.0, receiver ``u-blox``).
+    nav : NavData
+        Ephemerides decoded from ``RXM-SFRBX`` (``version`` 0.0); tables only for systems
+        with at least one complete ephemeris. The ``line`` column holds the 1-based message
+        number of the ephemeris' first subframe in the log.
+    messages : mapping of str to int
+        UBX messages by class/id (``"RXM-RAWX"``, ``"RXM-SFRBX"``, ``"0x01 0x07"`` ...),
+        checksum-valid ones only.
+    undecoded : mapping of str to int
+        ``RXM-SFRBX`` messages not turned into navigation data, by system letter and reason
+        (``"E: Galileo I/NAV not decoded"``, ``"G: subframe 5 (almanac)"``, ...).
+    skipped : tuple of SkippedLine
+        Messages skipped in lenient reading; ``line`` is the 1-based message number, the reason
+        names the byte offset.
+    unknown_signals : mapping of str to int
+        RAWX measurements whose (gnssId, sigId) has no RINEX code in :data:`SIGNALS`, or
+        whose satellite is not identified (GLONASS slot 255), by ``"gnssId/sigId"``.
+    """
+
+    obs: Observations
+    nav: NavData
+    messages: Mapping[str, int]
+    undecoded: Mapping[str, int]
+    skipped: tuple[SkippedLine, ...] = ()
+    unknown_signals: Mapping[str, int] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for name in ("messages", "undecoded", "unknown_signals"):
+            object.__setattr__(self, name, MappingProxyType(dict(getattr(self, name))))
+
+
+def is_ubx(path: StrPath) -> bool:
+    """True when the file's first 4 kB hold a UBX frame start (``0xB5 0x62``) followed by a
+    known message class: a UBX log, possibly with NMEA sentences interleaved."""
+    with open(path, "rb") as f:
+        head = f.read(4096)
+    k = head.find(b"\xb5\x62")
+    while k >= 0 and k + 2 < len(head):
+        if head[k + 2] in (0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x0A, 0x0D, 0x10, 0x13, 0x21):
+            return True
+        k = head.find(b"\xb5\x62", k + 1)
+    return False
+
+
+def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float = 0.020) -> UbxLog:
+    """Read a u-blox UBX log (module notes).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The log (binary UBX, NMEA or RTCM 3 messages interleaved are passed over).
+    lenient : bool, default False
+        False: a message with a bad checksum or an inconsistent length raises. True: it is
+        skipped and listed in :attr:`UbxLog.skipped`.
+    max_cp_std_cycles : float, default 0.020
+        Carrier phases whose reported standard deviation exceeds this are dropped (RTKLIB
+        ``convbin``'s threshold; ``inf`` keeps every phase the receiver marks valid).
+
+    Raises
+    ------
+    FileFormatError
+        No RXM-RAWX message in the file, or (strict reading) a damaged message.
+    ImportError
+        pyubx2 is not installed (``pip install navtrack[ublox]``).
+    """
+    try:
+        from pyubx2 import UBX_PROTOCOL, UBXReader, calc_checksum
+    except ImportError as exc:  # pragma: no cover - the extra is installed in tests
+        raise ImportError(
+            "reading u-blox logs needs pyubx2: pip install 'navtrack[ublox]'"
+        ) from exc
+    messages: Counter[str] = Counter()
+    skipped: list[SkippedLine] = []
+    epochs: list[tuple[float, int, np.ndarray]] = []  # (t_gps_s, recStat, measurements)
+    subframes: list[tuple[int, int, int, np.ndarray, int]] = []  # epoch index, gnss, sv, words, n
+    leap: int | None = None
+    offset = 0
+    with open(path, "rb") as stream:
+        reader = UBXReader(stream, protfilter=UBX_PROTOCOL, parsing=False, quitonerror=0)
+        for number, (raw, _) in enumerate(reader, start=1):
+            where = f"message at byte {offset}"
+            offset += len(raw)
+            if raw is None or len(raw) < 8:
+                continue
+            cls_id = (raw[2], raw[3])
+            payload = raw[6:-2]
+
+            def bad(reason: str, number: int = number, where: str = where) -> None:
+                if not lenient:
+                    raise FileFormatError(path, None, f"{where}: {reason}")
+                skipped.append(SkippedLine(line=number, reason=f"{where}: {reason}"))
+
+            if calc_checksum(raw[2:-2]) != raw[-2:]:
+                bad("checksum error")
+                continue
+            messages[_identity(cls_id)] += 1
+            if cls_id == _RAWX:
+                if len(payload) < _RAWX_HEAD.itemsize:
+                    bad("RXM-RAWX shorter than its header")
+                    continue
+                head = np.frombuffer(payload, _RAWX_HEAD, count=1)[0]
+                n = int(head["numMeas"])
+                if len(payload) != 16 + 32 * n:
+                    bad(f"RXM-RAWX of {len(payload)} bytes for {n} measurements")
+                    continue
+                if int(head["week"]) == 0:
+                    continue  # no GPS time yet (receiver start-up): no epoch to tag
+                meas = np.frombuffer(payload, _RAWX_MEAS, count=n, offset=16)
+                t = int(head["week"]) * SECONDS_PER_WEEK + float(head["rcvTow"])
+                epochs.append((t, int(head["recStat"]), meas))
+                if int(head["recStat"]) & 1:
+                    leap = int(head["leapS"])
+            elif cls_id == _SFRBX:
+                if len(payload) < _SFRBX_HEAD.itemsize:
+                    bad("RXM-SFRBX shorter than its header")
+                    continue
+                h = np.frombuffer(payload, _SFRBX_HEAD, count=1)[0]
+                n = int(h["numWords"])
+                if len(payload) != 8 + 4 * n:
+                    bad(f"RXM-SFRBX of {len(payload)} bytes for {n} words")
+                    continue
+                words = np.frombuffer(payload, "<u4", count=n, offset=8)
+                subframes.append((len(epochs), int(h["gnssId"]), int(h["svId"]), words, number))
+    if not epochs and not subframes:
+        raise FileFormatError(path, None, "no RXM-RAWX nor RXM-SFRBX message: not a raw log")
+    obs, unknown = _observations(path, epochs, max_cp_std_cycles)
+    # the 10-bit LNAV week is resolved against the receiver's week; a log without RAWX
+    # epochs has none, and the current date stands in (as RTKLIB does)
+    t_epochs = [e[0] for e in epochs] or [_now_gps_s()]
+    nav, undecoded = _navigation(path, subframes, t_epochs, leap)
+    return UbxLog(
+        obs=obs,
+        nav=nav,
+        messages=dict(messages),
+        undecoded=undecoded,
+        skipped=tuple(skipped),
+        unknown_signals=unknown,
+    )
+
+
+def _now_gps_s() -> float:
+    from navtrack.timescale import gps_seconds
+
+    return float(gps_seconds(np.datetime64("now", "s")))
+
+
+def _identity(cls_id: tuple[int, int]) -> str:
+    return {_RAWX: "RXM-RAWX", _SFRBX: "RXM-SFRBX"}.get(
+        cls_id, f"0x{cls_id[0]:02X} 0x{cls_id[1]:02X}"
+    )
+
+
+# ------------------------------------------------------------------------------ observations
+
+
+def _observations(
+    path: StrPath, epochs: list[tuple[float, int, np.ndarray]], max_cp_std_cycles: float
+) -> tuple[Observations, dict[str, int]]:
+    """Epoch records -> fixed arrays (one column per satellite, four codes per signal)."""
+    unknown: Counter[str] = Counter()
+    allm = np.concatenate([e[2] for e in epochs]) if epochs else np.zeros(0, _RAWX_MEAS)
+    ep = np.repeat(np.arange(len(epochs)), [len(e[2]) for e in epochs])
+    keys = [(int(g), int(s)) for g, s in zip(allm["gnssId"], allm["sigId"], strict=True)]
+    signal = np.array([SIGNALS.get(k, "") for k in keys])
+    sv = allm["svId"].astype(int)
+    sys_letter = np.array([_SYSTEM.get(int(g), "") for g in allm["gnssId"]])
+    # SBAS PRN 120-158 -> S20-S58; QZSS svId 1-10 (PRN 193-202) -> J01-J10
+    prn = np.where(sys_letter == "S", sv - 100, sv)
+    ok = (signal != "") & (prn >= 1) & (prn <= 99) & ~((sys_letter == "R") & (sv == 255))
+    for k in np.flatnonzero(~ok):
+        unknown[f"{keys[k][0]}/{keys[k][1]}"] += 1
+    sat = np.array([f"{s}{p:02d}" for s, p in zip(sys_letter, prn, strict=True)])
+    sats = tuple(sorted(set(sat[ok].tolist())))
+    band = np.array([s[1:] for s in signal])
+    obs_types: dict[str, tuple[str, ...]] = {}
+    for s in "GRECJSI":
+        sigs = list(dict.fromkeys(band[ok & (sys_letter == s)].tolist()))
+        if sigs:
+            obs_types[s] = tuple(f"{t}{b}" for b in sigs for t in "CLDS")
+    codes = tuple(dict.fromkeys(c for v in obs_types.values() for c in v))
+    n_e, n_s, n_c = len(epochs), len(sats), len(codes)
+    values = np.full((n_e, n_s, n_c), np.nan)
+    lli = np.full((n_e, n_s, n_c), -1, dtype=np.int8)
+    s_idx = {s: i for i, s in enumerate(sats)}
+    c_idx = {c: i for i, c in enumerate(codes)}
+    rows = np.flatnonzero(ok)
+    e_i = ep[rows]
+    s_i = np.array([s_idx[x] for x in sat[rows]], dtype=int)
+    m = allm[rows]
+    col = {t: np.array([c_idx[t + b] for b in band[rows]], dtype=int) for t in "CLDS"}
+    trk = m["trkStat"].astype(int)
+    pr = np.where(trk & 1, m["prMes"], np.nan)
+    cp = m["cpMes"].copy()
+    cp_ok = (trk & 2 > 0) & (cp != -0.5) & ((m["cpStdev"] & 15) * _CP_STD_UNIT_CYC
+                                            <= max_cp_std_cycles + 1e-12)  # fmt: skip
+    geo = (sys_letter[rows] == "C") & ((prn[rows] <= 5) | (prn[rows] >= 59))
+    cp = np.where(cp_ok, cp + np.where(geo, 0.5, 0.0), np.nan)
+    values[e_i, s_i, col["C"]] = pr
+    values[e_i, s_i, col["L"]] = cp
+    values[e_i, s_i, col["D"]] = m["doMes"].astype(float)
+    values[e_i, s_i, col["S"]] = m["cno"].astype(float)
+    # continuity is judged between valid phases: the first valid phase after invalid ones
+    # (tracked, phase not yet usable) starts a new arc
+    flags = _lli(
+        np.array([e[0] for e in epochs], dtype=float),
+        np.array([e[1] for e in epochs], dtype=int),
+        e_i[cp_ok],
+        (s_i * n_c + col["L"])[cp_ok],
+        m["locktime"][cp_ok].astype(float) * 1e-3,
+        trk[cp_ok],
+    )
+    lli[e_i[cp_ok], s_i[cp_ok], col["L"][cp_ok]] = flags
+    fcn = {
+        f"R{int(p):02d}": int(f) - 7
+        for p, f, s in zip(prn[rows], m["freqId"], sys_letter[rows], strict=True)
+        if s == "R"
+    }
+    header = ObsHeader(
+        version=0.0,
+        file_type="O",
+        system="M",
+        receiver="u-blox",
+        time_system="GPS",
+        obs_types=obs_types,
+        glonass_fcn=fcn,
+    )
+    obs = Observations(
+        path=fspath(path),
+        header=header,
+        t_gps_s=np.array([e[0] for e in epochs], dtype=float),
+        epoch_flag=np.zeros(n_e, dtype=np.int8),
+        clock_offset_s=np.full(n_e, np.nan),
+        sats=sats,
+        codes=codes,
+        values=values,
+        lli=lli,
+        ssi=np.full(values.shape, -1, dtype=np.int8),
+    )
+    return obs, dict(unknown)
+
+
+def _lli(
+    t_epoch: np.ndarray,
+    rec_stat: np.ndarray,
+    e_i: np.ndarray,
+    key: np.ndarray,
+    lock_s: np.ndarray,
+    trk: np.ndarray,
+) -> np.ndarray:
+    """RINEX loss-of-lock indicator of each valid phase measurement (module notes).
+
+    ``key`` identifies the signal (satellite and code column); measurements are in epoch
+    order, so each signal's previous valid phase is its previous row in a stable sort."""
+    order = np.lexsort((e_i, key))
+    k, e = key[order], e_i[order]
+    first = np.r_[True, k[1:] != k[:-1]]
+    prev = np.r_[order[:1], order[:-1]]  # (a first observation has no previous: masked)
+    gap = t_epoch[e] - t_epoch[e_i[prev]]
+    half_sub = trk[order] & 8
+    slip = (
+        first
+        | (lock_s[order] == 0.0)
+        | (lock_s[order] < lock_s[prev])
+        | (lock_s[order] + 1e-3 < gap)
+        | (half_sub != (trk[prev] & 8))
+        | (rec_stat[e] & 2 > 0)  # receiver clock reset
+    )
+    out = np.empty(len(key), dtype=np.int8)
+    out[order] = slip.astype(np.int8) | np.where(trk[order] & 4, 0, 2).astype(np.int8)
+    return out
+
+
+# -------------------------------------------------------------------------------- navigation
+
+
+def _bits(words: np.ndarray) -> int:
+    """The 24 data bits of each of the 10 LNAV words (u-blox gives each 30-bit word with its
+    parity in bits 5-0, polarity already corrected) as one 240-bit integer."""
+    v = 0
+    for w in words[:10]:
+        v = (v << 24) | ((int(w) >> 6) & 0xFFFFFF)
+    return v
+
+
+def _u(v: int, word: int, bit: int, n: int) -> int:
+    """Unsigned field of ``n`` bits starting at data bit ``bit`` (1-24) of word ``word``
+    (1-10), IS-GPS-200 numbering."""
+    start = 24 * (word - 1) + bit - 1
+    return (v >> (240 - start - n)) & ((1 << n) - 1)
+
+
+def _s(v: int, word: int, bit: int, n: int) -> int:
+    x = _u(v, word, bit, n)
+    return x - (1 << n) if x >> (n - 1) else x
+
+
+def _split(v: int, w1: int, b1: int, n1: int, w2: int, n2: int, signed: bool) -> int:
+    """A field whose ``n1`` most significant bits end a word and ``n2`` others fill the next."""
+    x = (_u(v, w1, b1, n1) << n2) | _u(v, w2, 1, n2)
+    n = n1 + n2
+    return x - (1 << n) if signed and x >> (n - 1) else x
+
+
+def _fit_hours(flag: int, iodc: int) -> float:
+    """Curve-fit interval (h) from the fit flag and IODC, IS-GPS-200N table 20-XII."""
+    if flag == 0:
+        return 4.0
+    for lo, hi, hours in ((240, 247, 8.0), (248, 255, 14.0), (496, 496, 14.0),
+                          (497, 503, 26.0), (504, 510, 50.0), (511, 511, 74.0),
+                          (752, 756, 74.0), (757, 763, 98.0), (764, 767, 122.0),
+                          (1008, 1010, 122.0), (1011, 1020, 146.0)):  # fmt: skip
+        if lo <= iodc <= hi:
+            return hours
+    return 6.0
+
+
+def _navigation(
+    path: StrPath,
+    subframes: list[tuple[int, int, int, np.ndarray, int]],
+    t_epochs: list[float],
+    leap: int | None,
+) -> tuple[NavData, dict[str, int]]:
+    """LNAV subframes -> ephemeris tables, ionosphere and UTC parameters."""
+    undecoded: Counter[str] = Counter()
+    pending: dict[tuple[str, int], dict[int, tuple[int, int, float]]] = {}
+    records: dict[str, list[dict[str, Any]]] = {"G": [], "J": []}
+    seen: set[tuple[str, int, int, int]] = set()
+    iono: dict[str, np.ndarray] = {}
+    time_corrections: dict[str, tuple[Any, ...]] = {}
+    for e_next, gnss, sv, words, number in subframes:
+        letter = _SYSTEM.get(gnss, "?")
+        if letter not in "GJ" or len(words) < 10:
+            name = {"E": "Galileo I/NAV", "C": "BeiDou D1/D2", "R": "GLONASS strings"}.get(
+                letter, "navigation message"
+            )
+            undecoded[f"{letter}: {name} not decoded"] += 1
+            continue
+        v = _bits(words)
+        if _u(v, 1, 1, 8) != 0x8B:
+            undecoded[f"{letter}: no LNAV preamble (CNAV or damaged)"] += 1
+            continue
+        sfid = _u(v, 2, 20, 3)
+        # the receiver week at this subframe: from the RAWX epoch just before it (or after)
+        t_rx = t_epochs[min(max(e_next - 1, 0), len(t_epochs) - 1)]
+        if sfid in (1, 2, 3):
+            pending.setdefault((letter, sv), {})[sfid] = (v, number, t_rx)
+            have = pending[(letter, sv)]
+            if len(have) == 3:
+                rec = _ephemeris(have)
+                if rec is not None:
+                    key = (letter, sv, rec["iode"], int(rec["toe_sow"]))
+                    if key not in seen:  # the same issue is broadcast every 30 s
+                        seen.add(key)
+                        rec["sat"] = f"{letter}{sv:02d}"
+                        records[letter].append(rec)
+        elif sfid == 4 and letter == "G" and _u(v, 3, 3, 6) == 56:
+            iono["GPSA"] = np.array(
+                [
+                    _s(v, 3, 9, 8) * 2.0**-30,
+                    _s(v, 3, 17, 8) * 2.0**-27,
+                    _s(v, 4, 1, 8) * 2.0**-24,
+                    _s(v, 4, 9, 8) * 2.0**-24,
+                ]
+            )
+            iono["GPSB"] = np.array(
+                [
+                    _s(v, 4, 17, 8) * 2.0**11,
+                    _s(v, 5, 1, 8) * 2.0**14,
+                    _s(v, 5, 9, 8) * 2.0**16,
+                    _s(v, 5, 17, 8) * 2.0**16,
+                ]
+            )
+            a1 = _s(v, 6, 1, 24) * 2.0**-50
+            a0 = _split(v, 7, 1, 24, 8, 8, True) * 2.0**-30
+            tot = _u(v, 8, 9, 8) * 2**12
+            week_t = _u(v, 8, 17, 8)
+            week_rx = int(t_rx // SECONDS_PER_WEEK)
+            week_full = week_rx + ((week_t - week_rx + 128) % 256) - 128  # 8-bit WNt
+            time_corrections["GPUT"] = (a0, a1, tot, week_full, None, None)
+            leap = _s(v, 9, 1, 8)
+        else:
+            what = "almanac/health" if sfid in (4, 5) else f"subframe id {sfid}"
+            undecoded[f"{letter}: subframe {sfid} ({what})"] += 1
+    tables = {s: _table(s, recs) for s, recs in records.items() if recs}
+    nav = NavData(
+        path=fspath(path),
+        version=0.0,
+        file_type="N",
+        system="M",
+        iono=iono,
+        time_corrections=time_corrections,
+        leap_seconds=leap,
+        tables=tables,
+    )
+    return nav, {k: c for k, c in undecoded.items() if c}
+
+
+def _ephemeris(have: dict[int, tuple[int, int, float]]) -> dict[str, Any] | None:
+    """One ephemeris from subframes 1-3 of the same issue, IS-GPS-200N 20.3.3.3-20.3.3.4;
+    None while their issues differ (a new upload arriving)."""
+    v1, n1, t_rx = have[1]
+    v2, _, _ = have[2]
+    v3, _, _ = have[3]
+    iodc = (_u(v1, 3, 23, 2) << 8) | _u(v1, 8, 1, 8)
+    iode2, iode3 = _u(v2, 3, 1, 8), _u(v3, 10, 1, 8)
+    if not (iode2 == iode3 == iodc & 0xFF):
+        return None
+    week_rx = int(t_rx // SECONDS_PER_WEEK)
+    week10 = _u(v1, 3, 1, 10)
+    week = week_rx + ((week10 - week_rx + 512) % 1024) - 512
+    tot_sow = _u(v1, 2, 1, 17) * 6.0 - 6.0  # HOW TOW count: start of the next subframe
+    ttr = week * SECONDS_PER_WEEK + tot_sow
+    toc = week * SECONDS_PER_WEEK + _u(v1, 8, 9, 16) * 16.0
+    # toc within half a week of the transmission (an upload near the end of a week)
+    toc += round((ttr - toc) / SECONDS_PER_WEEK) * SECONDS_PER_WEEK
+    toe_sow = _u(v2, 10, 1, 16) * 16.0
+    fit_flag = _u(v2, 10, 17, 1)
+    ura = _u(v1, 3, 13, 4)
+    rec: dict[str, Any] = {
+        "toc_gps_s": toc,
+        "af0": _s(v1, 10, 1, 22) * 2.0**-31,
+        "af1": _s(v1, 9, 9, 16) * 2.0**-43,
+        "af2": _s(v1, 9, 1, 8) * 2.0**-55,
+        "iode": iode2,
+        "crs": _s(v2, 3, 9, 16) * 2.0**-5,
+        "deltan": _s(v2, 4, 1, 16) * 2.0**-43 * _PI,
+        "m0": _split(v2, 4, 17, 8, 5, 24, True) * 2.0**-31 * _PI,
+        "cuc": _s(v2, 6, 1, 16) * 2.0**-29,
+        "e": _split(v2, 6, 17, 8, 7, 24, False) * 2.0**-33,
+        "cus": _s(v2, 8, 1, 16) * 2.0**-29,
+        "sqrta": _split(v2, 8, 17, 8, 9, 24, False) * 2.0**-19,
+        "toe_sow": toe_sow,
+        "cic": _s(v3, 3, 1, 16) * 2.0**-29,
+        "omega0": _split(v3, 3, 17, 8, 4, 24, True) * 2.0**-31 * _PI,
+        "cis": _s(v3, 5, 1, 16) * 2.0**-29,
+        "i0": _split(v3, 5, 17, 8, 6, 24, True) * 2.0**-31 * _PI,
+        "crc": _s(v3, 7, 1, 16) * 2.0**-5,
+        "omega": _split(v3, 7, 17, 8, 8, 24, True) * 2.0**-31 * _PI,
+        "omegadot": _s(v3, 9, 1, 24) * 2.0**-43 * _PI,
+        "idot": _s(v3, 10, 9, 14) * 2.0**-43 * _PI,
+        "codes_l2": _u(v1, 3, 11, 2),
+        "week": week,
+        "l2p_flag": _u(v1, 4, 1, 1),
+        "sva_m": _URA_M[ura] if ura < 15 else math.nan,  # 15: no accuracy prediction
+        "svh": _u(v1, 3, 17, 6),
+        "tgd": _s(v1, 7, 17, 8) * 2.0**-31,
+        "iodc": iodc,
+        "tot_sow": tot_sow % SECONDS_PER_WEEK,
+        "fit_h": _fit_hours(fit_flag, iodc),
+        "line": n1,
+    }
+    return rec
+
+
+_TABLE_COLUMNS = (
+    "toc_gps_s", "af0", "af1", "af2", "iode", "crs", "deltan", "m0", "cuc", "e", "cus",
+    "sqrta", "toe_sow", "cic", "omega0", "cis", "i0", "crc", "omega", "omegadot", "idot",
+    "codes_l2", "week", "toe_gps_s", "l2p_flag", "sva_m", "svh", "tgd", "iodc", "tot_sow",
+    "fit_h", "line",
+)  # fmt: skip
+_INT_COLUMNS = {"iode", "codes_l2", "week", "l2p_flag", "svh", "iodc", "line"}
+
+
+def _table(letter: str, recs: list[dict[str, Any]]) -> dict[str, np.ndarray]:
+    """Ephemeris records -> the column table :class:`NavData` holds, sorted as RINEX's."""
+    sats = np.array([r["sat"] for r in recs])
+    cols: dict[str, np.ndarray] = {}
+    for name in _TABLE_COLUMNS:
+        if name == "toe_gps_s":
+            continue
+        dtype = np.int64 if name in _INT_COLUMNS else float
+        cols[name] = np.array([r[name] for r in recs], dtype=dtype)
+    cols["toe_gps_s"] = _toe_gps_s(
+        letter, cols["week"].astype(float), cols["toe_sow"], cols["toc_gps_s"]
+    )
+    order = np.lexsort((cols["line"], cols["toc_gps_s"], sats))
+    out = {"sat": sats[order]}
+    out.update((name, cols[name][order]) for name in _TABLE_COLUMNS)
+    return out
