@@ -1,0 +1,244 @@
+"""u-blox UBX logs: RXM-RAWX observations and RXM-SFRBX ephemerides against RTKLIB's convbin,
+the RINEX 3.04 writers read back by navtrack, RTKLIB and georinex, damaged messages.
+
+Data (tests/data/ubx/README.md): two real RXM-RAWX logs (pyubx2's test log of a multi-GNSS
+receiver, 14 epochs at 1 Hz; ublox-rs's two RAWX epochs of an F9 receiver with L2 signals) and
+ublox-rs's 131 GPS RXM-SFRBX subframes. The ``*_convbin.*`` files are RTKLIB 2.4.3 b34
+``convbin`` outputs of the same logs (commands in the README); the live tests run convbin
+again when it is installed.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from navtrack.errors import FileFormatError
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.rinex.write import write_nav, write_obs
+from navtrack.gnss.ubx import is_ubx, read_ubx
+
+DATA = Path(__file__).parents[1] / "data" / "ubx"
+RAWX_1HZ = DATA / "pyubx2_rxmrawx.ubx"
+RAWX_F9 = DATA / "ubloxrs_rxm_rawx.ubx"
+SFRBX_GPS = DATA / "ubloxrs_rxm_sfrbx_gps.ubx"
+
+
+def _same_as_printed(ours, theirs) -> None:
+    """Same epochs, satellites, codes, missing pattern, and values to RINEX's 3 decimals."""
+    np.testing.assert_array_equal(ours.t_gps_s, theirs.t_gps_s)
+    assert ours.sats == theirs.sats
+    assert set(ours.codes) == set(theirs.codes)
+    for code in theirs.codes:
+        a, b = ours.code(code), theirs.code(code)
+        np.testing.assert_array_equal(np.isnan(a), np.isnan(b), err_msg=code)
+        ok = ~np.isnan(b)
+        # theirs is printed F14.3: ours rounds to it
+        assert np.max(np.abs(np.round(a[ok], 3) - b[ok]), initial=0.0) < 6e-4, code
+
+
+@pytest.mark.parametrize("log", [RAWX_1HZ, RAWX_F9])
+def test_rawx_values_as_convbin_prints_them(log: Path) -> None:
+    ours = read_ubx(log).obs
+    theirs = read_obs(DATA / f"{log.stem}_convbin.obs")
+    _same_as_printed(ours, theirs)
+    assert dict(ours.header.glonass_fcn) == dict(theirs.header.glonass_fcn)
+    assert ours.header.obs_types == theirs.header.obs_types
+
+
+def test_rawx_lli_as_convbin_on_continuous_epochs() -> None:
+    """1 Hz without gaps: slip and half-cycle flags equal RTKLIB's wherever there is a phase
+    (the first epoch's phases, and E08/G07 whose phases become valid later, are slips)."""
+    ours = read_ubx(RAWX_1HZ).obs
+    theirs = read_obs(DATA / "pyubx2_rxmrawx_convbin.obs")
+    for code in ("L1C", "L2I"):
+        k, j = ours.codes.index(code), theirs.codes.index(code)
+        phase = ~np.isnan(ours.values[:, :, k])
+        a = np.maximum(ours.lli[:, :, k], 0)[phase]
+        b = np.maximum(theirs.lli[:, :, j], 0)[phase]
+        np.testing.assert_array_equal(a, b, err_msg=code)
+    # R17 has lock time 0 and no valid phase: no phase, no LLI (convbin writes 3 on the blank)
+    assert np.isnan(ours.code("L1C")[0, ours.sat_index("R17")])
+    assert (ours.lli[0, :, ours.codes.index("L1C")] & 1)[~np.isnan(ours.code("L1C")[0])].all()
+
+
+def test_rawx_lli_flags_a_gap_longer_than_the_lock_time() -> None:
+    """The two ublox-rs epochs are 49 days apart: every phase of the second is a possible slip
+    (lock time shorter than the gap), where convbin, comparing lock times only, flags 2 of 16
+    L1C phases."""
+    obs = read_ubx(RAWX_F9).obs
+    assert obs.t_gps_s[1] - obs.t_gps_s[0] > 4e6
+    phases = [c for c in obs.codes if c.startswith("L")]
+    for code in phases:
+        k = obs.codes.index(code)
+        has = ~np.isnan(obs.values[1, :, k])
+        assert (obs.lli[1, has, k] & 1).all(), code
+    theirs = read_obs(DATA / "ubloxrs_rxm_rawx_convbin.obs")
+    k = theirs.codes.index("L1C")
+    has = ~np.isnan(theirs.values[1, :, k])
+    assert (np.maximum(theirs.lli[1, has, k], 0) & 1).sum() == 2 < has.sum() == 16
+
+
+def test_rawx_half_cycle_flag_from_tracking_state() -> None:
+    """LLI bit 1 where trkStat bit 2 (half cycle valid) is clear, read with pyubx2's parser."""
+    from pyubx2 import UBXReader
+
+    obs = read_ubx(RAWX_1HZ).obs
+    letters = {0: "G", 2: "E", 6: "R", 3: "C"}  # UBX gnssId
+    n_checked = 0
+    with RAWX_1HZ.open("rb") as f:
+        for e, (_, msg) in enumerate(UBXReader(f, protfilter=2)):
+            for i in range(1, msg.numMeas + 1):
+                letter = letters[getattr(msg, f"gnssId_{i:02d}")]
+                sat = f"{letter}{getattr(msg, f'svId_{i:02d}'):02d}"
+                k = obs.codes.index("L2I" if letter == "C" else "L1C")
+                j = obs.sat_index(sat)
+                if np.isnan(obs.values[e, j, k]):
+                    continue
+                half_valid = getattr(msg, f"halfCyc_{i:02d}")
+                assert bool(obs.lli[e, j, k] & 2) == (not half_valid), (e, sat)
+                n_checked += 1
+    assert n_checked > 100
+
+
+def test_sfrbx_gps_ephemeris_as_convbin() -> None:
+    """G27 (IODE 57) from subframes 1-3, field by field against convbin's record."""
+    nav = read_ubx(SFRBX_GPS).nav
+    theirs = read_nav(DATA / "ubloxrs_rxm_sfrbx_gps_convbin.nav").tables["G"]
+    ours = nav.tables["G"]
+    assert list(ours["sat"]) == list(theirs["sat"]) == ["G27"]
+    for name in theirs:
+        if name in ("line", "tot_sow", "sat"):
+            continue
+        np.testing.assert_allclose(ours[name], theirs[name], rtol=1e-11, atol=0, err_msg=name)
+
+
+def test_sfrbx_transmission_time_is_the_first_subframe_1_start() -> None:
+    """tot: start of the first subframe 1 of the issue (its HOW count x 6 - 6 s), read here
+    with pyubx2's own parser; convbin writes the count x 6 of the last subframe 1 received
+    (303006 s), a later repetition of the same issue."""
+    from pyubx2 import UBXReader
+
+    nav = read_ubx(SFRBX_GPS).nav
+    with SFRBX_GPS.open("rb") as f:
+        counts = [
+            (msg.dwrd_02 >> 13) & 0x1FFFF
+            for _, msg in UBXReader(f, protfilter=2)
+            if msg.svId == 27 and (msg.dwrd_02 >> 8) & 7 == 1
+        ]
+    assert nav.tables["G"]["tot_sow"][0] == counts[0] * 6 - 6
+    assert max(counts) * 6 == 303006
+
+
+def test_sfrbx_undecoded_counted() -> None:
+    log = read_ubx(SFRBX_GPS)
+    # 131 subframes: 3 used for G27's ephemeris, the repetitions of subframes 1-3 are not
+    # counted as undecoded; nothing else in this cut
+    assert log.messages["RXM-SFRBX"] == 131
+    assert all(k.startswith("G:") for k in log.undecoded)
+
+
+def test_writers_read_back(tmp_path: Path) -> None:
+    log = read_ubx(RAWX_1HZ)
+    write_obs(log.obs, tmp_path / "a.obs", comments=["test"])
+    back = read_obs(tmp_path / "a.obs")
+    np.testing.assert_array_equal(back.t_gps_s, log.obs.t_gps_s)
+    # LLI 0 is written blank (read back -1)
+    np.testing.assert_array_equal(np.maximum(back.lli, 0), np.maximum(log.obs.lli, 0))
+    ok = ~np.isnan(log.obs.values)
+    np.testing.assert_array_equal(ok, ~np.isnan(back.values))
+    assert np.max(np.abs(back.values[ok] - log.obs.values[ok])) <= 5e-4 + 1e-9
+    nav = read_ubx(SFRBX_GPS).nav
+    write_nav(nav, tmp_path / "a.nav")
+    nback = read_nav(tmp_path / "a.nav")
+    for name, col in nav.tables["G"].items():
+        if name in ("line", "sat"):
+            continue
+        np.testing.assert_allclose(nback.tables["G"][name], col, rtol=1e-12, err_msg=name)
+
+
+def test_georinex_reads_the_written_files(tmp_path: Path) -> None:
+    gr = pytest.importorskip("georinex")
+    log = read_ubx(RAWX_1HZ)
+    write_obs(log.obs, tmp_path / "a.obs")
+    write_nav(read_ubx(SFRBX_GPS).nav, tmp_path / "a.nav")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ds = gr.load(tmp_path / "a.obs")
+        nv = gr.load(tmp_path / "a.nav")
+    k = log.obs.sat_index("G11")
+    np.testing.assert_allclose(
+        ds["C1C"].sel(sv="G11").values, np.round(log.obs.code("C1C")[:, k], 3), atol=1e-9
+    )
+    assert float(nv["sqrtA"].sel(sv="G27").values[0]) == pytest.approx(
+        read_ubx(SFRBX_GPS).nav.tables["G"]["sqrta"][0], rel=1e-12
+    )
+
+
+@pytest.mark.skipif(shutil.which("convbin") is None, reason="RTKLIB convbin not installed")
+def test_convbin_live_same_epochs_and_values(tmp_path: Path) -> None:
+    out = tmp_path / "c.obs"
+    subprocess.run(
+        ["convbin", "-r", "ubx", "-od", "-os", "-o", str(out), str(RAWX_1HZ)],
+        check=True,
+        capture_output=True,
+    )
+    _same_as_printed(read_ubx(RAWX_1HZ).obs, read_obs(out))
+
+
+@pytest.mark.skipif(shutil.which("convbin") is None, reason="RTKLIB convbin not installed")
+def test_rtklib_reads_the_written_obs(tmp_path: Path) -> None:
+    """RTKLIB reads navtrack's RINEX (convbin RINEX -> RINEX) to the same epochs and values."""
+    ours = read_ubx(RAWX_1HZ).obs
+    write_obs(ours, tmp_path / "n.obs")
+    subprocess.run(
+        [
+            "convbin",
+            "-r",
+            "rinex",
+            "-od",
+            "-os",
+            "-o",
+            str(tmp_path / "r.obs"),
+            str(tmp_path / "n.obs"),
+        ],
+        check=True,
+        capture_output=True,
+    )
+    _same_as_printed(ours, read_obs(tmp_path / "r.obs"))
+
+
+def test_damaged_message_refused_or_skipped(tmp_path: Path) -> None:
+    data = bytearray(RAWX_1HZ.read_bytes())
+    data[100] ^= 0xFF  # inside the first RXM-RAWX payload
+    bad = tmp_path / "bad.ubx"
+    bad.write_bytes(bytes(data))
+    with pytest.raises(FileFormatError, match="message at byte 0: checksum error"):
+        read_ubx(bad)
+    log = read_ubx(bad, lenient=True)
+    assert len(log.skipped) == 1
+    assert len(log.obs.t_gps_s) == 13
+
+
+def test_is_ubx() -> None:
+    assert is_ubx(RAWX_1HZ)
+    assert not is_ubx(DATA / "pyubx2_rxmrawx_convbin.obs")
+
+
+def test_convert_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from navtrack.cli import main
+
+    log = tmp_path / "log.ubx"
+    log.write_bytes(RAWX_1HZ.read_bytes() + SFRBX_GPS.read_bytes())
+    assert main(["convert", str(log), "--out", str(tmp_path / "x.obs")]) == 0
+    out = capsys.readouterr().out
+    assert "14 epochs, 23 satellites" in out
+    assert "ephemerides G 1" in out
+    assert read_obs(tmp_path / "x.obs").values.shape == (14, 23, 8)
+    assert list(read_nav(tmp_path / "x.nav").tables["G"]["sat"]) == ["G27"]
