@@ -28,15 +28,27 @@ DATA = Path(__file__).parents[1] / "data" / "ubx"
 RAWX_1HZ = DATA / "pyubx2_rxmrawx.ubx"
 RAWX_F9 = DATA / "ubloxrs_rxm_rawx.ubx"
 SFRBX_GPS = DATA / "ubloxrs_rxm_sfrbx_gps.ubx"
+WALK = DATA / "gnss_imu_walk_cut.ubx"
 
 
-def _same_as_printed(ours, theirs) -> None:
-    """Same epochs, satellites, codes, missing pattern, and values to RINEX's 3 decimals."""
+def _same_as_printed(ours, theirs, *, superset: bool = False) -> None:
+    """Same epochs, satellites, codes, missing pattern, and values to RINEX's 3 decimals.
+    ``superset``: ours may hold more satellites and signals (those RTKLIB 2.4.3 does not
+    know); theirs are compared."""
     np.testing.assert_array_equal(ours.t_gps_s, theirs.t_gps_s)
-    assert ours.sats == theirs.sats
-    assert set(ours.codes) == set(theirs.codes)
+    if superset:
+        assert set(theirs.sats) <= set(ours.sats)
+        for letter, codes in theirs.header.obs_types.items():
+            assert set(codes) <= set(ours.header.obs_types[letter]), letter
+    else:
+        assert ours.sats == theirs.sats
+        assert set(ours.codes) == set(theirs.codes)
+    cols = [ours.sat_index(s) for s in theirs.sats]
     for code in theirs.codes:
-        a, b = ours.code(code), theirs.code(code)
+        a, b = ours.code(code)[:, cols], theirs.code(code)
+        if superset:  # a code of one system in the union: compare that system's satellites
+            has = np.array([code in theirs.header.obs_types[s[0]] for s in theirs.sats])
+            a, b = a[:, has], b[:, has]
         np.testing.assert_array_equal(np.isnan(a), np.isnan(b), err_msg=code)
         ok = ~np.isnan(b)
         # theirs is printed F14.3: ours rounds to it
@@ -50,6 +62,78 @@ def test_rawx_values_as_convbin_prints_them(log: Path) -> None:
     _same_as_printed(ours, theirs)
     assert dict(ours.header.glonass_fcn) == dict(theirs.header.glonass_fcn)
     assert ours.header.obs_types == theirs.header.obs_types
+
+
+def test_real_f9_walk_log_as_convbin() -> None:
+    """60 epochs at 4 Hz of a triple-frequency receiver walking: every value convbin writes,
+    equal to its printed precision; navtrack also keeps the signals RTKLIB 2.4.3 drops (GPS L5,
+    BeiDou B1C/B2a) and its phases' loss-of-lock bits agree on the continuous epochs."""
+    ours = read_ubx(WALK).obs
+    theirs = read_obs(DATA / "gnss_imu_walk_cut_convbin.obs")
+    _same_as_printed(ours, theirs, superset=True)
+    assert set(ours.header.obs_types["G"]) - set(theirs.header.obs_types["G"]) == {
+        "C5Q",
+        "L5Q",
+        "D5Q",
+        "S5Q",
+    }
+    assert "C" in ours.header.obs_types
+    assert "C" not in theirs.header.obs_types
+    cols = [ours.sat_index(s) for s in theirs.sats]
+    for code in ("L1C", "L2L"):
+        k, j = ours.codes.index(code), theirs.codes.index(code)
+        phase = ~np.isnan(theirs.values[:, :, j])
+        a = np.maximum(ours.lli[:, cols, k], 0)
+        b = np.maximum(theirs.lli[:, :, j], 0)
+        # a signal's first valid phase starts an arc: a possible slip for navtrack; convbin
+        # flags only the phases of the file's first epoch (here G18 L2L, valid from epoch 22)
+        first = phase & (np.cumsum(phase, axis=0) == 1)
+        assert (a[first] & 1).all(), code
+        np.testing.assert_array_equal(a[phase & ~first], b[phase & ~first], err_msg=code)
+        assert (a[first] != b[first]).sum() == (1 if code == "L2L" else 0)
+
+
+def test_real_f9_walk_ephemerides_as_convbin() -> None:
+    ours = read_ubx(WALK).nav.tables["G"]
+    theirs = read_nav(DATA / "gnss_imu_walk_cut_convbin.nav").tables["G"]
+    assert list(ours["sat"]) == list(theirs["sat"]) == ["G10", "G23", "G27", "G32"]
+    for name in theirs:
+        if name not in ("line", "tot_sow", "sat"):
+            np.testing.assert_allclose(ours[name], theirs[name], rtol=1e-11, err_msg=name)
+
+
+def test_pos_on_the_log_equals_pos_on_convbin_rinex(tmp_path: Path) -> None:
+    """``navtrack pos LOG`` (observations and ephemerides straight from the UBX log) gives the
+    positions of ``navtrack pos`` on convbin's RINEX files of the same log, to the 1 mm of
+    RINEX's printed pseudoranges (x PDOP ~5)."""
+    import pandas as pd
+
+    from navtrack.cli import main
+
+    assert main(["pos", str(WALK), "--iono", "off", "--out", str(tmp_path / "a.csv")]) == 0
+    rinex = [str(DATA / f"gnss_imu_walk_cut_convbin.{x}") for x in ("obs", "nav")]
+    assert main(["pos", *rinex, "--iono", "off", "--out", str(tmp_path / "b.csv")]) == 0
+    a, b = pd.read_csv(tmp_path / "a.csv"), pd.read_csv(tmp_path / "b.csv")
+    assert len(a) == len(b) == 60
+    xyz = ["x_m", "y_m", "z_m"]
+    assert np.abs(a[xyz].to_numpy() - b[xyz].to_numpy()).max() < 0.01
+
+
+def test_checksum_as_pyubx2() -> None:
+    import io
+
+    from pyubx2 import UBXReader, calc_checksum
+
+    from navtrack.gnss.ubx import _checksum_ok
+
+    data = WALK.read_bytes()
+    n = 0
+    for raw, _ in UBXReader(io.BytesIO(data), protfilter=2, parsing=False):
+        assert _checksum_ok(raw) == (calc_checksum(raw[2:-2]) == raw[-2:])
+        broken = raw[:-1] + bytes([raw[-1] ^ 1])
+        assert not _checksum_ok(broken)
+        n += 1
+    assert n == 288
 
 
 def test_rawx_lli_as_convbin_on_continuous_epochs() -> None:

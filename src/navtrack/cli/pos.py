@@ -406,10 +406,8 @@ def run_pos(args: argparse.Namespace) -> int:
     used_systems = "".join(s for s in "GRECJI" if s in used_sats)
 
     print(f"observations   {args.obs}")
-    print(
-        f"navigation     {', '.join(str(p) for p in args.nav) or '-'}"
-        + (f"  sp3 {args.sp3}" if args.sp3 else "")
-    )
+    nav_names = ", ".join(str(p) for p in args.nav) or ("from the log" if raw_log else "-")
+    print(f"navigation     {nav_names}" + (f"  sp3 {args.sp3}" if args.sp3 else ""))
     print(
         f"systems        {used_systems or '-'}  (clocks: {', '.join(result.clock_groups)}; "
         f"weighting {config.weighting}, elevation mask {config.elmask_deg:g} deg)"

@@ -23,7 +23,8 @@
 The framing (synchronisation, length, message class and id, resynchronisation after garbage
 and NMEA or RTCM sentences interleaved in the log) is pyubx2's; the two payloads are decoded
 here with NumPy record types laid out as the u-blox interface description gives them, and each
-message's checksum is verified with pyubx2's :func:`pyubx2.calc_checksum`. A message with a bad
+message's 8-bit Fletcher checksum (interface description 3.2) is verified in closed form
+with NumPy (the tests check it against pyubx2's ``calc_checksum``). A message with a bad
 checksum or a length that contradicts its own count is refused (``FileFormatError`` naming the
 byte offset) or, with ``lenient=True``, skipped and listed in :attr:`UbxLog.skipped`.
 
@@ -71,8 +72,9 @@ SIGNALS: Mapping[tuple[int, int], str] = MappingProxyType(
         (0, 0): "G1C", (0, 3): "G2L", (0, 4): "G2S", (0, 6): "G5I", (0, 7): "G5Q",
         (1, 0): "S1C",
         (2, 0): "E1C", (2, 1): "E1B", (2, 3): "E5I", (2, 4): "E5Q", (2, 5): "E7I",
-        (2, 6): "E7Q",
-        (3, 0): "C2I", (3, 1): "C2I", (3, 2): "C7I", (3, 3): "C7I", (3, 5): "C1P",
+        (2, 6): "E7Q", (2, 8): "E6B", (2, 9): "E6C",
+        (3, 0): "C2I", (3, 1): "C2I", (3, 2): "C7I", (3, 3): "C7I", (3, 4): "C6I",
+        (3, 10): "C6I", (3, 5): "C1P",
         (3, 6): "C1D", (3, 7): "C5P", (3, 8): "C5D",
         (5, 0): "J1C", (5, 1): "J1Z", (5, 4): "J2S", (5, 5): "J2L", (5, 8): "J5I",
         (5, 9): "J5Q",
@@ -81,7 +83,8 @@ SIGNALS: Mapping[tuple[int, int], str] = MappingProxyType(
     }
 )  # fmt: skip
 """(gnssId, sigId) of RXM-RAWX -> system letter and RINEX 3.04 band + attribute (BeiDou B1I is
-``2I`` as RINEX 3.02-3.04 write it; D1 and D2 navigation of B1I/B2I share one code)."""
+``2I`` as RINEX 3.02-3.04 write it; D1 and D2 navigation of B1I/B2I/B3I share one code).
+QZSS L1C/B (sigId 12) has no RINEX 3.04 code and is counted as unknown."""
 
 _RAWX_HEAD = np.dtype(
     [
@@ -186,7 +189,7 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
         pyubx2 is not installed (``pip install navtrack[ublox]``).
     """
     try:
-        from pyubx2 import UBX_PROTOCOL, UBXReader, calc_checksum
+        from pyubx2 import UBX_PROTOCOL, UBXReader
     except ImportError as exc:  # pragma: no cover - the extra is installed in tests
         raise ImportError(
             "reading u-blox logs needs pyubx2: pip install 'navtrack[ublox]'"
@@ -194,7 +197,8 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
     messages: Counter[str] = Counter()
     skipped: list[SkippedLine] = []
     epochs: list[tuple[float, int, np.ndarray]] = []  # (t_gps_s, recStat, measurements)
-    subframes: list[tuple[int, int, int, np.ndarray, int]] = []  # epoch index, gnss, sv, words, n
+    # (RAWX epochs before it, gnssId, svId, sigId, words, message number)
+    subframes: list[tuple[int, int, int, int, np.ndarray, int]] = []
     leap: int | None = None
     offset = 0
     with open(path, "rb") as stream:
@@ -212,7 +216,7 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
                     raise FileFormatError(path, None, f"{where}: {reason}")
                 skipped.append(SkippedLine(line=number, reason=f"{where}: {reason}"))
 
-            if calc_checksum(raw[2:-2]) != raw[-2:]:
+            if not _checksum_ok(raw):
                 bad("checksum error")
                 continue
             messages[_identity(cls_id)] += 1
@@ -242,7 +246,9 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
                     bad(f"RXM-SFRBX of {len(payload)} bytes for {n} words")
                     continue
                 words = np.frombuffer(payload, "<u4", count=n, offset=8)
-                subframes.append((len(epochs), int(h["gnssId"]), int(h["svId"]), words, number))
+                subframes.append(
+                    (len(epochs), int(h["gnssId"]), int(h["svId"]), int(h["sigId"]), words, number)
+                )
     if not epochs and not subframes:
         raise FileFormatError(path, None, "no RXM-RAWX nor RXM-SFRBX message: not a raw log")
     obs, unknown = _observations(path, epochs, max_cp_std_cycles)
@@ -258,6 +264,16 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
         skipped=tuple(skipped),
         unknown_signals=unknown,
     )
+
+
+def _checksum_ok(raw: bytes) -> bool:
+    """The 8-bit Fletcher checksum over class, id, length and payload: CK_A is the byte sum,
+    CK_B the sum of the running CK_A values, i.e. each byte weighted by its distance from the
+    end (both modulo 256)."""
+    b = np.frombuffer(raw, np.uint8, count=len(raw) - 4, offset=2).astype(np.int64)
+    ck_a = int(b.sum()) & 0xFF
+    ck_b = int(b @ np.arange(len(b), 0, -1)) & 0xFF
+    return ck_a == raw[-2] and ck_b == raw[-1]
 
 
 def _now_gps_s() -> float:
@@ -279,43 +295,61 @@ def _observations(
     path: StrPath, epochs: list[tuple[float, int, np.ndarray]], max_cp_std_cycles: float
 ) -> tuple[Observations, dict[str, int]]:
     """Epoch records -> fixed arrays (one column per satellite, four codes per signal)."""
-    unknown: Counter[str] = Counter()
     allm = np.concatenate([e[2] for e in epochs]) if epochs else np.zeros(0, _RAWX_MEAS)
     ep = np.repeat(np.arange(len(epochs)), [len(e[2]) for e in epochs])
-    keys = [(int(g), int(s)) for g, s in zip(allm["gnssId"], allm["sigId"], strict=True)]
-    signal = np.array([SIGNALS.get(k, "") for k in keys])
+    gnss, sig = allm["gnssId"].astype(int), allm["sigId"].astype(int)
+    # one integer per (gnssId, sigId) and per satellite, so that the lookups are array ones
+    sig_key = gnss * 256 + sig
+    known_keys = np.array([g * 256 + k for g, k in SIGNALS], dtype=int)
+    known = np.isin(sig_key, known_keys)
     sv = allm["svId"].astype(int)
-    sys_letter = np.array([_SYSTEM.get(int(g), "") for g in allm["gnssId"]])
     # SBAS PRN 120-158 -> S20-S58; QZSS svId 1-10 (PRN 193-202) -> J01-J10
-    prn = np.where(sys_letter == "S", sv - 100, sv)
-    ok = (signal != "") & (prn >= 1) & (prn <= 99) & ~((sys_letter == "R") & (sv == 255))
-    for k in np.flatnonzero(~ok):
-        unknown[f"{keys[k][0]}/{keys[k][1]}"] += 1
-    sat = np.array([f"{s}{p:02d}" for s, p in zip(sys_letter, prn, strict=True)])
-    sats = tuple(sorted(set(sat[ok].tolist())))
-    band = np.array([s[1:] for s in signal])
+    prn = np.where(gnss == 1, sv - 100, sv)
+    ok = (
+        known
+        & np.isin(gnss, list(_SYSTEM))
+        & (prn >= 1)
+        & (prn <= 99)
+        & ~((gnss == 6) & (sv == 255))
+    )
+    bad_keys, bad_counts = np.unique(sig_key[~ok], return_counts=True)
+    unknown = {f"{k // 256}/{k % 256}": int(n) for k, n in zip(bad_keys, bad_counts, strict=True)}
+    rows = np.flatnonzero(ok)
+    m, e_i = allm[rows], ep[rows]
+    gnss, prn, sig_key = gnss[rows], prn[rows], sig_key[rows]
+    sat_key = gnss * 256 + prn
+    sat_keys, s_i = np.unique(sat_key, return_inverse=True)
+    names = [f"{_SYSTEM[k // 256]}{k % 256:02d}" for k in sat_keys]
+    order = np.argsort(names, kind="stable")  # satellites sorted as strings
+    sats = tuple(names[k] for k in order)
+    s_i = np.argsort(order)[s_i]
+    # observation types per system, signals in first-seen order
     obs_types: dict[str, tuple[str, ...]] = {}
-    for s in "GRECJSI":
-        sigs = list(dict.fromkeys(band[ok & (sys_letter == s)].tolist()))
-        if sigs:
-            obs_types[s] = tuple(f"{t}{b}" for b in sigs for t in "CLDS")
+    first_rows = np.unique(sig_key, return_index=True)[1]
+    seen = [int(sig_key[r]) for r in np.sort(first_rows)]
+    for letter in "GRECJSI":
+        bands = [SIGNALS[(k // 256, k % 256)][1:] for k in seen if _SYSTEM[k // 256] == letter]
+        bands = list(dict.fromkeys(bands))
+        if bands:
+            obs_types[letter] = tuple(f"{t}{b}" for b in bands for t in "CLDS")
     codes = tuple(dict.fromkeys(c for v in obs_types.values() for c in v))
     n_e, n_s, n_c = len(epochs), len(sats), len(codes)
     values = np.full((n_e, n_s, n_c), np.nan)
     lli = np.full((n_e, n_s, n_c), -1, dtype=np.int8)
-    s_idx = {s: i for i, s in enumerate(sats)}
     c_idx = {c: i for i, c in enumerate(codes)}
-    rows = np.flatnonzero(ok)
-    e_i = ep[rows]
-    s_i = np.array([s_idx[x] for x in sat[rows]], dtype=int)
-    m = allm[rows]
-    col = {t: np.array([c_idx[t + b] for b in band[rows]], dtype=int) for t in "CLDS"}
+    uniq_sig, sig_i = np.unique(sig_key, return_inverse=True)
+    col = {
+        t: np.array([c_idx[t + SIGNALS[(k // 256, k % 256)][1:]] for k in uniq_sig], dtype=int)[
+            sig_i
+        ]
+        for t in "CLDS"
+    }
     trk = m["trkStat"].astype(int)
     pr = np.where(trk & 1, m["prMes"], np.nan)
     cp = m["cpMes"].copy()
     cp_ok = (trk & 2 > 0) & (cp != -0.5) & ((m["cpStdev"] & 15) * _CP_STD_UNIT_CYC
                                             <= max_cp_std_cycles + 1e-12)  # fmt: skip
-    geo = (sys_letter[rows] == "C") & ((prn[rows] <= 5) | (prn[rows] >= 59))
+    geo = (gnss == 3) & ((prn <= 5) | (prn >= 59))
     cp = np.where(cp_ok, cp + np.where(geo, 0.5, 0.0), np.nan)
     values[e_i, s_i, col["C"]] = pr
     values[e_i, s_i, col["L"]] = cp
@@ -332,11 +366,8 @@ def _observations(
         trk[cp_ok],
     )
     lli[e_i[cp_ok], s_i[cp_ok], col["L"][cp_ok]] = flags
-    fcn = {
-        f"R{int(p):02d}": int(f) - 7
-        for p, f, s in zip(prn[rows], m["freqId"], sys_letter[rows], strict=True)
-        if s == "R"
-    }
+    glo = np.flatnonzero(gnss == 6)
+    fcn = {f"R{int(prn[k]):02d}": int(m["freqId"][k]) - 7 for k in glo}
     header = ObsHeader(
         version=0.0,
         file_type="O",
@@ -358,7 +389,7 @@ def _observations(
         lli=lli,
         ssi=np.full(values.shape, -1, dtype=np.int8),
     )
-    return obs, dict(unknown)
+    return obs, unknown
 
 
 def _lli(
@@ -438,7 +469,7 @@ def _fit_hours(flag: int, iodc: int) -> float:
 
 def _navigation(
     path: StrPath,
-    subframes: list[tuple[int, int, int, np.ndarray, int]],
+    subframes: list[tuple[int, int, int, int, np.ndarray, int]],
     t_epochs: list[float],
     leap: int | None,
 ) -> tuple[NavData, dict[str, int]]:
@@ -449,8 +480,11 @@ def _navigation(
     seen: set[tuple[str, int, int, int]] = set()
     iono: dict[str, np.ndarray] = {}
     time_corrections: dict[str, tuple[Any, ...]] = {}
-    for e_next, gnss, sv, words, number in subframes:
+    for e_next, gnss, sv, sig, words, number in subframes:
         letter = _SYSTEM.get(gnss, "?")
+        if letter in "GJ" and sig in (3, 4, 6, 7, 8, 9):
+            undecoded[f"{letter}: CNAV (L2C/L5) not decoded"] += 1
+            continue
         if letter not in "GJ" or len(words) < 10:
             name = {"E": "Galileo I/NAV", "C": "BeiDou D1/D2", "R": "GLONASS strings"}.get(
                 letter, "navigation message"
