@@ -21,6 +21,7 @@ RINEX 3.04 (IGS/RTCM-SC104, 2018), tables A1-A3 (observation header and records)
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable
 from datetime import UTC, datetime
@@ -109,24 +110,34 @@ def write_obs(obs: Observations, path: StrPath, *, comments: Iterable[str] = ())
             _label(" C1C    0.000 C1P    0.000 C2C    0.000 C2P    0.000", "GLONASS COD/PHS/BIS")
         )
     lines.append(_label("", "END OF HEADER"))
+    # every present value formatted once (F14.3, LLI, SSI), then one line per (epoch,
+    # satellite) group of values, in the order of the satellite's system's code list
+    idx = np.nonzero(~np.isnan(obs.values))
+    digit = np.array([" ", *"123456789"])
+    texts = [
+        f + li + si
+        for f, li, si in zip(
+            map("%14.3f".__mod__, obs.values[idx].tolist()),
+            digit[np.clip(obs.lli[idx], 0, 9)].tolist(),
+            digit[np.clip(obs.ssi[idx], 0, 9)].tolist(),
+            strict=True,
+        )
+    ]
     col = {c: k for k, c in enumerate(obs.codes)}
-    sat_cols = {s: [col.get(c, -1) for c in types[s]] for s in present}
+    sat_cols = [[col.get(c, -1) for c in types[sat[0]]] for sat in obs.sats]
+    blank = " " * 16
+    row = idx[0] * len(obs.sats) + idx[1]
+    starts = [*np.flatnonzero(np.r_[True, row[1:] != row[:-1]]).tolist(), len(row)]
+    epoch_rows: dict[int, list[str]] = {}
+    for a, b in itertools.pairwise(starts):
+        e, j = int(idx[0][a]), int(idx[1][a])
+        have = dict(zip(idx[2][a:b].tolist(), texts[a:b], strict=True))
+        if have.keys().isdisjoint(sat_cols[j]):
+            continue
+        line = obs.sats[j] + "".join(have.get(k, blank) for k in sat_cols[j])
+        epoch_rows.setdefault(e, []).append(line.rstrip())
     for e, t in enumerate(obs.t_gps_s):
-        rows = []
-        for j, sat in enumerate(obs.sats):
-            cols = sat_cols[sat[0]]
-            v = np.array([obs.values[e, j, k] if k >= 0 else np.nan for k in cols])
-            if np.all(np.isnan(v)):
-                continue
-            fields = []
-            for k, x in zip(cols, v, strict=True):
-                if np.isnan(x):
-                    fields.append(" " * 16)
-                    continue
-                lli = int(obs.lli[e, j, k])
-                ssi = int(obs.ssi[e, j, k])
-                fields.append(f"{x:14.3f}{lli if lli > 0 else ' '}{ssi if ssi > 0 else ' '}")
-            rows.append((sat + "".join(fields)).rstrip())
+        rows = epoch_rows.get(e)
         if not rows:
             continue
         y, mo, d, hh, mi, ss = _calendar(float(t))
