@@ -326,3 +326,21 @@ def test_convert_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> 
     assert "ephemerides G 1" in out
     assert read_obs(tmp_path / "x.obs").values.shape == (14, 23, 8)
     assert list(read_nav(tmp_path / "x.nav").tables["G"]["sat"]) == ["G27"]
+
+
+def test_rtk_with_a_ubx_rover_zero_baseline(tmp_path: Path) -> None:
+    """``navtrack rtk LOG RINEX``: the UBX log against convbin's RINEX of the same log (a zero
+    baseline through the two readers): every epoch fixed at the base position (the phases
+    agree to RINEX's printed 0.001 cycle)."""
+    import pandas as pd
+
+    from navtrack.cli import main
+
+    base = [-1276964.2, -4717226.1, 4087226.7]
+    out = tmp_path / "z.csv"
+    args = ["rtk", str(WALK), str(DATA / "gnss_imu_walk_cut_convbin.obs"), "--no-progress"]
+    assert main([*args, "--base-pos", *map(str, base), "--out", str(out)]) == 0
+    sol = pd.read_csv(out)
+    assert (sol["status"] == "fix").all()
+    assert len(sol) == 60
+    assert np.abs(sol[["x_m", "y_m", "z_m"]].to_numpy() - base).max() < 0.01
