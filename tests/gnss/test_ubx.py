@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from navtrack.data import sample_path
 from navtrack.errors import FileFormatError
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
@@ -28,7 +29,7 @@ DATA = Path(__file__).parents[1] / "data" / "ubx"
 RAWX_1HZ = DATA / "pyubx2_rxmrawx.ubx"
 RAWX_F9 = DATA / "ubloxrs_rxm_rawx.ubx"
 SFRBX_GPS = DATA / "ubloxrs_rxm_sfrbx_gps.ubx"
-WALK = DATA / "gnss_imu_walk_cut.ubx"
+WALK = sample_path("gnss_imu_walk_cut.ubx")  # bundled: the example of navtrack convert
 
 
 def _same_as_printed(ours, theirs, *, superset: bool = False) -> None:
@@ -67,7 +68,8 @@ def test_rawx_values_as_convbin_prints_them(log: Path) -> None:
 def test_real_f9_walk_log_as_convbin() -> None:
     """60 epochs at 4 Hz of a triple-frequency receiver walking: every value convbin writes,
     equal to its printed precision; navtrack also keeps the signals RTKLIB 2.4.3 drops (GPS L5,
-    BeiDou B1C/B2a) and its phases' loss-of-lock bits agree on the continuous epochs."""
+    BeiDou B1C/B2a/B3I, Galileo E5a/E6) and its phases' loss-of-lock bits agree on the
+    continuous epochs."""
     ours = read_ubx(WALK).obs
     theirs = read_obs(DATA / "gnss_imu_walk_cut_convbin.obs")
     _same_as_printed(ours, theirs, superset=True)

@@ -14,6 +14,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+EXAMPLE = "gnss_imu_walk_cut.ubx"
+
 
 def register(subparsers: Any) -> None:
     p = subparsers.add_parser(
@@ -22,8 +24,18 @@ def register(subparsers: Any) -> None:
         description="Convert a u-blox UBX log (RXM-RAWX, RXM-SFRBX) to RINEX 3.04. The "
         "observations agree with RTKLIB's convbin to the printed precision (docs/rtk.md).",
     )
-    p.add_argument("log", type=Path, help="u-blox UBX log (.ubx)")
-    p.add_argument("--out", type=Path, required=True, help="RINEX observation file to write")
+    p.add_argument("log", type=Path, nargs="?", help="u-blox UBX log (.ubx)")
+    p.add_argument(
+        "--out",
+        type=Path,
+        help="RINEX observation file to write (required, except with --example: then a new "
+        "temporary directory)",
+    )
+    p.add_argument(
+        "--example",
+        action="store_true",
+        help=f"convert the bundled log {EXAMPLE} (a u-blox receiver walking, 15 s at 4 Hz)",
+    )
     p.add_argument(
         "--nav",
         type=Path,
@@ -50,6 +62,18 @@ def run(args: argparse.Namespace) -> int:
     from navtrack.gnss.rinex.write import write_nav, write_obs
     from navtrack.gnss.ubx import is_ubx, read_ubx
 
+    if args.example:
+        if args.log is not None:
+            raise SystemExit("navtrack convert: give either LOG or --example, not both")
+        import tempfile
+
+        from navtrack.data import sample_path
+
+        args.log = sample_path(EXAMPLE)
+        if args.out is None:
+            args.out = Path(tempfile.mkdtemp(prefix="navtrack-convert-")) / "walk.obs"
+    if args.log is None or args.out is None:
+        raise SystemExit("navtrack convert: give LOG --out FILE.obs, or --example")
     if not args.log.is_file():
         raise SystemExit(f"navtrack convert: file {str(args.log)!r} not found")
     if not is_ubx(args.log):
