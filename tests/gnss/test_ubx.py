@@ -346,3 +346,23 @@ def test_rtk_with_a_ubx_rover_zero_baseline(tmp_path: Path) -> None:
     assert (sol["status"] == "fix").all()
     assert len(sol) == 60
     assert np.abs(sol[["x_m", "y_m", "z_m"]].to_numpy() - base).max() < 0.01
+
+
+def test_beidou_d1_ephemerides_as_convbin(tmp_path: Path) -> None:
+    """The B3I D1 subframes of the walk log (153 RXM-SFRBX): the 8 MEO/IGSO ephemerides equal
+    convbin's field by field, transmission time and BDT-dated toc included, and survive the
+    RINEX writer and reader."""
+    log = read_ubx(DATA / "gnss_imu_walk_bds_b3i_sfrbx.ubx")
+    ours = log.nav.tables["C"]
+    theirs = read_nav(DATA / "gnss_imu_walk_bds_b3i_sfrbx_convbin.nav").tables["C"]
+    assert list(ours["sat"]) == list(theirs["sat"])
+    assert len(ours["sat"]) == 8
+    for name in theirs:
+        if name not in ("line", "sat"):
+            np.testing.assert_allclose(ours[name], theirs[name], rtol=1e-11, err_msg=name)
+    assert log.undecoded == {"C: D1 subframe 4 (almanac)": 25, "C: D1 subframe 5 (almanac)": 38}
+    write_nav(log.nav, tmp_path / "c.nav")
+    back = read_nav(tmp_path / "c.nav").tables["C"]
+    for name in theirs:
+        if name not in ("line", "sat"):
+            np.testing.assert_allclose(back[name], ours[name], rtol=1e-12, err_msg=name)

@@ -14,11 +14,13 @@
   (half-cycle ambiguity) while the receiver has not resolved the half cycle (``trkStat`` bit 2
   clear).
 * ``RXM-SFRBX`` (0x02 0x13) -> :class:`~navtrack.gnss.rinex.nav.NavData`: GPS and QZSS LNAV
-  subframes 1-3 become one ephemeris record per issue (IODC = IODE of both subframes), and
-  GPS subframe 4 page 18 the Klobuchar parameters, the GPS-UTC polynomial and the leap
-  seconds. Galileo I/NAV, BeiDou D1/D2, GLONASS strings, SBAS and the modernised messages are
-  not decoded: their words are counted in :attr:`UbxLog.undecoded` by system, so a log whose
-  navigation data cannot serve those systems says so (give a RINEX navigation file for them).
+  subframes 1-3 become one ephemeris record per issue (IODC = IODE of both subframes), GPS
+  subframe 4 page 18 the Klobuchar parameters, the GPS-UTC polynomial and the leap seconds;
+  BeiDou D1 subframes 1-3 of one frame (on B1I, B2I or B3I, MEO and IGSO satellites) one
+  record per (AODE, toe). Galileo I/NAV, BeiDou D2 (GEO) and B-CNAV, GLONASS strings, SBAS and
+  GPS/QZSS CNAV are not decoded: their messages are counted in :attr:`UbxLog.undecoded` by
+  system and reason, so a log whose navigation data cannot serve those systems says so (give a
+  RINEX navigation file for them).
 
 The framing (synchronisation, length, message class and id, resynchronisation after garbage
 and NMEA or RTCM sentences interleaved in the log) is pyubx2's; the two payloads are decoded
@@ -42,6 +44,7 @@ u-blox, "u-blox F9 HPG 1.32 Interface Description" (UBX-22008968), sections 3.2 
 checksum), 3.17.6 (UBX-RXM-RAWX), 3.17.9 (UBX-RXM-SFRBX), 1.5.4 (signal identifiers);
 "u-blox 8 / M8 Receiver description" (UBX-13003221) 10.2 (navigation data words);
 IS-GPS-200N 20.3.2 and 20.3.3 (LNAV subframes 1-4); IS-QZSS-PNT-005 (QZSS LNAV);
+BDS-SIS-ICD-B1I 3.0 (2019) 5.2.4 (D1 subframes 1-3); BDS-SIS-ICD-B3I 1.0 (D1 on B3I);
 RINEX 3.04 table A2 (LLI) and section 5.1 (codes).
 """
 
@@ -61,7 +64,7 @@ from navtrack._typing import StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import Observations, ObsHeader, SkippedLine
 from navtrack.gnss.rinex.nav import NavData, _toe_gps_s
-from navtrack.timescale import SECONDS_PER_WEEK
+from navtrack.timescale import BDS_WEEK_OFFSET, BDT_MINUS_GPST_S, SECONDS_PER_WEEK
 
 __all__ = ["SIGNALS", "UbxLog", "is_ubx", "read_ubx"]
 
@@ -478,6 +481,8 @@ def _navigation(
     pending: dict[tuple[str, int], dict[int, tuple[int, int, float]]] = {}
     records: dict[str, list[dict[str, Any]]] = {"G": [], "J": []}
     seen: set[tuple[str, int, int, int]] = set()
+    bds_pending: dict[int, dict[int, tuple[int, int]]] = {}
+    bds_records: list[dict[str, Any]] = []
     iono: dict[str, np.ndarray] = {}
     time_corrections: dict[str, tuple[Any, ...]] = {}
     for e_next, gnss, sv, sig, words, number in subframes:
@@ -485,10 +490,13 @@ def _navigation(
         if letter in "GJ" and sig in (3, 4, 6, 7, 8, 9):
             undecoded[f"{letter}: CNAV (L2C/L5) not decoded"] += 1
             continue
+        if letter == "C":
+            why = _beidou_subframe(bds_pending, bds_records, seen, sv, sig, words, number)
+            if why:
+                undecoded[f"C: {why}"] += 1
+            continue
         if letter not in "GJ" or len(words) < 10:
-            name = {"E": "Galileo I/NAV", "C": "BeiDou D1/D2", "R": "GLONASS strings"}.get(
-                letter, "navigation message"
-            )
+            name = {"E": "Galileo I/NAV", "R": "GLONASS strings"}.get(letter, "navigation message")
             undecoded[f"{letter}: {name} not decoded"] += 1
             continue
         v = _bits(words)
@@ -537,6 +545,7 @@ def _navigation(
         else:
             what = "almanac/health" if sfid in (4, 5) else f"subframe id {sfid}"
             undecoded[f"{letter}: subframe {sfid} ({what})"] += 1
+    records["C"] = bds_records
     tables = {s: _table(s, recs) for s, recs in records.items() if recs}
     nav = NavData(
         path=fspath(path),
@@ -608,20 +617,26 @@ def _ephemeris(have: dict[int, tuple[int, int, float]]) -> dict[str, Any] | None
     return rec
 
 
-_TABLE_COLUMNS = (
+_ORBIT_COLUMNS = (
     "toc_gps_s", "af0", "af1", "af2", "iode", "crs", "deltan", "m0", "cuc", "e", "cus",
     "sqrta", "toe_sow", "cic", "omega0", "cis", "i0", "crc", "omega", "omegadot", "idot",
-    "codes_l2", "week", "toe_gps_s", "l2p_flag", "sva_m", "svh", "tgd", "iodc", "tot_sow",
-    "fit_h", "line",
 )  # fmt: skip
-_INT_COLUMNS = {"iode", "codes_l2", "week", "l2p_flag", "svh", "iodc", "line"}
+_TABLE_COLUMNS = {
+    "G": (*_ORBIT_COLUMNS, "codes_l2", "week", "toe_gps_s", "l2p_flag", "sva_m", "svh", "tgd",
+          "iodc", "tot_sow", "fit_h", "line"),
+    "C": (*_ORBIT_COLUMNS, "week", "toe_gps_s", "sva_m", "svh", "tgd1", "tgd2", "tot_sow",
+          "aodc", "line"),
+}  # fmt: skip
+_TABLE_COLUMNS["J"] = _TABLE_COLUMNS["G"]
+_INT_COLUMNS = {"iode", "codes_l2", "week", "l2p_flag", "svh", "iodc", "aodc", "line"}
 
 
 def _table(letter: str, recs: list[dict[str, Any]]) -> dict[str, np.ndarray]:
     """Ephemeris records -> the column table :class:`NavData` holds, sorted as RINEX's."""
     sats = np.array([r["sat"] for r in recs])
     cols: dict[str, np.ndarray] = {}
-    for name in _TABLE_COLUMNS:
+    names = _TABLE_COLUMNS[letter]
+    for name in names:
         if name == "toe_gps_s":
             continue
         dtype = np.int64 if name in _INT_COLUMNS else float
@@ -631,5 +646,116 @@ def _table(letter: str, recs: list[dict[str, Any]]) -> dict[str, np.ndarray]:
     )
     order = np.lexsort((cols["line"], cols["toc_gps_s"], sats))
     out = {"sat": sats[order]}
-    out.update((name, cols[name][order]) for name in _TABLE_COLUMNS)
+    out.update((name, cols[name][order]) for name in names)
     return out
+
+
+# BeiDou D1 (BDS-SIS-ICD-B1I 3.0, 5.2.4): each 30-bit word carries 26 (word 1) or 22 (words
+# 2-10) information bits before its parity; with the parity removed every field of subframes
+# 1-3 is one run of bits. (start, length, signed) in that 224-bit information stream.
+_BDS_SOW = (18, 20, False)
+_BDS_D1: dict[int, dict[str, tuple[int, int, bool]]] = {
+    1: {"svh": (38, 1, False), "aodc": (39, 5, False), "urai": (44, 4, False),
+        "week": (48, 13, False), "toc": (61, 17, False), "tgd1": (78, 10, True),
+        "tgd2": (88, 10, True), "af2": (162, 11, True), "af0": (173, 24, True),
+        "af1": (197, 22, True), "iode": (219, 5, False)},
+    2: {"deltan": (38, 16, True), "cuc": (54, 18, True), "m0": (72, 32, True),
+        "e": (104, 32, False), "cus": (136, 18, True), "crc": (154, 18, True),
+        "crs": (172, 18, True), "sqrta": (190, 32, False), "toe_msb": (222, 2, False)},
+    3: {"toe_lsb": (38, 15, False), "i0": (53, 32, True), "cic": (85, 18, True),
+        "omegadot": (103, 24, True), "cis": (127, 18, True), "idot": (145, 14, True),
+        "omega0": (159, 32, True), "omega": (191, 32, True)},
+}  # fmt: skip
+
+
+def _bds_info(words: np.ndarray) -> int:
+    """The information bits of a D1/D2 subframe (u-blox gives each 30-bit word with its BCH
+    parity after the information bits, de-interleaved) as one 224-bit integer."""
+    v = (int(words[0]) >> 4) & ((1 << 26) - 1)
+    for w in words[1:10]:
+        v = (v << 22) | ((int(w) >> 8) & ((1 << 22) - 1))
+    return v
+
+
+def _bds_field(v: int, start: int, n: int, signed: bool) -> int:
+    x = (v >> (224 - start - n)) & ((1 << n) - 1)
+    return x - (1 << n) if signed and x >> (n - 1) else x
+
+
+def _beidou_subframe(
+    pending: dict[int, dict[int, tuple[int, int]]],
+    records: list[dict[str, Any]],
+    seen: set[tuple[str, int, int, int]],
+    sv: int,
+    sig: int,
+    words: np.ndarray,
+    number: int,
+) -> str:
+    """Collect a BeiDou subframe; a D1 ephemeris when subframes 1-3 of one frame are in.
+    Returns why the subframe gives nothing (empty when it was used or is pending)."""
+    if sig not in (0, 1, 2, 3, 4, 10):  # B1I, B2I, B3I carry D1 (MEO/IGSO) or D2 (GEO)
+        return "B-CNAV (B1C/B2a) not decoded"
+    if sv <= 5 or sv >= 59:
+        return "D2 (GEO) not decoded"
+    if len(words) < 10:
+        return "D1 subframe shorter than 10 words"
+    v = _bds_info(words)
+    if (v >> (224 - 11)) != 0b11100010010:
+        return "no D1 preamble"
+    frame_id = _bds_field(v, 15, 3, False)
+    if frame_id not in (1, 2, 3):
+        return f"D1 subframe {frame_id} (almanac)" if frame_id in (4, 5) else "D1 subframe id"
+    have = pending.setdefault(sv, {})
+    have[frame_id] = (v, number)
+    if len(have) < 3:
+        return ""
+    sow = [_bds_field(have[k][0], *_BDS_SOW) for k in (1, 2, 3)]
+    if not (sow[1] == sow[0] + 6 and sow[2] == sow[1] + 6):
+        return ""  # subframes of different frames: wait for a consistent set
+    f = {k: _bds_field(have[sf][0], *spec) for sf, t in _BDS_D1.items() for k, spec in t.items()}
+    toe_sow = ((f["toe_msb"] << 15) | f["toe_lsb"]) * 8.0
+    toc_sow = f["toc"] * 8.0
+    if toe_sow != toc_sow:
+        return "D1 toe != toc"
+    week = f["week"]  # BDT week of the frame; toe within half a week of it
+    week += round((sow[0] - toe_sow) / SECONDS_PER_WEEK)
+    key = ("C", sv, f["iode"], int(toe_sow))
+    if key in seen:
+        return ""
+    seen.add(key)
+    toc = (week + BDS_WEEK_OFFSET) * SECONDS_PER_WEEK + toc_sow - BDT_MINUS_GPST_S
+    records.append(
+        {
+            "sat": f"C{sv:02d}",
+            "toc_gps_s": toc,
+            "af0": f["af0"] * 2.0**-33,
+            "af1": f["af1"] * 2.0**-50,
+            "af2": f["af2"] * 2.0**-66,
+            "iode": f["iode"],
+            "crs": f["crs"] * 2.0**-6,
+            "deltan": f["deltan"] * 2.0**-43 * _PI,
+            "m0": f["m0"] * 2.0**-31 * _PI,
+            "cuc": f["cuc"] * 2.0**-31,
+            "e": f["e"] * 2.0**-33,
+            "cus": f["cus"] * 2.0**-31,
+            "sqrta": f["sqrta"] * 2.0**-19,
+            "toe_sow": toe_sow,
+            "cic": f["cic"] * 2.0**-31,
+            "omega0": f["omega0"] * 2.0**-31 * _PI,
+            "cis": f["cis"] * 2.0**-31,
+            "i0": f["i0"] * 2.0**-31 * _PI,
+            "crc": f["crc"] * 2.0**-6,
+            "omega": f["omega"] * 2.0**-31 * _PI,
+            "omegadot": f["omegadot"] * 2.0**-43 * _PI,
+            "idot": f["idot"] * 2.0**-43 * _PI,
+            "week": week,
+            "sva_m": _URA_M[f["urai"]] if f["urai"] < 15 else math.nan,
+            "svh": f["svh"],
+            "tgd1": f["tgd1"] * 0.1e-9,
+            "tgd2": f["tgd2"] * 0.1e-9,
+            "tot_sow": float(sow[0]),
+            "aodc": f["aodc"],
+            "line": have[1][1],
+        }
+    )
+    return ""

@@ -2,8 +2,9 @@
 
 :func:`write_obs` writes an :class:`~navtrack.gnss.observations.Observations` (from any
 source: a u-blox log, an Android log, another RINEX file) as a RINEX 3.04 mixed observation
-file; :func:`write_nav` writes the GPS and QZSS LNAV records, ionosphere and GPS-UTC parameters
-and leap seconds of a :class:`~navtrack.gnss.rinex.nav.NavData` as a RINEX 3.04 navigation file.
+file; :func:`write_nav` writes the GPS and QZSS LNAV and BeiDou D1 records, ionosphere and
+GPS-UTC parameters and leap seconds of a :class:`~navtrack.gnss.rinex.nav.NavData` as a RINEX
+3.04 navigation file.
 Both read back with :func:`~navtrack.gnss.rinex.obs.read_obs` /
 :func:`~navtrack.gnss.rinex.nav.read_nav` to the written precision, and with RTKLIB and
 georinex.
@@ -16,7 +17,7 @@ blank fields; an epoch with no value at all is not written.
 References
 ----------
 RINEX 3.04 (IGS/RTCM-SC104, 2018), tables A1-A3 (observation header and records), A4-A8
-(navigation header, GPS and QZSS records).
+(navigation header, GPS, QZSS and BeiDou records).
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ from navtrack import __version__
 from navtrack._typing import StrPath
 from navtrack.gnss.observations import Observations
 from navtrack.gnss.rinex.nav import _FIELDS, NavData
-from navtrack.timescale import to_datetime64
+from navtrack.timescale import BDT_MINUS_GPST_S, to_datetime64
 
 __all__ = ["write_nav", "write_obs"]
 
@@ -157,7 +158,7 @@ def _d19(x: float) -> str:
 
 
 def write_nav(nav: NavData, path: StrPath, *, comments: Iterable[str] = ()) -> None:
-    """Write the GPS and QZSS records of a :class:`NavData` as RINEX 3.04 navigation.
+    """Write the GPS, QZSS and BeiDou records of a :class:`NavData` as RINEX 3.04 navigation.
 
     Raises
     ------
@@ -165,9 +166,9 @@ def write_nav(nav: NavData, path: StrPath, *, comments: Iterable[str] = ()) -> N
         When ``nav`` holds records of another system (this writer knows the LNAV layout
         only).
     """
-    other = [s for s in nav.tables if s not in "GJ"]
+    other = [s for s in nav.tables if s not in "GJC"]
     if other:
-        raise ValueError(f"nav: write_nav writes GPS and QZSS records only, not {other}")
+        raise ValueError(f"nav: write_nav writes GPS, QZSS and BeiDou records only, not {other}")
     lines = [
         _label(f"{3.04:9.2f}{'':11}{'N: GNSS NAV DATA':<20}{'M: Mixed':<20}",
                "RINEX VERSION / TYPE"),
@@ -188,13 +189,14 @@ def write_nav(nav: NavData, path: StrPath, *, comments: Iterable[str] = ()) -> N
         lines.append(_label(f"{nav.leap_seconds:6d}", "LEAP SECONDS"))
     lines.append(_label("", "END OF HEADER"))
     records = []
-    for s in ("G", "J"):
+    for s in ("G", "J", "C"):
         table = nav.tables.get(s)
         if table is None:
             continue
         for r in range(len(table["sat"])):
             toc = float(table["toc_gps_s"][r])
-            y, mo, d, hh, mi, ss = _calendar(toc)
+            # BeiDou records are dated in BDT (RINEX 3.04 table A14)
+            y, mo, d, hh, mi, ss = _calendar(toc + (BDT_MINUS_GPST_S if s == "C" else 0.0))
             values = [np.nan if f is None else float(table[f][r]) for f in _FIELDS[s]]
             head = f"{table['sat'][r]} {y:4d} {mo:02d} {d:02d} {hh:02d} {mi:02d} {int(ss):02d}"
             text = [head + "".join(_d19(v) for v in values[:3])]
