@@ -1,7 +1,7 @@
 """``navtrack convert LOG --out FILE.obs``: a u-blox raw log as RINEX 3.04 files.
 
 Reads a UBX log (:func:`navtrack.gnss.ubx.read_ubx`: RXM-RAWX observations, RXM-SFRBX GPS and
-QZSS LNAV and BeiDou D1 ephemerides) and writes a RINEX 3.04 observation file and, when the log
+QZSS LNAV, Galileo I/NAV and BeiDou D1 ephemerides) and writes a RINEX 3.04 observation file and, when the log
 holds ephemerides, a navigation file next to it (``--nav`` names it; default the observation file's
 name with ``.nav``). Prints what was written and what was not: epochs, satellites and codes per
 system, ephemerides per system, navigation messages not decoded (by system and reason),
@@ -98,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
         per = ", ".join(f"{s} {len(t['sat'])}" for s, t in log.nav.tables.items())
         print(f"wrote          {nav_path}: ephemerides {per}")
     else:
-        print("no navigation file: the log holds no complete GPS/QZSS/BeiDou ephemeris")
+        print("no navigation file: the log holds no complete ephemeris")
     for why, n in sorted(log.undecoded.items()):
         print(f"not decoded    {n} RXM-SFRBX: {why}")
     for sig, n in sorted(log.unknown_signals.items()):

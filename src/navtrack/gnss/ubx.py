@@ -16,11 +16,13 @@
 * ``RXM-SFRBX`` (0x02 0x13) -> :class:`~navtrack.gnss.rinex.nav.NavData`: GPS and QZSS LNAV
   subframes 1-3 become one ephemeris record per issue (IODC = IODE of both subframes), GPS
   subframe 4 page 18 the Klobuchar parameters, the GPS-UTC polynomial and the leap seconds;
-  BeiDou D1 subframes 1-3 of one frame (on B1I, B2I or B3I, MEO and IGSO satellites) one
-  record per (AODE, toe). Galileo I/NAV, BeiDou D2 (GEO) and B-CNAV, GLONASS strings, SBAS and
-  GPS/QZSS CNAV are not decoded: their messages are counted in :attr:`UbxLog.undecoded` by
-  system and reason, so a log whose navigation data cannot serve those systems says so (give a
-  RINEX navigation file for them).
+  Galileo I/NAV word types 1-5 of one IODnav (E1-B or E5b-I pages, CRC-24Q checked) one
+  record per (IODnav, toe); BeiDou D1 subframes 1-3 of one frame (on B1I, B2I or B3I, MEO and
+  IGSO satellites) one record per (AODE, toe). Galileo F/NAV, BeiDou D2 (GEO) and B-CNAV,
+  GLONASS strings, SBAS and GPS/QZSS CNAV are not decoded, nor the Galileo and BeiDou
+  ionosphere parameters: those messages are counted in :attr:`UbxLog.undecoded` by system
+  and reason, so a log whose navigation data cannot serve a system says so (give a RINEX
+  navigation file for it).
 
 The framing (synchronisation, length, message class and id, resynchronisation after garbage
 and NMEA or RTCM sentences interleaved in the log) is pyubx2's; the two payloads are decoded
@@ -45,6 +47,7 @@ checksum), 3.17.6 (UBX-RXM-RAWX), 3.17.9 (UBX-RXM-SFRBX), 1.5.4 (signal identifi
 "u-blox 8 / M8 Receiver description" (UBX-13003221) 10.2 (navigation data words);
 IS-GPS-200N 20.3.2 and 20.3.3 (LNAV subframes 1-4); IS-QZSS-PNT-005 (QZSS LNAV);
 BDS-SIS-ICD-B1I 3.0 (2019) 5.2.4 (D1 subframes 1-3); BDS-SIS-ICD-B3I 1.0 (D1 on B3I);
+Galileo OS SIS ICD 2.0 (2021) 4.3.4-4.3.5 (I/NAV pages, CRC, word types 1-5), table 89 (SISA);
 RINEX 3.04 table A2 (LLI) and section 5.1 (codes).
 """
 
@@ -483,6 +486,8 @@ def _navigation(
     seen: set[tuple[str, int, int, int]] = set()
     bds_pending: dict[int, dict[int, tuple[int, int]]] = {}
     bds_records: list[dict[str, Any]] = []
+    gal_pending: dict[int, dict[int, tuple[int, int]]] = {}
+    gal_records: list[dict[str, Any]] = []
     iono: dict[str, np.ndarray] = {}
     time_corrections: dict[str, tuple[Any, ...]] = {}
     for e_next, gnss, sv, sig, words, number in subframes:
@@ -495,8 +500,13 @@ def _navigation(
             if why:
                 undecoded[f"C: {why}"] += 1
             continue
+        if letter == "E":
+            why = _galileo_page(gal_pending, gal_records, seen, sv, sig, words, number)
+            if why:
+                undecoded[f"E: {why}"] += 1
+            continue
         if letter not in "GJ" or len(words) < 10:
-            name = {"E": "Galileo I/NAV", "R": "GLONASS strings"}.get(letter, "navigation message")
+            name = {"R": "GLONASS strings"}.get(letter, "navigation message")
             undecoded[f"{letter}: {name} not decoded"] += 1
             continue
         v = _bits(words)
@@ -546,6 +556,7 @@ def _navigation(
             what = "almanac/health" if sfid in (4, 5) else f"subframe id {sfid}"
             undecoded[f"{letter}: subframe {sfid} ({what})"] += 1
     records["C"] = bds_records
+    records["E"] = gal_records
     tables = {s: _table(s, recs) for s, recs in records.items() if recs}
     nav = NavData(
         path=fspath(path),
@@ -628,7 +639,11 @@ _TABLE_COLUMNS = {
           "aodc", "line"),
 }  # fmt: skip
 _TABLE_COLUMNS["J"] = _TABLE_COLUMNS["G"]
-_INT_COLUMNS = {"iode", "codes_l2", "week", "l2p_flag", "svh", "iodc", "aodc", "line"}
+_TABLE_COLUMNS["E"] = (*_ORBIT_COLUMNS, "data_source", "week", "toe_gps_s", "sva_m", "svh",
+                       "bgd_e5a", "bgd_e5b", "tot_sow", "line")  # fmt: skip
+_INT_COLUMNS = {
+    "iode", "codes_l2", "week", "l2p_flag", "svh", "iodc", "aodc", "data_source", "line",
+}  # fmt: skip
 
 
 def _table(letter: str, recs: list[dict[str, Any]]) -> dict[str, np.ndarray]:
@@ -755,6 +770,144 @@ def _beidou_subframe(
             "tgd2": f["tgd2"] * 0.1e-9,
             "tot_sow": float(sow[0]),
             "aodc": f["aodc"],
+            "line": have[1][1],
+        }
+    )
+    return ""
+
+
+# Galileo I/NAV (OS SIS ICD 2.0, 4.3.5): a word is the 112 data bits of an even page and the
+# first 16 of the odd page that follows; (start, length, signed) in the 128-bit word, after the
+# 6-bit word type.
+_GAL_WORDS: dict[int, dict[str, tuple[int, int, bool]]] = {
+    1: {"iod": (6, 10, False), "toe": (16, 14, False), "m0": (30, 32, True),
+        "e": (62, 32, False), "sqrta": (94, 32, False)},
+    2: {"iod": (6, 10, False), "omega0": (16, 32, True), "i0": (48, 32, True),
+        "omega": (80, 32, True), "idot": (112, 14, True)},
+    3: {"iod": (6, 10, False), "omegadot": (16, 24, True), "deltan": (40, 16, True),
+        "cuc": (56, 16, True), "cus": (72, 16, True), "crc": (88, 16, True),
+        "crs": (104, 16, True), "sisa": (120, 8, False)},
+    4: {"iod": (6, 10, False), "svid": (16, 6, False), "cic": (22, 16, True),
+        "cis": (38, 16, True), "toc": (54, 14, False), "af0": (68, 31, True),
+        "af1": (99, 21, True), "af2": (120, 6, True)},
+    5: {"bgd_e5a": (47, 10, True), "bgd_e5b": (57, 10, True), "e5b_hs": (67, 2, False),
+        "e1b_hs": (69, 2, False), "e5b_dvs": (71, 1, False), "e1b_dvs": (72, 1, False),
+        "wn": (73, 12, False), "tow": (85, 20, False)},
+}  # fmt: skip
+_GAL_SOURCE_INAV = 1 | 1 << 9  # RINEX data source: I/NAV E1-B, clock for E5b/E1
+
+
+def _crc24q(data: bytes) -> int:
+    """CRC-24Q (generator 0x1864CFB) of a byte string (OS SIS ICD 2.0, 4.3.4)."""
+    crc = 0
+    for byte in data:
+        crc ^= byte << 16
+        for _ in range(8):
+            crc <<= 1
+            if crc & 0x1000000:
+                crc ^= 0x1864CFB
+    return crc & 0xFFFFFF
+
+
+def _sisa_m(index: int) -> float:
+    """Signal-in-space accuracy (m) of a SISA index, OS SIS ICD 2.0 table 89 (255: none)."""
+    if index < 50:
+        return index * 0.01
+    if index < 75:
+        return 0.5 + (index - 50) * 0.02
+    if index < 100:
+        return 1.0 + (index - 75) * 0.04
+    if index < 126:
+        return 2.0 + (index - 100) * 0.16
+    return math.nan
+
+
+def _galileo_page(
+    pending: dict[int, dict[int, tuple[int, int]]],
+    records: list[dict[str, Any]],
+    seen: set[tuple[str, int, int, int]],
+    sv: int,
+    sig: int,
+    words: np.ndarray,
+    number: int,
+) -> str:
+    """Collect a Galileo I/NAV word; an ephemeris when word types 1-5 of one issue are in.
+    Returns why the message gives nothing (empty when it was used or is pending)."""
+    if sig not in (1, 5) or len(words) < 8:  # E1-B and E5b-I carry I/NAV
+        return "F/NAV or E6 not decoded"
+    v = 0
+    for w in words[:8]:
+        v = (v << 32) | int(w)
+    bit = lambda start, n: (v >> (256 - start - n)) & ((1 << n) - 1)  # noqa: E731
+    if bit(0, 1) != 0 or bit(128, 1) != 1:
+        return "I/NAV page pair out of order"
+    if bit(1, 1) or bit(129, 1):
+        return "I/NAV alert page"
+    # CRC over 4 zero bits, the even page's first 114 bits and the odd page's first 82
+    crc_in = (bit(0, 114) << 82) | bit(128, 82)
+    if _crc24q(crc_in.to_bytes(25, "big")) != bit(210, 24):
+        return "I/NAV CRC error"
+    word = (bit(2, 112) << 16) | bit(130, 16)
+    wtype = word >> 122
+    if wtype not in (1, 2, 3, 4, 5):
+        return "I/NAV almanac, UTC, GST-GPS or spare word"
+    have = pending.setdefault(sv, {})
+    have[wtype] = (word, number)
+    if wtype != 5 or len(have) < 5:
+        return ""
+
+    def field(t: int, name: str) -> int:
+        start, n, signed = _GAL_WORDS[t][name]
+        x = (have[t][0] >> (128 - start - n)) & ((1 << n) - 1)
+        return x - (1 << n) if signed and x >> (n - 1) else x
+
+    iods = {field(t, "iod") for t in (1, 2, 3, 4)}
+    if len(iods) != 1:
+        return ""  # words of two issues: wait for a consistent set
+    iod = iods.pop()
+    week = field(5, "wn") + 1024  # GST week -> the GPS week count RINEX uses
+    tot_sow = float(field(5, "tow"))
+    toe_sow = field(1, "toe") * 60.0
+    toc_sow = field(4, "toc") * 60.0
+    # toe and toc within half a week of the transmission time
+    week_toe = week + round((tot_sow - toe_sow) / SECONDS_PER_WEEK)
+    week_toc = week + round((tot_sow - toc_sow) / SECONDS_PER_WEEK)
+    key = ("E", sv, iod, int(toe_sow))
+    if key in seen:
+        return ""
+    seen.add(key)
+    f = {name: field(t, name) for t, spec in _GAL_WORDS.items() for name in spec if name != "iod"}
+    records.append(
+        {
+            "sat": f"E{sv:02d}",
+            "toc_gps_s": week_toc * SECONDS_PER_WEEK + toc_sow,
+            "af0": f["af0"] * 2.0**-34,
+            "af1": f["af1"] * 2.0**-46,
+            "af2": f["af2"] * 2.0**-59,
+            "iode": iod,
+            "crs": f["crs"] * 2.0**-5,
+            "deltan": f["deltan"] * 2.0**-43 * _PI,
+            "m0": f["m0"] * 2.0**-31 * _PI,
+            "cuc": f["cuc"] * 2.0**-29,
+            "e": f["e"] * 2.0**-33,
+            "cus": f["cus"] * 2.0**-29,
+            "sqrta": f["sqrta"] * 2.0**-19,
+            "toe_sow": toe_sow,
+            "cic": f["cic"] * 2.0**-29,
+            "omega0": f["omega0"] * 2.0**-31 * _PI,
+            "cis": f["cis"] * 2.0**-29,
+            "i0": f["i0"] * 2.0**-31 * _PI,
+            "crc": f["crc"] * 2.0**-5,
+            "omega": f["omega"] * 2.0**-31 * _PI,
+            "omegadot": f["omegadot"] * 2.0**-43 * _PI,
+            "idot": f["idot"] * 2.0**-43 * _PI,
+            "data_source": _GAL_SOURCE_INAV,
+            "week": week_toe,
+            "sva_m": _sisa_m(f["sisa"]),
+            "svh": f["e5b_hs"] << 7 | f["e5b_dvs"] << 6 | f["e1b_hs"] << 1 | f["e1b_dvs"],
+            "bgd_e5a": f["bgd_e5a"] * 2.0**-32,
+            "bgd_e5b": f["bgd_e5b"] * 2.0**-32,
+            "tot_sow": tot_sow,
             "line": have[1][1],
         }
     )

@@ -2,8 +2,8 @@
 
 :func:`write_obs` writes an :class:`~navtrack.gnss.observations.Observations` (from any
 source: a u-blox log, an Android log, another RINEX file) as a RINEX 3.04 mixed observation
-file; :func:`write_nav` writes the GPS and QZSS LNAV and BeiDou D1 records, ionosphere and
-GPS-UTC parameters and leap seconds of a :class:`~navtrack.gnss.rinex.nav.NavData` as a RINEX
+file; :func:`write_nav` writes the GPS and QZSS LNAV, Galileo and BeiDou records, ionosphere
+and GPS-UTC parameters and leap seconds of a :class:`~navtrack.gnss.rinex.nav.NavData` as a RINEX
 3.04 navigation file.
 Both read back with :func:`~navtrack.gnss.rinex.obs.read_obs` /
 :func:`~navtrack.gnss.rinex.nav.read_nav` to the written precision, and with RTKLIB and
@@ -17,7 +17,7 @@ blank fields; an epoch with no value at all is not written.
 References
 ----------
 RINEX 3.04 (IGS/RTCM-SC104, 2018), tables A1-A3 (observation header and records), A4-A8
-(navigation header, GPS, QZSS and BeiDou records).
+(navigation header, GPS, QZSS, Galileo and BeiDou records).
 """
 
 from __future__ import annotations
@@ -158,7 +158,8 @@ def _d19(x: float) -> str:
 
 
 def write_nav(nav: NavData, path: StrPath, *, comments: Iterable[str] = ()) -> None:
-    """Write the GPS, QZSS and BeiDou records of a :class:`NavData` as RINEX 3.04 navigation.
+    """Write the GPS, QZSS, Galileo and BeiDou records of a :class:`NavData` as RINEX 3.04
+    navigation.
 
     Raises
     ------
@@ -166,9 +167,9 @@ def write_nav(nav: NavData, path: StrPath, *, comments: Iterable[str] = ()) -> N
         When ``nav`` holds records of another system (this writer knows the LNAV layout
         only).
     """
-    other = [s for s in nav.tables if s not in "GJC"]
+    other = [s for s in nav.tables if s not in "GJEC"]
     if other:
-        raise ValueError(f"nav: write_nav writes GPS, QZSS and BeiDou records only, not {other}")
+        raise ValueError(f"nav: write_nav writes Kepler records (G, J, E, C) only, not {other}")
     lines = [
         _label(f"{3.04:9.2f}{'':11}{'N: GNSS NAV DATA':<20}{'M: Mixed':<20}",
                "RINEX VERSION / TYPE"),
@@ -189,7 +190,7 @@ def write_nav(nav: NavData, path: StrPath, *, comments: Iterable[str] = ()) -> N
         lines.append(_label(f"{nav.leap_seconds:6d}", "LEAP SECONDS"))
     lines.append(_label("", "END OF HEADER"))
     records = []
-    for s in ("G", "J", "C"):
+    for s in ("G", "J", "E", "C"):
         table = nav.tables.get(s)
         if table is None:
             continue
