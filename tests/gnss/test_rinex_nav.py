@@ -431,7 +431,6 @@ def test_observation_file_rejected() -> None:
         read_nav(sample_path("07590920.05o"))
 
 
-
 def test_cli_rinex_info_on_nav(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     import json
 
