@@ -419,3 +419,21 @@ def test_rtklib_positions_galileo_from_the_written_files(tmp_path: Path) -> None
         ref_xyz, ref_xyz[0]
     )
     assert np.hypot(enu[:, 0], enu[:, 1]).max() < 15.0
+
+
+def test_glonass_strings_as_convbin(tmp_path: Path) -> None:
+    """GLONASS strings 1-4 of one frame (ublox-rs log, 18 RXM-SFRBX): the R02, R03, R12
+    ephemerides equal convbin's field by field (UTC-dated toc, -TauN, message frame time in s of
+    the UTC week, PZ-90 state in m, frequency channel from the SFRBX header), also after the
+    RINEX writer and reader."""
+    log = read_ubx(DATA / "ubloxrs_rxm_sfrbx_glo_cut.ubx")
+    ours = log.nav.tables["R"]
+    theirs = read_nav(DATA / "ubloxrs_rxm_sfrbx_glo_cut_convbin.nav").tables["R"]
+    assert list(ours["sat"]) == list(theirs["sat"]) == ["R02", "R03", "R12"]
+    write_nav(log.nav, tmp_path / "r.nav")
+    back = read_nav(tmp_path / "r.nav").tables["R"]
+    for name in theirs:
+        if name not in ("line", "sat"):
+            np.testing.assert_allclose(ours[name], theirs[name], rtol=1e-11, err_msg=name)
+            np.testing.assert_allclose(back[name], ours[name], rtol=1e-11, err_msg=name)
+    assert log.undecoded == {"R: non-immediate string (almanac, time)": 3}

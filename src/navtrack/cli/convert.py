@@ -1,12 +1,12 @@
 """``navtrack convert LOG --out FILE.obs``: a u-blox raw log as RINEX 3.04 files.
 
 Reads a UBX log (:func:`navtrack.gnss.ubx.read_ubx`: RXM-RAWX observations; RXM-SFRBX GPS and
-QZSS LNAV, Galileo I/NAV and BeiDou D1 ephemerides) and writes a RINEX 3.04 observation file
-and, when the log holds ephemerides, a navigation file next to it (``--nav`` names it; default
-the observation file's name with ``.nav``). Prints what was written and what was not: epochs,
-satellites and codes per system, ephemerides per system, navigation messages not decoded (by
-system and reason), measurements of unknown signals and damaged messages skipped
-(``--lenient``).
+QZSS LNAV, Galileo I/NAV, BeiDou D1 and GLONASS ephemerides) and writes a RINEX 3.04
+observation file and, when the log holds ephemerides, a navigation file next to it (``--nav``
+names it; default the observation file's name with ``.nav``). Prints what was written and what
+was not: epochs, satellites and codes per system, ephemerides per system, navigation messages
+not decoded (by system and reason), measurements of unknown signals and damaged messages
+skipped (``--lenient``).
 """
 
 from __future__ import annotations

@@ -18,11 +18,12 @@
   subframe 4 page 18 the Klobuchar parameters, the GPS-UTC polynomial and the leap seconds;
   Galileo I/NAV word types 1-5 of one IODnav (E1-B or E5b-I pages, CRC-24Q checked) one
   record per (IODnav, toe); BeiDou D1 subframes 1-3 of one frame (on B1I, B2I or B3I, MEO and
-  IGSO satellites) one record per (AODE, toe). Galileo F/NAV, BeiDou D2 (GEO) and B-CNAV,
-  GLONASS strings, SBAS and GPS/QZSS CNAV are not decoded, nor the Galileo and BeiDou
-  ionosphere parameters: those messages are counted in :attr:`UbxLog.undecoded` by system
-  and reason, so a log whose navigation data cannot serve a system says so (give a RINEX
-  navigation file for it).
+  IGSO satellites) one record per (AODE, toe); GLONASS strings 1-4 of one frame one record per
+  (slot, tb). Galileo F/NAV, BeiDou D2 (GEO) and B-CNAV, GLONASS strings 5-15, SBAS and
+  GPS/QZSS CNAV are not decoded, nor the Galileo and BeiDou ionosphere parameters, and GLONASS
+  strings get no Hamming check (the receiver's only): those messages are counted in
+  :attr:`UbxLog.undecoded` by system and reason, so a log whose navigation data cannot serve a
+  system says so (give a RINEX navigation file for it).
 
 The framing (synchronisation, length, message class and id, resynchronisation after garbage
 and NMEA or RTCM sentences interleaved in the log) is pyubx2's; the two payloads are decoded
@@ -48,6 +49,7 @@ checksum), 3.17.6 (UBX-RXM-RAWX), 3.17.9 (UBX-RXM-SFRBX), 1.5.4 (signal identifi
 IS-GPS-200N 20.3.2 and 20.3.3 (LNAV subframes 1-4); IS-QZSS-PNT-005 (QZSS LNAV);
 BDS-SIS-ICD-B1I 3.0 (2019) 5.2.4 (D1 subframes 1-3); BDS-SIS-ICD-B3I 1.0 (D1 on B3I);
 Galileo OS SIS ICD 2.0 (2021) 4.3.4-4.3.5 (I/NAV pages, CRC, word types 1-5), table 89 (SISA);
+GLONASS ICD 5.1 (2008) 4.4 (immediate data, strings 1-4);
 RINEX 3.04 table A2 (LLI) and section 5.1 (codes).
 """
 
@@ -67,7 +69,13 @@ from navtrack._typing import StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import Observations, ObsHeader, SkippedLine
 from navtrack.gnss.rinex.nav import NavData, _toe_gps_s
-from navtrack.timescale import BDS_WEEK_OFFSET, BDT_MINUS_GPST_S, SECONDS_PER_WEEK
+from navtrack.timescale import (
+    BDS_WEEK_OFFSET,
+    BDT_MINUS_GPST_S,
+    SECONDS_PER_WEEK,
+    leap_seconds,
+    utc_to_gps,
+)
 
 __all__ = ["SIGNALS", "UbxLog", "is_ubx", "read_ubx"]
 
@@ -203,8 +211,8 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
     messages: Counter[str] = Counter()
     skipped: list[SkippedLine] = []
     epochs: list[tuple[float, int, np.ndarray]] = []  # (t_gps_s, recStat, measurements)
-    # (RAWX epochs before it, gnssId, svId, sigId, words, message number)
-    subframes: list[tuple[int, int, int, int, np.ndarray, int]] = []
+    # (RAWX epochs before it, gnssId, svId, sigId, freqId, words, message number)
+    subframes: list[tuple[int, int, int, int, int, np.ndarray, int]] = []
     leap: int | None = None
     offset = 0
     with open(path, "rb") as stream:
@@ -252,9 +260,8 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
                     bad(f"RXM-SFRBX of {len(payload)} bytes for {n} words")
                     continue
                 words = np.frombuffer(payload, "<u4", count=n, offset=8)
-                subframes.append(
-                    (len(epochs), int(h["gnssId"]), int(h["svId"]), int(h["sigId"]), words, number)
-                )
+                ids = (int(h["gnssId"]), int(h["svId"]), int(h["sigId"]), int(h["freqId"]))
+                subframes.append((len(epochs), *ids, words, number))
     if not epochs and not subframes:
         raise FileFormatError(path, None, "no RXM-RAWX nor RXM-SFRBX message: not a raw log")
     obs, unknown = _observations(path, epochs, max_cp_std_cycles)
@@ -475,7 +482,7 @@ def _fit_hours(flag: int, iodc: int) -> float:
 
 def _navigation(
     path: StrPath,
-    subframes: list[tuple[int, int, int, int, np.ndarray, int]],
+    subframes: list[tuple[int, int, int, int, int, np.ndarray, int]],
     t_epochs: list[float],
     leap: int | None,
 ) -> tuple[NavData, dict[str, int]]:
@@ -488,9 +495,11 @@ def _navigation(
     bds_records: list[dict[str, Any]] = []
     gal_pending: dict[int, dict[int, tuple[int, int]]] = {}
     gal_records: list[dict[str, Any]] = []
+    glo_pending: dict[tuple[int, int], dict[int, tuple[int, int]]] = {}
+    glo_records: list[dict[str, Any]] = []
     iono: dict[str, np.ndarray] = {}
     time_corrections: dict[str, tuple[Any, ...]] = {}
-    for e_next, gnss, sv, sig, words, number in subframes:
+    for e_next, gnss, sv, sig, freq, words, number in subframes:
         letter = _SYSTEM.get(gnss, "?")
         if letter in "GJ" and sig in (3, 4, 6, 7, 8, 9):
             undecoded[f"{letter}: CNAV (L2C/L5) not decoded"] += 1
@@ -505,9 +514,14 @@ def _navigation(
             if why:
                 undecoded[f"E: {why}"] += 1
             continue
+        if letter == "R":
+            t_rx = t_epochs[min(max(e_next - 1, 0), len(t_epochs) - 1)]
+            why = _glonass_string(glo_pending, glo_records, seen, freq, words, number, t_rx)
+            if why:
+                undecoded[f"R: {why}"] += 1
+            continue
         if letter not in "GJ" or len(words) < 10:
-            name = {"R": "GLONASS strings"}.get(letter, "navigation message")
-            undecoded[f"{letter}: {name} not decoded"] += 1
+            undecoded[f"{letter}: navigation message not decoded"] += 1
             continue
         v = _bits(words)
         if _u(v, 1, 1, 8) != 0x8B:
@@ -557,6 +571,7 @@ def _navigation(
             undecoded[f"{letter}: subframe {sfid} ({what})"] += 1
     records["C"] = bds_records
     records["E"] = gal_records
+    records["R"] = glo_records
     tables = {s: _table(s, recs) for s, recs in records.items() if recs}
     nav = NavData(
         path=fspath(path),
@@ -639,10 +654,14 @@ _TABLE_COLUMNS = {
           "aodc", "line"),
 }  # fmt: skip
 _TABLE_COLUMNS["J"] = _TABLE_COLUMNS["G"]
+_TABLE_COLUMNS["R"] = ("toc_gps_s", "taun", "gamman", "tk_s", "x_m", "y_m", "z_m", "vx_mps",
+                       "vy_mps", "vz_mps", "ax_mps2", "ay_mps2", "az_mps2", "svh", "freq_num",
+                       "age_d", "line")  # fmt: skip
 _TABLE_COLUMNS["E"] = (*_ORBIT_COLUMNS, "data_source", "week", "toe_gps_s", "sva_m", "svh",
                        "bgd_e5a", "bgd_e5b", "tot_sow", "line")  # fmt: skip
 _INT_COLUMNS = {
     "iode", "codes_l2", "week", "l2p_flag", "svh", "iodc", "aodc", "data_source", "line",
+    "freq_num", "age_d",
 }  # fmt: skip
 
 
@@ -656,9 +675,10 @@ def _table(letter: str, recs: list[dict[str, Any]]) -> dict[str, np.ndarray]:
             continue
         dtype = np.int64 if name in _INT_COLUMNS else float
         cols[name] = np.array([r[name] for r in recs], dtype=dtype)
-    cols["toe_gps_s"] = _toe_gps_s(
-        letter, cols["week"].astype(float), cols["toe_sow"], cols["toc_gps_s"]
-    )
+    if letter != "R":
+        cols["toe_gps_s"] = _toe_gps_s(
+            letter, cols["week"].astype(float), cols["toe_sow"], cols["toc_gps_s"]
+        )
     order = np.lexsort((cols["line"], cols["toc_gps_s"], sats))
     out = {"sat": sats[order]}
     out.update((name, cols[name][order]) for name in names)
@@ -908,6 +928,94 @@ def _galileo_page(
             "bgd_e5a": f["bgd_e5a"] * 2.0**-32,
             "bgd_e5b": f["bgd_e5b"] * 2.0**-32,
             "tot_sow": tot_sow,
+            "line": have[1][1],
+        }
+    )
+    return ""
+
+
+# GLONASS navigation strings (ICD GLONASS 5.1, 4.4): (start, length) in the 85-bit string, bit 0
+# the leading idle bit (ICD bit 85); sign-magnitude numbers ("*") have their sign in the MSB.
+_GLO_STRINGS: dict[int, dict[str, tuple[int, int, bool]]] = {
+    1: {"tk_h": (9, 5, False), "tk_m": (14, 6, False), "tk_s": (20, 1, False),
+        "vx": (21, 24, True), "ax": (45, 5, True), "x": (50, 27, True)},
+    2: {"bn_msb": (5, 1, False), "tb": (9, 7, False), "vy": (21, 24, True),
+        "ay": (45, 5, True), "y": (50, 27, True)},
+    3: {"gamman": (6, 11, True), "vz": (21, 24, True), "az": (45, 5, True), "z": (50, 27, True)},
+    4: {"taun": (5, 22, True), "en": (32, 5, False), "slot": (70, 5, False)},
+}  # fmt: skip
+
+
+def _glonass_string(
+    pending: dict[tuple[int, int], dict[int, tuple[int, int]]],
+    records: list[dict[str, Any]],
+    seen: set[tuple[str, int, int, int]],
+    freq: int,
+    words: np.ndarray,
+    number: int,
+    t_rx: float,
+) -> str:
+    """Collect a GLONASS string; an ephemeris when strings 1-4 of one frame are in. The frame
+    is told by the frame id u-blox appends in the fourth word. Returns why the message gives
+    nothing (empty when it was used or is pending)."""
+    if len(words) < 4:
+        return "string shorter than 4 words"
+    v = 0
+    for w in words[:4]:
+        v = (v << 32) | int(w)
+    m = (v >> (128 - 5)) & 0xF
+    if m not in (1, 2, 3, 4):
+        return "non-immediate string (almanac, time)" if 5 <= m <= 15 else "string number 0"
+    frame_id = (v >> 16) & 0xFFFF
+    have = pending.setdefault((freq, frame_id), {})
+    have[m] = (v >> (128 - 85), number)
+    if len(have) < 4:
+        return ""
+    del pending[(freq, frame_id)]
+
+    def field(k: int, name: str) -> int:
+        start, n, signed = _GLO_STRINGS[k][name]
+        x = (have[k][0] >> (85 - start - n)) & ((1 << n) - 1)
+        if signed and x >> (n - 1):
+            return -(x & ((1 << (n - 1)) - 1))
+        return x
+
+    slot = field(4, "slot")
+    tb = field(2, "tb")
+    key = ("R", slot, tb, freq)
+    if slot < 1 or key in seen:
+        return "" if slot >= 1 else "slot 0 in string 4"
+    seen.add(key)
+    # tb and tk are Moscow times of day (UTC + 3 h): dated within 12 h of the reception
+    leap = float(leap_seconds(t_rx))
+    t_utc = t_rx - leap
+    day = math.floor(t_utc / 86400.0) * 86400.0
+    tod = t_utc - day
+    toe = tb * 900.0 - 10800.0
+    toe += 86400.0 * round((tod - toe) / 86400.0)
+    tof = field(1, "tk_h") * 3600.0 + field(1, "tk_m") * 60.0 + field(1, "tk_s") * 30.0
+    tof -= 10800.0
+    tof += 86400.0 * round((tod - tof) / 86400.0)
+    week_start = math.floor(t_utc / SECONDS_PER_WEEK) * SECONDS_PER_WEEK
+    records.append(
+        {
+            "sat": f"R{slot:02d}",
+            "toc_gps_s": float(utc_to_gps(day + toe)),
+            "taun": -field(4, "taun") * 2.0**-30,  # RINEX writes -TauN
+            "gamman": field(3, "gamman") * 2.0**-40,
+            "tk_s": (day + tof) - week_start,  # message frame time, s of the UTC week
+            "x_m": field(1, "x") * 2.0**-11 * 1e3,
+            "y_m": field(2, "y") * 2.0**-11 * 1e3,
+            "z_m": field(3, "z") * 2.0**-11 * 1e3,
+            "vx_mps": field(1, "vx") * 2.0**-20 * 1e3,
+            "vy_mps": field(2, "vy") * 2.0**-20 * 1e3,
+            "vz_mps": field(3, "vz") * 2.0**-20 * 1e3,
+            "ax_mps2": field(1, "ax") * 2.0**-30 * 1e3,
+            "ay_mps2": field(2, "ay") * 2.0**-30 * 1e3,
+            "az_mps2": field(3, "az") * 2.0**-30 * 1e3,
+            "svh": field(2, "bn_msb"),
+            "freq_num": freq - 7,
+            "age_d": field(4, "en"),
             "line": have[1][1],
         }
     )

@@ -2,7 +2,7 @@
 
 :func:`write_obs` writes an :class:`~navtrack.gnss.observations.Observations` (from any
 source: a u-blox log, an Android log, another RINEX file) as a RINEX 3.04 mixed observation
-file; :func:`write_nav` writes the GPS and QZSS LNAV, Galileo and BeiDou records, ionosphere
+file; :func:`write_nav` writes the GPS, QZSS, Galileo, BeiDou and GLONASS records, ionosphere
 and GPS-UTC parameters and leap seconds of a :class:`~navtrack.gnss.rinex.nav.NavData` as a RINEX
 3.04 navigation file.
 Both read back with :func:`~navtrack.gnss.rinex.obs.read_obs` /
@@ -17,7 +17,7 @@ blank fields; an epoch with no value at all is not written.
 References
 ----------
 RINEX 3.04 (IGS/RTCM-SC104, 2018), tables A1-A3 (observation header and records), A4-A8
-(navigation header, GPS, QZSS, Galileo and BeiDou records).
+(navigation header; GPS, QZSS, Galileo, BeiDou and GLONASS records).
 """
 
 from __future__ import annotations
@@ -32,8 +32,8 @@ import numpy as np
 from navtrack import __version__
 from navtrack._typing import StrPath
 from navtrack.gnss.observations import Observations
-from navtrack.gnss.rinex.nav import _FIELDS, NavData
-from navtrack.timescale import BDT_MINUS_GPST_S, to_datetime64
+from navtrack.gnss.rinex.nav import _FIELDS, _KM, NavData
+from navtrack.timescale import BDT_MINUS_GPST_S, gps_to_utc, to_datetime64
 
 __all__ = ["write_nav", "write_obs"]
 
@@ -158,8 +158,8 @@ def _d19(x: float) -> str:
 
 
 def write_nav(nav: NavData, path: StrPath, *, comments: Iterable[str] = ()) -> None:
-    """Write the GPS, QZSS, Galileo and BeiDou records of a :class:`NavData` as RINEX 3.04
-    navigation.
+    """Write the GPS, QZSS, Galileo, BeiDou and GLONASS records of a :class:`NavData` as RINEX
+    3.04 navigation.
 
     Raises
     ------
@@ -167,9 +167,9 @@ def write_nav(nav: NavData, path: StrPath, *, comments: Iterable[str] = ()) -> N
         When ``nav`` holds records of another system (this writer knows the LNAV layout
         only).
     """
-    other = [s for s in nav.tables if s not in "GJEC"]
+    other = [s for s in nav.tables if s not in "GJECR"]
     if other:
-        raise ValueError(f"nav: write_nav writes Kepler records (G, J, E, C) only, not {other}")
+        raise ValueError(f"nav: write_nav writes G, J, E, C and R records only, not {other}")
     lines = [
         _label(f"{3.04:9.2f}{'':11}{'N: GNSS NAV DATA':<20}{'M: Mixed':<20}",
                "RINEX VERSION / TYPE"),
@@ -190,15 +190,22 @@ def write_nav(nav: NavData, path: StrPath, *, comments: Iterable[str] = ()) -> N
         lines.append(_label(f"{nav.leap_seconds:6d}", "LEAP SECONDS"))
     lines.append(_label("", "END OF HEADER"))
     records = []
-    for s in ("G", "J", "E", "C"):
+    for s in ("G", "J", "E", "C", "R"):
         table = nav.tables.get(s)
         if table is None:
             continue
+        # BeiDou records are dated in BDT, GLONASS ones in UTC (RINEX 3.04 tables A14, A10)
+        dated = table["toc_gps_s"] + BDT_MINUS_GPST_S if s == "C" else table["toc_gps_s"]
+        if s == "R":
+            dated = gps_to_utc(table["toc_gps_s"])
+        fields = _FIELDS[s][:15] if s == "R" else _FIELDS[s]  # RINEX 3.04: 4 GLONASS lines
         for r in range(len(table["sat"])):
             toc = float(table["toc_gps_s"][r])
-            # BeiDou records are dated in BDT (RINEX 3.04 table A14)
-            y, mo, d, hh, mi, ss = _calendar(toc + (BDT_MINUS_GPST_S if s == "C" else 0.0))
-            values = [np.nan if f is None else float(table[f][r]) for f in _FIELDS[s]]
+            y, mo, d, hh, mi, ss = _calendar(float(dated[r]))
+            values = [
+                np.nan if f is None else float(table[f][r]) / (1e3 if f in _KM else 1.0)
+                for f in fields
+            ]
             head = f"{table['sat'][r]} {y:4d} {mo:02d} {d:02d} {hh:02d} {mi:02d} {int(ss):02d}"
             text = [head + "".join(_d19(v) for v in values[:3])]
             body = values[3:]
