@@ -11,7 +11,7 @@ Usage::
 
     PYTHONPATH=src python benchmarks/bench_convert.py [--log FILE.ubx ...] [--repeat 7]
 
-Default log: the bundled test cut ``tests/data/ubx/gnss_imu_walk_cut.ubx``; give the whole
+Default log: the bundled cut ``src/navtrack/data/gnss_imu_walk_cut.ubx``; give the whole
 ``data/walk_0827/gnss_1730.ubx`` of rtklibexplorer/GNSS_IMU (2 minutes at 4 Hz) for a longer one.
 """
 
@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-DEFAULT_LOG = REPO / "tests" / "data" / "ubx" / "gnss_imu_walk_cut.ubx"
+DEFAULT_LOG = REPO / "src" / "navtrack" / "data" / "gnss_imu_walk_cut.ubx"
 
 
 def _run(cmd: list[str], env: dict[str, str]) -> tuple[float, float]:
