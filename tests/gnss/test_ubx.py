@@ -437,3 +437,15 @@ def test_glonass_strings_as_convbin(tmp_path: Path) -> None:
             np.testing.assert_allclose(ours[name], theirs[name], rtol=1e-11, err_msg=name)
             np.testing.assert_allclose(back[name], ours[name], rtol=1e-11, err_msg=name)
     assert log.undecoded == {"R: non-immediate string (almanac, time)": 3}
+
+
+def test_convert_refuses_what_is_not_a_ubx_log(tmp_path: Path) -> None:
+    from navtrack.cli import CommandLineExit, main
+
+    rinex = DATA / "pyubx2_rxmrawx_convbin.obs"
+    with pytest.raises(CommandLineExit, match="is not a u-blox UBX log"):
+        main(["convert", str(rinex), "--out", str(tmp_path / "x.obs")])
+    with pytest.raises(CommandLineExit, match=r"give LOG --out FILE\.obs, or --example"):
+        main(["convert", str(RAWX_1HZ)])
+    with pytest.raises(CommandLineExit, match="does not exist"):
+        main(["convert", str(RAWX_1HZ), "--out", str(tmp_path / "no" / "x.obs")])
