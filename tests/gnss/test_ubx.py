@@ -449,3 +449,21 @@ def test_convert_refuses_what_is_not_a_ubx_log(tmp_path: Path) -> None:
         main(["convert", str(RAWX_1HZ)])
     with pytest.raises(CommandLineExit, match="does not exist"):
         main(["convert", str(RAWX_1HZ), "--out", str(tmp_path / "no" / "x.obs")])
+
+
+def test_rawx_without_gps_time_counted_not_tagged(tmp_path: Path) -> None:
+    """A receiver at start-up writes RXM-RAWX with week 0: the epoch cannot be dated, so it is
+    counted in ``undated_epochs`` and left out (here the first of the 14, week set to 0 and
+    the checksum recomputed with pyubx2)."""
+    from pyubx2 import calc_checksum
+
+    data = bytearray(RAWX_1HZ.read_bytes())
+    assert data[2:4] == b"\x02\x15"
+    length = int.from_bytes(data[4:6], "little")
+    data[6 + 8 : 6 + 10] = b"\x00\x00"  # week (U2 at payload offset 8)
+    data[6 + length : 8 + length] = calc_checksum(bytes(data[2 : 6 + length]))
+    path = tmp_path / "start.ubx"
+    path.write_bytes(bytes(data))
+    log = read_ubx(path)
+    assert log.undated_epochs == 1
+    np.testing.assert_array_equal(log.obs.t_gps_s, read_ubx(RAWX_1HZ).obs.t_gps_s[1:])

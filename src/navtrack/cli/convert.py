@@ -104,6 +104,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"not decoded    {n} RXM-SFRBX: {why}")
     for sig, n in sorted(log.unknown_signals.items()):
         print(f"not converted  {n} measurements of gnssId/sigId {sig} (no RINEX code)")
+    if log.undated_epochs:
+        print(f"not converted  {log.undated_epochs} RXM-RAWX epochs before GPS time was known")
     if log.skipped:
         print(
             f"skipped        {len(log.skipped)} damaged messages (first: {log.skipped[0].reason})"

@@ -154,6 +154,9 @@ class UbxLog:
     unknown_signals : mapping of str to int
         RAWX measurements whose (gnssId, sigId) has no RINEX code in :data:`SIGNALS`, or
         whose satellite is not identified (GLONASS slot 255), by ``"gnssId/sigId"``.
+    undated_epochs : int
+        RXM-RAWX messages with week 0 (a receiver that does not know GPS time yet, at
+        start-up): no epoch can be tagged, so they are not in ``obs``.
     """
 
     obs: Observations
@@ -162,6 +165,7 @@ class UbxLog:
     undecoded: Mapping[str, int]
     skipped: tuple[SkippedLine, ...] = ()
     unknown_signals: Mapping[str, int] = field(default_factory=dict)
+    undated_epochs: int = 0
 
     def __post_init__(self) -> None:
         for name in ("messages", "undecoded", "unknown_signals"):
@@ -214,6 +218,7 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
     # (RAWX epochs before it, gnssId, svId, sigId, freqId, words, message number)
     subframes: list[tuple[int, int, int, int, int, np.ndarray, int]] = []
     leap: int | None = None
+    undated = 0
     offset = 0
     with open(path, "rb") as stream:
         reader = UBXReader(stream, protfilter=UBX_PROTOCOL, parsing=False, quitonerror=0)
@@ -243,8 +248,9 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
                 if len(payload) != 16 + 32 * n:
                     bad(f"RXM-RAWX of {len(payload)} bytes for {n} measurements")
                     continue
-                if int(head["week"]) == 0:
-                    continue  # no GPS time yet (receiver start-up): no epoch to tag
+                if int(head["week"]) == 0:  # no GPS time yet (receiver start-up)
+                    undated += 1
+                    continue
                 meas = np.frombuffer(payload, _RAWX_MEAS, count=n, offset=16)
                 t = int(head["week"]) * SECONDS_PER_WEEK + float(head["rcvTow"])
                 epochs.append((t, int(head["recStat"]), meas))
@@ -276,6 +282,7 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
         undecoded=undecoded,
         skipped=tuple(skipped),
         unknown_signals=unknown,
+        undated_epochs=undated,
     )
 
 
