@@ -865,7 +865,11 @@ def _galileo_page(
     v = 0
     for w in words[:8]:
         v = (v << 32) | int(w)
-    bit = lambda start, n: (v >> (256 - start - n)) & ((1 << n) - 1)  # noqa: E731
+
+    def bit(start: int, n: int) -> int:
+        """``n`` bits from bit ``start`` of the 256-bit page pair."""
+        return (v >> (256 - start - n)) & ((1 << n) - 1)
+
     if bit(0, 1) != 0 or bit(128, 1) != 1:
         return "I/NAV page pair out of order"
     if bit(1, 1) or bit(129, 1):
