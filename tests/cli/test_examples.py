@@ -12,6 +12,7 @@ from navtrack.cli import main
 EXAMPLES = [
     (["pos", "--example", "--no-progress"], r"ok +\d+"),
     (["rinex", "info", "--example"], r"n_epochs +\d+"),
+    (["convert", "--example"], r"60 epochs, 28 satellites"),
     (["agps", "--example"], r"status      ok"),
     (["rtk", "--example", "--no-progress"], r"  fix +120"),
     (["ppp", "--example"], r"formal sd      E/N/U"),

@@ -447,15 +447,6 @@ def test_observation_file_rejected() -> None:
         read_nav(sample_path("07590920.05o"))
 
 
-def test_rinex4_rejected(tmp_path: Path) -> None:
-    path = tmp_path / "v4.rnx"
-    path.write_text(f"{'     4.00           N: GNSS NAV DATA    M':<60}RINEX VERSION / TYPE\n")
-    with pytest.raises(
-        FileFormatError, match=r"line 1: RINEX 4\.0 navigation files are not supported"
-    ):
-        read_nav(path)
-
-
 def test_cli_rinex_info_on_nav(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     import json
 

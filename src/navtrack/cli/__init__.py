@@ -43,6 +43,7 @@ from navtrack import __version__
 COMMANDS = {
     "pos": "navtrack.cli.pos",
     "rinex": "navtrack.cli.rinex",
+    "convert": "navtrack.cli.convert",
     "track": "navtrack.cli.track",
     "smooth": "navtrack.cli.smooth",
     "reproduce": "navtrack.cli.reproduce",

@@ -54,8 +54,18 @@ def register(subparsers: Any) -> None:
         "first record (often F/NAV, BGD 0), which moves multi-GNSS positions by ~0.5 m "
         "(--rtklib-compatible reproduces it; docs/rtklib-users.md).",
     )
-    p.add_argument("obs", nargs="?", type=Path, help="RINEX observation file or GnssLogger log")
-    p.add_argument("nav", nargs="*", type=Path, help="RINEX navigation file(s)")
+    p.add_argument(
+        "obs",
+        nargs="?",
+        type=Path,
+        help="RINEX observation file, u-blox UBX log or GnssLogger log",
+    )
+    p.add_argument(
+        "nav",
+        nargs="*",
+        type=Path,
+        help="RINEX navigation file(s) (optional for a UBX log holding ephemerides)",
+    )
     p.add_argument("--sp3", type=Path, help="precise orbits/clocks (SP3) instead of broadcast")
     p.add_argument(
         "--systems", help=f"systems to use, e.g. GEJ (default {DEFAULT_SYSTEMS}: all present)"
@@ -256,18 +266,22 @@ def _read_inputs(
 ) -> tuple[Observations, list[NavData], Sp3 | None]:
     """The observations (of the configured systems' pseudorange codes only), navigation data
     (of those systems only) and precise orbits."""
+    from navtrack.gnss.rinex.nav import read_nav
+
+    navs = [read_nav(p, systems=config.systems) for p in args.nav]
     if args.android:
         from navtrack.gnss.android import read_gnsslogger
 
         obs = read_gnsslogger(args.obs)
     else:
-        from navtrack.gnss.rinex.obs import read_obs
+        from navtrack.cli.inputs import read_observations
         from navtrack.gnss.spp import observation_codes
 
-        obs = read_obs(args.obs, systems=config.systems, codes=observation_codes(config))
-    from navtrack.gnss.rinex.nav import read_nav
-
-    navs = [read_nav(p, systems=config.systems) for p in args.nav]
+        obs, log_nav = read_observations(
+            args.obs, systems=config.systems, codes=observation_codes(config)
+        )
+        if log_nav is not None:
+            navs.insert(0, log_nav)
     sp3 = None
     if args.sp3 is not None:
         from navtrack.gnss.sp3 import read_sp3
@@ -336,7 +350,10 @@ def run_pos(args: argparse.Namespace) -> int:
     for p in [*args.nav, *([args.sp3] if args.sp3 else [])]:
         if not p.is_file():
             raise SystemExit(f"navtrack pos: file {str(p)!r} not found")
-    if not args.nav and args.sp3 is None:
+    from navtrack.cli.inputs import is_raw_log
+
+    raw_log = is_raw_log(args.obs)
+    if not args.nav and args.sp3 is None and not raw_log:
         raise SystemExit(
             "navtrack pos: no navigation file given: positions need broadcast ephemerides "
             "(RINEX NAV) or precise orbits (--sp3)"
@@ -345,7 +362,7 @@ def run_pos(args: argparse.Namespace) -> int:
     config = _config(args)
     from navtrack.cli.network import network_jobs, run_network
 
-    jobs = None if args.android else network_jobs(args)
+    jobs = None if args.android or raw_log else network_jobs(args)
     if jobs is not None:
         if window is not None:
             raise SystemExit("navtrack pos: --ts/--te/--ti are for one station")
@@ -373,9 +390,9 @@ def run_pos(args: argparse.Namespace) -> int:
     if sp3 is None and not any(nav.tables for nav in navs):
         for why in _input_warnings(args, config, obs, navs):
             print(f"warning        {why}")
+        names = ", ".join(map(str, args.nav or [args.obs]))
         print(
-            f"navtrack pos: {', '.join(map(str, args.nav))}: no ephemerides of the systems "
-            f"{config.systems}",
+            f"navtrack pos: {names}: no ephemerides of the systems {config.systems}",
             file=sys.stderr,
         )
         return 1
@@ -396,10 +413,8 @@ def run_pos(args: argparse.Namespace) -> int:
     used_systems = "".join(s for s in "GRECJI" if s in used_sats)
 
     print(f"observations   {args.obs}")
-    print(
-        f"navigation     {', '.join(str(p) for p in args.nav) or '-'}"
-        + (f"  sp3 {args.sp3}" if args.sp3 else "")
-    )
+    nav_names = ", ".join(str(p) for p in args.nav) or ("from the log" if raw_log else "-")
+    print(f"navigation     {nav_names}" + (f"  sp3 {args.sp3}" if args.sp3 else ""))
     print(
         f"systems        {used_systems or '-'}  (clocks: {', '.join(result.clock_groups)}; "
         f"weighting {config.weighting}, elevation mask {config.elmask_deg:g} deg)"

@@ -36,9 +36,18 @@ def register(subparsers: Any) -> None:
         description="Double-differenced code and carrier phase, Kalman filter (kinematic) or "
         "least squares (static), integer ambiguities by LAMBDA with the ratio test.",
     )
-    p.add_argument("rover", type=Path, nargs="?", help="rover RINEX observation file")
-    p.add_argument("base", type=Path, nargs="?", help="base RINEX observation file")
-    p.add_argument("nav", nargs="*", type=Path, help="RINEX navigation file(s)")
+    p.add_argument(
+        "rover", type=Path, nargs="?", help="rover RINEX observation file or u-blox UBX log"
+    )
+    p.add_argument(
+        "base", type=Path, nargs="?", help="base RINEX observation file or u-blox UBX log"
+    )
+    p.add_argument(
+        "nav",
+        nargs="*",
+        type=Path,
+        help="RINEX navigation file(s) (optional when a UBX log holds ephemerides)",
+    )
     p.add_argument(
         "--example",
         action="store_true",
@@ -165,7 +174,6 @@ def run_rtk(args: argparse.Namespace) -> int:
     from navtrack.gnss.ambiguity import AmbiguityConfig
     from navtrack.gnss.relative import STATUS_NAMES, RtkConfig, solution_frame, solve_relative
     from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.rinex.obs import read_obs
 
     if args.example:
         if args.rover is not None:
@@ -179,8 +187,12 @@ def run_rtk(args: argparse.Namespace) -> int:
             args.base_pos = list(REFERENCE_XYZ_M[RTK_EXAMPLE[1]])
         if args.ref is None and args.ref_llh is None and args.ref_pos is None:
             args.ref = list(REFERENCE_XYZ_M[RTK_EXAMPLE[0]])
-    if args.rover is None or args.base is None or not args.nav:
+    if args.rover is None or args.base is None:
         raise SystemExit("navtrack rtk: give ROVER BASE NAV..., or --example")
+    from navtrack.cli.inputs import is_raw_log, read_observations
+
+    if not args.nav and not (is_raw_log(args.rover) or is_raw_log(args.base)):
+        raise SystemExit("navtrack rtk: give ROVER BASE NAV... (NAV optional for UBX logs)")
     for path in [args.rover, args.base, *args.nav, *([args.sp3] if args.sp3 else [])]:
         if not path.is_file():
             raise SystemExit(f"navtrack rtk: file {str(path)!r} not found")
@@ -201,8 +213,8 @@ def run_rtk(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise SystemExit(f"navtrack rtk: {exc}") from None
     base_xyz, base_src = _base_position(args)
-    rover = read_obs(args.rover)
-    base = read_obs(args.base)
+    rover, rover_nav = read_observations(args.rover)
+    base, base_nav = read_observations(args.base)
     if base_src == "header":
         if base.header.approx_xyz_m is None:
             raise SystemExit(
@@ -210,7 +222,10 @@ def run_rtk(args: argparse.Namespace) -> int:
             )
         base_xyz = np.asarray(base.header.approx_xyz_m, dtype=float)
         base_src = f"header APPROX POSITION of {args.base} (give --base-pos for a surveyed one)"
-    navs = [read_nav(p) for p in args.nav]
+    navs = [n for n in (rover_nav, base_nav) if n is not None]
+    navs += [read_nav(p) for p in args.nav]
+    if not any(n.tables for n in navs):
+        raise SystemExit("navtrack rtk: no ephemerides: give a RINEX navigation file")
     sp3 = None
     if args.sp3 is not None:
         from navtrack.gnss.sp3 import read_sp3
@@ -290,7 +305,7 @@ def _print_summary(
     x, y, z = (float(v) for v in base_xyz)
     print(f"base position  {x:.4f} {y:.4f} {z:.4f}  ({base_src})")
     print(
-        f"navigation     {', '.join(str(p) for p in args.nav)}"
+        f"navigation     {', '.join(str(p) for p in args.nav) or 'from the UBX log(s)'}"
         + (f"  sp3 {args.sp3}" if args.sp3 else "")
     )
     systems = "".join(dict.fromkeys(s[0] for s in result.sats))
@@ -355,7 +370,6 @@ def run_ppp(args: argparse.Namespace) -> int:
 
     from navtrack.gnss.ppp import PppConfig, convergence, solution_frame, solve_ppp
     from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.rinex.obs import read_obs
     from navtrack.gnss.sp3 import read_sp3
 
     if args.clk is not None:
@@ -388,8 +402,10 @@ def run_ppp(args: argparse.Namespace) -> int:
         config = PppConfig(systems=args.systems.upper(), elmask_deg=args.elmask)
     except ValueError as exc:
         raise SystemExit(f"navtrack ppp: {exc}") from None
-    obs = read_obs(args.obs)
-    navs = [read_nav(p) for p in args.nav]
+    from navtrack.cli.inputs import read_observations
+
+    obs, log_nav = read_observations(args.obs)
+    navs = [read_nav(p) for p in args.nav] + ([log_nav] if log_nav is not None else [])
     sp3 = read_sp3(args.sp3)
     for why in sp3.warnings:
         print(f"warning        {args.sp3}: {why}", file=sys.stderr)

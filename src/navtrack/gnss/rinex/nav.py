@@ -1,4 +1,4 @@
-"""RINEX 2.x/3.x navigation (broadcast ephemeris) reader.
+"""RINEX 2.x/3.x/4.x navigation (broadcast ephemeris) reader.
 
 :func:`read_nav` turns a RINEX navigation file into a :class:`NavData`: header ionosphere
 parameters, time-system corrections and leap seconds, and one :class:`pandas.DataFrame` of
@@ -200,6 +200,10 @@ class NavData:
         ``svh``, ``ura_m``, ``iodn``.
     skipped : tuple of SkippedLine
         Records skipped in lenient reading (first line of each and why); empty otherwise.
+    records_not_read : mapping of str to int
+        RINEX 4: records of the types not read, counted by record and message type
+        (``"EPH CNAV"``, ``"EPH CNV2"``, ``"STO CNVX"``, ``"EOP CNVX"``, ``"ION CNVX"``, ...);
+        empty for RINEX 2/3.
 
     References
     ----------
@@ -216,12 +220,14 @@ class NavData:
     tables: Mapping[str, Mapping[str, np.ndarray]]
     skipped: tuple[SkippedLine, ...] = ()
     comments: tuple[str, ...] = field(default=())
+    records_not_read: Mapping[str, int] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for arr in self.iono.values():
             arr.flags.writeable = False
         object.__setattr__(self, "iono", MappingProxyType(dict(self.iono)))
         object.__setattr__(self, "time_corrections", MappingProxyType(dict(self.time_corrections)))
+        object.__setattr__(self, "records_not_read", MappingProxyType(dict(self.records_not_read)))
         frozen = {}
         for letter, columns in self.tables.items():
             for arr in columns.values():
@@ -263,11 +269,18 @@ class NavData:
             "leap_seconds": self.leap_seconds,
             "toc_span_gps": span,
             "skipped_records": len(self.skipped),
+            "records_not_read": dict(self.records_not_read),
         }
 
 
 def read_nav(path: StrPath, *, systems: str | None = None, lenient: bool = False) -> NavData:
-    """Read a RINEX 2.x/3.x navigation file.
+    """Read a RINEX 2.x/3.x/4.x navigation file.
+
+    RINEX 4 files are read through their record headers (``> EPH G01 LNAV``): the ephemeris
+    messages with a RINEX 3 layout (GPS/QZSS/NavIC LNAV, Galileo I/NAV and F/NAV, BeiDou D1/D2,
+    GLONASS FDMA, SBAS) become the same tables as a RINEX 3 file's; the broadcast Klobuchar
+    and NeQuick parameters of ``> ION`` records fill :attr:`NavData.iono`; every other record
+    (CNAV, CNV1-3, STO, EOP, other ION) is counted in :attr:`NavData.records_not_read`.
 
     Parameters
     ----------
@@ -297,11 +310,13 @@ def read_nav(path: StrPath, *, systems: str | None = None, lenient: bool = False
     kind = sniff(path, data)
     if kind.format != "rinex" or kind.file_type not in "NGHE" or not kind.file_type.strip():
         raise FileFormatError(path, 1, f"not a RINEX navigation file (type {kind.file_type!r})")
-    if kind.version >= 4:
-        raise FileFormatError(path, 1, f"RINEX {kind.version} navigation files are not supported")
     text = data.decode("ascii", "replace")
     lines = text.splitlines()
     header = _parse_header(path, lines)
+    not_read: dict[str, int] = {}
+    origin: list[int] | None = None  # RINEX 4: the file line of each kept line
+    if kind.version >= 4:
+        lines, origin, not_read = _rinex4_records(path, lines, header)
     v2 = kind.version < 3
     if v2:
         system = _RINEX2_SYSTEM[kind.file_type]
@@ -318,9 +333,19 @@ def read_nav(path: StrPath, *, systems: str | None = None, lenient: bool = False
         if not lenient:
             raise FileFormatError(path, len(lines), reason)
         lines.pop()
-    groups, skipped = _parse_records(path, lines, header.end, v2, system, lenient, systems)
+    try:
+        groups, skipped = _parse_records(path, lines, header.end, v2, system, lenient, systems)
+    except FileFormatError as exc:
+        if origin is None or exc.line is None:
+            raise
+        raise FileFormatError(path, origin[exc.line - 1] + 1, exc.message) from None
     if cut:
         skipped.append(SkippedLine(len(lines) + 1, reason))
+    if origin is not None:
+        at = origin
+        for g, _ in groups.values():
+            g.lines = [at[k - 1] + 1 for k in g.lines]
+        skipped = [SkippedLine(at[sk.line - 1] + 1, sk.reason) for sk in skipped]
     tables = _tables(groups)
     return NavData(
         path=fspath(path),
@@ -333,7 +358,60 @@ def read_nav(path: StrPath, *, systems: str | None = None, lenient: bool = False
         tables=tables,
         skipped=tuple(skipped),
         comments=tuple(header.comments),
+        records_not_read=not_read,
     )
+
+
+# RINEX 4 ephemeris messages read (the RINEX 3 record layouts: LNAV of GPS, QZSS and NavIC,
+# Galileo I/NAV and F/NAV, BeiDou D1/D2, GLONASS FDMA, SBAS); CNAV, CNV1-3 and the STO and
+# EOP records are counted in NavData.records_not_read.
+_V4_EPHEMERIS = frozenset({"LNAV", "INAV", "FNAV", "D1", "D2", "FDMA", "SBAS"})
+# RINEX 4 ionosphere records read into NavData.iono (RINEX 4.00 table A32/A33): key per system
+# letter and message, and how many values they hold.
+_V4_IONO = {
+    ("G", "LNAV"): (("GPSA", "GPSB"), 8),
+    ("J", "LNAV"): (("QZSA", "QZSB"), 8),
+    ("C", "D1D2"): (("BDSA", "BDSB"), 8),
+    ("E", "IFNV"): (("GAL",), 3),
+}
+
+
+def _rinex4_records(
+    path: StrPath, lines: list[str], header: _Header
+) -> tuple[list[str], list[int], dict[str, int]]:
+    """The RINEX 3-layout lines of a RINEX 4 file's ephemeris records (``> EPH`` record
+    headers removed), the file line of each kept line, and the records not read by type.
+    ``> ION`` records of the broadcast Klobuchar and NeQuick parameters go into
+    ``header.iono`` (the first of each, as RINEX 3's header holds one)."""
+    kept = lines[: header.end]
+    origin = list(range(header.end))
+    not_read: dict[str, int] = {}
+    i, n = header.end, len(lines)
+    while i < n:
+        line = lines[i]
+        if not line.startswith(">"):  # outside a record: left for the record parser to judge
+            kept.append(line)
+            origin.append(i)
+            i += 1
+            continue
+        words = line[1:].split()
+        kind = " ".join(words[:1] + words[2:3]) if len(words) >= 3 else line[1:].strip()
+        j = i + 1
+        while j < n and not lines[j].startswith(">"):
+            j += 1
+        if len(words) >= 3 and words[0] == "EPH" and words[2] in _V4_EPHEMERIS:
+            kept.extend(lines[i + 1 : j])
+            origin.extend(range(i + 1, j))
+        elif len(words) >= 3 and words[0] == "ION" and (words[1][:1], words[2]) in _V4_IONO:
+            keys, count = _V4_IONO[(words[1][:1], words[2])]
+            text = " ".join([lines[i + 1][23:], *lines[i + 2 : j]]) if j > i + 1 else ""
+            vals = _tokens(path, i + 2, text, count, f"ION {words[1]} {words[2]}")
+            for k, key in enumerate(keys):
+                header.iono.setdefault(key, np.array(vals[4 * k : 4 * k + 4]))
+        else:
+            not_read[kind] = not_read.get(kind, 0) + 1
+        i = j
+    return kept, origin, not_read
 
 
 @dataclass(slots=True)
