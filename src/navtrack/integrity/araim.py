@@ -26,9 +26,9 @@ Per epoch, on the satellites the integrity support message covers (:mod:`.ism`):
    42-43).
 5. **EMT**: the largest vertical threshold of the modes with prior ``>= p_emt``; the vertical
    accuracy ``sigma_acc``.
-6. **Exclusion**: where a test fails, the modes are tried in the order of the chi-square of
-   their subset (with ``sigma_acc``); the first whose remaining satellites pass all the tests
-   of their own fault modes is excluded, and the protection levels are those of the remaining
+6. **Exclusion**: where a test fails, the modes are tried from the fewest satellites up, each
+   size in the order of the normalised chi-square of the subset (with ``sigma_acc``); the first
+   whose remaining satellites pass all the tests of their own fault modes is excluded, and the protection levels are those of the remaining
    satellites (post-exclusion PL).
 
 The position reported is the fault-free (or post-exclusion) solution of step 2, one
@@ -168,26 +168,29 @@ def fault_modes(const_of_sat: IntArray, ism: Ism, systems: str) -> FaultModes:
             else:
                 removed[i] |= const_of_sat == e - n
         p_fault[i], multiplier[i] = pt, m
-    # fault consolidation: satellite modes inside a constellation mode merge into it
+    # a constellation mode covers the constellation's fault whatever else fails: its prior is
+    # the marginal ``p_const`` (ADD v4.2); fault consolidation merges satellite modes inside
+    # it while their sum stays below ``fc p_const``
     keep = np.ones(len(p_fault), dtype=bool)
-    if ism.fc > 0.0:
-        for c in range(len(cons)):
-            in_c = const_of_sat == c
-            const_mode = [
-                i for i, (ev, *_) in enumerate(modes, start=1) if ev == (n + c,)
-            ]
-            if not const_mode:
-                continue
-            ic = const_mode[0]
-            inside = np.flatnonzero(
-                keep & removed.any(axis=1) & ~(removed & ~in_c).any(axis=1)
-                & (np.arange(len(p_fault)) != ic)
-            )
-            inside = inside[np.argsort(p_fault[inside], kind="stable")]
-            merged = np.cumsum(p_fault[inside]) <= ism.fc * cons[c].p_const * mult[n + c]
-            absorb = inside[merged]
-            p_fault[ic] += p_fault[absorb].sum()
-            keep[absorb] = False
+    for c in range(len(cons)):
+        in_c = const_of_sat == c
+        const_mode = [i for i, (ev, *_) in enumerate(modes, start=1) if ev == (n + c,)]
+        if not const_mode:
+            continue
+        ic = const_mode[0]
+        inside = np.flatnonzero(
+            keep
+            & removed.any(axis=1)
+            & ~(removed & ~in_c).any(axis=1)
+            & (np.arange(len(p_fault)) != ic)
+        )
+        inside = inside[np.argsort(p_fault[inside], kind="stable")]
+        limit = ism.fc * cons[c].p_const * mult[n + c]
+        absorb = inside[np.cumsum(p_fault[inside]) <= limit] if ism.fc > 0.0 else inside[:0]
+        new = cons[c].p_const * mult[n + c] + p_fault[absorb].sum()
+        p_unmon -= new - p_fault[ic] - p_fault[absorb].sum()
+        p_fault[ic] = new
+        keep[absorb] = False
     p_fault[0] = 0.0
     return FaultModes(
         removed=removed[keep],
@@ -227,13 +230,14 @@ def protection_level(
     phmi = np.asarray(phmi, dtype=float)
     good = phmi > 0.0
     ph = np.where(good, phmi, 1.0)[:, None]
-    k_low = _qinv(np.minimum(1.0, ph / p_fault))
+    k_low = np.maximum(_qinv(np.minimum(1.0, ph / p_fault)), -40.0)
     k_high = np.maximum(0.0, _qinv(ph / (p_fault.size * p_fault)))
     lo = np.max(bias + k_low * sigma, axis=1)
     hi = np.max(bias + k_high * sigma, axis=1)
 
     def risk(pl: FloatArray) -> FloatArray:
-        q = ndtr((bias - pl[:, None]) / sigma)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            q = np.nan_to_num(ndtr((bias - pl[:, None]) / sigma), nan=0.0)
         return np.where(q > 0.5, 1.0, q)
 
     for _ in range(200):
@@ -470,7 +474,7 @@ def araim(
         Of the same epochs (:func:`.ism.error_model`).
     ism : Ism
     max_candidates : int
-        Exclusion candidates tried per failed epoch (in order of their chi-square).
+        Exclusion candidates tried per failed epoch.
 
     Returns
     -------
@@ -496,11 +500,11 @@ def araim(
     for b in range(n_b):
         cols = np.flatnonzero(used[b])
         g = estimate.design[b][cols]
-        g_enu = np.concatenate([g[:, :3] @ rot[b].T, g[:, 3:]], axis=1)
-        touched = np.abs(g_enu).sum(axis=0) > 0
-        touched[:3] = True
-        g_enu = g_enu[:, touched]
-        if cols.size < touched.sum() + 1:
+        # one receiver clock per clock group (the ADD's parametrisation): a subset without
+        # the first group keeps a solvable clock; ``clock_map`` maps back to clock + ISBs
+        clock_map, group = np.unique(g[:, 3:], axis=0, return_inverse=True)
+        g_enu = np.concatenate([g[:, :3] @ rot[b].T, np.eye(clock_map.shape[0])[group]], axis=1)
+        if cols.size < g_enu.shape[1] + 1:
             continue
         v = np.nan_to_num(estimate.residuals_m[b, cols])
         systems = "".join(dict.fromkeys(letters[cols]))
@@ -515,7 +519,11 @@ def araim(
         final, gone = ep, np.zeros(cols.size, dtype=bool)
         if not ep.ok:
             out["detected"][b] = True
-            order = np.argsort(np.where(np.arange(ep.chi2.size) == 0, np.inf, ep.chi2))
+            # the smallest modes first, each size by normalised chi-square
+            size = ep.modes.removed.sum(axis=1)
+            dof = np.maximum((~ep.modes.removed).sum(axis=1) - g_enu.shape[1], 1)
+            key = np.where(size == 0, np.inf, size * 1e6 + ep.chi2 / dof)
+            order = np.argsort(key, kind="stable")
             for h in order[: min(max_candidates, ep.chi2.size - 1)]:
                 rm = ep.modes.removed[h]
                 keep = ~rm
@@ -539,9 +547,7 @@ def araim(
                     final = replace(sub, dx=dx)
                     gone = rm
                     break
-        full_dx = np.zeros(n_p)
-        full_dx[touched] = final.dx
-        full_dx[:3] = rot[b].T @ final.dx[:3]
+        full_dx = np.concatenate([rot[b].T @ final.dx[:3], np.linalg.pinv(clock_map) @ final.dx[3:]])
         out["ok"][b] = final.ok
         out["available"][b] = math.isfinite(final.vpl_m) and math.isfinite(final.hpl_m)
         out["excluded"][b, cols[gone]] = True
