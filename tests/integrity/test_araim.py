@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from tests.integrity.test_pos_raim import _faulty_sample
 
 from navtrack.errors import NavtrackError
 from navtrack.integrity.araim import araim_epoch, fault_modes, protection_level
@@ -88,7 +89,7 @@ def test_error_model_terms() -> None:
     tropo = 0.12**2 * 1.001**2 / (0.002001 + 1.0)
     air = (0.13 + 0.53 * math.exp(-9.0)) ** 2 + (0.15 + 0.43 * math.exp(-90 / 6.9)) ** 2
     assert m.var_int_m2[0, 0] == pytest.approx(0.75**2 + tropo + air * 2.588**2, rel=1e-3)
-    assert IONOFREE_NOISE_FACTOR == pytest.approx(2.59, abs=2e-3)  # ADD: 2.59
+    assert pytest.approx(2.59, abs=2e-3) == IONOFREE_NOISE_FACTOR  # ADD: 2.59
     low = error_model(ism, ("G01",), azel[:, 1:], llh, ionofree=True)
     mapping5 = 1.001 / math.sqrt(0.002001 + math.sin(math.radians(5)) ** 2)
     assert mapping5 == pytest.approx(10.2, abs=0.05)  # DO-229 A.4.2.4 mapping at 5 deg
@@ -97,24 +98,26 @@ def test_error_model_terms() -> None:
     assert low.var_int_m2[0, 0] == pytest.approx(expect5, rel=1e-9)
     single = error_model(ism, ("G01", "X01"), azel, llh, ionofree=False)
     assert single.var_int_m2[0, 0] > m.var_int_m2[0, 0] / IONOFREE_NOISE_FACTOR**2 + 4.0
-    assert not single.covered[1] and np.isinf(single.var_int_m2[0, 1])
+    assert not single.covered[1]
+    assert np.isinf(single.var_int_m2[0, 1])
 
 
 def test_ism_file_reads_and_rejects(tmp_path: Path) -> None:
     ism = read_ism(DEFAULT_ISM_PATH)
     assert ism.constellations["G"].sigma_ura_m == 0.75
     assert ism.constellations["E"].p_const == 2e-4
-    assert ism.phmi_v == 9.8e-8 and ism.n_es == 25.0
+    assert ism.phmi_v == 9.8e-8
+    assert ism.n_es == 25.0
     bad = tmp_path / "bad.toml"
     bad.write_text("phmi_v = 1e-7\n[constellation.G]\nsigma_ura_m = 0.75\nsigma_urx = 1\n")
-    with pytest.raises(NavtrackError, match=r"bad.toml: \[constellation.G\]: unknown key"):
+    with pytest.raises(NavtrackError, match=r"bad\.toml: \[constellation\.G\]: unknown key"):
         read_ism(bad)
     bad.write_text("[constellation.G]\nsigma_ura_m = -1\nsigma_ure_m = 0.5\nb_nom_m = 0\n"
                    "b_cont_m = 0\np_sat = 1e-5\np_const = 1e-8\n")  # fmt: skip
     with pytest.raises(NavtrackError, match="sigma_ura_m"):
         read_ism(bad)
     bad.write_text("phmi_v = \n")
-    with pytest.raises(NavtrackError, match="bad.toml"):
+    with pytest.raises(NavtrackError, match=r"bad\.toml"):
         read_ism(bad)
 
 
@@ -124,8 +127,6 @@ def test_araim_on_the_sample_bounds_and_excludes_an_injected_fault(tmp_path: Pat
     from navtrack.gnss.rinex.nav import read_nav
     from navtrack.gnss.spp import SppConfig, solve_spp
     from navtrack.integrity.raim import RaimConfig
-
-    from tests.integrity.test_pos_raim import _faulty_sample
 
     obs = read_obs(_faulty_sample(tmp_path))
     nav = read_nav(sample_path("SEPT078M.21P"))

@@ -28,8 +28,8 @@ Per epoch, on the satellites the integrity support message covers (:mod:`.ism`):
    accuracy ``sigma_acc``.
 6. **Exclusion**: where a test fails, the modes are tried from the fewest satellites up, each
    size in the order of the normalised chi-square of the subset (with ``sigma_acc``); the first
-   whose remaining satellites pass all the tests of their own fault modes is excluded, and the protection levels are those of the remaining
-   satellites (post-exclusion PL).
+   whose remaining satellites pass all the tests of their own fault modes is excluded, and the
+   protection levels are those of the remaining satellites (post-exclusion PL).
 
 The position reported is the fault-free (or post-exclusion) solution of step 2, one
 linearised step from the SPP estimate with the integrity weights.
@@ -409,9 +409,7 @@ def araim_epoch(
         dx=dx_modes[0],
         chi2=chi2,
         ratio=ratio,
-        modes=FaultModes(
-            removed=removed, p_fault=p_fault, multiplier=mult, p_unmonitored=p_unmon
-        ),
+        modes=FaultModes(removed=removed, p_fault=p_fault, multiplier=mult, p_unmonitored=p_unmon),
         dx_modes=dx_modes,
     )
 
@@ -536,7 +534,10 @@ def araim(
                 sub = araim_epoch(
                     g_sub[:, live],
                     v[keep],
-                    *(a[keep] for a in args),
+                    args[0][keep],
+                    args[1][keep],
+                    args[2][keep],
+                    args[3][keep],
                     np.array([sub_sys.index(s) for s in letters[cols][keep]], dtype=np.int64),
                     sub_sys,
                     ism,
@@ -547,7 +548,9 @@ def araim(
                     final = replace(sub, dx=dx)
                     gone = rm
                     break
-        full_dx = np.concatenate([rot[b].T @ final.dx[:3], np.linalg.pinv(clock_map) @ final.dx[3:]])
+        full_dx = np.concatenate(
+            [rot[b].T @ final.dx[:3], np.linalg.pinv(clock_map) @ final.dx[3:]]
+        )
         out["ok"][b] = final.ok
         out["available"][b] = math.isfinite(final.vpl_m) and math.isfinite(final.hpl_m)
         out["excluded"][b, cols[gone]] = True
@@ -565,4 +568,3 @@ def araim_model(meas: Measurements, estimate: Estimate, ism: Ism) -> ErrorModel:
 
     llh = ecef_to_geodetic(estimate.x[:, :3])
     return error_model(ism, meas.sats, estimate.azel_rad, llh[:, :2], meas.ionofree)
-

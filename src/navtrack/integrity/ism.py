@@ -308,8 +308,10 @@ def error_model(
 
     def per_sat(name: str) -> FloatArray:
         return np.array(
-            [getattr(ism.constellations[s], name) if s in ism.constellations else np.inf
-             for s in systems]
+            [
+                getattr(ism.constellations[s], name) if s in ism.constellations else np.inf
+                for s in systems
+            ]
         )
 
     el = np.clip(azel_rad[..., 1], math.radians(1.0), math.pi / 2)
@@ -323,9 +325,7 @@ def error_model(
         var_air = var_air * IONOFREE_NOISE_FACTOR**2
         var_iono = np.zeros_like(var_air)
     else:
-        var_iono = (
-            _klobuchar_sigma_m(azel_rad[..., 0], el, llh_rad[:, 0], llh_rad[:, 1]) ** 2
-        )
+        var_iono = _klobuchar_sigma_m(azel_rad[..., 0], el, llh_rad[:, 0], llh_rad[:, 1]) ** 2
     common = var_tropo + var_air + var_iono
     ura = per_sat("sigma_ura_m")
     ure = per_sat("sigma_ure_m")

@@ -205,6 +205,17 @@ class IntegrityResult:
         counts = np.bincount(self.status.astype(np.int64), minlength=len(RaimStatus))
         return {name: int(counts[i]) for i, name in enumerate(STATUS_NAMES)}
 
+    def availability(self, hal_m: float = 40.0, val_m: float = 35.0) -> dict[str, float]:
+        """Fractions of all epochs whose integrity supports an operation: ``vertical``
+        (status ``ok`` or ``excluded``, ``HPL <= hal_m`` and ``VPL <= val_m``; LPV-200 with
+        the defaults) and ``horizontal`` (``HPL <= hal_m`` only)."""
+        n = max(self.status.size, 1)
+        usable = (self.status == RaimStatus.OK) | (self.status == RaimStatus.EXCLUDED)
+        with np.errstate(invalid="ignore"):
+            h = usable & (self.hpl_m <= hal_m)
+            v = h & (self.vpl_m <= val_m)
+        return {"vertical": float(v.sum() / n), "horizontal": float(h.sum() / n)}
+
 
 def concatenate_integrity(parts: list[IntegrityResult]) -> IntegrityResult:
     """Join the integrity of consecutive epoch blocks (same satellites and method)."""
@@ -714,7 +725,7 @@ def _model_spread(
     b = np.where(used, model.b_int_m, 0.0)[idx]
     sigma = np.sqrt(np.sum(gain**2 * var, axis=-1))
     bias = np.sum(np.abs(gain) * b, axis=-1)
-    outside = (used & ~finite).any(axis=1)[(slice(None),) + (None,) * (extra + 1)]
+    outside = np.asarray((used & ~finite).any(axis=1))[(slice(None),) + (None,) * (extra + 1)]
     return np.where(outside, np.inf, sigma), np.where(outside, np.inf, bias)
 
 
@@ -804,9 +815,7 @@ def bounded_separation_levels(
         left = ((sat_axis == m[..., :1]) | (sat_axis == m[..., 1:])) & (m[..., :1] >= 0)
         keep = used[r, None, :] & ~left  # (b, H, S)
         gk = g[r, None] * keep[..., None]
-        gain = np.einsum(
-            "bij,bhjp,bhsp,bs->bhis", rot[r], sub.cov[r][..., :3, :], gk, scale[r]
-        )
+        gain = np.einsum("bij,bhjp,bhsp,bs->bhis", rot[r], sub.cov[r][..., :3, :], gk, scale[r])
         sig, b = _model_spread(gain, used[r], model_rows(model, r))
         pk = np.where(sub.valid[r][..., None], sep.threshold_m[r] + k_md * sig + b, 0.0)
         pl[r] = np.maximum(pl[r], pk.max(axis=1))
@@ -976,7 +985,12 @@ def monitor(
             sep_r = solution_separation(g[rows], y[rows], used[rows], est.enu_rotation[rows], raim)
             final_fail[rows], avail_ss[rows] = sep_r.detected, sep_r.available
             hpl[rows], vpl[rows] = bounded_separation_levels(
-                sep_r, g[rows], used[rows], scale[rows], rot[rows], model_rows(model, rows),
+                sep_r,
+                g[rows],
+                used[rows],
+                scale[rows],
+                rot[rows],
+                model_rows(model, rows),
                 raim.pmd,
             )
             stat[rows] = np.where(sep_r.available, sep_r.ratio.max(axis=1, initial=0.0), np.nan)

@@ -83,7 +83,7 @@ STATIONS: dict[str, Station] = {
     ),
 }
 
-METHODS = ("rtklib", "chi2", "loo", "fde", "ss", "fcm")
+METHODS = ("rtklib", "chi2", "loo", "fde", "ss", "fcm", "araim")
 
 
 @dataclass(frozen=True, slots=True)
