@@ -204,6 +204,25 @@ def _print_raim_summary(result: SppResult, hal_m: float = 40.0, val_m: float = 3
     )
 
 
+def _print_misleading(result: SppResult, ref: tuple[float, float, float]) -> None:
+    """Summary line: epochs whose status is ``ok`` or ``excluded`` and whose error against the
+    reference exceeds the protection level (misleading information)."""
+    import numpy as np
+
+    from navtrack.geodesy import ecef_to_enu
+    from navtrack.integrity.raim import RaimStatus
+
+    integ = result.integrity
+    assert integ is not None
+    enu = ecef_to_enu(result.pos_m, np.asarray(ref))
+    usable = (integ.status == RaimStatus.OK) | (integ.status == RaimStatus.EXCLUDED)
+    ok = usable & np.isfinite(enu[:, 0])
+    with np.errstate(invalid="ignore"):
+        mi_h = int(np.sum(ok & (np.hypot(enu[:, 0], enu[:, 1]) > integ.hpl_m)))
+        mi_v = int(np.sum(ok & (np.abs(enu[:, 2]) > integ.vpl_m)))
+    print(f"  misleading   {mi_h} / {mi_v} epochs error > HPL / VPL (ok or excluded)")
+
+
 def add_reference_options(p: argparse.ArgumentParser, *, trajectory: bool = False) -> None:
     """``--ref X Y Z`` | ``--ref-llh LAT LON H`` (one of them), read by :func:`_reference`;
     ``trajectory`` adds ``--ref-pos FILE``, an RTKLIB ``.pos`` file compared epoch by epoch."""
@@ -454,6 +473,8 @@ def run_pos(args: argparse.Namespace) -> int:
         e, n, u = (st[k].mean_m for k in ("east", "north", "up"))
         print(f"  mean ENU     {e:8.3f}  {n:8.3f}  {u:8.3f}")
     _print_raim_summary(result, args.hal, args.val)
+    if ref is not None and result.integrity is not None:
+        _print_misleading(result, ref)
     if solved == 0:
         cause = max(((v, k) for k, v in counts.items() if k != "ok"), default=(0, "?"))[1]
         hint = ""
