@@ -95,5 +95,5 @@ def test_araim_summary_availability_and_misleading_information(
     assert np.all(df["vpl_m"] < 35.0)
     bad = tmp_path / "ism.toml"
     bad.write_text("[constellation.G]\nsigma_ura_m = 0.75\n")
-    with pytest.raises(SystemExit, match="--ism: .*ism.toml"):
+    with pytest.raises(SystemExit, match=r"--ism: .*ism\.toml"):
         main(["pos", "--example", "--raim", "araim", "--ism", str(bad), "--no-progress"])

@@ -166,11 +166,6 @@ def tables_markdown(results: dict[str, Any]) -> str:
             ]
             out.append(f"| {case} | " + " | ".join(cells) + " |")
         out.append("")
-    for key, d in results.get("whole_day", {}).items():
-        lines.append(
-            f"{key:<14} MI (H/V) "
-            + " ".join(f"{m} {v['mi_h']}/{v['mi_v']}" for m, v in d.items())
-        )
     live = results.get("rtklib_live", {})
     if live and "skipped" not in live:
         out += [
@@ -247,8 +242,7 @@ def summary_lines(results: dict[str, Any]) -> list[str]:
         )
     for key, d in results.get("whole_day", {}).items():
         lines.append(
-            f"{key:<14} MI (H/V) "
-            + " ".join(f"{m} {v['mi_h']}/{v['mi_v']}" for m, v in d.items())
+            f"{key:<14} MI (H/V) " + " ".join(f"{m} {v['mi_h']}/{v['mi_v']}" for m, v in d.items())
         )
     live = results.get("rtklib_live", {})
     if live and "skipped" not in live:
