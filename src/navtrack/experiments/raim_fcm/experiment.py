@@ -60,7 +60,7 @@ def clean_protection(params: RaimFcmParams, gnss_dir: str) -> tuple[dict[str, An
     res: dict[str, Any] = {}
     art: dict[str, Any] = {}
     for name in params.stations:
-        data = station_data(gnss_dir, name)
+        data = station_data(gnss_dir, name, params.iono)
         res[name], art[name] = {}, {}
         for m in params.methods:
             final, _, integ = monitor(
