@@ -501,6 +501,7 @@ def araim(
         # one receiver clock per clock group (the ADD's parametrisation): a subset without
         # the first group keeps a solvable clock; ``clock_map`` maps back to clock + ISBs
         clock_map, group = np.unique(g[:, 3:], axis=0, return_inverse=True)
+        group = group.reshape(-1)  # NumPy 2.0.0 returned it with a trailing axis
         g_enu = np.concatenate([g[:, :3] @ rot[b].T, np.eye(clock_map.shape[0])[group]], axis=1)
         if cols.size < g_enu.shape[1] + 1:
             continue
