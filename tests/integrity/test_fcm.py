@@ -180,3 +180,32 @@ def test_batched_fcm_equals_each_problem_alone() -> None:
         np.testing.assert_allclose(batch.u[i, :, :n], one.u, atol=1e-12)
         np.testing.assert_array_equal(batch.classes[i, :n], one.classes)
         assert np.all(batch.classes[i, n:] == -1)
+
+
+@pytest.mark.parametrize(("m", "faulty"), [(1.5, [4, 7]), (2.0, [4, 7]), (2.5, [7]), (3.0, [7])])
+@pytest.mark.parametrize("stop", ["memberships", "centres"])
+def test_two_fault_success_needs_fuzziness_at_most_two(
+    m: float, faulty: list[int], stop: str
+) -> None:
+    """The paper's two-fault example: FCM names 4 and 7 for m <= 2 only; at 2.5 and 3 it names
+    only 7, as hard (single-linkage) clustering does (docs/integrity.md), whichever the
+    stopping rule."""
+    x = mahalanobis_whitening(full_design_matrix(T_PAPER, EPS_TWO).T, cov=np.eye(5))
+    res = fuzzy_cmeans(x, 3, m, stop=stop, max_iter=1000)
+    assert list(np.flatnonzero(gross_error_columns(res.classes)) + 1) == faulty
+
+
+def test_centre_stopping_rule_stops_on_the_centres() -> None:
+    """With ``stop="centres"`` the last step moved the centres by less than ``tol`` (Frobenius
+    norm), re-run one step longer to see it; the memberships rule stops elsewhere."""
+    x = full_design_matrix(T_PAPER, EPS_ONE).T
+    tol = 1e-4
+    res = fuzzy_cmeans(x, 3, 2.0, stop="centres", tol=tol)
+    before = fuzzy_cmeans(x, 3, 2.0, stop="centres", tol=0.0, max_iter=int(res.iterations) - 1)
+    assert np.linalg.norm(res.centres - before.centres) < tol
+    earlier = fuzzy_cmeans(x, 3, 2.0, stop="centres", tol=0.0, max_iter=int(res.iterations) - 2)
+    assert np.linalg.norm(before.centres - earlier.centres) >= tol
+    other = fuzzy_cmeans(x, 3, 2.0, stop="memberships", tol=tol)
+    assert other.iterations != res.iterations
+    with pytest.raises(ValueError, match="stop"):
+        fuzzy_cmeans(x, 3, 2.0, stop="labels")

@@ -73,3 +73,27 @@ def test_android_log_with_fcm(gnss_data: Path, capsys: pytest.CaptureFixture[str
     text = capsys.readouterr().out
     assert "integrity      fcm:" in text
     assert "unavailable 7" in text
+
+
+def test_araim_summary_availability_and_misleading_information(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--raim araim`` on the bundled SEPT sample (GPS + Galileo, ionosphere-free): every
+    epoch ``ok`` or ``excluded``, the LPV-200 availability line, no epoch with an error above
+    its protection level, the EMT column; a bad ISM file is a clear error."""
+    out = tmp_path / "sol.csv"
+    rc = main(["pos", "--example", "--systems", "GE", "--iono", "ionofree", "--raim", "araim",
+               "--out", str(out), "--no-progress"])  # fmt: skip
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "integrity      araim: ok " in text
+    assert "alert 0, unavailable 0" in text
+    assert "availability 100.0 % (HPL <= 40 m, VPL <= 35 m)" in text
+    assert "misleading   0 / 0 epochs" in text
+    df = read_solution(out)
+    assert np.all(df["emt_m"] > 0)
+    assert np.all(df["vpl_m"] < 35.0)
+    bad = tmp_path / "ism.toml"
+    bad.write_text("[constellation.G]\nsigma_ura_m = 0.75\n")
+    with pytest.raises(SystemExit, match=r"--ism: .*ism\.toml"):
+        main(["pos", "--example", "--raim", "araim", "--ism", str(bad), "--no-progress"])

@@ -58,3 +58,28 @@ def test_reproduce_writes_results_and_figures(tmp_path: Path, gnss_data: Path) -
     assert (tmp_path / "stanford_ARL1.png").stat().st_size > 0
     assert "Paper example" in (tmp_path / "tables.md").read_text()
     assert np.isfinite(prot["hpl_median_m"])
+
+
+def test_whole_day_protection_on_the_bundled_sample(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The whole-day step on the bundled SEPT sample standing in for a day station: a station
+    runs only when both files are among the inputs; every method gives a row per run with no
+    misleading information on this clean file."""
+    from navtrack.data import REFERENCE_XYZ_M, sample_path
+    from navtrack.experiments.raim_fcm import wholeday
+
+    obs, nav = sample_path("SEPT078M_120.21O"), sample_path("SEPT078M.21P")
+    ref = tuple(REFERENCE_XYZ_M["SEPT078M_120.21O"])
+    monkeypatch.setattr(
+        wholeday, "DAY_STATIONS", {"SEPT": wholeday.DayStation(obs.name, nav.name, "GE", ref)}
+    )
+    assert wholeday.whole_day_protection([obs], ["fde"]) == ({}, {})
+    res, art = wholeday.whole_day_protection([obs, nav], ["fde", "araim"])
+    assert set(res) == {"SEPT GE L1", "SEPT GE IF", "SEPT G L1", "SEPT G IF"}
+    for d in res.values():
+        for v in d.values():
+            assert v["epochs"] == 120
+            assert v["mi_h"] == 0
+            assert v["mi_v"] == 0
+    assert res["SEPT GE IF"]["araim"]["availability_v"] == 1.0
+    eh, hpl, ev, vpl = art["SEPT_GE_IF"]["araim"]
+    assert eh.shape == hpl.shape == ev.shape == vpl.shape == (120,)

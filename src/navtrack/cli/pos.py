@@ -142,13 +142,22 @@ def register(subparsers: Any) -> None:
     # --- integrity monitoring (navtrack.integrity.raim)
     p.add_argument(
         "--raim",
-        choices=("off", "chi2", "loo", "fde", "ss", "fcm"),
+        choices=("off", "chi2", "loo", "fde", "ss", "fcm", "araim"),
         default="off",
         help="integrity monitoring: chi-square test only, leave-one-out (RTKLIB-like), "
-        "iterative exclusion, solution separation (up to 2 faults), fuzzy c-means (default off)",
+        "iterative exclusion, solution separation (up to 2 faults), fuzzy c-means, "
+        "ARAIM multiple-hypothesis solution separation (default off)",
     )
     p.add_argument("--pfa", type=float, default=1e-3, help="false-alarm probability (1e-3)")
     p.add_argument("--pmd", type=float, default=1e-3, help="missed-detection probability (1e-3)")
+    p.add_argument(
+        "--ism",
+        metavar="FILE",
+        help="integrity support message (TOML) behind every protection level "
+        "(default: the ARAIM ADD baseline, navtrack/data/ism_add.toml)",
+    )
+    p.add_argument("--hal", type=float, default=40.0, help="horizontal alert limit, m (40)")
+    p.add_argument("--val", type=float, default=35.0, help="vertical alert limit, m (35)")
     p.set_defaults(func=run_pos)
 
 
@@ -168,17 +177,23 @@ def _raim_config(args: argparse.Namespace) -> Any:
     """The RaimConfig of ``--raim/--pfa/--pmd`` (None for ``off``)."""
     if args.raim == "off":
         return None
+    from navtrack.errors import NavtrackError
+    from navtrack.integrity.ism import read_ism
     from navtrack.integrity.raim import RaimConfig
 
     try:
-        return RaimConfig(method=args.raim, pfa=args.pfa, pmd=args.pmd)
+        ism = None if args.ism is None else read_ism(args.ism)
+    except NavtrackError as exc:
+        raise SystemExit(f"navtrack pos: --ism: {exc}") from None
+    try:
+        return RaimConfig(method=args.raim, pfa=args.pfa, pmd=args.pmd, ism=ism)
     except ValueError as exc:
         raise SystemExit(f"navtrack pos: --raim {args.raim}: {exc}") from None
 
 
-def _print_raim_summary(result: SppResult) -> None:
+def _print_raim_summary(result: SppResult, hal_m: float = 40.0, val_m: float = 35.0) -> None:
     """Integrity lines of the summary: epochs per RAIM status, exclusions per satellite,
-    median protection levels."""
+    median protection levels, availability (HPL <= HAL and VPL <= VAL; HPL <= HAL)."""
     import numpy as np
 
     integ = result.integrity
@@ -194,6 +209,30 @@ def _print_raim_summary(result: SppResult) -> None:
         )
     if np.isfinite(integ.hpl_m).any():
         print(f"  HPL/VPL      median {_median(integ.hpl_m):.2f} / {_median(integ.vpl_m):.2f} m")
+    av = integ.availability(hal_m, val_m)
+    print(
+        f"  availability {100 * av['vertical']:.1f} % (HPL <= {hal_m:g} m, VPL <= {val_m:g} m), "
+        f"horizontal {100 * av['horizontal']:.1f} % (HPL <= {hal_m:g} m)"
+    )
+
+
+def _print_misleading(result: SppResult, ref: tuple[float, float, float]) -> None:
+    """Summary line: epochs whose status is ``ok`` or ``excluded`` and whose error against the
+    reference exceeds the protection level (misleading information)."""
+    import numpy as np
+
+    from navtrack.geodesy import ecef_to_enu
+    from navtrack.integrity.raim import RaimStatus
+
+    integ = result.integrity
+    assert integ is not None
+    enu = ecef_to_enu(result.pos_m, np.asarray(ref))
+    usable = (integ.status == RaimStatus.OK) | (integ.status == RaimStatus.EXCLUDED)
+    ok = usable & np.isfinite(enu[:, 0])
+    with np.errstate(invalid="ignore"):
+        mi_h = int(np.sum(ok & (np.hypot(enu[:, 0], enu[:, 1]) > integ.hpl_m)))
+        mi_v = int(np.sum(ok & (np.abs(enu[:, 2]) > integ.vpl_m)))
+    print(f"  misleading   {mi_h} / {mi_v} epochs error > HPL / VPL (ok or excluded)")
 
 
 def add_reference_options(p: argparse.ArgumentParser, *, trajectory: bool = False) -> None:
@@ -456,7 +495,9 @@ def run_pos(args: argparse.Namespace) -> int:
             print(f"  {name:<12} {st[key].mean_m:8.3f}  {st[key].rms_m:8.3f}  {st[key].p95_m:8.3f}")
         e, n, u = (st[k].mean_m for k in ("east", "north", "up"))
         print(f"  mean ENU     {e:8.3f}  {n:8.3f}  {u:8.3f}")
-    _print_raim_summary(result)
+    _print_raim_summary(result, args.hal, args.val)
+    if ref is not None and result.integrity is not None:
+        _print_misleading(result, ref)
     if solved == 0:
         cause = max(((v, k) for k, v in counts.items() if k != "ok"), default=(0, "?"))[1]
         hint = ""

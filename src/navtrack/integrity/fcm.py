@@ -209,6 +209,7 @@ def fuzzy_cmeans(
     init_centres: IntArray | None = None,
     tol: float = 1e-6,
     max_iter: int = 100,
+    stop: str = "memberships",
 ) -> FcmResult:
     """Fuzzy c-means clustering (paper eqs. 1-9) from given initial centres, batched.
 
@@ -227,8 +228,11 @@ def fuzzy_cmeans(
         Samples the centres start at (default: :func:`fcm_initial_centres` for ``c = 3``,
         else the ``c`` samples of largest norm).
     tol : float
-        A problem stops when the Frobenius norm of its membership change is below ``tol``.
+        A problem stops when the Frobenius norm of its change is below ``tol``.
     max_iter : int
+    stop : {"memberships", "centres"}
+        What ``tol`` measures: the change of the membership matrix (Bezdek, scikit-fuzzy) or
+        of the cluster centres (the paper's rule, section 3.2).
 
     Returns
     -------
@@ -256,6 +260,8 @@ def fuzzy_cmeans(
         raise ValueError(f"c: expected an integer 2 <= c <= {n_min} (samples), got {c}")
     if not m > 1.0:
         raise ValueError(f"m: the weighting exponent must be > 1, got {m}")
+    if stop not in ("memberships", "centres"):
+        raise ValueError(f"stop: expected memberships or centres, got {stop!r}")
     if init_centres is None:
         if c == 3:
             init_centres = fcm_initial_centres(x, ok)
@@ -283,13 +289,15 @@ def fuzzy_cmeans(
         if not act.size:
             break
         prev = uf[act]
+        prev_c = cf[act]
         total = np.maximum(prev.sum(axis=-2, keepdims=True), 1e-300)
         um = (np.maximum(prev / total, _EPS) * ws[:, None, :]) ** m
         new_c = (um @ xs) / um.sum(axis=-1, keepdims=True)
         new_u = _memberships(xs, x2s, new_c, m, ws)
         cf[act], uf[act] = new_c, new_u
         iterations[act] += 1
-        done = np.sqrt(np.sum((new_u - prev) ** 2, axis=(-2, -1))) < tol
+        change = new_u - prev if stop == "memberships" else new_c - prev_c
+        done = np.sqrt(np.sum(change**2, axis=(-2, -1))) < tol
         if done.any():
             act, xs, x2s, ws = act[~done], xs[~done], x2s[~done], ws[~done]
     converged = np.ones(xf.shape[0], dtype=bool)

@@ -45,6 +45,7 @@ from navtrack.smoothing.robust import redundancy_numbers, w_test
 
 if TYPE_CHECKING:
     from navtrack.gnss.spp import Estimate, Measurements, SppConfig
+    from navtrack.integrity.ism import ErrorModel, Ism
 
 __all__ = [
     "METHODS",
@@ -68,8 +69,8 @@ __all__ = [
     "wraim_levels",
 ]
 
-RaimMethod = Literal["chi2", "loo", "fde", "ss", "fcm"]
-METHODS: tuple[str, ...] = ("chi2", "loo", "fde", "ss", "fcm")
+RaimMethod = Literal["chi2", "loo", "fde", "ss", "fcm", "araim"]
+METHODS: tuple[str, ...] = ("chi2", "loo", "fde", "ss", "fcm", "araim")
 
 
 class RaimStatus(IntEnum):
@@ -95,10 +96,11 @@ class RaimConfig:
 
     Attributes
     ----------
-    method : {"chi2", "loo", "fde", "ss", "fcm"}
+    method : {"chi2", "loo", "fde", "ss", "fcm", "araim"}
         Detection only; RTKLIB-like leave-one-out single exclusion; iterative exclusion of the
         largest normalised residual; solution separation with up to ``max_faults``
-        simultaneous faults; fuzzy c-means identification (paper 2).
+        simultaneous faults; fuzzy c-means identification (paper 2); the ARAIM MHSS user
+        algorithm (:mod:`.araim`, its own allocations from the ISM: ``pfa``/``pmd`` unused).
     pfa : float
         False-alarm probability of the detection test per epoch (default 1e-3, RTKLIB's
         chi-square significance in ``valsol``).
@@ -113,6 +115,12 @@ class RaimConfig:
         FCM weighting exponent (Bezdek's 2; the paper gives none).
     fcm_tol : float
     fcm_max_iter : int
+    fcm_stop : {"memberships", "centres"}
+        FCM stopping rule: change of the memberships (Bezdek) or of the cluster centres (the
+        paper's, section 3.2), both below ``fcm_tol``.
+    ism : Ism, optional
+        Integrity support message and error model behind every protection level
+        (:mod:`.ism`); default :func:`.ism.default_ism` (the ADD baseline).
     variance_factor : float, optional
         Scale ``s^2`` of the measurement variances of the SPP weighting (``sigma^2 s^2``);
         default: estimated from the block of epochs by :func:`variance_factor`. RTKLIB's
@@ -128,6 +136,8 @@ class RaimConfig:
     fcm_m: float = 2.0
     fcm_tol: float = 1e-6
     fcm_max_iter: int = 100
+    fcm_stop: str = "memberships"
+    ism: Ism | None = None
     variance_factor: float | None = None
 
     def __post_init__(self) -> None:
@@ -141,6 +151,8 @@ class RaimConfig:
             raise ValueError(f"max_exclusions: expected >= 1, got {self.max_exclusions}")
         if self.max_faults not in (1, 2):
             raise ValueError(f"max_faults: expected 1 or 2, got {self.max_faults}")
+        if self.fcm_stop not in ("memberships", "centres"):
+            raise ValueError(f"fcm_stop: expected memberships or centres, got {self.fcm_stop!r}")
         if not self.fcm_m > 1.0:
             raise ValueError(f"fcm_m: the weighting exponent must be > 1, got {self.fcm_m}")
         vf = self.variance_factor
@@ -168,8 +180,11 @@ class IntegrityResult:
     threshold : ndarray, shape (E,)
         Its threshold (``chi2_{1-pfa}(dof)``; ``ss``: 1).
     hpl_m, vpl_m : ndarray, shape (E,)
-        Horizontal and vertical protection levels of the final solution (m); NaN where
-        unavailable.
+        Horizontal and vertical protection levels of the final solution (m) on the error
+        model of the ISM; NaN where unavailable, ``inf`` where a used satellite is outside
+        the model (or, ``araim``, the integrity budget is exhausted).
+    emt_m : ndarray, shape (E,)
+        ``araim``: effective monitor threshold (m); NaN for the other methods.
     """
 
     method: str
@@ -180,6 +195,7 @@ class IntegrityResult:
     threshold: FloatArray
     hpl_m: FloatArray
     vpl_m: FloatArray
+    emt_m: FloatArray
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -188,6 +204,17 @@ class IntegrityResult:
         """Epochs per status name (zeros included)."""
         counts = np.bincount(self.status.astype(np.int64), minlength=len(RaimStatus))
         return {name: int(counts[i]) for i, name in enumerate(STATUS_NAMES)}
+
+    def availability(self, hal_m: float = 40.0, val_m: float = 35.0) -> dict[str, float]:
+        """Fractions of all epochs whose integrity supports an operation: ``vertical``
+        (status ``ok`` or ``excluded``, ``HPL <= hal_m`` and ``VPL <= val_m``; LPV-200 with
+        the defaults) and ``horizontal`` (``HPL <= hal_m`` only)."""
+        n = max(self.status.size, 1)
+        usable = (self.status == RaimStatus.OK) | (self.status == RaimStatus.EXCLUDED)
+        with np.errstate(invalid="ignore"):
+            h = usable & (self.hpl_m <= hal_m)
+            v = h & (self.vpl_m <= val_m)
+        return {"vertical": float(v.sum() / n), "horizontal": float(h.sum() / n)}
 
 
 def concatenate_integrity(parts: list[IntegrityResult]) -> IntegrityResult:
@@ -513,6 +540,8 @@ class Separation:
     subsets : Subsets
     ratio : ndarray, shape (B, H)
         Largest ``|dx_q| / T_kq`` over east, north, up (> 1: the hypothesis' test fails).
+    threshold_m : ndarray, shape (B, H, 3)
+        ``T_kq`` (east, north, up; m).
     detected : ndarray of bool, shape (B,)
     hpl_m, vpl_m : ndarray, shape (B,)
         ``max(K_ff sigma_0, max_k T_k + K_md sigma_k)`` per axis; horizontal as the root sum
@@ -523,6 +552,7 @@ class Separation:
 
     subsets: Subsets
     ratio: FloatArray
+    threshold_m: FloatArray
     detected: BoolArray
     hpl_m: FloatArray
     vpl_m: FloatArray
@@ -602,6 +632,7 @@ def solution_separation(
     return Separation(
         subsets=sub,
         ratio=ratio,
+        threshold_m=thr,
         detected=available & np.any(ratio > 1.0, axis=1),
         hpl_m=np.where(available, np.hypot(pl[:, 0], pl[:, 1]), np.nan),
         vpl_m=np.where(available, pl[:, 2], np.nan),
@@ -654,11 +685,155 @@ def fcm_exclusion(g: FloatArray, y: FloatArray, used: BoolArray, config: RaimCon
         x[i, : f.shape[0], : f.shape[1]] = f
         valid[i, : f.shape[0]] = True
     res = fuzzy_cmeans(
-        x, 3, config.fcm_m, valid=valid, tol=config.fcm_tol, max_iter=config.fcm_max_iter
+        x,
+        3,
+        config.fcm_m,
+        valid=valid,
+        tol=config.fcm_tol,
+        max_iter=config.fcm_max_iter,
+        stop=config.fcm_stop,
     )
     for i, (b, cols) in enumerate(zip(rows, cols_of, strict=True)):
         out[b, cols] = gross_error_columns(res.classes[i, : cols.size + 1])
     return out
+
+
+# --------------------------------------------------------------------------- bounded levels
+def _model_spread(
+    gain: FloatArray, used: BoolArray, model: ErrorModel
+) -> tuple[FloatArray, FloatArray]:
+    """Standard deviation and nominal bias of position errors under the ISM model.
+
+    ``sigma_q^2 = sum_j S_qj^2 sigma_int,j^2``, ``b_q = sum_j |S_qj| b_nom,j`` for position
+    gains ``S`` (m per m of pseudorange error) of the satellites used; ``inf`` where a used
+    satellite is outside the model.
+
+    Parameters
+    ----------
+    gain : ndarray, shape (B, ..., 3, S)
+    used : ndarray of bool, shape (B, S)
+    model : ErrorModel
+
+    Returns
+    -------
+    sigma, bias : ndarray, shape (B, ..., 3)
+    """
+    extra = gain.ndim - 3
+    idx = (slice(None),) + (None,) * extra + (None, slice(None))
+    finite = np.isfinite(model.var_int_m2)
+    var = np.where(used & finite, model.var_int_m2, 0.0)[idx]
+    b = np.where(used, model.b_int_m, 0.0)[idx]
+    sigma = np.sqrt(np.sum(gain**2 * var, axis=-1))
+    bias = np.sum(np.abs(gain) * b, axis=-1)
+    outside = np.asarray((used & ~finite).any(axis=1))[(slice(None),) + (None,) * (extra + 1)]
+    return np.where(outside, np.inf, sigma), np.where(outside, np.inf, bias)
+
+
+def _gain_all(g: FloatArray, scale: FloatArray, rot: FloatArray) -> FloatArray:
+    """East/north/up gains (m per m) of the weighted least squares of whitened ``g`` (rows
+    ``scale_j B_j``): ``R (g^T g)^-1 g^T diag(scale)``, shape (B, 3, S)."""
+    q = _normal_inverse(g)
+    return np.einsum("bij,bjp,bsp,bs->bis", rot, q[:, :3, :], g, scale)
+
+
+def bounded_wraim_levels(
+    g: FloatArray,
+    used: BoolArray,
+    scale: FloatArray,
+    rot: FloatArray,
+    model: ErrorModel,
+    pfa: float,
+    pmd: float,
+) -> tuple[FloatArray, FloatArray]:
+    """Weighted-RAIM protection levels on the ISM error model (``chi2``, ``loo``, ``fde``,
+    ``fcm``).
+
+    The detection test (and so the slopes and ``p_bias`` of :func:`wraim_levels`) uses the
+    SPP weights; the position error it leaves is bounded with the integrity model:
+    ``VPL = max(K_ff sigma_u, VSlope_max p_bias + K_md sigma_u) + b_u`` and
+    ``HPL = max(K_h sigma_h, HSlope_max p_bias + K_md sigma_h) + b_h`` with
+    ``sigma_q, b_q`` from :func:`_model_spread`, ``sigma_h = sqrt(sigma_e^2 + sigma_n^2)``,
+    ``b_h = sqrt(b_e^2 + b_n^2)``, ``K_md = Q^-1(pmd)``, ``K_ff = Q^-1(pmd / 2)`` and
+    ``K_h = sqrt(-2 ln pmd)`` (the radial tail ``exp(-K^2 / 2)`` of a 2-D Gaussian of largest
+    axis ``<= sigma_h``).
+
+    Parameters
+    ----------
+    g, used : whitened problem (shapes (B, S, P), (B, S))
+    scale : ndarray, shape (B, S)
+        Whitening of each pseudorange (``g = scale B``), 1/m.
+    rot : ndarray, shape (B, 3, 3)
+    model : ErrorModel
+    pfa, pmd : float
+
+    Returns
+    -------
+    hpl_m, vpl_m : ndarray, shape (B,)
+    """
+    fault_h, fault_v = wraim_levels(g, used, rot, pfa, pmd)
+    sig, b = _model_spread(_gain_all(g, scale, rot), used, model)
+    k_md = _normal_quantile(1.0 - pmd)
+    k_ff = _normal_quantile(1.0 - pmd / 2.0)
+    k_h = math.sqrt(-2.0 * math.log(pmd))
+    s_h = np.hypot(sig[:, 0], sig[:, 1])
+    vpl = np.maximum(k_ff * sig[:, 2], fault_v + k_md * sig[:, 2]) + b[:, 2]
+    hpl = np.maximum(k_h * s_h, fault_h + k_md * s_h) + np.hypot(b[:, 0], b[:, 1])
+    return hpl, vpl
+
+
+def bounded_separation_levels(
+    sep: Separation,
+    g: FloatArray,
+    used: BoolArray,
+    scale: FloatArray,
+    rot: FloatArray,
+    model: ErrorModel,
+    pmd: float,
+    block: int = 128,
+) -> tuple[FloatArray, FloatArray]:
+    """Solution-separation protection levels on the ISM error model (``ss``):
+    ``PL_q = max(K_ff sigma_0q + b_0q, max_k T_kq + K_md sigma_kq + b_kq)`` with the
+    thresholds ``T_kq`` of the test (:func:`solution_separation`) and ``sigma, b`` of each
+    subset's gains under the integrity model (:func:`_model_spread`); ``HPL = sqrt(PL_e^2 +
+    PL_n^2)``. Gains are formed ``block`` epochs at a time.
+
+    Returns
+    -------
+    hpl_m, vpl_m : ndarray, shape (B,)
+        NaN where the separation is unavailable.
+    """
+    sub = sep.subsets
+    sig0, b0 = _model_spread(_gain_all(g, scale, rot), used, model)
+    k_md = _normal_quantile(1.0 - pmd)
+    k_ff = _normal_quantile(1.0 - pmd / 2.0)
+    pl = k_ff * sig0 + b0
+    n_s = used.shape[1]
+    sat_axis = np.arange(n_s)
+    for a in range(0, used.shape[0], block):
+        r = slice(a, a + block)
+        m = sub.members[r]
+        left = ((sat_axis == m[..., :1]) | (sat_axis == m[..., 1:])) & (m[..., :1] >= 0)
+        keep = used[r, None, :] & ~left  # (b, H, S)
+        gk = g[r, None] * keep[..., None]
+        gain = np.einsum("bij,bhjp,bhsp,bs->bhis", rot[r], sub.cov[r][..., :3, :], gk, scale[r])
+        sig, b = _model_spread(gain, used[r], model_rows(model, r))
+        pk = np.where(sub.valid[r][..., None], sep.threshold_m[r] + k_md * sig + b, 0.0)
+        pl[r] = np.maximum(pl[r], pk.max(axis=1))
+    ok = sep.available
+    return np.where(ok, np.hypot(pl[:, 0], pl[:, 1]), np.nan), np.where(ok, pl[:, 2], np.nan)
+
+
+def model_rows(model: ErrorModel, rows: slice | IntArray) -> ErrorModel:
+    """The error model of some epochs."""
+    from navtrack.integrity.ism import ErrorModel
+
+    return ErrorModel(
+        var_int_m2=model.var_int_m2[rows],
+        var_acc_m2=model.var_acc_m2[rows],
+        b_int_m=model.b_int_m[rows],
+        b_acc_m=model.b_acc_m[rows],
+        covered=model.covered,
+    )
 
 
 # --------------------------------------------------------------------------- the stage
@@ -730,7 +905,12 @@ def monitor(
     integrity : IntegrityResult
     """
     from navtrack.gnss.spp import SppStatus, estimate_position, merge_estimates, validate
+    from navtrack.integrity.araim import araim_model
+    from navtrack.integrity.ism import default_ism
 
+    ism = raim.ism if raim.ism is not None else default_ism()
+    if raim.method == "araim":
+        return _monitor_araim(meas, estimate, config, ism)
     solved = estimate.status == SppStatus.OK
     s2 = variance_factor(estimate) if raim.variance_factor is None else raim.variance_factor
     stat, thr, dof, g, y, used = _test(estimate, raim.pfa, s2)
@@ -791,22 +971,33 @@ def monitor(
                 break
 
     stat, thr, dof, g, y, used = _test(est, raim.pfa, s2)
+    model = araim_model(meas, est, ism)
+    scale = np.sqrt(np.where(used, est.weights, 0.0) / s2)
+    rot = est.enu_rotation
     status = np.full(n_epochs, RaimStatus.UNAVAILABLE, dtype=np.int8)
     if raim.method == "ss":
         final_fail = sep.detected.copy()
-        hpl, vpl = sep.hpl_m.copy(), sep.vpl_m.copy()
+        hpl, vpl = bounded_separation_levels(sep, g, used, scale, rot, model, raim.pmd)
         avail_ss = sep.available.copy()
         stat = np.where(sep.available, sep.ratio.max(axis=1, initial=0.0), np.nan)
         rows = np.flatnonzero(excluded.any(axis=1))
         if rows.size:  # after exclusion: the hypotheses of the remaining satellites
             sep_r = solution_separation(g[rows], y[rows], used[rows], est.enu_rotation[rows], raim)
             final_fail[rows], avail_ss[rows] = sep_r.detected, sep_r.available
-            hpl[rows], vpl[rows] = sep_r.hpl_m, sep_r.vpl_m
+            hpl[rows], vpl[rows] = bounded_separation_levels(
+                sep_r,
+                g[rows],
+                used[rows],
+                scale[rows],
+                rot[rows],
+                model_rows(model, rows),
+                raim.pmd,
+            )
             stat[rows] = np.where(sep_r.available, sep_r.ratio.max(axis=1, initial=0.0), np.nan)
         thr = np.where(avail_ss, 1.0, np.nan)
     else:
         final_fail = (dof >= 1) & (stat > thr)
-        hpl, vpl = wraim_levels(g, used, est.enu_rotation, raim.pfa, raim.pmd)
+        hpl, vpl = bounded_wraim_levels(g, used, scale, rot, model, raim.pfa, raim.pmd)
     any_excl = excluded.any(axis=1)
     status[avail & ~detected] = RaimStatus.OK
     status[avail & detected] = RaimStatus.ALERT
@@ -829,6 +1020,56 @@ def monitor(
             threshold=np.where(unavailable, np.nan, thr),
             hpl_m=np.where(unavailable | ~solved, np.nan, hpl),
             vpl_m=np.where(unavailable | ~solved, np.nan, vpl),
+            emt_m=np.full(n_epochs, np.nan),
+        ),
+    )
+
+
+def _monitor_araim(
+    meas: Measurements, estimate: Estimate, config: SppConfig, ism: Ism
+) -> tuple[Estimate, Int8Array, IntegrityResult]:
+    """``monitor`` for ``araim``: MHSS on the ISM (:func:`.araim.araim`), the reported
+    position the fault-free (or post-exclusion) solution with the integrity weights."""
+    from navtrack.gnss.spp import SppStatus, validate
+    from navtrack.integrity.araim import araim, araim_model
+
+    solved = estimate.status == SppStatus.OK
+    res = araim(estimate, meas.sats, araim_model(meas, estimate, ism), ism)
+    used = estimate.used & ~res.excluded & res.in_model[None, :]
+    v = np.nan_to_num(estimate.residuals_m) - np.einsum("bsp,bp->bs", estimate.design, res.dx)
+    est = replace(
+        estimate,
+        x=estimate.x + res.dx,
+        residuals_m=np.where(used, v, np.nan),
+        used=used,
+        design=estimate.design * used[..., None],
+        weights=np.where(used, estimate.weights, 0.0),
+    )
+    avail = solved & res.available
+    status = np.full(used.shape[0], RaimStatus.UNAVAILABLE, dtype=np.int8)
+    any_excl = res.excluded.any(axis=1)
+    status[avail & ~res.detected] = RaimStatus.OK
+    status[avail & res.detected] = RaimStatus.ALERT
+    status[avail & res.detected & any_excl & res.ok] = RaimStatus.EXCLUDED
+    unavailable = status == RaimStatus.UNAVAILABLE
+    spp_status = validate(est, replace(config, chi2_alpha=0.0))
+    spp_status[(spp_status == SppStatus.OK) & (status == RaimStatus.ALERT)] = (
+        SppStatus.REJECTED_VALIDITY
+    )
+    keep = ~unavailable
+    return (
+        est,
+        spp_status,
+        IntegrityResult(
+            method="araim",
+            status=status,
+            excluded=res.excluded,
+            detected=res.detected & solved,
+            test_stat=np.where(keep, res.ratio, np.nan),
+            threshold=np.where(keep, 1.0, np.nan),
+            hpl_m=np.where(keep, res.hpl_m, np.nan),
+            vpl_m=np.where(keep, res.vpl_m, np.nan),
+            emt_m=np.where(keep, res.emt_m, np.nan),
         ),
     )
 
@@ -866,7 +1107,8 @@ def _pick_exclusion(raim: RaimConfig, g: FloatArray, y: FloatArray, used: BoolAr
 
 def integrity_columns(integrity: IntegrityResult, sats: tuple[str, ...]) -> dict[str, np.ndarray]:
     """Solution-frame columns of an integrity result: ``raim_status`` (name), ``excluded``
-    (space-separated satellite ids), ``hpl_m``, ``vpl_m``, ``test_stat``, ``threshold``."""
+    (space-separated satellite ids), ``hpl_m``, ``vpl_m``, ``test_stat``, ``threshold``,
+    ``emt_m``."""
     names = np.array(STATUS_NAMES, dtype=object)[integrity.status.astype(np.int64)]
     ids = np.array(sats, dtype=object)
     excluded = np.array([" ".join(ids[row]) for row in integrity.excluded], dtype=object)
@@ -877,4 +1119,5 @@ def integrity_columns(integrity: IntegrityResult, sats: tuple[str, ...]) -> dict
         "vpl_m": integrity.vpl_m,
         "test_stat": integrity.test_stat,
         "threshold": integrity.threshold,
+        "emt_m": integrity.emt_m,
     }

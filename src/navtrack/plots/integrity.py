@@ -107,7 +107,7 @@ def stanford_axes(
     ax.set_ylim(0.0, top)
     ax.set_aspect("equal")
     mi = int(np.sum(e > p))
-    ax.set_title(f"{label}: {e.size} epochs, error > PL {mi}", fontsize=9)
+    ax.set_title(f"{label}\n{e.size} epochs, error > PL: {mi}", fontsize=9)
     ax.set_xlabel("position error (m)")
     ax.set_ylabel("protection level (m)")
     return mesh
@@ -138,8 +138,9 @@ def stanford_figure(name: str, methods: Mapping[str, tuple[Any, Any, Any, Any]])
     count = max((a[0].size for a in arrays), default=1)
     mesh = None
     for j, (m, (eh, hpl, ev, vpl)) in enumerate(zip(methods, arrays, strict=True)):
-        stanford_axes(axes[0, j], eh, hpl, f"{name} {m} H", top_m=top_h, max_count=count)
-        mesh = stanford_axes(axes[1, j], ev, vpl, f"{name} {m} V", top_m=top_v, max_count=count)
+        stanford_axes(axes[0, j], eh, hpl, f"{m} horizontal", top_m=top_h, max_count=count)
+        mesh = stanford_axes(axes[1, j], ev, vpl, f"{m} vertical", top_m=top_v, max_count=count)
+    fig.suptitle(name.replace("_", " "))
     if mesh is not None:
         fig.colorbar(mesh, ax=axes.ravel().tolist(), label="epochs per cell", shrink=0.8)
     return fig

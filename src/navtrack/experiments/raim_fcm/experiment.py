@@ -5,7 +5,8 @@
 2. the ``extra`` step: the paper's numeric example
    (:func:`~navtrack.experiments.raim_fcm.example.paper_example`) and the protection levels of
    every method against the actual errors on all clean epochs of each station (the data of the
-   Stanford diagrams);
+   Stanford diagrams), and on the whole days given with ``--input``
+   (:mod:`~navtrack.experiments.raim_fcm.wholeday`);
 3. tables, console lines, figures (:mod:`navtrack.plots.integrity`).
 """
 
@@ -26,6 +27,7 @@ from navtrack.experiments.raim_fcm.study import (
     station_data,
     summarize_study,
 )
+from navtrack.experiments.raim_fcm.wholeday import whole_day_protection
 
 __all__ = ["EXPERIMENT", "RaimFcmExperiment", "clean_protection"]
 
@@ -58,7 +60,7 @@ def clean_protection(params: RaimFcmParams, gnss_dir: str) -> tuple[dict[str, An
     res: dict[str, Any] = {}
     art: dict[str, Any] = {}
     for name in params.stations:
-        data = station_data(gnss_dir, name)
+        data = station_data(gnss_dir, name, params.iono)
         res[name], art[name] = {}, {}
         for m in params.methods:
             final, _, integ = monitor(
@@ -105,6 +107,11 @@ class RaimFcmExperiment(Experiment[RaimFcmParams, _RunResult]):
         protection, art = clean_protection(params, _gnss_dir())
         example = paper_example(params.fcm_m)
         results = {"example": example, "clean_protection": protection}
+        methods = [m for m in params.methods if m != "rtklib"]
+        day, day_art = whole_day_protection(context.inputs, methods)
+        if day:
+            results["whole_day"] = day
+            art.update(day_art)
         if "ARL1" in params.stations:
             work = context.out_dir / "rtklib_live"
             work.mkdir(parents=True, exist_ok=True)
@@ -193,6 +200,31 @@ def tables_markdown(results: dict[str, Any]) -> str:
                     f"| {_fmt(v['vpl_median_m'])} | {v['exclusion']:.4f} |"
                 )
         out.append("")
+    day = results.get("whole_day", {})
+    if day:
+        out += [
+            "## Whole days: misleading information and availability",
+            "",
+            "Misleading information (MI): epochs with status ok or excluded whose error exceeds "
+            "the protection level. Availability: HPL <= 40 m and VPL <= 35 m (LPV-200), and "
+            "HPL <= 40 m alone, over all epochs.",
+            "",
+            "| run | method | epochs | ok / excl / alert / unav | MI H / V | median HPL / VPL "
+            "| 95 % error H / V | VPL <= 35 m | LPV-200 | horizontal |",
+            "|---|---|---|---|---|---|---|---|---|---|",
+        ]
+        for key, d in day.items():
+            for m, v in d.items():
+                s = v["statuses"]
+                out.append(
+                    f"| {key} | {m} | {v['epochs']} | {s['ok']} / {s['excluded']} / "
+                    f"{s['alert']} / {s['unavailable']} | {v['mi_h']} / {v['mi_v']} | "
+                    f"{_fmt(v['hpl_median_m'])} / {_fmt(v['vpl_median_m'])} | "
+                    f"{_fmt(v['err_h_p95_m'])} / {_fmt(v['err_v_p95_m'])} | "
+                    f"{v['vpl_le_val']:.3f} | {v['availability_v']:.3f} | "
+                    f"{v['availability_h']:.3f} |"
+                )
+        out.append("")
     return "\n".join(out)
 
 
@@ -207,6 +239,10 @@ def summary_lines(results: dict[str, Any]) -> list[str]:
             f"{ex['double']['fcm_gross_errors']}, hierarchical "
             f"{ex['single']['hierarchical_gross_errors']} / "
             f"{ex['double']['hierarchical_gross_errors']}"
+        )
+    for key, d in results.get("whole_day", {}).items():
+        lines.append(
+            f"{key:<14} MI (H/V) " + " ".join(f"{m} {v['mi_h']}/{v['mi_v']}" for m, v in d.items())
         )
     live = results.get("rtklib_live", {})
     if live and "skipped" not in live:

@@ -83,7 +83,7 @@ STATIONS: dict[str, Station] = {
     ),
 }
 
-METHODS = ("rtklib", "chi2", "loo", "fde", "ss", "fcm")
+METHODS = ("rtklib", "chi2", "loo", "fde", "ss", "fcm", "araim")
 
 
 @dataclass(frozen=True, slots=True)
@@ -106,6 +106,10 @@ class RaimFcmParams:
         As :class:`navtrack.integrity.raim.RaimConfig`.
     fcm_m : float
         FCM weighting exponent.
+    iono : {"klobuchar", "ionofree"}
+        Ionosphere handling of the stations' SPP (:class:`navtrack.gnss.spp.SppConfig`); the
+        injected fault is added to the pseudorange the solution uses (the ionosphere-free
+        combination with ``ionofree``). The RTKLIB live comparison stays on L1.
     """
 
     stations: tuple[str, ...] = ("SEPT", "ARL1", "0759", "YAMATOGAWA")
@@ -116,8 +120,11 @@ class RaimFcmParams:
     pfa: float = 1e-3
     pmd: float = 1e-3
     fcm_m: float = 2.0
+    iono: str = "klobuchar"
 
     def __post_init__(self) -> None:
+        if self.iono not in ("klobuchar", "ionofree"):
+            raise ValueError(f"iono: expected klobuchar or ionofree, got {self.iono!r}")
         bad = [s for s in self.stations if s not in STATIONS]
         if bad:
             raise ValueError(f"stations: unknown {bad}; expected some of {sorted(STATIONS)}")
@@ -145,7 +152,7 @@ class StationData:
 
 
 @lru_cache(maxsize=8)
-def station_data(gnss_dir: str, name: str) -> StationData:
+def station_data(gnss_dir: str, name: str, iono: str = "klobuchar") -> StationData:
     """Read and solve a station once per process (cached)."""
     from navtrack.gnss.rinex.nav import read_nav
     from navtrack.gnss.rinex.obs import read_obs
@@ -153,7 +160,7 @@ def station_data(gnss_dir: str, name: str) -> StationData:
     st = STATIONS[name]
     obs = read_obs(Path(gnss_dir) / st.obs)
     nav = read_nav(Path(gnss_dir) / st.nav)
-    cfg = SppConfig(systems=st.systems)
+    cfg = SppConfig(systems=st.systems, iono=iono)
     pr = code_pseudoranges(obs, cfg)
     meas = corrected_measurements(pr, satellite_states(pr, [nav], config=cfg), cfg)
     clean = estimate_position(meas, cfg)
@@ -205,7 +212,7 @@ def injection_run(params: RaimFcmParams, rng: np.random.Generator, gnss_dir: str
     {method: outcome}}}`` with the counts of :func:`_trial_outcomes`."""
     out: dict[str, Any] = {}
     for name in params.stations:
-        data = station_data(gnss_dir, name)
+        data = station_data(gnss_dir, name, params.iono)
         meas, clean = data.meas, data.clean
         solved = np.flatnonzero((clean.status == SppStatus.OK) & (clean.dof >= 1))
         n = min(params.trials_per_run, solved.size)
