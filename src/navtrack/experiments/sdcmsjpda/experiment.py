@@ -15,9 +15,11 @@ from typing import Any
 
 import numpy as np
 
+from navtrack._numba import HAVE_NUMBA
 from navtrack._typing import FloatArray
-from navtrack.experiments.contract import Experiment, Outcome
+from navtrack.experiments.contract import Experiment, ExperimentContext, ExtraResult, Outcome
 from navtrack.experiments.sdcmsjpda.scenario import SdCmsjpdaParams, clutter_density, paper3_run
+from navtrack.experiments.sdcmsjpda.sensitivity import compact, run_readings, sensitivity_markdown
 from navtrack.tracking.models import constant_velocity
 from navtrack.tracking.simulate import simulate_truth
 
@@ -103,6 +105,7 @@ def summarize_runs(params: SdCmsjpdaParams, runs: Sequence[_RunResult]) -> dict[
         "by_pd": by_pd,
         "algorithm_equations": {a: ALGORITHM_EQUATIONS[a] for a in params.algorithms},
         "diverged_by_threshold": _diverged_by_threshold(params, runs),
+        "post_crossing_worst": _post_crossing_worst(params, runs),
         "paper_table1": PAPER_TABLE1,
         "paper_ms_per_step": PAPER_MS_PER_STEP,
     }
@@ -132,6 +135,36 @@ def _diverged_by_threshold(
                 for alg in params.algorithms
             }
         out[f"{dm:g}"] = per_pd
+    return out
+
+
+def _post_crossing_worst(
+    params: SdCmsjpdaParams, runs: Sequence[_RunResult]
+) -> dict[str, dict[str, dict[str, float]]]:
+    """Per ``P_D`` and algorithm, over the converged runs: the run and target of the largest
+    RMS position error over :data:`POST_CROSSING_STEPS` (``run``, ``target``, ``rms_m``) and
+    the RMS over those steps of all converged runs with and without that run
+    (``rms_all_m``, ``rms_without_m``): whether one run carries the post-crossing RMS."""
+    a, b = POST_CROSSING_STEPS
+    out: dict[str, dict[str, dict[str, float]]] = {}
+    for pd in params.pd_values:
+        key = f"{pd:g}"
+        out[key] = {}
+        for alg in params.algorithms:
+            idx = [i for i, r in enumerate(runs) if not r[key][alg]["diverged"]]
+            if not idx or params.n_steps < a:
+                continue
+            err = np.array([runs[i][key][alg]["pos_err_per_target_m"][a - 1 : b] for i in idx])
+            per = np.sqrt(np.mean(err**2, axis=1))  # (runs, targets)
+            j, t = np.unravel_index(int(np.argmax(per)), per.shape)
+            rest = np.delete(err, j, axis=0)
+            out[key][alg] = {
+                "run": idx[j],
+                "target": int(t),
+                "rms_m": float(per[j, t]),
+                "rms_all_m": float(np.sqrt(np.mean(err**2))),
+                "rms_without_m": float(np.sqrt(np.mean(rest**2))) if rest.size else float("nan"),
+            }
     return out
 
 
@@ -204,10 +237,30 @@ def tables_markdown(results: dict[str, Any]) -> str:
     if set(PAPER_MS_PER_STEP) <= set(algs):
         seq, sd = (np.mean([by_pd[p][a]["ms_per_step"] for p in pds]) for a in PAPER_MS_PER_STEP)
         paper_ratio = PAPER_MS_PER_STEP["sdcmsjpda"] / PAPER_MS_PER_STEP["sequential"]
+        numba = "with numba" if results["numba"] else "without numba"
         lines += [
             "",
-            f"Time per step, sdcmsjpda / sequential: {sd / seq:.2f} [paper {paper_ratio:.2f}].",
+            f"Time per step in these runs ({numba}), sdcmsjpda / sequential: {sd / seq:.2f} "
+            f"[paper {paper_ratio:.2f}].",
         ]
+    if "timing" in results:
+        from navtrack.experiments.sdcmsjpda.timing import ratio_markdown
+
+        t = results["timing"]["this_process"]
+        lines += [
+            "",
+            "## Time per step, SD-CMSJPDA / sequential MSJPDA, with numba and without",
+            "",
+            f"CPU ms per fusion step, medians over {t['pairs']} scan-set runs per tracker "
+            "(the trackers alternate on each scan set); ratio: median of the paired ratios "
+            "to sequential on the same scan set. The paper's absolute times are of a 2005 PC; "
+            "only its ratio is compared.",
+            "",
+            *ratio_markdown(results["timing"]),
+        ]
+    lines += _post_crossing_lines(results)
+    if "sensitivity" in results:
+        lines += ["", *sensitivity_markdown(results["sensitivity_study"], results["sensitivity"])]
     lines += [
         "",
         "## Sensitivity to the divergence threshold (same runs): divergences per Pd",
@@ -224,6 +277,30 @@ def tables_markdown(results: dict[str, Any]) -> str:
     lines += ["", "## What each algorithm implements", ""]
     lines += [f"- `{a}`: {results['algorithm_equations'][a]}" for a in algs]
     return "\n".join(lines) + "\n"
+
+
+def _post_crossing_lines(results: dict[str, Any]) -> list[str]:
+    """Sequential MSJPDA's RMS over :data:`POST_CROSSING_STEPS` per ``P_D``, with and without
+    its worst converged run."""
+    worst = results["post_crossing_worst"]
+    if not any("sequential" in per for per in worst.values()):
+        return []
+    a, b = POST_CROSSING_STEPS
+    lines = [
+        "",
+        f"## Sequential MSJPDA after the crossing (steps {a}-{b}, converged runs)",
+        "",
+        "| Pd | RMS position m | worst run (target): its RMS m | RMS without that run m |",
+        "|---|---|---|---|",
+    ]
+    for p, per in worst.items():
+        if "sequential" in per:
+            w = per["sequential"]
+            lines.append(
+                f"| {p} | {w['rms_all_m']:.0f} | {w['run']} ({w['target']}): {w['rms_m']:.0f} "
+                f"| {w['rms_without_m']:.0f} |"
+            )
+    return lines
 
 
 def write_figures(outcome: Outcome[SdCmsjpdaParams, _RunResult], out_dir: Path) -> list[Path]:
@@ -247,26 +324,44 @@ def write_figures(outcome: Outcome[SdCmsjpdaParams, _RunResult], out_dir: Path) 
             ax.legend(fontsize=8)
             paths.append(save_figure(fig, d / f"fig{n}_rms_{what}_pd{p}.png"))
             n += 1
-    paths.append(_post_crossing_figure(outcome.results, d))
+    if "sequential" in outcome.params.algorithms:
+        paths.append(_post_crossing_figure(outcome, d))
     return paths
 
 
-def _post_crossing_figure(results: dict[str, Any], d: Path) -> Path:
-    """Sequential MSJPDA's mean position error over :data:`POST_CROSSING_STEPS` of every
-    converged run and target, sorted, one curve per ``P_D``: whether a few runs whose tracks
-    coalesced or swapped (still under the divergence rule) carry the RMS."""
+def _post_crossing_figure(outcome: Outcome[SdCmsjpdaParams, _RunResult], d: Path) -> Path:
+    """Sequential MSJPDA after the crossing. Left: the mean position error over
+    :data:`POST_CROSSING_STEPS` of every converged run and target, sorted, one curve per
+    ``P_D`` (whether a few runs carry the RMS). Right: the error per step of the worst of them
+    per ``P_D``, beside the distance between the targets (a track on the other target has an
+    error near that distance; a track lost to clutter does not)."""
     from navtrack.plots.canvas import new_figure, save_figure
 
-    fig = new_figure((6.4, 3.8))
-    ax = fig.add_subplot()
+    results = outcome.results
+    fig = new_figure((11.0, 3.8))
+    left, right = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    truth = _truth(outcome.params)
+    sep = np.hypot(*(truth[:, 0, [0, 2]] - truth[:, 1, [0, 2]]).T)
+    steps = np.arange(1, sep.size + 1)
     for p, per in results["by_pd"].items():
         err = np.sort(np.ravel(per["sequential"]["post_crossing_err_per_run_m"]))[::-1]
-        ax.semilogy(np.arange(1, err.size + 1), err, marker=".", label=f"P_D = {p}")
+        left.semilogy(np.arange(1, err.size + 1), err, marker=".", label=f"P_D = {p}")
+        w = results["post_crossing_worst"][p].get("sequential")
+        if w is not None:
+            e = np.asarray(outcome.runs[w["run"]][p]["sequential"]["pos_err_per_target_m"])
+            right.plot(steps, e[:, w["target"]], label=f"P_D = {p}: run {w['run']}")
+    right.plot(steps, sep, "k--", lw=1, label="distance between the targets")
     a, b = POST_CROSSING_STEPS
-    ax.set_xlabel("run x target, by decreasing error")
-    ax.set_ylabel(f"mean position error, steps {a}-{b}, m")
-    ax.set_title("Sequential MSJPDA after the crossing (converged runs)")
-    ax.legend(fontsize=8)
+    right.axvspan(a, b, color="0.9")
+    left.set_xlabel("run x target, by decreasing error")
+    left.set_ylabel(f"mean position error, steps {a}-{b}, m")
+    left.set_title("Sequential MSJPDA, converged runs")
+    right.set_yscale("log")
+    right.set_xlabel("step")
+    right.set_ylabel("position error, m")
+    right.set_title(f"Worst run per P_D over steps {a}-{b}")
+    left.legend(fontsize=8)
+    right.legend(fontsize=7)
     return save_figure(fig, d / "sequential_post_crossing.png")
 
 
@@ -294,7 +389,23 @@ class SdCmsjpdaExperiment(Experiment[SdCmsjpdaParams, _RunResult]):
         return paper3_run(params, rng)
 
     def summarize(self, params: SdCmsjpdaParams, runs: Sequence[_RunResult]) -> dict[str, Any]:
-        return summarize_runs(params, runs)
+        out = summarize_runs(params, runs) | {"numba": HAVE_NUMBA}
+        n = min(params.sensitivity_runs, len(runs))
+        if n:
+            out["sensitivity_study"] = compact(summarize_runs(params, runs[:n]))
+        return out
+
+    def extra(self, params: SdCmsjpdaParams, context: ExperimentContext) -> ExtraResult:
+        """The sensitivity readings (``sensitivity_runs``) and the timing with and without
+        numba (``timing_repeat``)."""
+        out: dict[str, Any] = {}
+        if params.sensitivity_runs:
+            out["sensitivity"] = run_readings(params, context)
+        if params.timing_repeat:
+            from navtrack.experiments.sdcmsjpda.timing import both_paths  # runs as a module too
+
+            out["timing"] = both_paths(params, repeat=params.timing_repeat)
+        return ExtraResult(out)
 
     def tables(self, results: dict[str, Any]) -> str:
         return tables_markdown(results)

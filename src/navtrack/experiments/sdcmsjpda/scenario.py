@@ -77,6 +77,11 @@ class SdCmsjpdaParams:
         printed, eq. 26's ``m`` = ``clutter_rate``), S-D GNN and the ML-fused reading
         ``sdcmsjpda_fused`` by default; ``sdcmsjpda_joint`` (the joint tuple likelihood, a
         diagnostic, not eq. 15) on request; a subset for quick studies of other settings
+    sensitivity_runs : Monte Carlo runs of each other reading of the sensitivity table
+        (:mod:`~navtrack.experiments.sdcmsjpda.sensitivity`; every tracker of ``algorithms``
+        under each reading; 0: no table)
+    timing_repeat : passes of the timing of SD-CMSJPDA against sequential MSJPDA, with numba
+        and without (:mod:`~navtrack.experiments.sdcmsjpda.timing`; 0: not timed)
     """
 
     pd_values: tuple[float, ...] = (0.97, 0.76, 0.58)
@@ -104,6 +109,8 @@ class SdCmsjpdaParams:
         "sd_gnn",
         "sdcmsjpda_fused",
     )
+    sensitivity_runs: int = 10
+    timing_repeat: int = 3
 
     def __post_init__(self) -> None:
         S = len(self.sensor_x_m)
@@ -116,6 +123,8 @@ class SdCmsjpdaParams:
             raise ValueError("need 1 <= divergence_window <= n_steps")
         if not self.algorithms or any(a not in ALGORITHMS for a in self.algorithms):
             raise ValueError(f"algorithms must be a non-empty subset of {ALGORITHMS}")
+        if self.sensitivity_runs < 0 or self.timing_repeat < 0:
+            raise ValueError("sensitivity_runs and timing_repeat must be >= 0")
         if not (self.clutter_rate > 0 and self.clutter_halfwidth_sigma > 0):
             raise ValueError("clutter_rate and clutter_halfwidth_sigma must be > 0")
 
