@@ -102,9 +102,11 @@ class AlhatExperiment(Experiment[AlhatParams, _RunResult]):
         return tables_markdown(results)
 
     def figures(self, outcome: Outcome[AlhatParams, _RunResult], out_dir: Path) -> list[Path]:
-        from navtrack.experiments.alhat.figures import write_error_figures
+        from navtrack.experiments.alhat.figures import write_error_figures, write_fig16
 
-        return write_error_figures(out_dir, outcome.artifacts or [])
+        paths = write_error_figures(out_dir, outcome.artifacts or [])
+        fig16 = write_fig16(out_dir, outcome.runs[0]["regime"]) if outcome.runs else None
+        return [fig16, *paths] if fig16 else paths
 
     def summary_lines(self, results: dict[str, Any]) -> list[str]:
         return summary_lines(results)

@@ -318,6 +318,12 @@ def regime_run(
         row["length_s"] = float(ft[idx][-1] - ft[idx][0])
     res["status"] = "ok"
     res["sequences"] = seqs
+    res["fix_series"] = {
+        "t_since_first_fix_s": (ft - ft[0]).tolist(),
+        "sequence": labels.tolist(),
+        "e_s_before_deg": np.degrees(starts.e_s_before_rad).tolist(),
+        "e_s_after_deg": np.degrees(starts.e_s_after_rad).tolist(),
+    }
     b = np.radians(params.b_deg_h) / 3600.0
     u = weighted_attitude(
         rec.t_s,

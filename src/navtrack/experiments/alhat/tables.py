@@ -46,8 +46,9 @@ def _fig16_lines(reg: dict[str, Any]) -> list[str]:
     lines = [
         "## Paper's method in the paper's regime: Fig. 16 statistic (e_s at the fixes)",
         "",
-        f"{reg['runs']} simulated recordings ({_fmt(reg['settings'])}); navtrack columns are "
-        "median [5 %, 95 %] over the runs.",
+        f"{reg['runs']} simulated recordings ("
+        + ", ".join(f"{k} {v}" for k, v in reg["settings"].items())
+        + "); navtrack columns are median [5 %, 95 %] over the runs.",
         "",
         "| e_s statistic | paper (Borrow Pit) | longest sequence of each run | every sequence |",
         "|---|---|---|---|",
