@@ -208,7 +208,8 @@ def correlation_shift(
     -------
     LidarShift
         The least-squares shift minimising the height differences between the shifted points
-        and the DEM.
+        and the DEM. A point shifted off the DEM adds no residual; callers check that the
+        frame lies on the DEM (the reproduction counts frames that do not as ``off_dem``).
     """
     pts = np.asarray(points_lidar, dtype=np.float64)
     pts = pts[np.all(np.isfinite(pts), axis=1)]

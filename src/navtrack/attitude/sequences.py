@@ -151,6 +151,8 @@ def sequence_starts(
     correction : reading of the correction quaternion
     sigma0 : ``after`` (std of ``e_s`` after the correction, default) or ``before``
     """
+    if sigma0 not in ("after", "before"):
+        raise ValueError(f"sigma0: expected 'after' or 'before', got {sigma0!r}")
     t = np.asarray(t_s, dtype=np.float64)
     w = np.asarray(gyr_rad_s, dtype=np.float64)
     d = delta_angles(t, w)

@@ -20,6 +20,7 @@ The paper's method on it: eq. 3 (fixes into the inertial frame), per-sequence co
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -27,7 +28,8 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from navtrack._typing import FloatArray
+from navtrack._frozen import freeze_arrays
+from navtrack._typing import FloatArray, IntArray
 from navtrack.attitude.frames import earth_rate_enu, from_inertial, to_inertial
 from navtrack.attitude.imu_sim import LN200, GyroSpec, integrate_rates, sample_times, simulate_gyro
 from navtrack.attitude.lidar import (
@@ -39,7 +41,12 @@ from navtrack.attitude.lidar import (
 )
 from navtrack.attitude.quaternion import attitude_errors
 from navtrack.attitude.reconstruct import ESTIMATES, ReconstructionConfig, reconstruct
-from navtrack.attitude.sequences import sequence_starts, split_sequences, weighted_attitude
+from navtrack.attitude.sequences import (
+    SequenceStarts,
+    sequence_starts,
+    split_sequences,
+    weighted_attitude,
+)
 from navtrack.attitude.smoother import SmootherConfig
 from navtrack.attitude.wahba import RansacConfig, solve_fixes
 from navtrack.experiments.alhat.params import AlhatParams
@@ -68,22 +75,44 @@ MOUNT = Rotation.from_matrix([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]
 
 @dataclass(frozen=True, slots=True, eq=False)
 class Recording:
-    """One simulated recording (truth and measurements)."""
+    """One simulated recording: truth and measurements (arrays read-only).
+
+    Attributes
+    ----------
+    t_s : (n,) IMU sample times, s
+    truth : (n, 4) true IMU -> ENU attitudes, scalar-last
+    position_m : (n, 3) true ENU positions (site-centred), m
+    gyr_rad_s : (n, 3) simulated gyro rates, rad/s
+    gnss_t_s, gnss_m : (g,), (g, 3) GNSS times and noisy ENU positions
+    fix_t_s : (k,) times of the usable camera fixes (on IMU samples), s
+    fix_quat : (k, 4) camera -> ENU fix attitudes
+    fix_sigma_rad : (k,) per-axis fix standard deviations
+    fix_error_rad : (k,) fix errors against the truth
+    images : int
+        Images taken (one a second).
+    fix_status : dict of str to int
+        Fix status counts of all images.
+    dem : Dem
+    spec : GyroSpec
+    """
 
     t_s: FloatArray
-    truth: FloatArray  # (n, 4) IMU -> ENU
-    position_m: FloatArray  # (n, 3) true ENU position
+    truth: FloatArray
+    position_m: FloatArray
     gyr_rad_s: FloatArray
     gnss_t_s: FloatArray
     gnss_m: FloatArray
     fix_t_s: FloatArray
-    fix_quat: FloatArray  # (k, 4) camera -> ENU
+    fix_quat: FloatArray
     fix_sigma_rad: FloatArray
     fix_error_rad: FloatArray
     images: int
     fix_status: dict[str, int]
     dem: Dem
     spec: GyroSpec
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
 
 
 def gyro_spec(params: AlhatParams) -> GyroSpec:
@@ -170,16 +199,17 @@ def _deg_stats(e_rad: FloatArray) -> dict[str, float]:
     return {"mean_deg": float(e.mean()), "max_deg": float(e.max()), "std_deg": float(e.std())}
 
 
-def _fig16(starts: Any) -> list[dict[str, Any]]:
+def _fig16(starts: SequenceStarts, fix_t_s: FloatArray, labels: IntArray) -> list[dict[str, Any]]:
+    """The Fig. 16 statistic of every sequence: max and std of ``e_s`` before and after."""
     rows = []
     for j in range(starts.t_q0_s.size):
-        idx = starts.labels == j
+        idx = labels == j
         b, a = np.degrees(starts.e_s_before_rad[idx]), np.degrees(starts.e_s_after_rad[idx])
         rows.append(
             {
                 "sequence": j,
                 "fixes": int(idx.sum()),
-                "length_s": None,
+                "length_s": float(fix_t_s[idx][-1] - fix_t_s[idx][0]),
                 "max_before_deg": float(b.max()),
                 "max_after_deg": float(a.max()),
                 "std_before_deg": float(b.std()),
@@ -225,14 +255,7 @@ def _lidar_verification(
         truth.append([d[0], -d[1]])
     out: dict[str, Any] = {"frames": int(k.size), "status": status}
     # the camera's view of the same angles at the fixes (paper Fig. 17 B)
-    cam_est = (
-        Rotation.from_quat(
-            np.asarray(
-                [est_imu[np.searchsorted(t, tf)] for tf in rec.fix_t_s],
-            )
-        )
-        * MOUNT.inv()
-    )
+    cam_est = Rotation.from_quat(est_imu[np.searchsorted(t, rec.fix_t_s)]) * MOUNT.inv()
     dc = np.asarray((Rotation.from_quat(rec.fix_quat).inv() * cam_est).as_rotvec())
     cam = np.degrees(np.column_stack([dc[:, 0], -dc[:, 1]]))
     out["camera_max_abs_yaw_deg"] = float(np.abs(cam[:, 0]).max())
@@ -250,10 +273,11 @@ def _lidar_verification(
 def _extensions(
     rec: Recording,
     fixes: tuple[FloatArray, FloatArray, FloatArray],
-    to_enu: Any,
+    to_enu: Callable[[FloatArray], FloatArray],
     params: AlhatParams,
 ) -> dict[str, FloatArray]:
-    """Calibration, filter and smoother on the fixes of the propagation frame; IMU -> ENU."""
+    """Calibration, filter and smoother on the fixes ``(t_s, quat, sigma_rad)`` of the
+    propagation frame; their attitudes IMU -> ENU."""
     spec = rec.spec
     cfg = ReconstructionConfig(
         smoother=SmootherConfig(
@@ -312,12 +336,8 @@ def regime_run(
         correction=params.correction,
         sigma0=params.sigma0_reading,
     )
-    seqs = _fig16(starts)
-    for j, row in enumerate(seqs):
-        idx = labels == j
-        row["length_s"] = float(ft[idx][-1] - ft[idx][0])
     res["status"] = "ok"
-    res["sequences"] = seqs
+    res["sequences"] = _fig16(starts, ft, labels)
     res["fix_series"] = {
         "t_since_first_fix_s": (ft - ft[0]).tolist(),
         "sequence": labels.tolist(),
