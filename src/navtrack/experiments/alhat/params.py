@@ -61,8 +61,11 @@ class AlhatParams:
         Fixes further apart start a new sequence.
     b_deg_h, weight_power, average, sigma0_reading : eq. 6-7 readings
         (:mod:`navtrack.attitude.sequences`): ``b`` (default the gyro's 1 °/h bias),
-        ``w = σ^-weight_power``, absolute or relative axis-angle average, σ0 after or before
-        the sequence's correction.
+        ``w = σ^-weight_power``, σ0 after or before the sequence's correction, and the
+        axis-angle average: ``relative`` (about the best-weighted propagation, default) equals
+        the printed ``absolute`` one wherever that is defined and stays defined where the
+        attitudes straddle a rotation of π (the printed one parts from it there by up to
+        160° at two samples per run of the regime; counted in the results).
     earth_rate : bool
         Propagate in the inertial frame (eq. 3); off, the gyro still senses the Earth.
     lidar_interval_s, lidar_pixels : float, int
@@ -105,7 +108,7 @@ class AlhatParams:
     sequence_gap_s: float = 5.0
     b_deg_h: float = 1.0
     weight_power: float = 1.0
-    average: Literal["absolute", "relative"] = "absolute"
+    average: Literal["absolute", "relative"] = "relative"
     sigma0_reading: Literal["after", "before"] = "after"
     earth_rate: bool = True
     lidar_interval_s: float = 2.0

@@ -42,6 +42,7 @@ from navtrack.attitude.lidar import (
 from navtrack.attitude.quaternion import attitude_errors
 from navtrack.attitude.reconstruct import ESTIMATES, ReconstructionConfig, reconstruct
 from navtrack.attitude.sequences import (
+    AverageReading,
     SequenceStarts,
     sequence_starts,
     split_sequences,
@@ -68,6 +69,11 @@ SITE_LAT_DEG, SITE_LON_DEG = 34.93, -117.89
 #: descent along one line of sight, slant range 430 m to 200 m.
 HELI_START_M = np.array([-260.0, 0.0, 340.0])
 HELI_END_M = np.array([-120.0, 0.0, 160.0])
+#: Smallest eq. 6 accuracy at a sequence's start, rad (a sequence whose fixes agree exactly with
+#: its propagation would get an infinite weight); sequences floored are counted.
+SIGMA0_FLOOR_RAD = 1e-9
+#: The absolute and relative eq. 7 averages are counted as parting beyond this, rad.
+AVERAGE_AGREEMENT_RAD = np.radians(0.01)
 #: IMU -> camera (and LIDAR) rotation: camera ``z`` (boresight) = IMU ``x``, camera ``x`` = IMU
 #: ``y``, camera ``y`` = IMU ``z`` (eq. 3's known ``M R_C``).
 MOUNT = Rotation.from_matrix([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
@@ -345,18 +351,30 @@ def regime_run(
         "e_s_after_deg": np.degrees(starts.e_s_after_rad).tolist(),
     }
     b = np.radians(params.b_deg_h) / 3600.0
-    u = weighted_attitude(
-        rec.t_s,
-        starts.quat,
-        starts.t_q0_s,
-        np.maximum(starts.sigma0_rad, 1e-9),
-        b,
-        weight_power=params.weight_power,
-        average=params.average,
-    )
+    sigma0 = np.maximum(starts.sigma0_rad, SIGMA0_FLOOR_RAD)
+    res["sigma0_floored"] = int(np.sum(starts.sigma0_rad < SIGMA0_FLOOR_RAD))
+
+    def combine(average: AverageReading) -> FloatArray:
+        return weighted_attitude(
+            rec.t_s,
+            starts.quat,
+            starts.t_q0_s,
+            sigma0,
+            b,
+            weight_power=params.weight_power,
+            average=average,
+        )
+
+    u = combine(params.average)
+    other = combine("relative" if params.average == "absolute" else "absolute")
+    gap = attitude_errors(Rotation.from_quat(u), Rotation.from_quat(other))[0]
+    # the printed (absolute) average is undefined where the propagations straddle a rotation
+    # of π; the two readings then part
+    res["average_readings_differ_samples"] = int(np.sum(gap > AVERAGE_AGREEMENT_RAD))
+    res["average_readings_max_gap_deg"] = float(np.degrees(gap.max()))
     eq7 = to_enu(u)
     span = (rec.t_s >= ft[0]) & (rec.t_s <= ft[-1])
-    ev = np.flatnonzero(span)[:: max(1, int(params.imu_rate_hz / 10))]
+    ev = np.flatnonzero(span)
     truth = Rotation.from_quat(rec.truth[ev])
 
     def err(q: FloatArray) -> dict[str, float]:
@@ -421,6 +439,9 @@ def summarize_regime(params: AlhatParams, runs: list[dict[str, Any]]) -> dict[st
         out[kind]["max_lowered"] = sum(s["max_after_deg"] < s["max_before_deg"] for s in seqs)
         out[kind]["std_lowered"] = sum(s["std_after_deg"] < s["std_before_deg"] for s in seqs)
     out["sequences_per_run"] = _spread([float(len(r["sequences"])) for r in ok])
+    out["sigma0_floored"] = sum(r["sigma0_floored"] for r in ok)
+    out["average_readings_differ_samples"] = sum(r["average_readings_differ_samples"] for r in ok)
+    out["average_readings_max_gap_deg"] = max(r["average_readings_max_gap_deg"] for r in ok)
     out["fix_error_mean_deg"] = _spread([r["fix_error"]["mean_deg"] for r in ok])
     for key in ("weighted_eq7", "longest_sequence_corrected"):
         out[key] = {k: _spread([r["paper"][key][k] for r in ok]) for k in ("mean_deg", "max_deg")}
