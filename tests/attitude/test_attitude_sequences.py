@@ -118,3 +118,17 @@ def test_lidar_must_look_down() -> None:
     dem = lidar.smooth_dem(rng, size_m=10.0)
     with pytest.raises(ValueError, match="look down"):
         lidar.lidar_points(dem, [0.0, 0.0, 100.0], Rotation.identity(), rng)
+
+
+def test_printed_average_breaks_across_pi_and_relative_does_not() -> None:
+    """Two equally weighted propagations 179.9° and 180.1° about z (the second is 179.9° about
+    -z): their axis-angle vectors cancel, so the printed (absolute) average is the identity,
+    180° from both; the relative reading returns the rotation of 180° between them."""
+    t = np.array([0.0])
+    q = np.stack([_const([0, 0, 179.9], 1), _const([0, 0, -179.9], 1)])
+    args = (t, q, np.array([0.0, 0.0]), np.radians([0.1, 0.1]), 0.0)
+    absolute = Rotation.from_quat(sequences.weighted_attitude(*args, average="absolute"))
+    relative = Rotation.from_quat(sequences.weighted_attitude(*args, average="relative"))
+    half_turn = Rotation.from_rotvec([0.0, 0.0, np.pi])
+    assert np.degrees((absolute * half_turn.inv()).magnitude()[0]) > 179.0
+    assert np.degrees((relative * half_turn.inv()).magnitude()[0]) < 1e-9
