@@ -65,7 +65,7 @@ class AlhatParams:
         axis-angle average: ``relative`` (about the best-weighted propagation, default) equals
         the printed ``absolute`` one wherever that is defined and stays defined where the
         attitudes straddle a rotation of π (the printed one parts from it there by up to
-        160° at two samples per run of the regime; counted in the results).
+        170° at about two samples per run of the regime; counted in the results).
     earth_rate : bool
         Propagate in the inertial frame (eq. 3); off, the gyro still senses the Earth.
     lidar_interval_s, lidar_pixels : float, int
