@@ -4,7 +4,9 @@
 
 * :mod:`~navtrack.experiments.alhat.params` — :class:`AlhatParams`;
 * :mod:`~navtrack.experiments.alhat.synthetic` — seeded RANSAC-SVD scenes (Monte Carlo runs);
-* :mod:`~navtrack.experiments.alhat.real` — BROAD trials with simulated camera fixes;
+* :mod:`~navtrack.experiments.alhat.regime` — the paper's regime: one simulated recording per
+  run (BROAD motion, LN-200-class gyro, narrow camera, GNSS, flash LIDAR);
+* :mod:`~navtrack.experiments.alhat.real` — BROAD trials with their own MEMS gyro;
 * :mod:`~navtrack.experiments.alhat.tables`, :mod:`~navtrack.experiments.alhat.figures`;
 * :mod:`~navtrack.experiments.alhat.experiment` — the :class:`~navtrack.experiments.Experiment`.
 """
@@ -19,6 +21,7 @@ from navtrack.experiments.alhat.real import (
     series_accuracy,
     trial_study,
 )
+from navtrack.experiments.alhat.regime import regime_run, summarize_regime
 from navtrack.experiments.alhat.synthetic import ransac_scene, summarize_scenes
 
 __all__ = [
@@ -28,7 +31,9 @@ __all__ = [
     "TrialOutcome",
     "optical_rate_lag_s",
     "ransac_scene",
+    "regime_run",
     "series_accuracy",
+    "summarize_regime",
     "summarize_scenes",
     "trial_study",
 ]

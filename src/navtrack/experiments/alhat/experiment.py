@@ -1,11 +1,13 @@
 """``navtrack reproduce alhat``: paper 6 (ALHAT trajectory reconstruction) on the contract.
 
-1. Monte Carlo runs: seeded RANSAC-SVD scenes with 20 % outliers
+1. Monte Carlo runs: each run simulates one recording in the paper's regime (BROAD motion, an
+   LN-200-class gyro at 400 Hz, a narrow camera on a patch of surveyed targets, GNSS, a flash
+   LIDAR; :func:`~navtrack.experiments.alhat.regime.regime_run`) and runs the paper's method
+   on it (eqs. 3, 5-11), plus one seeded RANSAC-SVD scene with 20 % outliers
    (:func:`~navtrack.experiments.alhat.synthetic.ransac_scene`);
-2. the ``extra`` step: every BROAD trial of the parameters that is present
-   (:func:`~navtrack.experiments.alhat.real.trial_study`), each with its own generator spawned
-   from the step's; the first trial's estimates head ``results.json``; the pose trajectory of
-   the first trial's smoother with the pyins GNSS positions (``pose_trajectory.parquet``);
+2. the ``extra`` step: the extensions (calibration, filter, smoother) on one regime recording,
+   and every BROAD trial of the parameters with its own real MEMS gyro
+   (:func:`~navtrack.experiments.alhat.real.trial_study`), each with its own generator;
 3. tables, console lines and the attitude-error figures.
 """
 
@@ -20,94 +22,91 @@ import numpy as np
 from navtrack.attitude.reconstruct import ESTIMATES
 from navtrack.experiments.alhat.params import AlhatParams
 from navtrack.experiments.alhat.real import TrialOutcome, trial_study
+from navtrack.experiments.alhat.regime import regime_run, summarize_regime
 from navtrack.experiments.alhat.synthetic import ransac_scene, summarize_scenes
 from navtrack.experiments.alhat.tables import PAPER_VALUES, summary_lines, tables_markdown
-from navtrack.experiments.contract import Experiment, ExperimentContext, ExtraResult, Outcome
+from navtrack.experiments.contract import (
+    Experiment,
+    ExperimentContext,
+    ExtraResult,
+    Outcome,
+    shared_data_dir,
+)
 
 __all__ = ["EXPERIMENT", "AlhatExperiment"]
 
 _RunResult = dict[str, Any]
 
 
-def _pose_trajectory(recon: Any, shared: Path, out_dir: Path) -> tuple[str | None, str | None]:
-    """Write the smoother's pose with the pyins GNSS positions; (path, reason skipped)."""
-    from navtrack.attitude.trajectory import pose_frame, read_gnss_positions
-    from navtrack.io.solution import write_solution
-
-    gnss_path = shared / "trajectory" / "pyins_gnss" / "gnss.csv"
-    if not gnss_path.exists():
-        return None, f"{gnss_path} absent"
-    gnss = read_gnss_positions(gnss_path)
-    est = recon.estimates["smoother"]
-    t_cam = recon.t_s - est.time_offset_s
-    frame = pose_frame(t_cam, est.quat, gnss, gnss_offset_s=float(gnss.t_s[0] - t_cam[0]))
-    try:
-        path = write_solution(frame, out_dir / "pose_trajectory.parquet")
-    except ImportError as exc:
-        return None, str(exc)
-    return str(path), None
+def _broad_dir() -> Path:
+    return shared_data_dir() / "trajectory" / "broad"
 
 
 class AlhatExperiment(Experiment[AlhatParams, _RunResult]):
-    """Gyro propagation, RANSAC-SVD camera fixes, correction quaternion, calibration and
-    smoother on BROAD."""
+    """The paper's regime (LN-200, narrow camera, LIDAR) per run; extensions and BROAD's real
+    MEMS gyro in the extra step."""
 
     name = "alhat"
     description = (
-        "Paper 6: attitude reconstruction from gyro and camera fixes (ALHAT) on BROAD, with "
-        "calibration and smoother"
+        "Paper 6: attitude reconstruction from gyro and camera fixes (ALHAT) in the paper's "
+        "regime (LN-200, narrow camera, LIDAR check), with extensions and BROAD's MEMS gyro"
     )
     params_type = AlhatParams
-    default_runs = 200
+    default_runs = 20
 
     def run_one(self, params: AlhatParams, rng: np.random.Generator) -> _RunResult:
-        return ransac_scene(params, rng)
+        scene_rng, regime_rng = rng.spawn(2)
+        broad = _broad_dir()
+        out: _RunResult = {"ransac": ransac_scene(params, scene_rng)}
+        if (broad / f"{params.regime_trial}.mat").exists():
+            out["regime"] = regime_run(params, broad, regime_rng)
+        else:
+            out["regime"] = {"status": "no_truth_motion"}
+        return out
 
     def summarize(self, params: AlhatParams, runs: Sequence[_RunResult]) -> dict[str, Any]:
         return {
             "paper": "ALHAT flash-LIDAR field test 1, trajectory reconstruction (paper 6)",
             "paper_values": PAPER_VALUES,
-            "ransac": summarize_scenes(params, runs),
+            "ransac": summarize_scenes(params, [r["ransac"] for r in runs]),
+            "regime": summarize_regime(params, [r["regime"] for r in runs]),
         }
 
     def extra(self, params: AlhatParams, context: ExperimentContext) -> ExtraResult:
-        shared = context.shared_data()
-        broad = shared / "trajectory" / "broad"
+        broad = context.shared_data() / "trajectory" / "broad"
+        ext_rng, *trial_rngs = context.rng.spawn(len(params.trials) + 1)
+        results: dict[str, Any] = {}
+        if params.extensions and (broad / f"{params.regime_trial}.mat").exists():
+            results["regime_extensions"] = regime_run(params, broad, ext_rng, extensions=True)
         trials: dict[str, Any] = {}
         skipped: list[str] = []
         outcomes: list[TrialOutcome] = []
-        first = None
-        for name, child in zip(params.trials, context.rng.spawn(len(params.trials)), strict=True):
+        for name, child in zip(params.trials, trial_rngs, strict=True):
             mat = broad / f"{name}.mat"
             if not mat.exists():
                 skipped.append(f"{mat} absent")
                 continue
-            res, outcome, recon = trial_study(mat, params, child)
+            res, outcome, _ = trial_study(mat, params, child)
             trials[name] = res
             outcomes.append(outcome)
-            if first is None:
-                first = (name, res, recon)
-        results: dict[str, Any] = {"trials": trials, "trials_skipped": skipped}
-        if first is not None:
-            name, res, recon = first
+        results["trials"] = trials
+        results["trials_skipped"] = skipped
+        if trials:
+            name = next(iter(trials))
             results["primary_trial"] = name
             for key in ESTIMATES:
-                results[key] = res[key]
-            if params.pose_gnss:
-                path, why = _pose_trajectory(recon, shared, context.out_dir)
-                if path:
-                    results["pose_trajectory"] = path
-                else:
-                    results["pose_trajectory_skipped"] = why
+                results[key] = trials[name][key]
         return ExtraResult(results, outcomes)
 
     def tables(self, results: dict[str, Any]) -> str:
         return tables_markdown(results)
 
     def figures(self, outcome: Outcome[AlhatParams, _RunResult], out_dir: Path) -> list[Path]:
-        from navtrack.experiments.alhat.figures import write_error_figures
+        from navtrack.experiments.alhat.figures import write_error_figures, write_fig16
 
-        return write_error_figures(out_dir, outcome.artifacts or [])
+        paths = write_error_figures(out_dir, outcome.artifacts or [])
+        fig16 = write_fig16(out_dir, outcome.runs[0]["regime"]) if outcome.runs else None
+        return [fig16, *paths] if fig16 else paths
 
     def summary_lines(self, results: dict[str, Any]) -> list[str]:
         return summary_lines(results)

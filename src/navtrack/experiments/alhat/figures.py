@@ -4,10 +4,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from navtrack.experiments.alhat.real import TrialOutcome
 
-__all__ = ["write_error_figures"]
+__all__ = ["write_error_figures", "write_fig16"]
 
 
 def write_error_figures(out_dir: Path, outcomes: Sequence[TrialOutcome]) -> list[Path]:
@@ -34,3 +37,37 @@ def write_error_figures(out_dir: Path, outcomes: Sequence[TrialOutcome]) -> list
         plt.close(fig)
         paths.append(path)
     return paths
+
+
+def write_fig16(out_dir: Path, run: dict[str, Any]) -> Path | None:
+    """``fig16_scalar_error.png``: ``e_s`` at the fixes of one regime run before and after each
+    sequence's correction (the paper's Fig. 16 A and C), sequences marked by colour."""
+    series = run.get("fix_series")
+    if not series:
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = np.asarray(series["t_since_first_fix_s"])
+    seq = np.asarray(series["sequence"])
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    for ax, key, title in (
+        (axes[0], "e_s_before_deg", "before the correction (Fig. 16 A)"),
+        (axes[1], "e_s_after_deg", "after the correction (Fig. 16 C)"),
+    ):
+        e = np.asarray(series[key])
+        for j in np.unique(seq):
+            sel = seq == j
+            ax.plot(t[sel], e[sel], ".-", ms=3, lw=0.6, label=f"sequence {j}")
+        ax.set_title(title)
+        ax.set_xlabel("seconds since the first fix")
+    axes[0].set_ylabel("scalar error e_s (deg)")
+    axes[0].legend(fontsize=8)
+    fig.suptitle("Paper's regime (LN-200, 30° camera, target patch), first run")
+    fig.tight_layout()
+    path = out_dir / "fig16_scalar_error.png"
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
