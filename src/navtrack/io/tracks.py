@@ -508,7 +508,14 @@ def velocity_local_enu(
 
 def local_enu_to_geodetic(en_m: ArrayLike, ref_lat_deg: float, ref_lon_deg: float) -> FloatArray:
     """Latitude and longitude of east/north positions in the tangent plane of
-    :func:`to_local_enu` (the inverse of that function).
+    :func:`to_local_enu`: its exact inverse.
+
+    :func:`to_local_enu` places a point of the ellipsoid (height 0) in the frame of the
+    reference and drops its up coordinate, i.e. projects it along the reference's normal onto
+    the tangent plane. The inverse goes back along that normal: the point of the ellipsoid on
+    the line ``ref + e·east + n·north + u·up`` nearest the plane, ``u`` the smaller root of the
+    line's quadratic with the ellipsoid ``(x² + y²)/a² + z²/b² = 1``. Setting ``u = 0`` instead
+    misplaces a point by 12 m at 100 km from the reference and 330 m at 300 km.
 
     Parameters
     ----------
@@ -520,16 +527,41 @@ def local_enu_to_geodetic(en_m: ArrayLike, ref_lat_deg: float, ref_lon_deg: floa
     Returns
     -------
     ndarray, shape (n, 2)
-        Geodetic latitude and longitude (deg, WGS-84) of the points (up = 0 in the plane, so
-        the points lie slightly above the ellipsoid away from the reference).
+        Geodetic latitude and longitude (deg, WGS-84) of the points of the ellipsoid that
+        project onto ``en_m``.
+
+    Raises
+    ------
+    ValueError
+        ``en_m`` not of shape (n, 2), or a point beyond the ellipsoid's horizon seen along the
+        reference's normal (more than about 6 000 km from the reference).
     """
-    from navtrack.geodesy import ecef_to_geodetic, enu_rotation, geodetic_to_ecef
+    from navtrack.geodesy import (
+        WGS84_A_M,
+        WGS84_E2,
+        ecef_to_geodetic,
+        enu_rotation,
+        geodetic_to_ecef,
+    )
 
     en = np.asarray(en_m, dtype=float)
     if en.ndim != 2 or en.shape[1] != 2:
         raise ValueError(f"en_m: expected shape (n, 2), got {en.shape}")
     lat0, lon0 = np.radians(ref_lat_deg), np.radians(ref_lon_deg)
-    enu = np.concatenate([en, np.zeros((len(en), 1))], axis=1)
-    # the rows of enu_rotation are the east, north, up unit vectors in ECEF
-    xyz = geodetic_to_ecef([lat0, lon0, 0.0]) + enu @ enu_rotation(lat0, lon0)
+    rot = enu_rotation(lat0, lon0)  # rows: east, north, up unit vectors in ECEF
+    p0 = geodetic_to_ecef([lat0, lon0, 0.0]) + en @ rot[:2]
+    up = rot[2]
+    w = np.array([1.0, 1.0, 1.0 / (1.0 - WGS84_E2)]) / WGS84_A_M**2  # 1/a², 1/a², 1/b²
+    qa = float(up @ (w * up))
+    qb = (p0 * w) @ up
+    qc = np.einsum("ij,ij->i", p0 * w, p0) - 1.0
+    disc = qb**2 - qa * qc
+    if np.any(disc < 0):
+        bad = int(np.flatnonzero(disc < 0)[0])
+        raise ValueError(
+            f"en_m: row {bad} ({en[bad, 0]:.0f}, {en[bad, 1]:.0f} m) lies beyond the horizon "
+            "of the tangent plane's reference"
+        )
+    u = -qc / (qb + np.sqrt(disc))  # the root nearest the plane, without cancellation
+    xyz = p0 + u[:, None] * up
     return np.degrees(ecef_to_geodetic(xyz)[:, :2])

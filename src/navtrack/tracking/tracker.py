@@ -61,12 +61,14 @@ from navtrack.tracking.models import (
 
 __all__ = [
     "DET_STATUS_NAMES",
+    "TRACK_END_NAMES",
     "DetStatus",
     "Initiation",
     "Management",
     "ScanAssociation",
     "ScanGate",
     "Seeds",
+    "TrackEnd",
     "TrackStore",
     "TrackerConfig",
     "TrackerCounts",
@@ -100,6 +102,18 @@ class DetStatus(IntEnum):
 
 
 DET_STATUS_NAMES = tuple(s.name.lower() for s in DetStatus)
+
+
+class TrackEnd(IntEnum):
+    """Why a track ended (``TrackerResult.end_reason``; names as written in the track table)."""
+
+    COAST = 0  # no update for longer than ``max_coast_s``
+    COVARIANCE = 1  # position standard deviation above ``max_position_std_m``
+    UNCONFIRMED = 2  # tentative, not confirmed within ``confirm_window_s``
+    END_OF_DATA = 3  # alive after the last detection
+
+
+TRACK_END_NAMES = tuple(s.name.lower() for s in TrackEnd)
 
 
 @dataclass(frozen=True, slots=True)
@@ -301,9 +315,11 @@ class TrackerResult:
     det_status : (N,) int8
         Fate of each detection, a :class:`DetStatus`: 0 confirmed-track update, 1 tentative-track
         update, 2 started a track, 3 seed never paired, 4 gated but not associated.
-    track_time_s, track_id, track_x, track_std_m, track_confirmed :
+    track_time_s, track_id, track_x, track_std_m, track_confirmed, track_p_update :
         One row per track update: time (s), id, state ``[x, vx, y, vy]`` (m, m/s), position
-        standard deviation ``sqrt(trace(P_pos)/2)`` (m), confirmed flag.
+        standard deviation ``sqrt(trace(P_pos)/2)`` (m), confirmed flag, and the probability
+        that a detection of this scan updated the track (1 for a GNN assignment; JPDA's
+        ``1 - β₀``: every soft update that moved the track has a row, also below 1/2).
     report_frame, report_id, report_xy :
         Confirmed tracks predicted to each requested report time (index into
         ``report_times``), for scoring.
@@ -316,6 +332,9 @@ class TrackerResult:
         ``log N(z; h(x), S)`` of each detection against the track it updated, mixed over the
         motion models with their predicted probabilities (NaN for detections that updated no
         track; the likelihood :mod:`navtrack.tracking.autotune` maximises over q).
+    end_id, end_time_s, end_reason : (K,)
+        One row per track: its id, when it ended (s; the time of the scan that deleted it, or
+        of the last scan) and why (a :class:`TrackEnd`).
     """
 
     det_track: IntArray
@@ -331,6 +350,10 @@ class TrackerResult:
     counts: TrackerCounts
     det_nis: FloatArray = field(default_factory=lambda: np.zeros(0))
     det_log_likelihood: FloatArray = field(default_factory=lambda: np.zeros(0))
+    track_p_update: FloatArray = field(default_factory=lambda: np.zeros(0))
+    end_id: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    end_time_s: FloatArray = field(default_factory=lambda: np.zeros(0))
+    end_reason: Int8Array = field(default_factory=lambda: np.zeros(0, dtype=np.int8))
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -787,6 +810,7 @@ class Management:
     id : (T,) track ids; x : (T, n) combined state; std_m : (T,) position standard deviation
         ``sqrt(trace(P_pos) / 2)``, m; confirmed : (T,) after this scan's confirmations
     kept : (T,) bool, still in the store
+    end_reason : (T,) int8, the :class:`TrackEnd` of each deleted track, -1 where kept
     confirmed_now, deleted_coast, deleted_covariance, deleted_unconfirmed : int
         Counts as in :class:`TrackerCounts`.
     """
@@ -796,6 +820,7 @@ class Management:
     std_m: FloatArray
     confirmed: BoolArray
     kept: BoolArray
+    end_reason: Int8Array
     confirmed_now: int
     deleted_coast: int
     deleted_covariance: int
@@ -830,12 +855,18 @@ def manage(store: TrackStore, hit: BoolArray, t_s: float, config: TrackerConfig)
     unconf = ~conf & (t_s - store.born_s > config.confirm_window_s)
     gone = coast | cov | unconf
     n_gone = np.count_nonzero(gone)
+    reason = np.full(gone.shape, -1, dtype=np.int8)
+    if n_gone:
+        reason[gone & conf & cov] = TrackEnd.COVARIANCE
+        reason[gone & conf & coast] = TrackEnd.COAST
+        reason[gone & ~conf] = TrackEnd.UNCONFIRMED
     out = Management(
         store.id.copy(),
         np.array(xc),
         std,
         conf,
         ~gone,
+        reason,
         int(np.count_nonzero(new_conf)),
         int(np.count_nonzero(coast & conf)) if n_gone else 0,
         int(np.count_nonzero(cov & ~coast & conf)) if n_gone else 0,
@@ -1131,7 +1162,7 @@ def run_tracker(
             det_ll[s0 + used] = g.log_likelihood_mix[k[used], used]
             hit = a.hit
             m = manage(store, hit, tk, cfg)
-            log.updates(tk, m, hit)
+            log.updates(tk, m, 1.0 - a.beta[:, 0])
             _add_counts(counts, a, m)
             claimed = a.associated if cfg.init_from == "unassociated" else g.gated
         free = np.flatnonzero(~claimed)
@@ -1144,6 +1175,7 @@ def run_tracker(
         det_status[ini.seed_det] = DetStatus.STARTED
         counts["tracks_started"] += int(np.count_nonzero(ini.track >= 0))
     log.report_until(store, now, now, cfg.motion, inclusive=True)
+    log.ends(now, store.id, np.full(store.size, TrackEnd.END_OF_DATA, dtype=np.int8))
     if progress is not None:
         progress(N - done)
     return log.result(
@@ -1191,15 +1223,31 @@ class _Log:
         self.rep_f: list[IntArray] = []
         self.rep_id: list[IntArray] = []
         self.rep_xy: list[FloatArray] = []
+        self.p: list[FloatArray] = []
+        self.end_t: list[FloatArray] = []
+        self.end_id: list[IntArray] = []
+        self.end_reason: list[Int8Array] = []
 
-    def updates(self, t_s: float, m: Management, hit: BoolArray) -> None:
-        upd = np.flatnonzero(hit)
+    def updates(self, t_s: float, m: Management, p_update: FloatArray) -> None:
+        """Rows for the tracks a detection moved this scan (``p_update > 0``), and the ends of
+        the tracks :func:`manage` deleted."""
+        upd = np.flatnonzero(p_update > 0.0)
         if upd.size:
             self.t.append(np.full(upd.size, t_s))
             self.id.append(m.id[upd])
             self.x.append(m.x[upd])
             self.std.append(m.std_m[upd])
             self.conf.append(m.confirmed[upd])
+            self.p.append(p_update[upd])
+        gone = np.flatnonzero(~m.kept)
+        if gone.size:
+            self.ends(t_s, m.id[gone], m.end_reason[gone])
+
+    def ends(self, t_s: float, ids: IntArray, reason: Int8Array) -> None:
+        if ids.size:
+            self.end_t.append(np.full(ids.size, t_s))
+            self.end_id.append(np.asarray(ids, dtype=np.int64))
+            self.end_reason.append(np.asarray(reason, dtype=np.int8))
 
     def report_until(
         self, store: TrackStore, now_s: float, limit_s: float, motion: LinearMotion, inclusive: bool
@@ -1241,4 +1289,8 @@ class _Log:
             counts,
             det_nis,
             det_ll,
+            cat(self.p, (0,), float),
+            cat(self.end_id, (0,), np.int64),
+            cat(self.end_t, (0,), float),
+            cat(self.end_reason, (0,), np.int8),
         )
