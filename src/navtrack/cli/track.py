@@ -111,6 +111,12 @@ def register(subparsers: Any) -> None:
         help="do not use reported speed/course for one-point track initiation",
     )
     p.add_argument(
+        "--keep-stale",
+        action="store_true",
+        help="track reports that repeat an earlier position while their reported speed says "
+        "the target moved on (skipped by default: they are not measurements at their time)",
+    )
+    p.add_argument(
         "--max-range-km",
         type=float,
         default=1000.0,
@@ -153,7 +159,13 @@ def run_track(args: argparse.Namespace) -> int:
     import numpy as np
 
     from navtrack.errors import FileFormatError
-    from navtrack.io.tracks import detect_format, read_tracks, to_local_enu, velocity_local_enu
+    from navtrack.io.tracks import (
+        detect_format,
+        read_tracks,
+        stale_repeats,
+        to_local_enu,
+        velocity_local_enu,
+    )
     from navtrack.tracking.metrics import clear_mot, hota, interpolate_truth
     from navtrack.tracking.tracker import DET_STATUS_NAMES, run_tracker
 
@@ -214,8 +226,17 @@ def run_track(args: argparse.Namespace) -> int:
     for key, value in input_warnings(det, en).items():
         summary[key] = value
         print(f"navtrack track: {key}: {value}", file=sys.stderr)
+    stale = stale_repeats(det.t_gps_s, en, det.speed_mps)
+    if args.keep_stale:
+        if stale.any():
+            key = "warning: stale repeats kept"
+            summary[key] = f"{int(stale.sum())} reports repeat an earlier position (--keep-stale)"
+            print(f"navtrack track: {key}: {summary[key]}", file=sys.stderr)
+        stale[:] = False
+    use = ~stale
+    summary["stale repeats skipped"] = int(stale.sum())
     clock = time.perf_counter()
-    cfg, tune = model_config(args, det.t_gps_s, en, vel)
+    cfg, tune = model_config(args, det.t_gps_s[use], en[use], None if vel is None else vel[use])
     t_tune = time.perf_counter() - clock
     t0 = det.t_gps_s[0]
     n_frames = int((det.t_gps_s[-1] - t0) // report_s) + 1
@@ -228,7 +249,14 @@ def run_track(args: argparse.Namespace) -> int:
     grid = t0 + np.arange(0.0, det.t_gps_s[-1] - t0 + 1e-9, report_s)
     clock = time.perf_counter()
     with _progress(len(det), quiet=args.quiet) as progress:
-        res = run_tracker(det.t_gps_s, en, cfg, report_times=grid, velocity=vel, progress=progress)
+        res = run_tracker(
+            det.t_gps_s[use],
+            en[use],
+            cfg,
+            report_times=grid,
+            velocity=None if vel is None else vel[use],
+            progress=progress,
+        )
     t_track = time.perf_counter() - clock
     status = np.bincount(res.det_status, minlength=len(DET_STATUS_NAMES))
     summary["reference (lat, lon deg)"] = f"{ref[0]:.6f} {ref[1]:.6f}"
@@ -255,7 +283,11 @@ def run_track(args: argparse.Namespace) -> int:
         )
     has_ids = bool(np.any(det.id != ""))
     if has_ids:
-        tf, tid, tpos = interpolate_truth(grid, det.t_gps_s, det.id, en, max_gap_s)
+        # truth: each id's own reports, its stale repeats left out (scoring rule: docs)
+        fresh = ~stale_repeats(det.t_gps_s, en, det.speed_mps, det.id)
+        tf, tid, tpos = interpolate_truth(
+            grid, det.t_gps_s[fresh], det.id[fresh], en[fresh], max_gap_s
+        )
         mot = clear_mot(tf, tid, tpos, res.report_frame, res.report_id, res.report_xy, match_m)
         summary["scoring"] = (
             f"{len(grid)} frames every {report_s:g} s, match within {match_m:g} m, "
@@ -285,7 +317,7 @@ def run_track(args: argparse.Namespace) -> int:
         from navtrack.plots.tracks import plot_tracks
 
         path = plot_tracks(
-            args.plot, en, res, title=f"{args.file.name} ({args.associator})", ref_deg=ref
+            args.plot, en[use], res, title=f"{args.file.name} ({args.associator})", ref_deg=ref
         )
         print(f"plot written to {path}")
     return 0

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
-from navtrack._typing import ArrayLike, FloatArray, IntArray, StrPath
+from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.io.tables import last_row_cut, read_csv_text
 
@@ -39,12 +39,19 @@ __all__ = [
     "read_opensky_csv",
     "read_track_csv",
     "read_tracks",
+    "stale_repeats",
     "to_local_enu",
     "velocity_local_enu",
 ]
 
 UNIX_TO_GPS_EPOCH_S = 315964800.0  # 1980-01-06T00:00:00 UTC in Unix seconds
 KNOT_MPS = 1852.0 / 3600.0
+STALE_MOVE_M = 25.0
+"""A repeated position is stale when the reported speed says the target moved farther than this
+since the position was first reported (:func:`stale_repeats`; the tracker's σ floor) ..."""
+STALE_MIN_SPEED_MPS = 1.0
+"""... at a reported speed above this (a moored ship's speed over ground wanders up to ~0.5 kn,
+0.26 m/s, while its position repeats)."""
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -565,3 +572,52 @@ def local_enu_to_geodetic(en_m: ArrayLike, ref_lat_deg: float, ref_lon_deg: floa
     u = -qc / (qb + np.sqrt(disc))  # the root nearest the plane, without cancellation
     xyz = p0 + u[:, None] * up
     return np.degrees(ecef_to_geodetic(xyz)[:, :2])
+
+
+def stale_repeats(
+    t_s: ArrayLike,
+    position: ArrayLike,
+    speed_mps: ArrayLike,
+    ids: ArrayLike | None = None,
+    min_move_m: float = STALE_MOVE_M,
+) -> BoolArray:
+    """Reports that repeat an earlier position of a target that has since moved on.
+
+    ADS-B state vectors (OpenSky's one per aircraft per second, receivers' 1 s outputs) and
+    some AIS feeds repeat the last decoded position at every output time until a new one is
+    decoded: the report's time advances, its position does not. Such a report is not a
+    measurement at its time; at 250 m/s, one second stale puts it 250 m behind the aircraft,
+    outside the gate of a track fed 1 s reports, and it starts a duplicate track. A report is
+    stale here when its position equals that of an earlier report exactly (bit for bit: two
+    moving targets never share a position to 1e-15°) and its own reported speed
+    times the time since that earlier report exceeds ``min_move_m``, at a speed above
+    :data:`STALE_MIN_SPEED_MPS`. A moored ship repeating its position at a speed over ground
+    of a few tenths of a knot is not stale; without a reported speed nothing is.
+
+    Parameters
+    ----------
+    t_s : (N,) report times, s (any order)
+    position : (N, 2) positions as read (latitude/longitude, or their tangent-plane east/north:
+        the same repeats)
+    speed_mps : (N,) reported speed over ground (NaN unknown)
+    ids : (N,) or None
+        Target ids: repeats are then sought within each id only (scoring truth); ``None`` for
+        the tracker's input, whose ids are hidden.
+    min_move_m : float
+
+    Returns
+    -------
+    (N,) bool
+    """
+    import pandas as pd
+
+    t = np.asarray(t_s, dtype=float)
+    pos = np.asarray(position, dtype=float)
+    keys: dict[str, Any] = {"p0": pos[:, 0], "p1": pos[:, 1]}
+    if ids is not None:
+        keys["id"] = np.asarray(ids)
+    df = pd.DataFrame(keys)
+    first = pd.Series(t).groupby([df[k] for k in keys], sort=False).transform("min").to_numpy()
+    speed = np.asarray(speed_mps, dtype=float)
+    moved = speed * (t - first)
+    return np.asarray(np.isfinite(moved) & (moved > min_move_m) & (speed > STALE_MIN_SPEED_MPS))

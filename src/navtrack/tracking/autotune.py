@@ -520,6 +520,7 @@ def auto_config(
         init_from="unassociated",
         imm_q=imm_q,
         scan_window_s=min(dt10, 10.0),
+        gnn_density_at_gate=imm_q is None,
     )
     kq = min(t.size, TRIAL_DETECTIONS)
     vq = None if velocity is None else np.asarray(velocity, dtype=float)[:kq]

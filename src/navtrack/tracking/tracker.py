@@ -77,6 +77,7 @@ __all__ = [
     "associate",
     "associate_gnn",
     "associate_jpda",
+    "gate_edge_log_density",
     "gate_scan",
     "initiate",
     "manage",
@@ -132,6 +133,14 @@ class TrackerConfig:
     ``scan_window_s``: reports at distinct times within this span are processed as one scan
     (:func:`scan_windows`); 0 = one scan per distinct time.
 
+    ``gnn_density_at_gate``: GNN only. False: one competing-report density
+    ``clutter_density`` for every track. True: each track's own, the density at which a
+    report on the edge of its gate ties a missed detection (:func:`gate_edge_log_density`,
+    from the track's predicted innovation covariance), so that every report inside a gate
+    is worth assigning; one λ from σ alone keeps a report only well inside the gate of a
+    track whose prediction is uncertain (NIS below 3.7 against a gate at 18.4 for 10 s
+    ADS-B reports), and the reports it leaves start duplicate tracks.
+
     The defaults suit ships (AIS); :meth:`for_aircraft` gives ADS-B values.
     """
 
@@ -155,6 +164,7 @@ class TrackerConfig:
     imm_q: tuple[float, ...] | None = None
     imm_sojourn_s: float = 300.0
     scan_window_s: float = 0.0
+    gnn_density_at_gate: bool = False
 
     def __post_init__(self) -> None:
         if self.motion.ndim != 2:
@@ -569,6 +579,8 @@ class ScanGate:
     log_likelihood_mix : (T, M) log of the model mixture with the predicted probabilities
     d2 : (T, r, M) normalised innovation squared ``νᵀ S⁻¹ ν`` per model (``inf`` where the
         pre-gate did not compute it)
+    S_mix : (T, m, m) innovation covariance of the model mixture, ``Σ_r μ_r S_r`` with the
+        predicted model probabilities (``S[:, 0]`` for one model)
     """
 
     innovation: FloatArray
@@ -578,6 +590,7 @@ class ScanGate:
     log_likelihood: FloatArray
     log_likelihood_mix: FloatArray
     d2: FloatArray
+    S_mix: FloatArray
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -638,12 +651,15 @@ def gate_scan(
     ll_rm = g.log_likelihood().reshape(T, r, M)
     if cand is not None:  # pairs left out by the pre-gate (d2 = inf)
         ll_rm = np.where(np.isfinite(ll_rm), ll_rm, -1e300)
+    S_rm = S.reshape(T, r, m, m)
     if r == 1:  # the mixture of one model is the model
         ll_mix = ll_rm[:, 0]
+        S_mix = S_rm[:, 0]
     else:  # mixture likelihood over models with the predicted model probabilities
         c_pred = store.mu
         a = np.log(np.where(c_pred > 0, c_pred, 1e-300))[:, :, None] + ll_rm
         ll_mix = np.logaddexp.reduce(a, axis=1)
+        S_mix = np.einsum("tr,trij->tij", c_pred, S_rm)
     return ScanGate(
         g.innovation.reshape(T, r, M, m),
         S.reshape(T, r, m, m),
@@ -652,6 +668,7 @@ def gate_scan(
         ll_rm,
         ll_mix,
         g.d2.reshape(T, r, M),
+        S_mix,
     )
 
 
@@ -698,19 +715,46 @@ class ScanAssociation:
         return np.asarray(self.beta[:, 1:].sum(axis=0) >= 0.5)
 
 
+def gate_edge_log_density(
+    S: FloatArray, pd: float, gate_probability: float, gamma: float
+) -> FloatArray:
+    """``log λ`` at which a report on the gate of innovation covariance ``S`` ties a miss.
+
+    ``λ = P_D / (1 - P_D P_G) · exp(-γ / 2) / sqrt(det(2π S))``: with it the GNN cost of a
+    pair, ``-(log N(ν; 0, S) + log P_D - log λ)``, equals the cost of a missed track,
+    ``-log(1 - P_D P_G)``, exactly at ``νᵀ S⁻¹ ν = γ``.
+
+    Parameters
+    ----------
+    S : (..., m, m) innovation covariances
+    """
+    m = S.shape[-1]
+    _sign, logdet = np.linalg.slogdet(S)
+    return np.asarray(
+        np.log(pd)
+        - np.log1p(-pd * gate_probability)
+        - 0.5 * gamma
+        - 0.5 * (m * np.log(2 * np.pi) + logdet)
+    )
+
+
 def associate_gnn(
-    gated: ScanGate, pd: float, gate_probability: float, clutter_density: float
+    gated: ScanGate,
+    pd: float,
+    gate_probability: float,
+    clutter_density: float | FloatArray,
 ) -> ScanAssociation:
     """Stage 3 (GNN): optimal 2-D assignment maximising the likelihood ratio.
 
     Cost of a gated pair ``-(log L_mix + log P_D - log λ)``, of a missed track
-    ``-log(1 - P_D P_G)`` (Blackman & Popoli 1999, 6.2).
+    ``-log(1 - P_D P_G)`` (Blackman & Popoli 1999, 6.2). ``clutter_density``: one λ, or one
+    per track ``(T,)`` (``TrackerConfig.gnn_density_at_gate``).
     """
     from navtrack.tracking.assignment import assign2d
 
     log_miss = np.log1p(-pd * gate_probability)
-    log_det_gain = np.log(pd) - np.log(clutter_density)
     T, M = gated.valid.shape
+    log_det_gain = np.broadcast_to(np.log(pd) - np.log(clutter_density), (T,))[:, None]
     beta = np.zeros((T, M + 1))
     beta[:, 0] = 1.0
     # a track that gates no detection takes its miss column in every optimum: the assignment
@@ -718,7 +762,7 @@ def associate_gnn(
     rows = np.flatnonzero(gated.valid.any(axis=1))
     if rows.size:
         valid = gated.valid[rows]
-        cost = np.where(valid, -(gated.log_likelihood_mix[rows] + log_det_gain), np.inf)
+        cost = np.where(valid, -(gated.log_likelihood_mix[rows] + log_det_gain[rows]), np.inf)
         if valid.sum(axis=0).max() == 1:  # no detection in two gates: each track on its own
             best = np.argmin(cost, axis=1)
             a_t = np.where(cost[np.arange(rows.size), best] < -log_miss, best, -1)
@@ -748,7 +792,11 @@ def associate(gated: ScanGate, model: TrackerModel) -> ScanAssociation:
     """Stage 3: :func:`associate_gnn` or :func:`associate_jpda`, as ``config.associator`` says."""
     cfg = model.config
     if cfg.associator == "gnn":
-        return associate_gnn(gated, cfg.pd, cfg.gate_probability, cfg.clutter_density)
+        density: float | FloatArray = cfg.clutter_density
+        if cfg.gnn_density_at_gate:
+            log_lam = gate_edge_log_density(gated.S_mix, cfg.pd, cfg.gate_probability, model.gamma)
+            density = np.exp(log_lam)
+        return associate_gnn(gated, cfg.pd, cfg.gate_probability, density)
     return associate_jpda(gated, model.jpda)
 
 
@@ -1094,7 +1142,6 @@ def run_tracker(
     progress : callable or None
         Called after each scan with the number of detections that scan held (e.g. a tqdm
         bar's ``update``).
-
     Raises
     ------
     ValueError
