@@ -233,7 +233,7 @@ def run_track(args: argparse.Namespace) -> int:
     use = ~stale
     summary["stale repeats skipped"] = int(stale.sum())
     clock = time.perf_counter()
-    cfg, tune = model_config(args, det.t_gps_s[use], en[use], None if vel is None else vel[use])
+    cfg, tune = model_config(args, det.t_gps_s, en, vel)  # tuned on the reports as read
     t_tune = time.perf_counter() - clock
     t0 = det.t_gps_s[0]
     n_frames = int((det.t_gps_s[-1] - t0) // report_s) + 1

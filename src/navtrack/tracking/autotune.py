@@ -520,13 +520,12 @@ def auto_config(
         init_from="unassociated",
         imm_q=imm_q,
         scan_window_s=min(dt10, 10.0),
-        gnn_density_at_gate=imm_q is None,
     )
     kq = min(t.size, TRIAL_DETECTIONS)
     vq = None if velocity is None else np.asarray(velocity, dtype=float)[:kq]
     gnn = replace(cfg, associator="gnn")  # the trials, like the first pass, use GNN
     q_fit, trials = fit_q(t[:kq], Z[:kq], vq, gnn, q if imm_q is None else imm_q[1])
-    cfg = _with_q(cfg, q_fit)
+    cfg = replace(_with_q(cfg, q_fit), gnn_density_at_gate=imm_q is None)
     if associator == "jpda":  # module notes, step 5
         s_bar = steady_innovation_variance(q_fit if imm_q is None else imm_q[0], sigma, dt50)
         cfg = replace(cfg, clutter_density=gate_edge_density(pd, pg, s_bar))
