@@ -63,8 +63,9 @@ EPOCH = dt.datetime(2000, 1, 1)
 
 
 def load(name: str) -> dict[str, tuple]:
-    """First and second halves: (t, en, vel, ids) with stale repeats left out, and the
-    scoring truth (fresh reports within each id)."""
+    """First and second halves: (t, en, vel, ids) with stale repeats left out, the scoring
+    truth (fresh reports within each id), and (t, en, vel) as read (``auto`` tunes on them,
+    as ``navtrack track`` does)."""
     fname, fmt = FILES[name]
     det = read_tracks(DATA / fname, fmt)
     en, ref = to_local_enu(det)
@@ -76,7 +77,11 @@ def load(name: str) -> dict[str, tuple]:
     out = {}
     for half, part in (("h1", t < mid), ("h2", t >= mid)):
         k, f = part & use, part & fresh
-        out[half] = ((t[k], en[k], vel[k], ids[k]), (t[f], en[f], ids[f]))
+        out[half] = (
+            (t[k], en[k], vel[k], ids[k]),
+            (t[f], en[f], ids[f]),
+            (t[part], en[part], vel[part]),
+        )
     return out
 
 
@@ -192,7 +197,7 @@ def report(
 
 
 def score_stonesoup(half: tuple, assoc: str, setting: dict, fixed: dict, scan_s: float) -> tuple:
-    (t, en, _vel, _ids), (tf, ef, idf) = half
+    (t, en, _vel, _ids), (tf, ef, idf), _read = half
     rule = scoring_rule(tf, idf)
     grid = t[0] + np.arange(0.0, t[-1] - t[0] + 1e-9, rule.report_s)
     clock = time.perf_counter()
@@ -202,7 +207,7 @@ def score_stonesoup(half: tuple, assoc: str, setting: dict, fixed: dict, scan_s:
 
 
 def score_navtrack(half: tuple, assoc: str, cfg) -> tuple[Scores, float]:
-    (t, en, vel, _ids), (tf, ef, idf) = half
+    (t, en, vel, _ids), (tf, ef, idf), _read = half
     rule = scoring_rule(tf, idf)
     grid = t[0] + np.arange(0.0, t[-1] - t[0] + 1e-9, rule.report_s)
     clock = time.perf_counter()
@@ -249,7 +254,7 @@ def main(argv: list[str] | None = None) -> int:
                     best, best_h = st, sc.hota
             h2 = halves["h2"]
             clock = time.perf_counter()
-            cfg = auto_config(h2[0][0], h2[0][1], h2[0][2], assoc).config
+            cfg = auto_config(*h2[2], assoc).config
             tune_s = time.perf_counter() - clock
             t_ss, t_nt = [], []
             for _ in range(a.reps):
