@@ -278,7 +278,6 @@ def run_track(args: argparse.Namespace) -> int:
         summary["jpda clusters (exact, k-best)"] = (
             f"{res.counts.jpda_exact_clusters} {res.counts.jpda_kbest_clusters}"
         )
-    scores = None
     if has_ids:
         scores = score_tracks(
             grid,
