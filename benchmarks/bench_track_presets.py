@@ -4,8 +4,9 @@ Run: ``NAVTRACK_SHARED_DATA=../shared/data PYTHONPATH=src python
 benchmarks/bench_track_presets.py [--associator gnn|jpda] [--quick]``.
 
 Every file is split in time at the middle of its span. Rows are what chose the model, columns
-where it is scored (MOTA / HOTA / confirmed tracks : ids); the scoring grid, match threshold and
-truth interpolation are the CLI's for the file's format:
+where it is scored (MOTA / HOTA / IDF1 / confirmed tracks : ids), by the CLI's one scoring rule
+(:mod:`navtrack.tracking.scoring`; the tracker skips stale repeats as the CLI does, ``auto``
+tunes on the reports as read):
 
 - ``ships`` and ``aircraft``: the presets (chosen on the whole Solent / OpenSky file: in sample
   on their own file, out of sample on the other);
@@ -33,13 +34,12 @@ from pathlib import Path
 
 import numpy as np
 
-from navtrack.io.tracks import read_tracks, to_local_enu, velocity_local_enu
+from navtrack.io.tracks import read_tracks, stale_repeats, to_local_enu, velocity_local_enu
 from navtrack.tracking.autotune import auto_config
-from navtrack.tracking.metrics import clear_mot, hota, interpolate_truth
+from navtrack.tracking.scoring import score_tracks, scoring_rule
 from navtrack.tracking.tracker import TrackerConfig, run_tracker
 
 DATA = Path(os.environ.get("NAVTRACK_SHARED_DATA", "../shared/data")) / "tracking"
-SCORING = {"ais": (60.0, 400.0, 500.0), "opensky": (10.0, 60.0, 2000.0)}
 
 
 def _part(t, en, vel, ids, mask):
@@ -47,7 +47,7 @@ def _part(t, en, vel, ids, mask):
 
 
 def load_parts() -> dict[str, tuple]:
-    """Named parts: (t, en, vel, ids, scoring) each."""
+    """Named parts: (t, en, vel, ids) each."""
     parts: dict[str, tuple] = {}
     for name, fname, fmt in (
         ("solent", "SolentAIS_20160112_130211.csv", "ais"),
@@ -63,18 +63,18 @@ def load_parts() -> dict[str, tuple]:
             ("h1", t < mid),
             ("h2", t >= mid),
         ):
-            parts[f"{name} {key}"] = (*_part(t, en, vel, ids, mask), SCORING[fmt])
+            parts[f"{name} {key}"] = _part(t, en, vel, ids, mask)
         west = det.lon_deg < np.median(det.lon_deg)
         if name == "solent":
-            parts["solent west"] = (*_part(t, en, vel, ids, west), SCORING[fmt])
-            parts["solent east"] = (*_part(t, en, vel, ids, ~west), SCORING[fmt])
+            parts["solent west"] = _part(t, en, vel, ids, west)
+            parts["solent east"] = _part(t, en, vel, ids, ~west)
         if name == "opensky":
             epochs = np.unique(t)
             thin = np.isin(t, epochs[::2])
-            parts["opensky 20 s"] = (*_part(t, en, vel, ids, thin), (20.0, 120.0, 2000.0))
-            parts["opensky west"] = (*_part(t, en, vel, ids, west), SCORING[fmt])
-            parts["opensky east"] = (*_part(t, en, vel, ids, ~west), SCORING[fmt])
-            parts["opensky csv"] = (*_csv_layout(det), (60.0, 400.0, 500.0))
+            parts["opensky 20 s"] = _part(t, en, vel, ids, thin)
+            parts["opensky west"] = _part(t, en, vel, ids, west)
+            parts["opensky east"] = _part(t, en, vel, ids, ~west)
+            parts["opensky csv"] = _csv_layout(det)
     return parts
 
 
@@ -105,25 +105,33 @@ def _csv_layout(det) -> tuple:
 
 
 def score(part: tuple, cfg: TrackerConfig) -> dict[str, float]:
-    t, en, vel, ids, (report_s, gap_s, match_m) = part
-    grid = t[0] + np.arange(0.0, t[-1] - t[0] + 1e-9, report_s)
+    """Track a part as ``navtrack track`` does (stale repeats skipped) and score it by the
+    CLI's rule."""
+    t, en, vel, ids = part
+    speed = np.hypot(vel[:, 0], vel[:, 1])
+    use = ~stale_repeats(t, en, speed)
+    fresh = ~stale_repeats(t, en, speed, ids)
+    rule = scoring_rule(t[fresh], ids[fresh])
+    grid = t[0] + np.arange(0.0, t[-1] - t[0] + 1e-9, rule.report_s)
     clock = time.perf_counter()
-    res = run_tracker(t, en, cfg, report_times=grid, velocity=vel)
+    res = run_tracker(t[use], en[use], cfg, report_times=grid, velocity=vel[use])
     elapsed = time.perf_counter() - clock
-    tf, tid, tp = interpolate_truth(grid, t, ids, en, gap_s)
-    args = (tf, tid, tp, res.report_frame, res.report_id, res.report_xy, match_m)
-    m, h = clear_mot(*args), hota(*args)
+    sc = score_tracks(
+        grid, t[fresh], en[fresh], ids[fresh], res.report_frame, res.report_id, res.report_xy, rule
+    )
     return {
-        "mota": m.mota,
-        "hota": h.hota,
+        "mota": sc.mota,
+        "hota": sc.hota,
+        "idf1": sc.idf1,
+        "switches": sc.id_switches,
         "confirmed": res.counts.tracks_confirmed,
-        "ids": int(np.unique(ids).size),
+        "ids": sc.n_ids,
         "time_s": elapsed,
     }
 
 
 def _cell(r: dict[str, float]) -> str:
-    return f"{r['mota']:.3f} / {r['hota']:.3f} / {r['confirmed']}:{r['ids']}"
+    return f"{r['mota']:.3f} / {r['hota']:.3f} / {r['idf1']:.3f} / {r['confirmed']}:{r['ids']}"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -173,7 +181,7 @@ def main(argv: list[str] | None = None) -> int:
         rows["auto in sample"][c] = score(p, cfg) | {"tune_s": tune_s}
     print("auto in sample", {c: _cell(r) for c, r in rows["auto in sample"].items()}, flush=True)
     print()
-    print(f"MOTA / HOTA / confirmed tracks:ids ({a.associator}); rows: what chose the model")
+    print(f"MOTA / HOTA / IDF1 / confirmed tracks:ids ({a.associator}); rows: what chose the model")
     print("| chosen on \\ scored on | " + " | ".join(cols) + " |")
     print("|---" * (len(cols) + 1) + "|")
     for name, r in rows.items():

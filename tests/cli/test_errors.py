@@ -57,8 +57,8 @@ def test_unexpected_exception_is_short_unless_debug(
     ("command", "option", "default"),
     [
         ("track", "--associator", "gnn"),
-        ("track", "--report-s", "60 for ais"),
-        ("track", "--match-m", "500 for ais, 2000 for opensky"),
+        ("track", "--report-s", "the median over the ids of their median report interval"),
+        ("track", "--match-m", "500"),
         ("track", "--max-time-days", "30"),
         ("pos", "--iono", "klobuchar"),
         ("pos", "--elmask", "15"),

@@ -221,3 +221,24 @@ def test_steady_innovation_variance_is_the_kalman_fixed_point() -> None:
     # the density on the gate falls with the innovation variance: λ(σ²) / λ(S) = S / σ²
     ratio = gate_edge_density(0.9, 0.9999, sigma**2) / gate_edge_density(0.9, 0.9999, s)
     assert ratio == pytest.approx(s / sigma**2)
+
+
+def test_auto_coast_spans_the_gaps_of_fast_reports(shared_data) -> None:
+    """Real 1 s GPS reports of one UAV with gaps cut into them (every 40 s, 6 s missing, as a
+    1 s ADS-B feed has): the median interval stays 1 s, and a coast of two median intervals
+    would delete the track at every gap. The coast spans the gaps: one confirmed track."""
+    from navtrack.io.tracks import read_tracks, to_local_enu
+
+    det = read_tracks(
+        shared_data / "tracking" / "UAV_Rot.csv",
+        "csv",
+        columns={"lat": "latitude", "lon": "longitude", "alt_m": "altitude (m)"},
+    )
+    en, _ = to_local_enu(det)
+    t = det.t_gps_s
+    keep = ((t - t[0]) % 40.0) < 34.0
+    tune = auto_config(t[keep], en[keep])
+    assert tune.report_interval_p95_s == 1.0
+    assert tune.config.max_coast_s >= 2 * 7.0  # the 7 s between the reports around a gap
+    res = run_tracker(t[keep], en[keep], tune.config)
+    assert res.counts.tracks_confirmed == 1

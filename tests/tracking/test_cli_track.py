@@ -96,8 +96,8 @@ def test_track_command_scores_a_one_minute_file(
     # issue 9, failure 3: a file shorter than a minute had no track at its one scoring frame and
     # scorer raised "cannot reshape array of size 0"; now every truth object is a miss
     f = tmp_path / "short.csv"
-    f.write_text(_ships(5))  # 50 s: one scoring frame, at the first report
-    assert main(["track", str(f), "--format", "csv"]) == 0
+    f.write_text(_ships(5))  # 50 s: one scoring frame of 60 s, at the first report
+    assert main(["track", str(f), "--format", "csv", "--report-s", "60"]) == 0
     text = capsys.readouterr().out
     assert re.search(r"truth objects / matches / misses / false +2 0 2 0\n", text)
 
@@ -108,13 +108,13 @@ def test_track_command_skips_a_century_old_row_and_bounds_the_grid(
     # issue 9, failure 1: one row dated 1920 made the report grid span a century (hang, GBs)
     f = tmp_path / "ships.csv"
     f.write_text(_ships(12, "1920-01-01T00:00:30Z,50.0,-1.0,s0\n"))
-    assert main(["track", str(f), "--format", "csv"]) == 0
+    assert main(["track", str(f), "--format", "csv", "--report-s", "60"]) == 0
     text = capsys.readouterr().out
     assert "time more than 30 days from the median time: 1" in text
     assert "3 frames every 60 s" in text
     # with the time check off, the grid size is refused before it is allocated
     with pytest.raises(SystemExit, match=r"--report-s 60 .* more than 1000000") as info:
-        main(["track", str(f), "--format", "csv", "--max-time-days", "1e6"])
+        main(["track", str(f), "--format", "csv", "--max-time-days", "1e6", "--report-s", "60"])
     assert info.value.code == 2
     assert "navtrack track: error: --report-s 60 " in capsys.readouterr().err
 
@@ -354,3 +354,54 @@ def test_track_example_runs_on_the_bundled_ais_cut(capsys: pytest.CaptureFixture
     assert re.search(r"ids +79\n", out)
     mota = float(re.search(r"MOTA +([-0-9.]+)", out).group(1))  # type: ignore[union-attr]
     assert 0.2 < mota <= 1.0  # scored against the hidden MMSIs
+
+
+def test_track_file_has_exact_positions_speeds_and_a_track_table(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # The OpenSky file spans 470 km: lat/lon written from the state must map back onto the
+    # state (the exact inverse of the tangent plane); speed and course are the state's velocity
+    # in each track's own north/east and agree with the transponders' reported heading; JPDA's
+    # soft updates below 1/2 have rows; every track has one row in the table with its end.
+    import json
+
+    import pandas as pd
+
+    from navtrack.geodesy import ecef_to_enu, geodetic_to_ecef
+
+    src = shared_data / "tracking" / "OpenSky_Plane_States.csv"
+    out = tmp_path / "t.csv"
+    assert main(["track", str(src), "--associator", "jpda", "--quiet", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert re.search(r"IDF1 \(IDP, IDR\) +0\.\d+ \(0\.\d+, 0\.\d+\)", text)
+    df = pd.read_csv(out)
+    meta = json.loads(Path(f"{out}.json").read_text())
+    lat0, lon0 = np.radians(meta["reference_lat_deg"]), np.radians(meta["reference_lon_deg"])
+    n = len(df)
+    xyz = geodetic_to_ecef(
+        np.stack([np.radians(df.lat_deg), np.radians(df.lon_deg), np.zeros(n)], axis=1)
+    )
+    en = ecef_to_enu(xyz, geodetic_to_ecef([lat0, lon0, 0.0]))[:, :2]
+    assert np.hypot(df.x_m, df.y_m).max() > 200e3  # far from the reference: a real test
+    assert np.hypot(en[:, 0] - df.x_m, en[:, 1] - df.y_m).max() < 1e-3
+    # course against the reported heading of the aircraft nearest each confirmed row
+    raw = pd.read_csv(src)
+    conf = df[df.confirmed & (df.speed_mps > 50)]
+    epoch = pd.Timestamp("1970-01-01", tz="UTC")
+    t_row = (pd.to_datetime(conf.time) - epoch).dt.total_seconds().to_numpy()
+    diffs = []
+    for k in range(0, len(conf), 25):
+        same = raw[np.abs(raw.time - t_row[k]) < 0.5]
+        d = np.hypot(same.lat - conf.lat_deg.iloc[k], same.lon - conf.lon_deg.iloc[k])
+        heading = same.heading.to_numpy()[np.argmin(d.to_numpy())]
+        diffs.append((conf.course_deg.iloc[k] - heading + 180) % 360 - 180)
+    assert np.median(np.abs(diffs)) < 3.0
+    assert (df.p_update < 0.5).any()
+    assert (df.p_update > 0).all()
+    assert np.isfinite(df.alt_m[df.confirmed]).mean() > 0.9
+    table = pd.read_csv(tmp_path / "t.tracks.csv")
+    assert table.track_id.is_unique
+    started = int(re.search(r"tracks started / confirmed +(\d+)", text).group(1))
+    assert len(table) == started
+    assert set(table.end_reason) <= {"coast", "covariance", "unconfirmed", "end_of_data"}
+    assert {"coast", "end_of_data"} <= set(table.end_reason)

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from navtrack.io.tracks import read_tracks, to_local_enu
-from navtrack.tracking.metrics import clear_mot, hota, interpolate_truth
+from navtrack.tracking.metrics import clear_mot, hota, id_scores, interpolate_truth
 
 # (file, format, report interval s, max truth gap s, match threshold m): the CLI's defaults
 FILES = {
@@ -78,6 +78,9 @@ def _motmetrics(tf, tid, tpos, hf, hid, hpos, threshold):
         d[d > threshold] = np.nan  # pairs beyond the threshold cannot match
         acc.update(list(tid[ti]), list(hid[hi]), d, frameid=int(f))
     names = [
+        "idf1",
+        "idp",
+        "idr",
         "mota",
         "motp",
         "num_switches",
@@ -125,6 +128,17 @@ def test_clear_mot_equals_motmetrics(shared_data: Path, name: str, source: str) 
     assert ours.motp == pytest.approx(ref["motp"], rel=1e-12)
     if source == "perturbed":
         assert ours.fragmentations > 0
+
+
+@pytest.mark.parametrize(("name", "source"), CASES)
+def test_id_scores_equal_motmetrics(shared_data: Path, name: str, source: str) -> None:
+    (tf, tid, tpos), (hf, hid, hpos), match_m = _hypotheses(shared_data, name, source)
+    ours = id_scores(tf, tid, tpos, hf, hid, hpos, match_m)
+    ref = _motmetrics(tf, tid, tpos, hf, hid, hpos, match_m)
+    assert 0.3 < ours.idf1 < 0.99  # id swaps and false tracks leave room on both sides
+    assert ours.idf1 == pytest.approx(ref["idf1"], abs=1e-12)
+    assert ours.idp == pytest.approx(ref["idp"], abs=1e-12)
+    assert ours.idr == pytest.approx(ref["idr"], abs=1e-12)
 
 
 def _trackeval_hota(tf, tid, tpos, hf, hid, hpos, threshold):

@@ -25,6 +25,7 @@ from navtrack.tracking.tracker import (
     TrackerConfig,
     TrackerModel,
     TrackStore,
+    associate,
     associate_gnn,
     associate_jpda,
     gate_scan,
@@ -137,6 +138,34 @@ def test_gnn_update_stage_equals_kf_update() -> None:
         np.testing.assert_allclose(store.P[t, 0], u.P, rtol=1e-14, atol=1e-10)
     np.testing.assert_array_equal(store.x[1, 0], x0[1])  # missed track: prediction kept
     np.testing.assert_array_equal(store.P[1, 0], P0[1])
+
+
+def test_gnn_density_at_gate_ties_a_miss_exactly_on_the_gate() -> None:
+    # One track whose prediction is uncertain (S ~ (400 m)^2 per axis, as after 10 s of an
+    # aircraft's flight) and reports at normalised distances d2 along one axis. With one λ
+    # from σ = 25 m a report is kept only far inside the gate (the pair costs more than a
+    # miss beyond d2 = γ - log(det S / σ^4)); with the track's own gate-edge density it is kept
+    # up to the gate, d2 = γ, and the pair cost equals the miss cost there.
+    sigma = 25.0
+    for flag in (False, True):
+        cfg = TrackerConfig(sigma_m=sigma, gnn_density_at_gate=flag)
+        model = TrackerModel.from_config(cfg)
+        lam_sigma = cfg.pd / (1 - cfg.pd * cfg.gate_probability)
+        lam_sigma *= np.exp(-model.gamma / 2) / (2 * np.pi * sigma**2)
+        cfg = replace(cfg, clutter_density=lam_sigma)
+        model = TrackerModel.from_config(cfg)
+        store = TrackStore(4, 1, capacity=1)
+        store.add(
+            np.zeros(4), np.diag([400.0**2 - sigma**2, 1.0, 400.0**2 - sigma**2, 1.0]), 0.0, 3
+        )
+        kept = []
+        for d2 in (3.0, 10.0, model.gamma - 0.01, model.gamma + 0.01):
+            z = np.array([[400.0 * np.sqrt(d2), 0.0]])
+            g = gate_scan(store, z, model)
+            kept.append(bool(associate(g, model).hit[0]))
+        threshold = model.gamma - np.log(400.0**4 / sigma**4)  # 7.3: kept below it only
+        assert threshold < 10.0
+        assert kept == ([True, False, False, False] if not flag else [True, True, True, False])
 
 
 def test_jpda_update_stage_equals_pda_update_with_imm_probabilities() -> None:

@@ -21,12 +21,6 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-DEFAULTS = {
-    # report interval (s), max truth gap for interpolation (s), match threshold (m)
-    "ais": (60.0, 400.0, 500.0),
-    "opensky": (10.0, 60.0, 2000.0),
-    "csv": (60.0, 400.0, 500.0),
-}
 MAX_REPORT_FRAMES = 1_000_000  # scoring grid size refused before it is allocated
 EXAMPLE = "SolentAIS_20160112_130211_20min.csv"
 """The bundled example (``navtrack/data/README.md``)."""
@@ -98,17 +92,24 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--report-s",
         type=float,
-        help="scoring grid interval, s (default: " + _by_format(0) + ")",
+        help="scoring grid interval, s (default: the median over the ids of their median "
+        "report interval, 1-60 s; navtrack.tracking.scoring)",
     )
     p.add_argument(
         "--match-m",
         type=float,
-        help="CLEAR-MOT match threshold, m (default: " + _by_format(2) + ")",
+        help="match threshold of CLEAR-MOT, HOTA and IDF1, m (default: 500)",
     )
     p.add_argument(
         "--no-velocity",
         action="store_true",
         help="do not use reported speed/course for one-point track initiation",
+    )
+    p.add_argument(
+        "--keep-stale",
+        action="store_true",
+        help="track reports that repeat an earlier position while their reported speed says "
+        "the target moved on (skipped by default: they are not measurements at their time)",
     )
     p.add_argument(
         "--max-range-km",
@@ -141,11 +142,6 @@ def _column_map(text: str | None) -> dict[str, str]:
     return out
 
 
-def _by_format(k: int) -> str:
-    """One column of :data:`DEFAULTS` as help text: ``60 for ais, 10 for opensky, ...``."""
-    return ", ".join(f"{v[k]:g} for {fmt}" for fmt, v in DEFAULTS.items())
-
-
 def run_track(args: argparse.Namespace) -> int:
     import sys
     import time
@@ -153,8 +149,14 @@ def run_track(args: argparse.Namespace) -> int:
     import numpy as np
 
     from navtrack.errors import FileFormatError
-    from navtrack.io.tracks import detect_format, read_tracks, to_local_enu, velocity_local_enu
-    from navtrack.tracking.metrics import clear_mot, hota, interpolate_truth
+    from navtrack.io.tracks import (
+        detect_format,
+        read_tracks,
+        stale_repeats,
+        to_local_enu,
+        velocity_local_enu,
+    )
+    from navtrack.tracking.scoring import ScoringRule, score_tracks, scoring_rule
     from navtrack.tracking.tracker import DET_STATUS_NAMES, run_tracker
 
     for name, value in (
@@ -205,17 +207,33 @@ def run_track(args: argparse.Namespace) -> int:
         )
         return 1
     en, ref = to_local_enu(det)
-    report_s, max_gap_s, match_m = DEFAULTS[args.fmt]
-    report_s = report_s if args.report_s is None else args.report_s
-    match_m = match_m if args.match_m is None else args.match_m
+    has_ids = bool(np.any(det.id != ""))
+    # truth: each id's own reports, its stale repeats left out (navtrack.tracking.scoring)
+    fresh = ~stale_repeats(det.t_gps_s, en, det.speed_mps, det.id)
+    rule = scoring_rule(det.t_gps_s[fresh], det.id[fresh])
+    rule = ScoringRule(
+        rule.report_s if args.report_s is None else args.report_s,
+        rule.max_gap_s,
+        rule.match_m if args.match_m is None else args.match_m,
+    )
+    report_s = rule.report_s
     vel = None if args.no_velocity else velocity_local_enu(det, *ref) if det.geodetic else None
     if vel is not None and not np.isfinite(vel).any():
         vel = None
     for key, value in input_warnings(det, en).items():
         summary[key] = value
         print(f"navtrack track: {key}: {value}", file=sys.stderr)
+    stale = stale_repeats(det.t_gps_s, en, det.speed_mps)
+    if args.keep_stale:
+        if stale.any():
+            key = "warning: stale repeats kept"
+            summary[key] = f"{int(stale.sum())} reports repeat an earlier position (--keep-stale)"
+            print(f"navtrack track: {key}: {summary[key]}", file=sys.stderr)
+        stale[:] = False
+    use = ~stale
+    summary["stale repeats skipped"] = int(stale.sum())
     clock = time.perf_counter()
-    cfg, tune = model_config(args, det.t_gps_s, en, vel)
+    cfg, tune = model_config(args, det.t_gps_s, en, vel)  # tuned on the reports as read
     t_tune = time.perf_counter() - clock
     t0 = det.t_gps_s[0]
     n_frames = int((det.t_gps_s[-1] - t0) // report_s) + 1
@@ -228,7 +246,14 @@ def run_track(args: argparse.Namespace) -> int:
     grid = t0 + np.arange(0.0, det.t_gps_s[-1] - t0 + 1e-9, report_s)
     clock = time.perf_counter()
     with _progress(len(det), quiet=args.quiet) as progress:
-        res = run_tracker(det.t_gps_s, en, cfg, report_times=grid, velocity=vel, progress=progress)
+        res = run_tracker(
+            det.t_gps_s[use],
+            en[use],
+            cfg,
+            report_times=grid,
+            velocity=None if vel is None else vel[use],
+            progress=progress,
+        )
     t_track = time.perf_counter() - clock
     status = np.bincount(res.det_status, minlength=len(DET_STATUS_NAMES))
     summary["reference (lat, lon deg)"] = f"{ref[0]:.6f} {ref[1]:.6f}"
@@ -253,39 +278,51 @@ def run_track(args: argparse.Namespace) -> int:
         summary["jpda clusters (exact, k-best)"] = (
             f"{res.counts.jpda_exact_clusters} {res.counts.jpda_kbest_clusters}"
         )
-    has_ids = bool(np.any(det.id != ""))
     if has_ids:
-        tf, tid, tpos = interpolate_truth(grid, det.t_gps_s, det.id, en, max_gap_s)
-        mot = clear_mot(tf, tid, tpos, res.report_frame, res.report_id, res.report_xy, match_m)
+        scores = score_tracks(
+            grid,
+            det.t_gps_s[fresh],
+            en[fresh],
+            det.id[fresh],
+            res.report_frame,
+            res.report_id,
+            res.report_xy,
+            rule,
+        )
         summary["scoring"] = (
-            f"{len(grid)} frames every {report_s:g} s, match within {match_m:g} m, "
-            f"truth interpolated over gaps <= {max_gap_s:g} s"
+            f"{len(grid)} frames every {rule.report_s:g} s, match within {rule.match_m:g} m, "
+            f"truth interpolated over gaps <= {rule.max_gap_s:g} s"
         )
-        hot = hota(tf, tid, tpos, res.report_frame, res.report_id, res.report_xy, match_m)
-        summary["MOTA"] = round(mot.mota, 4)
+        summary["MOTA"] = round(scores.mota, 4)
         summary["HOTA (DetA, AssA)"] = (
-            f"{hot.hota:.4f} ({hot.det_a:.4f}, {hot.ass_a:.4f}; similarity 1 - d / match)"
+            f"{scores.hota:.4f} ({scores.det_a:.4f}, {scores.ass_a:.4f}; similarity 1 - d / match)"
         )
-        summary["MOTP (m)"] = round(mot.motp, 1)
+        summary["IDF1 (IDP, IDR)"] = f"{scores.idf1:.4f} ({scores.idp:.4f}, {scores.idr:.4f})"
+        summary["MOTP (m)"] = round(scores.motp_m, 1)
         summary["truth objects / matches / misses / false"] = (
-            f"{mot.n_truth} {mot.n_matches} {mot.n_misses} {mot.n_false}"
+            f"{scores.n_truth} {scores.n_matches} {scores.n_misses} {scores.n_false}"
         )
-        summary["id switches"] = mot.id_switches
-        summary["fragmentations"] = mot.fragmentations
-        summary["track purity"] = round(mot.purity, 4)
-        summary["ids / confirmed tracks"] = (
-            f"{np.unique(det.id).size} / {res.counts.tracks_confirmed}"
-        )
+        summary["id switches"] = scores.id_switches
+        summary["fragmentations"] = scores.fragmentations
+        summary["track purity"] = round(scores.purity, 4)
+        summary["ids / confirmed tracks"] = f"{scores.n_ids} / {res.counts.tracks_confirmed}"
     summary["time read / tune / track (s)"] = f"{t_read:.2f} {t_tune:.2f} {t_track:.2f}"
     _print(summary)
     if args.out:
-        _write(args.out, res, ref, {"associator": args.associator, **model})
-        print(f"tracks written to {args.out}")
+        table = _write(
+            args.out,
+            res,
+            ref,
+            {"associator": args.associator, **model},
+            det.t_gps_s[use],
+            det.alt_m[use],
+        )
+        print(f"tracks written to {args.out}, one row per track to {table}")
     if args.plot:
         from navtrack.plots.tracks import plot_tracks
 
         path = plot_tracks(
-            args.plot, en, res, title=f"{args.file.name} ({args.associator})", ref_deg=ref
+            args.plot, en[use], res, title=f"{args.file.name} ({args.associator})", ref_deg=ref
         )
         print(f"plot written to {path}")
     return 0
@@ -500,9 +537,21 @@ def _print(summary: dict[str, Any]) -> None:
         print(f"{k:<{width}}  {v}")
 
 
-def _write(path: Path, res: Any, ref: tuple[float, float], meta: dict[str, Any]) -> None:
-    """Track states to ``.csv`` (the model in a ``.json`` beside it) or ``.parquet`` (the
-    model as JSON in the frame's ``attrs["navtrack"]``, which pandas keeps in the file)."""
+def _write(
+    path: Path,
+    res: Any,
+    ref: tuple[float, float],
+    meta: dict[str, Any],
+    report_t_s: Any,
+    report_alt_m: Any,
+) -> Path:
+    """Track updates to ``path`` (``.csv`` with the model in a ``.json`` beside it, or
+    ``.parquet`` with the model as JSON in the frame's ``attrs["navtrack"]``, which pandas
+    keeps in the file) and one row per track to ``<stem>.tracks<suffix>`` beside it; returns
+    the path of the per-track table.
+
+    ``report_t_s``, ``report_alt_m``: the tracked reports' times and altitudes (the altitude of
+    a row is that of the last report the track took; the tracker is 2-D)."""
     import json
 
     import numpy as np
@@ -510,14 +559,18 @@ def _write(path: Path, res: Any, ref: tuple[float, float], meta: dict[str, Any])
 
     from navtrack.io.tracks import local_enu_to_geodetic
     from navtrack.timescale import gps_to_utc, to_datetime64
+    from navtrack.tracking.tracker import TRACK_END_NAMES
+
+    def utc(t_s: Any) -> Any:
+        return pd.to_datetime(to_datetime64(gps_to_utc(t_s))).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
     x = res.track_x
-    times = to_datetime64(gps_to_utc(res.track_time_s))  # UTC calendar times
     df = pd.DataFrame(
         {
-            "time": pd.to_datetime(times).strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
+            "time": utc(res.track_time_s),
             "track_id": res.track_id,
             "confirmed": res.track_confirmed,
+            "p_update": res.track_p_update,
             "x_m": x[:, 0],
             "y_m": x[:, 2],
             "vx_mps": x[:, 1],
@@ -525,13 +578,57 @@ def _write(path: Path, res: Any, ref: tuple[float, float], meta: dict[str, Any])
             "std_m": res.track_std_m,
         }
     )
+    v_en = x[:, [1, 3]]
     if np.isfinite(ref[0]):
+        from navtrack.geodesy import enu_rotation
+
         latlon = local_enu_to_geodetic(x[:, [0, 2]], ref[0], ref[1])
         df["lat_deg"] = latlon[:, 0]
         df["lon_deg"] = latlon[:, 1]
+        # the velocity from the reference's east/north into the track's own
+        r0 = enu_rotation(np.radians(ref[0]), np.radians(ref[1]))
+        r_i = enu_rotation(np.radians(latlon[:, 0]), np.radians(latlon[:, 1]))
+        v_ecef = v_en @ r0[:2]
+        v_en = np.einsum("nij,nj->ni", r_i[:, :2], v_ecef)
+    df["speed_mps"] = np.hypot(v_en[:, 0], v_en[:, 1])
+    df["course_deg"] = np.mod(np.degrees(np.arctan2(v_en[:, 0], v_en[:, 1])), 360.0)
+    took = res.det_track >= 0
+    if np.isfinite(report_alt_m).any():
+        rows = pd.DataFrame({"t": res.track_time_s, "track_id": res.track_id})
+        rows["row"] = np.arange(len(rows))
+        reps = pd.DataFrame(
+            {"t": report_t_s[took], "track_id": res.det_track[took], "alt_m": report_alt_m[took]}
+        )
+        both = pd.merge_asof(
+            rows.sort_values("t"), reps.sort_values("t"), on="t", by="track_id"
+        ).sort_values("row")
+        df["alt_m"] = both["alt_m"].to_numpy()
+    per = df.groupby("track_id").agg(
+        first_update=("time", "first"),
+        last_update=("time", "last"),
+        updates=("time", "size"),
+        confirmed=("confirmed", "max"),
+        mean_std_m=("std_m", "mean"),
+    )
+    per["reports"] = pd.Series(res.det_track[took]).value_counts().reindex(per.index, fill_value=0)
+    ends = pd.DataFrame(
+        {
+            "end_time": utc(res.end_time_s),
+            "end_reason": np.asarray(TRACK_END_NAMES)[res.end_reason],
+        },
+        index=pd.Index(res.end_id, name="track_id"),
+    )
+    per = per.join(ends, how="outer").reset_index()  # (tracks never updated: ends only)
+    per = per.fillna({"updates": 0, "reports": 0, "confirmed": False})
+    per = per.astype({"updates": int, "reports": int, "confirmed": bool})
+    meta = {"reference_lat_deg": ref[0], "reference_lon_deg": ref[1], **meta}
+    table = path.with_name(f"{path.stem}.tracks{path.suffix}")
     if path.suffix == ".parquet":
         df.attrs["navtrack"] = json.dumps(meta)
         df.to_parquet(path, index=False)
+        per.to_parquet(table, index=False)
     else:
         df.to_csv(path, index=False)
+        per.to_csv(table, index=False)
         Path(f"{path}.json").write_text(json.dumps(meta, indent=1) + "\n")
+    return table

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
-from navtrack._typing import ArrayLike, FloatArray, IntArray, StrPath
+from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.io.tables import last_row_cut, read_csv_text
 
@@ -39,12 +39,19 @@ __all__ = [
     "read_opensky_csv",
     "read_track_csv",
     "read_tracks",
+    "stale_repeats",
     "to_local_enu",
     "velocity_local_enu",
 ]
 
 UNIX_TO_GPS_EPOCH_S = 315964800.0  # 1980-01-06T00:00:00 UTC in Unix seconds
 KNOT_MPS = 1852.0 / 3600.0
+STALE_MOVE_M = 25.0
+"""A repeated position is stale when the reported speed says the target moved farther than this
+since the position was first reported (:func:`stale_repeats`; the tracker's σ floor) ..."""
+STALE_MIN_SPEED_MPS = 1.0
+"""... at a reported speed above this (a moored ship's speed over ground wanders up to ~0.5 kn,
+0.26 m/s, while its position repeats)."""
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -508,7 +515,14 @@ def velocity_local_enu(
 
 def local_enu_to_geodetic(en_m: ArrayLike, ref_lat_deg: float, ref_lon_deg: float) -> FloatArray:
     """Latitude and longitude of east/north positions in the tangent plane of
-    :func:`to_local_enu` (the inverse of that function).
+    :func:`to_local_enu`: its exact inverse.
+
+    :func:`to_local_enu` places a point of the ellipsoid (height 0) in the frame of the
+    reference and drops its up coordinate, i.e. projects it along the reference's normal onto
+    the tangent plane. The inverse goes back along that normal: the point of the ellipsoid on
+    the line ``ref + e·east + n·north + u·up`` nearest the plane, ``u`` the smaller root of the
+    line's quadratic with the ellipsoid ``(x² + y²)/a² + z²/b² = 1``. Setting ``u = 0`` instead
+    misplaces a point by 12 m at 100 km from the reference and 330 m at 300 km.
 
     Parameters
     ----------
@@ -520,16 +534,90 @@ def local_enu_to_geodetic(en_m: ArrayLike, ref_lat_deg: float, ref_lon_deg: floa
     Returns
     -------
     ndarray, shape (n, 2)
-        Geodetic latitude and longitude (deg, WGS-84) of the points (up = 0 in the plane, so
-        the points lie slightly above the ellipsoid away from the reference).
+        Geodetic latitude and longitude (deg, WGS-84) of the points of the ellipsoid that
+        project onto ``en_m``.
+
+    Raises
+    ------
+    ValueError
+        ``en_m`` not of shape (n, 2), or a point beyond the ellipsoid's horizon seen along the
+        reference's normal (more than about 6 000 km from the reference).
     """
-    from navtrack.geodesy import ecef_to_geodetic, enu_rotation, geodetic_to_ecef
+    from navtrack.geodesy import (
+        WGS84_A_M,
+        WGS84_E2,
+        ecef_to_geodetic,
+        enu_rotation,
+        geodetic_to_ecef,
+    )
 
     en = np.asarray(en_m, dtype=float)
     if en.ndim != 2 or en.shape[1] != 2:
         raise ValueError(f"en_m: expected shape (n, 2), got {en.shape}")
     lat0, lon0 = np.radians(ref_lat_deg), np.radians(ref_lon_deg)
-    enu = np.concatenate([en, np.zeros((len(en), 1))], axis=1)
-    # the rows of enu_rotation are the east, north, up unit vectors in ECEF
-    xyz = geodetic_to_ecef([lat0, lon0, 0.0]) + enu @ enu_rotation(lat0, lon0)
+    rot = enu_rotation(lat0, lon0)  # rows: east, north, up unit vectors in ECEF
+    p0 = geodetic_to_ecef([lat0, lon0, 0.0]) + en @ rot[:2]
+    up = rot[2]
+    w = np.array([1.0, 1.0, 1.0 / (1.0 - WGS84_E2)]) / WGS84_A_M**2  # 1/a², 1/a², 1/b²
+    qa = float(up @ (w * up))
+    qb = (p0 * w) @ up
+    qc = np.einsum("ij,ij->i", p0 * w, p0) - 1.0
+    disc = qb**2 - qa * qc
+    if np.any(disc < 0):
+        bad = int(np.flatnonzero(disc < 0)[0])
+        raise ValueError(
+            f"en_m: row {bad} ({en[bad, 0]:.0f}, {en[bad, 1]:.0f} m) lies beyond the horizon "
+            "of the tangent plane's reference"
+        )
+    u = -qc / (qb + np.sqrt(disc))  # the root nearest the plane, without cancellation
+    xyz = p0 + u[:, None] * up
     return np.degrees(ecef_to_geodetic(xyz)[:, :2])
+
+
+def stale_repeats(
+    t_s: ArrayLike,
+    position: ArrayLike,
+    speed_mps: ArrayLike,
+    ids: ArrayLike | None = None,
+    min_move_m: float = STALE_MOVE_M,
+) -> BoolArray:
+    """Reports that repeat an earlier position of a target that has since moved on.
+
+    ADS-B state vectors (OpenSky's one per aircraft per second, receivers' 1 s outputs) and
+    some AIS feeds repeat the last decoded position at every output time until a new one is
+    decoded: the report's time advances, its position does not. Such a report is not a
+    measurement at its time; at 250 m/s, one second stale puts it 250 m behind the aircraft,
+    outside the gate of a track fed 1 s reports, and it starts a duplicate track. A report is
+    stale here when its position equals that of an earlier report exactly (bit for bit: two
+    moving targets never share a position to 1e-15°) and its own reported speed
+    times the time since that earlier report exceeds ``min_move_m``, at a speed above
+    :data:`STALE_MIN_SPEED_MPS`. A moored ship repeating its position at a speed over ground
+    of a few tenths of a knot is not stale; without a reported speed nothing is.
+
+    Parameters
+    ----------
+    t_s : (N,) report times, s (any order)
+    position : (N, 2) positions as read (latitude/longitude, or their tangent-plane east/north:
+        the same repeats)
+    speed_mps : (N,) reported speed over ground (NaN unknown)
+    ids : (N,) or None
+        Target ids: repeats are then sought within each id only (scoring truth); ``None`` for
+        the tracker's input, whose ids are hidden.
+    min_move_m : float
+
+    Returns
+    -------
+    (N,) bool
+    """
+    import pandas as pd
+
+    t = np.asarray(t_s, dtype=float)
+    pos = np.asarray(position, dtype=float)
+    keys: dict[str, Any] = {"p0": pos[:, 0], "p1": pos[:, 1]}
+    if ids is not None:
+        keys["id"] = np.asarray(ids)
+    df = pd.DataFrame(keys)
+    first = pd.Series(t).groupby([df[k] for k in keys], sort=False).transform("min").to_numpy()
+    speed = np.asarray(speed_mps, dtype=float)
+    moved = speed * (t - first)
+    return np.asarray(np.isfinite(moved) & (moved > min_move_m) & (speed > STALE_MIN_SPEED_MPS))

@@ -61,12 +61,14 @@ from navtrack.tracking.models import (
 
 __all__ = [
     "DET_STATUS_NAMES",
+    "TRACK_END_NAMES",
     "DetStatus",
     "Initiation",
     "Management",
     "ScanAssociation",
     "ScanGate",
     "Seeds",
+    "TrackEnd",
     "TrackStore",
     "TrackerConfig",
     "TrackerCounts",
@@ -75,6 +77,7 @@ __all__ = [
     "associate",
     "associate_gnn",
     "associate_jpda",
+    "gate_edge_log_density",
     "gate_scan",
     "initiate",
     "manage",
@@ -102,6 +105,18 @@ class DetStatus(IntEnum):
 DET_STATUS_NAMES = tuple(s.name.lower() for s in DetStatus)
 
 
+class TrackEnd(IntEnum):
+    """Why a track ended (``TrackerResult.end_reason``; names as written in the track table)."""
+
+    COAST = 0  # no update for longer than ``max_coast_s``
+    COVARIANCE = 1  # position standard deviation above ``max_position_std_m``
+    UNCONFIRMED = 2  # tentative, not confirmed within ``confirm_window_s``
+    END_OF_DATA = 3  # alive after the last detection
+
+
+TRACK_END_NAMES = tuple(s.name.lower() for s in TrackEnd)
+
+
 @dataclass(frozen=True, slots=True)
 class TrackerConfig:
     """Tracker parameters (SI units).
@@ -117,6 +132,14 @@ class TrackerConfig:
 
     ``scan_window_s``: reports at distinct times within this span are processed as one scan
     (:func:`scan_windows`); 0 = one scan per distinct time.
+
+    ``gnn_density_at_gate``: GNN only. False: one competing-report density
+    ``clutter_density`` for every track. True: each track's own, the density at which a
+    report on the edge of its gate ties a missed detection (:func:`gate_edge_log_density`,
+    from the track's predicted innovation covariance), so that every report inside a gate
+    is worth assigning; one λ from σ alone keeps a report only well inside the gate of a
+    track whose prediction is uncertain (NIS below 3.7 against a gate at 18.4 for 10 s
+    ADS-B reports), and the reports it leaves start duplicate tracks.
 
     The defaults suit ships (AIS); :meth:`for_aircraft` gives ADS-B values.
     """
@@ -141,6 +164,7 @@ class TrackerConfig:
     imm_q: tuple[float, ...] | None = None
     imm_sojourn_s: float = 300.0
     scan_window_s: float = 0.0
+    gnn_density_at_gate: bool = False
 
     def __post_init__(self) -> None:
         if self.motion.ndim != 2:
@@ -301,9 +325,11 @@ class TrackerResult:
     det_status : (N,) int8
         Fate of each detection, a :class:`DetStatus`: 0 confirmed-track update, 1 tentative-track
         update, 2 started a track, 3 seed never paired, 4 gated but not associated.
-    track_time_s, track_id, track_x, track_std_m, track_confirmed :
+    track_time_s, track_id, track_x, track_std_m, track_confirmed, track_p_update :
         One row per track update: time (s), id, state ``[x, vx, y, vy]`` (m, m/s), position
-        standard deviation ``sqrt(trace(P_pos)/2)`` (m), confirmed flag.
+        standard deviation ``sqrt(trace(P_pos)/2)`` (m), confirmed flag, and the probability
+        that a detection of this scan updated the track (1 for a GNN assignment; JPDA's
+        ``1 - β₀``: every soft update that moved the track has a row, also below 1/2).
     report_frame, report_id, report_xy :
         Confirmed tracks predicted to each requested report time (index into
         ``report_times``), for scoring.
@@ -316,6 +342,9 @@ class TrackerResult:
         ``log N(z; h(x), S)`` of each detection against the track it updated, mixed over the
         motion models with their predicted probabilities (NaN for detections that updated no
         track; the likelihood :mod:`navtrack.tracking.autotune` maximises over q).
+    end_id, end_time_s, end_reason : (K,)
+        One row per track: its id, when it ended (s; the time of the scan that deleted it, or
+        of the last scan) and why (a :class:`TrackEnd`).
     """
 
     det_track: IntArray
@@ -331,6 +360,10 @@ class TrackerResult:
     counts: TrackerCounts
     det_nis: FloatArray = field(default_factory=lambda: np.zeros(0))
     det_log_likelihood: FloatArray = field(default_factory=lambda: np.zeros(0))
+    track_p_update: FloatArray = field(default_factory=lambda: np.zeros(0))
+    end_id: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    end_time_s: FloatArray = field(default_factory=lambda: np.zeros(0))
+    end_reason: Int8Array = field(default_factory=lambda: np.zeros(0, dtype=np.int8))
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -546,6 +579,8 @@ class ScanGate:
     log_likelihood_mix : (T, M) log of the model mixture with the predicted probabilities
     d2 : (T, r, M) normalised innovation squared ``νᵀ S⁻¹ ν`` per model (``inf`` where the
         pre-gate did not compute it)
+    S_mix : (T, m, m) innovation covariance of the model mixture, ``Σ_r μ_r S_r`` with the
+        predicted model probabilities (``S[:, 0]`` for one model)
     """
 
     innovation: FloatArray
@@ -555,6 +590,7 @@ class ScanGate:
     log_likelihood: FloatArray
     log_likelihood_mix: FloatArray
     d2: FloatArray
+    S_mix: FloatArray
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -615,12 +651,15 @@ def gate_scan(
     ll_rm = g.log_likelihood().reshape(T, r, M)
     if cand is not None:  # pairs left out by the pre-gate (d2 = inf)
         ll_rm = np.where(np.isfinite(ll_rm), ll_rm, -1e300)
+    S_rm = S.reshape(T, r, m, m)
     if r == 1:  # the mixture of one model is the model
         ll_mix = ll_rm[:, 0]
+        S_mix = S_rm[:, 0]
     else:  # mixture likelihood over models with the predicted model probabilities
         c_pred = store.mu
         a = np.log(np.where(c_pred > 0, c_pred, 1e-300))[:, :, None] + ll_rm
         ll_mix = np.logaddexp.reduce(a, axis=1)
+        S_mix = np.einsum("tr,trij->tij", c_pred, S_rm)
     return ScanGate(
         g.innovation.reshape(T, r, M, m),
         S.reshape(T, r, m, m),
@@ -629,6 +668,7 @@ def gate_scan(
         ll_rm,
         ll_mix,
         g.d2.reshape(T, r, M),
+        S_mix,
     )
 
 
@@ -675,19 +715,46 @@ class ScanAssociation:
         return np.asarray(self.beta[:, 1:].sum(axis=0) >= 0.5)
 
 
+def gate_edge_log_density(
+    S: FloatArray, pd: float, gate_probability: float, gamma: float
+) -> FloatArray:
+    """``log λ`` at which a report on the gate of innovation covariance ``S`` ties a miss.
+
+    ``λ = P_D / (1 - P_D P_G) · exp(-γ / 2) / sqrt(det(2π S))``: with it the GNN cost of a
+    pair, ``-(log N(ν; 0, S) + log P_D - log λ)``, equals the cost of a missed track,
+    ``-log(1 - P_D P_G)``, exactly at ``νᵀ S⁻¹ ν = γ``.
+
+    Parameters
+    ----------
+    S : (..., m, m) innovation covariances
+    """
+    m = S.shape[-1]
+    _sign, logdet = np.linalg.slogdet(S)
+    return np.asarray(
+        np.log(pd)
+        - np.log1p(-pd * gate_probability)
+        - 0.5 * gamma
+        - 0.5 * (m * np.log(2 * np.pi) + logdet)
+    )
+
+
 def associate_gnn(
-    gated: ScanGate, pd: float, gate_probability: float, clutter_density: float
+    gated: ScanGate,
+    pd: float,
+    gate_probability: float,
+    clutter_density: float | FloatArray,
 ) -> ScanAssociation:
     """Stage 3 (GNN): optimal 2-D assignment maximising the likelihood ratio.
 
     Cost of a gated pair ``-(log L_mix + log P_D - log λ)``, of a missed track
-    ``-log(1 - P_D P_G)`` (Blackman & Popoli 1999, 6.2).
+    ``-log(1 - P_D P_G)`` (Blackman & Popoli 1999, 6.2). ``clutter_density``: one λ, or one
+    per track ``(T,)`` (``TrackerConfig.gnn_density_at_gate``).
     """
     from navtrack.tracking.assignment import assign2d
 
     log_miss = np.log1p(-pd * gate_probability)
-    log_det_gain = np.log(pd) - np.log(clutter_density)
     T, M = gated.valid.shape
+    log_det_gain = np.broadcast_to(np.log(pd) - np.log(clutter_density), (T,))[:, None]
     beta = np.zeros((T, M + 1))
     beta[:, 0] = 1.0
     # a track that gates no detection takes its miss column in every optimum: the assignment
@@ -695,7 +762,7 @@ def associate_gnn(
     rows = np.flatnonzero(gated.valid.any(axis=1))
     if rows.size:
         valid = gated.valid[rows]
-        cost = np.where(valid, -(gated.log_likelihood_mix[rows] + log_det_gain), np.inf)
+        cost = np.where(valid, -(gated.log_likelihood_mix[rows] + log_det_gain[rows]), np.inf)
         if valid.sum(axis=0).max() == 1:  # no detection in two gates: each track on its own
             best = np.argmin(cost, axis=1)
             a_t = np.where(cost[np.arange(rows.size), best] < -log_miss, best, -1)
@@ -725,7 +792,11 @@ def associate(gated: ScanGate, model: TrackerModel) -> ScanAssociation:
     """Stage 3: :func:`associate_gnn` or :func:`associate_jpda`, as ``config.associator`` says."""
     cfg = model.config
     if cfg.associator == "gnn":
-        return associate_gnn(gated, cfg.pd, cfg.gate_probability, cfg.clutter_density)
+        density: float | FloatArray = cfg.clutter_density
+        if cfg.gnn_density_at_gate:
+            log_lam = gate_edge_log_density(gated.S_mix, cfg.pd, cfg.gate_probability, model.gamma)
+            density = np.exp(log_lam)
+        return associate_gnn(gated, cfg.pd, cfg.gate_probability, density)
     return associate_jpda(gated, model.jpda)
 
 
@@ -787,6 +858,7 @@ class Management:
     id : (T,) track ids; x : (T, n) combined state; std_m : (T,) position standard deviation
         ``sqrt(trace(P_pos) / 2)``, m; confirmed : (T,) after this scan's confirmations
     kept : (T,) bool, still in the store
+    end_reason : (T,) int8, the :class:`TrackEnd` of each deleted track, -1 where kept
     confirmed_now, deleted_coast, deleted_covariance, deleted_unconfirmed : int
         Counts as in :class:`TrackerCounts`.
     """
@@ -796,6 +868,7 @@ class Management:
     std_m: FloatArray
     confirmed: BoolArray
     kept: BoolArray
+    end_reason: Int8Array
     confirmed_now: int
     deleted_coast: int
     deleted_covariance: int
@@ -830,12 +903,18 @@ def manage(store: TrackStore, hit: BoolArray, t_s: float, config: TrackerConfig)
     unconf = ~conf & (t_s - store.born_s > config.confirm_window_s)
     gone = coast | cov | unconf
     n_gone = np.count_nonzero(gone)
+    reason = np.full(gone.shape, -1, dtype=np.int8)
+    if n_gone:
+        reason[gone & conf & cov] = TrackEnd.COVARIANCE
+        reason[gone & conf & coast] = TrackEnd.COAST
+        reason[gone & ~conf] = TrackEnd.UNCONFIRMED
     out = Management(
         store.id.copy(),
         np.array(xc),
         std,
         conf,
         ~gone,
+        reason,
         int(np.count_nonzero(new_conf)),
         int(np.count_nonzero(coast & conf)) if n_gone else 0,
         int(np.count_nonzero(cov & ~coast & conf)) if n_gone else 0,
@@ -1063,7 +1142,6 @@ def run_tracker(
     progress : callable or None
         Called after each scan with the number of detections that scan held (e.g. a tqdm
         bar's ``update``).
-
     Raises
     ------
     ValueError
@@ -1131,7 +1209,7 @@ def run_tracker(
             det_ll[s0 + used] = g.log_likelihood_mix[k[used], used]
             hit = a.hit
             m = manage(store, hit, tk, cfg)
-            log.updates(tk, m, hit)
+            log.updates(tk, m, 1.0 - a.beta[:, 0])
             _add_counts(counts, a, m)
             claimed = a.associated if cfg.init_from == "unassociated" else g.gated
         free = np.flatnonzero(~claimed)
@@ -1144,6 +1222,7 @@ def run_tracker(
         det_status[ini.seed_det] = DetStatus.STARTED
         counts["tracks_started"] += int(np.count_nonzero(ini.track >= 0))
     log.report_until(store, now, now, cfg.motion, inclusive=True)
+    log.ends(now, store.id, np.full(store.size, TrackEnd.END_OF_DATA, dtype=np.int8))
     if progress is not None:
         progress(N - done)
     return log.result(
@@ -1191,15 +1270,31 @@ class _Log:
         self.rep_f: list[IntArray] = []
         self.rep_id: list[IntArray] = []
         self.rep_xy: list[FloatArray] = []
+        self.p: list[FloatArray] = []
+        self.end_t: list[FloatArray] = []
+        self.end_id: list[IntArray] = []
+        self.end_reason: list[Int8Array] = []
 
-    def updates(self, t_s: float, m: Management, hit: BoolArray) -> None:
-        upd = np.flatnonzero(hit)
+    def updates(self, t_s: float, m: Management, p_update: FloatArray) -> None:
+        """Rows for the tracks a detection moved this scan (``p_update > 0``), and the ends of
+        the tracks :func:`manage` deleted."""
+        upd = np.flatnonzero(p_update > 0.0)
         if upd.size:
             self.t.append(np.full(upd.size, t_s))
             self.id.append(m.id[upd])
             self.x.append(m.x[upd])
             self.std.append(m.std_m[upd])
             self.conf.append(m.confirmed[upd])
+            self.p.append(p_update[upd])
+        gone = np.flatnonzero(~m.kept)
+        if gone.size:
+            self.ends(t_s, m.id[gone], m.end_reason[gone])
+
+    def ends(self, t_s: float, ids: IntArray, reason: Int8Array) -> None:
+        if ids.size:
+            self.end_t.append(np.full(ids.size, t_s))
+            self.end_id.append(np.asarray(ids, dtype=np.int64))
+            self.end_reason.append(np.asarray(reason, dtype=np.int8))
 
     def report_until(
         self, store: TrackStore, now_s: float, limit_s: float, motion: LinearMotion, inclusive: bool
@@ -1241,4 +1336,8 @@ class _Log:
             counts,
             det_nis,
             det_ll,
+            cat(self.p, (0,), float),
+            cat(self.end_id, (0,), np.int64),
+            cat(self.end_t, (0,), float),
+            cat(self.end_reason, (0,), np.int8),
         )
