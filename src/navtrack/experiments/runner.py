@@ -363,13 +363,16 @@ def _run_dask_processes(
     import dask
 
     task = dask.delayed(_execute, pure=False)
-    # One pool for every batch; batches of several tasks per worker keep the workers busy
-    # between the checkpoints.
+    # One pool for every batch; a run per task (chunksize 1) and many tasks per worker in a batch
+    # keep the workers busy up to each checkpoint.
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context()) as pool:
-        for batch in _batches(pending, 8 * workers):
+        for batch in _batches(pending, 16 * workers):
             try:
                 outs = dask.compute(
-                    *[task(fn, seed, i, params) for i in batch], scheduler="processes", pool=pool
+                    *[task(fn, seed, i, params) for i in batch],
+                    scheduler="processes",
+                    pool=pool,
+                    chunksize=1,
                 )
             except Exception as exc:  # a worker died: its pool cannot run the batch
                 message = f"{type(exc).__name__}: {exc}"
