@@ -3,7 +3,10 @@
 1. Monte Carlo runs of :func:`~navtrack.experiments.ari.synthetic.synthetic_run`, summarized by
    :func:`~navtrack.experiments.ari.synthetic.summarize_synthetic`;
 2. the ``extra`` step: the real data catalogue (:mod:`navtrack.experiments.ari.real`) plus the
-   user's ``--input`` solution tables, then the SARIMAX cross-check
+   user's ``--input`` solution tables, the series in the paper's own regimes (carrier-phase
+   strips, :mod:`navtrack.experiments.ari.carrier`; navigation-grade INS attitude,
+   :mod:`navtrack.experiments.ari.ins`), a truth for every printed column
+   (:func:`navtrack.experiments.ari.truths.printed_truths`), then the SARIMAX cross-check
    (:mod:`navtrack.experiments.ari.sarimax`) with the step's own generator;
 3. tables and console lines (:mod:`navtrack.experiments.ari.tables`), figures
    (:func:`navtrack.plots.ari.write_reproduction_figures`).
@@ -19,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from navtrack.experiments.ari.broad import broad_series
+from navtrack.experiments.ari.carrier import carrier_rows, carrier_sources
 from navtrack.experiments.ari.real import (
     RealSeries,
     default_real_sources,
@@ -34,7 +38,9 @@ from navtrack.experiments.ari.synthetic import (
     synthetic_run,
 )
 from navtrack.experiments.ari.tables import PAPER_TABLES, summary_lines, tables_markdown
+from navtrack.experiments.ari.truths import printed_truths
 from navtrack.experiments.contract import Experiment, ExperimentContext, ExtraResult, Outcome
+from navtrack.smoothing.ari import AriConfig
 
 __all__ = ["EXPERIMENT", "AriExperiment"]
 
@@ -71,8 +77,9 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
             )
         sources += [solution_series(Path(path)) for path in context.inputs]
         strips: list[dict[str, Any]] = []
+        config = AriConfig(min_d=1, select_n=10000, robust_process=params.robust_process)
         rows, fits = real_data_rows(
-            sources, track=context.track, workers=context.workers, strips=strips
+            sources, config, track=context.track, workers=context.workers, strips=strips
         )
         # the attitude series in the paper's Euler form too, exact estimator only: the flags
         # before (Euler) and after (rotation-vector path) the change of representation
@@ -82,7 +89,7 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
             if src.meta.get("form") == "rotvec"
         ]
         euler_rows, _ = real_data_rows(
-            euler, track=context.track, workers=context.workers, further=False
+            euler, config, track=context.track, workers=context.workers, further=False
         )
         results = {
             "real": rows,
@@ -93,6 +100,14 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
             "strips": strips,
             "sarimax": sarimax_comparisons(context.rng, params.cases, sources, fits),
         }
+        if params.carrier_phase:
+            carrier, carrier_skipped = carrier_sources(context.shared_data() / "gnss")
+            results["carrier"] = carrier_rows(
+                carrier, params.carrier_strip_epochs, params.robust_process
+            )
+            results["carrier_skipped"] = carrier_skipped
+        if params.printed_truths:
+            results["printed_truths"] = printed_truths()
         if importlib.util.find_spec("statsmodels") is None:
             results["sarimax_skipped"] = (
                 "statsmodels is not installed: the SARIMAX cross-check was skipped "
