@@ -22,6 +22,7 @@ from navtrack.experiments.ari.carrier import (
     carrier_sources,
     strip_bounds,
 )
+from navtrack.experiments.ari.regime_tables import regime_lines
 from navtrack.experiments.contract import shared_data_dir
 
 
@@ -78,6 +79,11 @@ def test_strip_fits_give_both_vce_forms_and_the_bic_ranking(geonet: list[Carrier
     assert row["bic_top"][0][2] == 0.0
     assert not row["bic_52_minus_best"] < 0.0  # the chosen order is the best (or (5,2) absent)
     assert row["ls_sd_rms"] > 0
+    text = "\n".join(regime_lines({"carrier": [row], "carrier_skipped": []}))
+    for heading in ("### Table 1", "### Table 2", "### Table 3", "ARI(5,2) come out"):
+        assert heading in text
+    assert f"| {fixed.source} | 1 | e_m | ({ex['order'][0]},{ex['order'][1]}) |" in text
+    assert "## Variance components: redundancy numbers against Förstner" in text
 
 
 def test_shared_rover_pair_is_solved_or_skipped_with_a_reason() -> None:
