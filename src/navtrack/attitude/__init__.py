@@ -10,6 +10,8 @@ Modules:
 * :mod:`~navtrack.attitude.quaternion` — delta angles, truncated-series and closed-form
   propagation, error and correction quaternions;
 * :mod:`~navtrack.attitude.wahba` — SVD attitude from target rays inside seeded RANSAC;
+* :mod:`~navtrack.attitude.frames` — the Earth-rate frame chain (eq. 3);
+* :mod:`~navtrack.attitude.imu_sim` — simulated gyros (LN-200 class) on a truth attitude;
 * :mod:`~navtrack.attitude.simulate` — camera sightings of surveyed targets from a truth;
 * :mod:`~navtrack.attitude.calibration` — least-squares gyro bias/scale/misalignment and timing;
 * :mod:`~navtrack.attitude.smoother` — error-state Kalman filter and RTS smoother;
@@ -25,6 +27,14 @@ from navtrack.attitude.calibration import (
     calibrate_gyro,
     calibrated_propagation,
     corrected_rates,
+)
+from navtrack.attitude.imu_sim import (
+    LN200,
+    GyroRecord,
+    GyroSpec,
+    body_rates,
+    integrate_rates,
+    simulate_gyro,
 )
 from navtrack.attitude.quaternion import (
     Propagation,
@@ -59,6 +69,7 @@ from navtrack.attitude.wahba import (
 
 __all__ = [
     "ESTIMATES",
+    "LN200",
     "AttitudeFix",
     "CalibrationConfig",
     "CameraFixes",
@@ -67,6 +78,8 @@ __all__ = [
     "FixStatus",
     "GnssPositions",
     "GyroCalibration",
+    "GyroRecord",
+    "GyroSpec",
     "Propagation",
     "RansacConfig",
     "Reconstruction",
@@ -75,6 +88,7 @@ __all__ = [
     "SmootherConfig",
     "SmootherResult",
     "attitude_errors",
+    "body_rates",
     "calibrate_gyro",
     "calibrated_propagation",
     "check_quaternions",
@@ -83,12 +97,14 @@ __all__ = [
     "delta_angles",
     "delta_quaternions",
     "from_scalar_first",
+    "integrate_rates",
     "interpolate_attitude",
     "pose_frame",
     "propagate",
     "ransac_attitude",
     "read_gnss_positions",
     "reconstruct",
+    "simulate_gyro",
     "simulate_sightings",
     "smooth_attitude",
     "solve_fixes",
