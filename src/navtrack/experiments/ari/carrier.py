@@ -232,9 +232,9 @@ def _record(res: AriResult, conditional: bool) -> dict[str, Any]:
     }
 
 
-def strip_fits(values: FloatArray, robust_process: bool) -> dict[str, Any]:
-    """One strip of one coordinate: exact estimator with the BIC order, then the paper's
-    estimator at that order with both VCE forms.
+def strip_fits(values: FloatArray, robust_process: bool, *, paper: bool = True) -> dict[str, Any]:
+    """One strip of one coordinate: exact estimator with the BIC order, then (``paper``) the
+    paper's estimator at that order with both VCE forms.
 
     Returns
     -------
@@ -252,7 +252,7 @@ def strip_fits(values: FloatArray, robust_process: bool) -> dict[str, Any]:
     by_order = {(p, d): s for p, d, s in scores}
     out["bic_52_minus_best"] = by_order.get((5, 2), math.nan) - best
     out["bic_top"] = [[p, d, s - best] for p, d, s in scores[:3]]
-    if exact.estimated:
+    if exact.estimated and paper:
         for vce in ("redundancy", "forstner"):
             paper_cfg = dataclasses.replace(
                 cfg, order=(exact.p, exact.d), estimator="paper", vce=vce

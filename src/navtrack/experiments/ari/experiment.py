@@ -23,6 +23,7 @@ import numpy as np
 
 from navtrack.experiments.ari.broad import broad_series
 from navtrack.experiments.ari.carrier import carrier_rows, carrier_sources
+from navtrack.experiments.ari.ins import INS_DESCRIPTION, ins_rows, ins_series
 from navtrack.experiments.ari.real import (
     RealSeries,
     default_real_sources,
@@ -106,6 +107,17 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
                 carrier, params.carrier_strip_epochs, params.robust_process
             )
             results["carrier_skipped"] = carrier_skipped
+        if params.ins:
+            path = context.shared_data() / "trajectory" / "pyins_gnss" / "gnss.csv"
+            if path.exists():
+                # a child of the step's generator: the SARIMAX draws stay as they were
+                series = ins_series(path, context.rng.spawn(1)[0])
+                results["ins"] = {
+                    "description": INS_DESCRIPTION,
+                    "rows": ins_rows(series, params.robust_process),
+                }
+            else:
+                results["ins_skipped"] = f"{path} absent"
         if params.printed_truths:
             results["printed_truths"] = printed_truths()
         if importlib.util.find_spec("statsmodels") is None:

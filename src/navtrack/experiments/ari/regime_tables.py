@@ -279,9 +279,10 @@ def _ins_lines(results: dict[str, Any]) -> list[str]:
         "",
         ins["description"],
         "",
-        "| series | column | n | order (BIC) | σn (deg) | σe (deg) | σx (deg) | r(1..4) | "
-        "σn paper, Förstner | status |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| series | column | n | order (BIC) | σn (deg) | σe (deg) | σx (deg) | r(1..3) | "
+        "σn paper, redundancy / Förstner | status | motion alone: order, σn, σe | "
+        "INS error step rms |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for label, tab in PAPER_TABLES.items():
         if "INS" not in label:
@@ -290,17 +291,19 @@ def _ins_lines(results: dict[str, Any]) -> list[str]:
             lines.append(
                 f"| {label} (printed) | {col} | – | {label.rsplit(' ', 1)[-1]} | "
                 f"{tab['sigma_n'][k]} | {tab['sigma_e'][k]} | {tab['sigma_x'][k]} | "
-                + " ".join(f"{v:.2f}" for v in tab["r"][k])
-                + " | – | – |"
+                + " ".join(f"{v:.2f}" for v in tab["r"][k][:3])
+                + " | – | – | – | – |"
             )
     for r in ins["rows"]:
-        ex = r["exact"]
-        pf = r.get("paper_forstner") or {}
+        ex, tr = r["exact"], r["truth"]
+        pr, pf = r.get("paper_redundancy") or {}, r.get("paper_forstner") or {}
         lines.append(
             f"| {r['source']} | {r['column']} | {r['n']} | {_order(ex)} | "
             f"{fmt(ex['sigma_n'])} | {fmt(ex['sigma_e'])} | {fmt(ex['sigma_x'])} | "
             + " ".join(fmt(v, 2) for v in ex["r"])
-            + f" | {fmt(pf.get('sigma_n'))} | {ex['status']} |"
+            + f" | {fmt(pr.get('sigma_n'))} / {fmt(pf.get('sigma_n'))} | {ex['status']} | "
+            f"{_order(tr)}, {fmt(tr['sigma_n'])}, {fmt(tr['sigma_e'])} | "
+            f"{fmt(r['error_step_rms_deg'])} |"
         )
     return lines
 
