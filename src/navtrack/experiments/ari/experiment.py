@@ -134,11 +134,15 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
         self, outcome: Outcome[AriExperimentParams, _RunResult], out_dir: Path
     ) -> Iterator[Path]:
         from navtrack.plots import ari as ari_plots
+        from navtrack.plots.canvas import save_figure
 
         sources, fits = outcome.artifacts
         yield from ari_plots.write_reproduction_figures(
             out_dir, outcome.runs, outcome.params.cases, sources, fits
         )
+        regime = ari_plots.regime_figure(outcome.results)
+        if regime is not None:
+            yield save_figure(regime, out_dir / "paper_regimes_sigma_n.png")
 
     def summary_lines(self, results: dict[str, Any]) -> list[str]:
         return summary_lines(results)
