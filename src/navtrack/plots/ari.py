@@ -206,7 +206,10 @@ def regime_figure(results: Mapping[str, Any]) -> Figure | None:
         (axes[1], ins, "INS attitude: σn (deg)", (0.0023, 0.0060), "Tables 4–5 range"),
     )
     for ax, rows, title, printed, label in panels:
-        names = [f"{r['source']} s{r.get('strip', 1)} {r['column']}" for r in rows]
+        names = [
+            " ".join([r["source"], *([f"strip {r['strip']}"] if "strip" in r else []), r["column"]])
+            for r in rows
+        ]
         for key, marker, fit_label in fits:
             vals = [(r.get(key) or {}).get("sigma_n", np.nan) for r in rows]
             ax.plot(range(len(rows)), vals, marker, label=fit_label, ms=5, mfc="none")
