@@ -177,7 +177,15 @@ def test_reproduce_end_to_end_reduced(tmp_path: Path) -> None:
     _solution_csv(table)
     out = tmp_path / "out"
     tiny = exp.SyntheticCase("tiny", "tiny ARI(1,1)", (-0.5,), 1, 0.02, 0.01, 150, 1.0, "m")
-    params = exp.AriExperimentParams(cases=(tiny,), select_order=False, real_data=False)
+    # the paper's-regime series have their own tests (test_ari_carrier.py, test_ari_truths.py)
+    params = exp.AriExperimentParams(
+        cases=(tiny,),
+        select_order=False,
+        real_data=False,
+        carrier_phase=False,
+        ins=False,
+        printed_truths=False,
+    )
     opts = ReproduceOptions(
         out_dir=out, runs=2, seed=3, params=params, progress=False, inputs=(table,)
     )
@@ -202,6 +210,8 @@ def test_reproduce_end_to_end_reduced(tmp_path: Path) -> None:
     tables = (out / "tables.md").read_text()
     assert "Runs: 2 (seed 3, backend " in tables
     assert "## Synthetic truths" in tables
+    assert "# Consistency study on synthetic truths" in tables
+    assert "No carrier-phase series: switched off." in tables
     assert "| tiny ARI(1,1) | 150 | 1 | (1,1) |" in tables
     # every row of the gross-error and bar tables has both estimators, with their run counts
     assert "| tiny ARI(1,1) | exact | 2 | 4 |" in tables

@@ -11,7 +11,13 @@ import numpy as np
 import pytest
 
 from navtrack.experiments.ari import SYNTHETIC_CASES
-from navtrack.experiments.ari.truths import filtered_statistics, fit_published, pacf_to_phi
+from navtrack.experiments.ari.truths import (
+    filtered_statistics,
+    fit_published,
+    pacf_to_phi,
+    printed_columns,
+    printed_truths,
+)
 
 
 def test_pacf_to_phi_matches_ar2_closed_form() -> None:
@@ -41,3 +47,30 @@ def test_fit_published_finds_the_aircraft_yaw_truth() -> None:
     ratio, r = filtered_statistics(phi, 2, 0.0023, 0.0005, 3000)
     assert ratio == pytest.approx(0.0011 / 0.0023, abs=0.02)
     np.testing.assert_allclose(r, (0.86, 0.57, 0.29, 0.09), atol=0.02)
+
+
+def test_every_printed_column_is_listed_with_the_range_its_rounding_allows() -> None:
+    cols = printed_columns()
+    # GPS X/Y/Z for two strip groups (Tables 1, 3), Shuttle and aircraft yaw/pitch/roll
+    assert len(cols) == 12
+    for col in cols:
+        lo, hi = col["ratio_range"]
+        assert lo < col["ratio"] < hi
+    shuttle_pitch = next(c for c in cols if c["table"] == "Shuttle INS" and c["column"] == "pitch")
+    # Table 4: sigma_x 0.0027, sigma_n 0.0048 deg, printed to 1e-4
+    assert shuttle_pitch["ratio_range"] == pytest.approx([0.00265 / 0.00485, 0.00275 / 0.00475])
+
+
+def test_printed_truths_match_shuttle_yaw_and_not_aircraft_pitch() -> None:
+    cols = {(c["table"], c["column"]): c for c in printed_columns()}
+    rows = printed_truths(
+        [cols[("Shuttle INS", "yaw")], cols[("Aircraft INS", "pitch")]], n_starts=2
+    )
+    yaw, pitch = rows
+    assert yaw["matched"]
+    assert yaw["max_deviation"] < 0.01
+    # Table 5 pitch: sigma_x / sigma_n = 0.37 with sigma_e / sigma_n = 0.37 is out of reach of
+    # the stationary ARI(2,2): the closest model's ratio is above 0.5
+    assert not pitch["matched"]
+    assert pitch["worst"] == "sigma_x/sigma_n"
+    assert pitch["ratio_truth"] > 0.5

@@ -132,3 +132,17 @@ def test_smooth_example_is_the_0759_solution(capsys: pytest.CaptureFixture) -> N
     assert "example    single point positions of 07590920.05o" in text
     assert "status     5 rows not ok taken as missing (high_dop 5)" in text
     assert text.count("n 120 (missing 5)") == 3
+
+
+def test_smooth_vce_forstner_needs_the_paper_estimator(tmp_path: Path) -> None:
+    rng = np.random.default_rng(5)
+    y, _ = simulate_ari(rng, 300, (-0.5,), 1, 0.02, 0.01)
+    src = tmp_path / "series.csv"
+    pd.DataFrame({"t_s": np.arange(y.size), "v": y}).to_csv(src, index=False)
+    with pytest.raises(SystemExit, match="estimator='paper'"):
+        main(["smooth", str(src), "--order", "1,1", "--vce", "forstner"])
+    out = tmp_path / "out.csv"
+    argv = ["smooth", str(src), "--order", "1,1", "--estimator", "paper", "--vce", "forstner"]
+    assert main([*argv, "--out", str(out)]) == 0
+    summary = json.loads(out.with_suffix(".json").read_text())["columns"]["v"]
+    assert summary["sigma_n"] == pytest.approx(0.02, rel=0.3)

@@ -77,6 +77,13 @@ def register(subparsers: Any) -> None:
         help="exact likelihood (default) or the paper's alternating filtering/VCE iteration",
     )
     cmd.add_argument(
+        "--vce",
+        default="redundancy",
+        choices=("redundancy", "forstner"),
+        help="variance components of --estimator paper: exact redundancy numbers (default) or "
+        "Förstner's frequency-domain form",
+    )
+    cmd.add_argument(
         "--flag-threshold",
         type=float,
         default=3.29,
@@ -218,6 +225,7 @@ def run_smooth(args: argparse.Namespace) -> int:
             robust_process=args.robust_process,
             flag_threshold=args.flag_threshold,
             estimator=args.estimator,
+            vce=args.vce,
         )
     except ValueError as exc:
         raise SystemExit(f"navtrack smooth: {exc}") from None

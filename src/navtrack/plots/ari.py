@@ -184,3 +184,38 @@ def write_reproduction_figures(
         yield save_figure(
             series_figure(src.t_s, res, f"{src.source} {col}", src.unit), out_dir / name
         )
+
+
+def regime_figure(results: Mapping[str, Any]) -> Figure | None:
+    """σn in the paper's regimes beside the printed values: the carrier-phase strips (both VCE
+    forms of the paper's estimator and the exact one) against Table 1's range, and the INS
+    columns against Tables 4–5 (log scale); ``None`` when neither was run."""
+    carrier = results.get("carrier") or []
+    ins = (results.get("ins") or {}).get("rows") or []
+    if not carrier and not ins:
+        return None
+    fig = new_figure((9.0, 4.0))
+    axes = fig.subplots(1, 2)
+    fits = (
+        ("exact", "o", "exact"),
+        ("paper_redundancy", "s", "paper, redundancy VCE"),
+        ("paper_forstner", "x", "paper, Förstner VCE"),
+    )
+    panels = (
+        (axes[0], carrier, "carrier-phase strips: σn (m)", (0.007, 0.038), "Table 1 range"),
+        (axes[1], ins, "INS attitude: σn (deg)", (0.0023, 0.0060), "Tables 4–5 range"),
+    )
+    for ax, rows, title, printed, label in panels:
+        names = [
+            " ".join([r["source"], *([f"strip {r['strip']}"] if "strip" in r else []), r["column"]])
+            for r in rows
+        ]
+        for key, marker, fit_label in fits:
+            vals = [(r.get(key) or {}).get("sigma_n", np.nan) for r in rows]
+            ax.plot(range(len(rows)), vals, marker, label=fit_label, ms=5, mfc="none")
+        ax.axhspan(*printed, color="C3", alpha=0.15, label=f"paper, {label}")
+        ax.set_yscale("log")
+        ax.set_xticks(range(len(rows)), names, rotation=80, fontsize=6)
+        ax.set_title(title, fontsize=9)
+    axes[0].legend(fontsize=7)
+    return fig

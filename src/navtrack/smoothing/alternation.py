@@ -5,7 +5,9 @@ Lindenberger (§2.2, after Lindenberger 1987) solves the Gauss–Markov model (2
 by an *iterative computation scheme*: with the current ``(phi, sigma_n, sigma_e)``
 
 1. filter: solve the normal equations for ``x`` and the band of ``N^-1``;
-2. variance components: ``sigma_k^2 <- Omega_k / r_k`` (Förstner's reproducing VCE);
+2. variance components: ``sigma_k^2 <- Omega_k / r_k`` (Förstner's reproducing VCE; the
+   redundancies ``r_k`` exact, or in Förstner's (1984) frequency-domain form with
+   ``AriConfig(vce="forstner")``, :mod:`navtrack.smoothing.vce`);
 3. AR part: ``phi`` by least squares of eq. (3) on the filtered series,
 
 and repeat until nothing moves; gross errors get robust weights (Danish method) and, where
@@ -59,6 +61,7 @@ from navtrack.smoothing.estimation import (
     robust_reweight,
 )
 from navtrack.smoothing.model import AriProblem, ari_polynomial
+from navtrack.smoothing.vce import VceForm, spectral_redundancies
 
 __all__ = ["alternate", "ar_step", "estimate_alternating"]
 
@@ -92,16 +95,33 @@ def ar_step(phi: FloatArray, problem: AriProblem, fit_x: FloatArray, zb: FloatAr
         return phi
 
 
-def _map_step(vec: FloatArray, out: Evaluation, problem: AriProblem) -> FloatArray | None:
-    """One step of the scheme from the evaluation ``out`` at ``vec``: VCE, then the AR step;
-    ``None`` when a redundancy is not positive."""
+def _redundancies(
+    vec: FloatArray, out: Evaluation, problem: AriProblem, vce: VceForm
+) -> tuple[float, float]:
+    """Redundancies of the observation and process groups: the exact traces of ``out``
+    (``"redundancy"``) or Förstner's frequency-domain ones (``"forstner"``)."""
+    if vce == "redundancy":
+        return out.r_n, out.r_e
+    p = problem.p
+    total = np.count_nonzero(problem.w > 0) + np.count_nonzero(problem.v > 0) - problem.n
+    return spectral_redundancies(
+        vec[:p], problem.d, math.exp(vec[p]), math.exp(vec[p + 1]), float(total)
+    )
+
+
+def _map_step(
+    vec: FloatArray, out: Evaluation, problem: AriProblem, vce: VceForm = "redundancy"
+) -> FloatArray | None:
+    """One step of the scheme from the evaluation ``out`` at ``vec``: VCE (redundancies of
+    the form ``vce``), then the AR step; ``None`` when a redundancy is not positive."""
     p = problem.p
     fit = out.fit
-    if out.r_n <= 0 or out.r_e <= 0 or fit.zb is None:
+    r_n, r_e = _redundancies(vec, out, problem, vce)
+    if r_n <= 0 or r_e <= 0 or fit.zb is None:
         return None
     new = vec.copy()
-    new[p] = max(math.log(max(fit.omega_n, 1e-300) / out.r_n), problem.log_floor)
-    new[p + 1] = max(math.log(max(fit.omega_e, 1e-300) / out.r_e), problem.log_floor)
+    new[p] = max(math.log(max(fit.omega_n, 1e-300) / r_n), problem.log_floor)
+    new[p + 1] = max(math.log(max(fit.omega_e, 1e-300) / r_e), problem.log_floor)
     if p:
         new[:p] = ar_step(vec[:p], problem, fit.x, fit.zb)
     return new
@@ -116,7 +136,13 @@ def _change(new: FloatArray, vec: FloatArray, p: int) -> float:
 
 
 def alternate(
-    vec: FloatArray, problem: AriProblem, tol: float, max_iter: int, *, accelerate: bool = True
+    vec: FloatArray,
+    problem: AriProblem,
+    tol: float,
+    max_iter: int,
+    *,
+    accelerate: bool = True,
+    vce: VceForm = "redundancy",
 ) -> Estimate | None:
     """Iterate filtering, VCE and the AR step from ``vec`` ``(p + 2,)`` on ``problem``.
 
@@ -129,6 +155,12 @@ def alternate(
     accelerate : bool
         Extrapolate the sequence of the scheme by SQUAREM (default) instead of iterating it
         plainly.
+    vce : {"redundancy", "forstner"}
+        Redundancies of the VCE step: exact traces, or Förstner's frequency-domain ones
+        (:mod:`navtrack.smoothing.vce`). The frequency-domain scheme's fixed point is not the
+        likelihood's maximum (its redundancies are those of an infinite series), so its plain
+        steps are kept even when they lower the likelihood; the likelihood still guards the
+        SQUAREM jumps (near the fixed point they fall back to plain steps).
 
     Notes
     -----
@@ -155,12 +187,13 @@ def alternate(
         return None
     n_eval = 1
     converged = False
+    monotone = vce == "redundancy"
 
     def worse(new: Evaluation | None, old: Evaluation) -> bool:
         return new is None or new.fit.loglike < old.fit.loglike - 1e-9 * abs(old.fit.loglike)
 
     while n_eval < max_iter + 1:
-        x1 = _map_step(vec, out, problem)
+        x1 = _map_step(vec, out, problem, vce)
         if x1 is None:
             break
         change = _change(x1, vec, p)
@@ -169,11 +202,11 @@ def alternate(
             break
         out1 = evaluate(x1, problem)
         n_eval += 1
-        if worse(out1, out):
-            converged = change < 1e3 * tol
+        if out1 is None or (monotone and worse(out1, out)):
+            converged = out1 is not None and change < 1e3 * tol
             break
         assert out1 is not None
-        x2 = _map_step(x1, out1, problem) if accelerate else None
+        x2 = _map_step(x1, out1, problem, vce) if accelerate else None
         if x2 is None:  # plain iteration (or no second step)
             vec, out = x1, out1
             continue
@@ -211,7 +244,8 @@ def estimate_alternating(
     problem : AriProblem
         Unit weights; its ``stationary`` flag is dropped (the paper's model is conditional).
     config : AriConfig
-        ``alternation_tol`` and ``max_iter`` (stopping rule of :func:`alternate`), ``screen_n``,
+        ``alternation_tol`` and ``max_iter`` (stopping rule of :func:`alternate`), ``vce``
+        (form of the variance-component step), ``screen_n``,
         ``boundary_margin``, robust weight function, ``robust_process``, ``max_robust_iter``.
     starts : list of ndarray, shape (p + 2,)
     robust : bool
@@ -235,7 +269,7 @@ def estimate_alternating(
     found: list[Estimate] = []
     n_iter = 0
     for start in starts:
-        out = alternate(start, window, config.alternation_tol, config.max_iter)
+        out = alternate(start, window, config.alternation_tol, config.max_iter, vce=config.vce)
         if out is not None:
             found.append(out)
             n_iter += out.n_iter
@@ -243,7 +277,7 @@ def estimate_alternating(
         return EstimatorOutcome(None, problem, n_iter, "normal matrix singular at every start")
     best: Estimate | None = choose_estimate(found, config.boundary_margin)
     if window.n < n and best is not None:
-        best = alternate(best.vec, problem, config.alternation_tol, config.max_iter)
+        best = alternate(best.vec, problem, config.alternation_tol, config.max_iter, vce=config.vce)
         if best is None:
             return EstimatorOutcome(None, problem, n_iter, "normal matrix singular on the series")
         n_iter += best.n_iter
@@ -255,7 +289,9 @@ def estimate_alternating(
         if float(np.max(dw)) < 1e-2 or np.count_nonzero(w_new > 0) < min_observations(p, problem.d):
             break
         problem = problem.with_weights(w_new, v_new)
-        again = alternate(best.vec, problem, config.alternation_tol, config.max_iter)
+        again = alternate(
+            best.vec, problem, config.alternation_tol, config.max_iter, vce=config.vce
+        )
         if again is None:
             break
         best = again

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from navtrack.smoothing.robust import ROBUST_DEFAULTS, RobustName
+from navtrack.smoothing.vce import VCE_FORMS, VceForm
 
 __all__ = ["AriConfig"]
 
@@ -79,6 +80,12 @@ class AriConfig:
         variance-component estimation and AR fit
         (:func:`navtrack.smoothing.alternation.estimate_alternating`; ``initial`` is then
         ``"conditional"`` whatever it says).
+    vce : {"redundancy", "forstner"}
+        Form of the paper's estimator's variance-component step
+        (:mod:`navtrack.smoothing.vce`): redundancies ``r_k = n_k - tr(N^-1 N_k)`` exact from
+        the band of ``N^-1`` (default), or Förstner's (1984) frequency-domain form, the paper's
+        recommendation (§2.2). Only with ``estimator="paper"``: the exact estimator maximises
+        the likelihood, whose variance equations are the exact-trace VCE.
     alternation_tol : float
         Stopping rule of the paper's alternating iteration: largest change of ``phi`` and of
         the relative sigmas per iteration (default 1e-4: the paper prints two to three digits;
@@ -110,6 +117,7 @@ class AriConfig:
     initial: Literal["stationary", "conditional"] = "stationary"
     estimator: Literal["exact", "paper"] = "exact"
     alternation_tol: float = 1e-4
+    vce: VceForm = "redundancy"
 
     def __post_init__(self) -> None:
         if self.order is not None:
@@ -128,6 +136,13 @@ class AriConfig:
             raise ValueError(f"criterion must be 'bic' or 'aic', got {self.criterion!r}")
         if self.estimator not in ("exact", "paper"):
             raise ValueError(f"estimator must be 'exact' or 'paper', got {self.estimator!r}")
+        if self.vce not in VCE_FORMS:
+            raise ValueError(f"vce must be one of {VCE_FORMS}, got {self.vce!r}")
+        if self.vce == "forstner" and self.estimator != "paper":
+            raise ValueError(
+                "vce='forstner' needs estimator='paper' (the exact estimator's variance "
+                "equations are the likelihood's, with exact redundancies)"
+            )
         if self.n_starts < 1 or self.max_iter < 1 or self.tol <= 0:
             raise ValueError("need n_starts >= 1, max_iter >= 1, tol > 0")
         if self.stage_growth < 2:

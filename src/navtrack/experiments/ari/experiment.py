@@ -3,7 +3,10 @@
 1. Monte Carlo runs of :func:`~navtrack.experiments.ari.synthetic.synthetic_run`, summarized by
    :func:`~navtrack.experiments.ari.synthetic.summarize_synthetic`;
 2. the ``extra`` step: the real data catalogue (:mod:`navtrack.experiments.ari.real`) plus the
-   user's ``--input`` solution tables, then the SARIMAX cross-check
+   user's ``--input`` solution tables, the series in the paper's own regimes (carrier-phase
+   strips, :mod:`navtrack.experiments.ari.carrier`; navigation-grade INS attitude,
+   :mod:`navtrack.experiments.ari.ins`), a truth for every printed column
+   (:func:`navtrack.experiments.ari.truths.printed_truths`), then the SARIMAX cross-check
    (:mod:`navtrack.experiments.ari.sarimax`) with the step's own generator;
 3. tables and console lines (:mod:`navtrack.experiments.ari.tables`), figures
    (:func:`navtrack.plots.ari.write_reproduction_figures`).
@@ -19,6 +22,8 @@ from typing import Any
 import numpy as np
 
 from navtrack.experiments.ari.broad import broad_series
+from navtrack.experiments.ari.carrier import carrier_rows, carrier_sources
+from navtrack.experiments.ari.ins import INS_DESCRIPTION, ins_rows, ins_series
 from navtrack.experiments.ari.real import (
     RealSeries,
     default_real_sources,
@@ -34,7 +39,9 @@ from navtrack.experiments.ari.synthetic import (
     synthetic_run,
 )
 from navtrack.experiments.ari.tables import PAPER_TABLES, summary_lines, tables_markdown
+from navtrack.experiments.ari.truths import printed_truths
 from navtrack.experiments.contract import Experiment, ExperimentContext, ExtraResult, Outcome
+from navtrack.smoothing.ari import AriConfig
 
 __all__ = ["EXPERIMENT", "AriExperiment"]
 
@@ -71,8 +78,9 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
             )
         sources += [solution_series(Path(path)) for path in context.inputs]
         strips: list[dict[str, Any]] = []
+        config = AriConfig(min_d=1, select_n=10000, robust_process=params.robust_process)
         rows, fits = real_data_rows(
-            sources, track=context.track, workers=context.workers, strips=strips
+            sources, config, track=context.track, workers=context.workers, strips=strips
         )
         # the attitude series in the paper's Euler form too, exact estimator only: the flags
         # before (Euler) and after (rotation-vector path) the change of representation
@@ -82,7 +90,7 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
             if src.meta.get("form") == "rotvec"
         ]
         euler_rows, _ = real_data_rows(
-            euler, track=context.track, workers=context.workers, further=False
+            euler, config, track=context.track, workers=context.workers, further=False
         )
         results = {
             "real": rows,
@@ -93,6 +101,25 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
             "strips": strips,
             "sarimax": sarimax_comparisons(context.rng, params.cases, sources, fits),
         }
+        if params.carrier_phase:
+            carrier, carrier_skipped = carrier_sources(context.shared_data() / "gnss")
+            results["carrier"] = carrier_rows(
+                carrier, params.carrier_strip_epochs, params.robust_process
+            )
+            results["carrier_skipped"] = carrier_skipped
+        if params.ins:
+            path = context.shared_data() / "trajectory" / "pyins_gnss" / "gnss.csv"
+            if path.exists():
+                # a child of the step's generator: the SARIMAX draws stay as they were
+                series = ins_series(path, context.rng.spawn(1)[0])
+                results["ins"] = {
+                    "description": INS_DESCRIPTION,
+                    "rows": ins_rows(series, params.robust_process),
+                }
+            else:
+                results["ins_skipped"] = f"{path} absent"
+        if params.printed_truths:
+            results["printed_truths"] = printed_truths()
         if importlib.util.find_spec("statsmodels") is None:
             results["sarimax_skipped"] = (
                 "statsmodels is not installed: the SARIMAX cross-check was skipped "
@@ -107,11 +134,15 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
         self, outcome: Outcome[AriExperimentParams, _RunResult], out_dir: Path
     ) -> Iterator[Path]:
         from navtrack.plots import ari as ari_plots
+        from navtrack.plots.canvas import save_figure
 
         sources, fits = outcome.artifacts
         yield from ari_plots.write_reproduction_figures(
             out_dir, outcome.runs, outcome.params.cases, sources, fits
         )
+        regime = ari_plots.regime_figure(outcome.results)
+        if regime is not None:
+            yield save_figure(regime, out_dir / "paper_regimes_sigma_n.png")
 
     def summary_lines(self, results: dict[str, Any]) -> list[str]:
         return summary_lines(results)

@@ -356,7 +356,12 @@ def _fit_column(
             row["robust_process"] = _robust_process_fit(task, res, cfg)
         if task.strip_epochs is not None:
             strip = _strip_row(
-                task.source, task.column, task.values, res, task.strip_epochs, AriConfig()
+                task.source,
+                task.column,
+                task.values,
+                res,
+                task.strip_epochs,
+                AriConfig(robust_process=cfg.robust_process),
             )
     return row, res, strip
 
@@ -377,8 +382,9 @@ def real_data_rows(
     ``sigma_n``, ``sigma_e`` at their estimate
     (:func:`navtrack.smoothing.identifiability.sigma_bounds`) and the identifiability
     warnings. On a moving platform (``meta["kinematic"]``: attitude, vehicle tracks, the
-    walking rover — where the paper's edges and discontinuities are) the exact estimator is
-    run again with the process equations (3) reweighted too (``row["robust_process"]``).
+    walking rover — where the paper's edges and discontinuities are) both estimators are run
+    again with the other treatment of the process equations (3) than ``config``'s
+    (``row["robust_process"]``, :func:`_robust_process_fit`).
     Flags at epochs the source marks as outside the model (``meta["model_error"]``:
     Euler-angle artefacts of attitude near gimbal lock) are counted apart as
     ``n_model_error``; flags at epochs of each of ``meta["flag_causes"]`` are counted in
@@ -391,7 +397,8 @@ def real_data_rows(
     ----------
     sources : sequence of RealSeries
     config : AriConfig, optional
-        Settings of the whole-series fits (default: order by BIC over ``d = 1, 2``).
+        Settings of the whole-series fits (default: order by BIC over ``d = 1, 2``, process
+        equations not reweighted).
     track : callable, optional
         ``track(items, desc)`` wraps the loop over the columns, e.g. in a progress bar
         (:meth:`~navtrack.experiments.contract.ExperimentContext.track`).
@@ -429,13 +436,18 @@ def real_data_rows(
 
 
 def _robust_process_fit(task: _ColumnTask, whole: AriResult, cfg: AriConfig) -> dict[str, Any]:
-    """Both estimators at the order of ``whole`` with the process equations (3) reweighted
-    too (the paper's treatment of edges and discontinuities); the paper's in ``"paper"``, on
-    the series without its leading and trailing missing epochs (as :func:`_paper_fit`)."""
-    rp_cfg = dataclasses.replace(cfg, order=(whole.p, whole.d), robust_process=True)
+    """Both estimators at the order of ``whole`` with the other treatment of the process
+    equations (3) than ``cfg``'s (reweighted when ``cfg`` does not, and vice versa: the
+    paper's treatment of edges and discontinuities beside the observations-only one); the
+    paper's in ``"paper"``, on the series without its leading and trailing missing epochs (as
+    :func:`_paper_fit`). ``"reweighted"`` says which treatment the record holds."""
+    rp_cfg = dataclasses.replace(
+        cfg, order=(whole.p, whole.d), robust_process=not cfg.robust_process
+    )
     t0 = time.perf_counter()
     res = fit_ari(task.values, rp_cfg)
     out = _process_record(res) | {
+        "reweighted": rp_cfg.robust_process,
         "flags_explained": _flag_explanation(task, res),
         "seconds": time.perf_counter() - t0,
     }
@@ -471,6 +483,8 @@ def _estimates(res: AriResult, crb_n: float, crb_e: float) -> dict[str, Any]:
         "r": [float(v) for v in res.autocorr],
         "crb_sigma_n": crb_n,
         "crb_sigma_e": crb_e,
+        "n_process_downweighted": int(np.count_nonzero(res.process_weight < 0.5)),
+        "n_process": int(res.process_weight.size),
     }
 
 

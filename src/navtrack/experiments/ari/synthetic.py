@@ -227,6 +227,22 @@ class AriExperimentParams:
         candidate too (every case). Measured CPU per selection, paper / exact estimator (one
         series each, SQUAREM iteration): GPS strip 1.3 / 2.3 s, flight 1.6 / 4.1 s, Shuttle
         1.8 / 1.5 s, aircraft 9.4 / 2.7 s.
+    robust_process : bool
+        Reweight the process equations (3) too wherever the reproduction weights robustly (the
+        contaminated synthetic series, the real catalogue, the carrier-phase strips, the INS
+        series): the paper's treatment of edges and discontinuities (§2.2), on by default as in
+        the paper; ``False`` weights the observations only (``AriConfig``'s own default).
+    carrier_phase : bool
+        Fit the carrier-phase series of navtrack's relative positioning
+        (:mod:`navtrack.experiments.ari.carrier`): paper Tables 1–3 in the paper's regime.
+    carrier_strip_epochs : int
+        Strip length of the carrier-phase series (the paper's "about 130 registrations").
+    ins : bool
+        Fit the navigation-grade INS attitude series (:mod:`navtrack.experiments.ari.ins`):
+        paper Tables 4–5 in the paper's regime.
+    printed_truths : bool
+        Fit a truth to every column the paper prints
+        (:func:`navtrack.experiments.ari.truths.printed_truths`, about 15 s CPU).
     attitude_form : {"rotvec", "euler"}
         Form of the BROAD attitude series (:func:`navtrack.experiments.ari.broad.broad_series`):
         the rotation-vector path (default, no gimbal-lock singularity) or the paper's Euler
@@ -244,6 +260,11 @@ class AriExperimentParams:
     order_runs: int = 10
     paper_order: bool = True
     attitude_form: Literal["rotvec", "euler"] = "rotvec"
+    robust_process: bool = True
+    carrier_phase: bool = True
+    carrier_strip_epochs: int = 130
+    ins: bool = True
+    printed_truths: bool = True
 
     def __post_init__(self) -> None:
         if not self.cases or len({c.name for c in self.cases}) != len(self.cases):
@@ -260,6 +281,10 @@ class AriExperimentParams:
         if self.paper_runs < 0 or self.order_runs < 0:
             raise ValueError(
                 f"paper_runs, order_runs: expected >= 0, got {self.paper_runs}, {self.order_runs}"
+            )
+        if self.carrier_strip_epochs < 20:
+            raise ValueError(
+                f"carrier_strip_epochs: expected >= 20, got {self.carrier_strip_epochs}"
             )
         if self.attitude_form not in ATTITUDE_FORMS:
             raise ValueError(
@@ -334,7 +359,12 @@ def synthetic_run(params: AriExperimentParams, rng: np.random.Generator) -> dict
         truth = np.zeros(case.n, dtype=bool)
         truth[idx] = True
         t0 = time.perf_counter()
-        robust = fit_ari(dirty, AriConfig(order=(p, case.d), robust=params.robust))
+        robust = fit_ari(
+            dirty,
+            AriConfig(
+                order=(p, case.d), robust=params.robust, robust_process=params.robust_process
+            ),
+        )
         rec["robust_seconds"] = time.perf_counter() - t0
         rec.update(_robust_record("robust", robust, case, idx, truth))
         rec["n_injected"] = int(k)
@@ -343,7 +373,13 @@ def synthetic_run(params: AriExperimentParams, rng: np.random.Generator) -> dict
         if index < params.paper_runs:  # the paper's estimator on the same contaminated series
             t0 = time.perf_counter()
             paper = fit_ari(
-                dirty, AriConfig(order=(p, case.d), robust=params.robust, estimator="paper")
+                dirty,
+                AriConfig(
+                    order=(p, case.d),
+                    robust=params.robust,
+                    robust_process=params.robust_process,
+                    estimator="paper",
+                ),
             )
             rec["paper_robust_seconds"] = time.perf_counter() - t0
             rec.update(_robust_record("paper_robust", paper, case, idx, truth))
