@@ -353,14 +353,14 @@ def _safe_inverse(n: FloatArray) -> tuple[FloatArray, BoolArray]:
 
 def _normal_inverse(g: FloatArray) -> FloatArray:
     """``(g^T g)^-1`` with zero rows/columns for parameters no measurement touches."""
-    n = np.einsum("...sp,...sq->...pq", g, g)
+    n = np.swapaxes(g, -1, -2) @ g  # matmul: einsum is slow on stacks of small matrices
     absent = np.einsum("...pp->...p", n) <= 0.0
     inv, _ = _safe_inverse(n + np.eye(n.shape[-1]) * absent[..., None, :])
     return inv * ~absent[..., None, :] * ~absent[..., :, None]
 
 
 def _hat_diagonal(g: FloatArray, q: FloatArray) -> FloatArray:
-    return np.einsum("...sp,...pq,...sq->...s", g, q, g)
+    return np.sum((g @ q) * g, axis=-1)
 
 
 def normalised_residuals(g: FloatArray, y: FloatArray, used: BoolArray) -> FloatArray:
@@ -409,7 +409,7 @@ def wraim_levels(
         NaN where the test is unavailable (``dof < 1``).
     """
     q = _normal_inverse(g)
-    a = np.einsum("bij,bjp,bsp->bis", enu_rotation, q[:, :3, :], g)
+    a = enu_rotation @ q[:, :3, :] @ np.swapaxes(g, -1, -2)
     r = redundancy_numbers(_hat_diagonal(g, q), 1.0)
     ok = used & (r > 1e-9)
     sr = np.sqrt(np.where(ok, r, 1.0))
@@ -733,7 +733,7 @@ def _gain_all(g: FloatArray, scale: FloatArray, rot: FloatArray) -> FloatArray:
     """East/north/up gains (m per m) of the weighted least squares of whitened ``g`` (rows
     ``scale_j B_j``): ``R (g^T g)^-1 g^T diag(scale)``, shape (B, 3, S)."""
     q = _normal_inverse(g)
-    return np.einsum("bij,bjp,bsp,bs->bis", rot, q[:, :3, :], g, scale)
+    return rot @ q[:, :3, :] @ np.swapaxes(g, -1, -2) * scale[:, None, :]
 
 
 def bounded_wraim_levels(
@@ -815,7 +815,8 @@ def bounded_separation_levels(
         left = ((sat_axis == m[..., :1]) | (sat_axis == m[..., 1:])) & (m[..., :1] >= 0)
         keep = used[r, None, :] & ~left  # (b, H, S)
         gk = g[r, None] * keep[..., None]
-        gain = np.einsum("bij,bhjp,bhsp,bs->bhis", rot[r], sub.cov[r][..., :3, :], gk, scale[r])
+        gain = rot[r][:, None] @ sub.cov[r][..., :3, :] @ np.swapaxes(gk, -1, -2)
+        gain = gain * scale[r][:, None, None, :]
         sig, b = _model_spread(gain, used[r], model_rows(model, r))
         pk = np.where(sub.valid[r][..., None], sep.threshold_m[r] + k_md * sig + b, 0.0)
         pl[r] = np.maximum(pl[r], pk.max(axis=1))
@@ -1036,7 +1037,7 @@ def _monitor_araim(
     solved = estimate.status == SppStatus.OK
     res = araim(estimate, meas.sats, araim_model(meas, estimate, ism), ism)
     used = estimate.used & ~res.excluded & res.in_model[None, :]
-    v = np.nan_to_num(estimate.residuals_m) - np.einsum("bsp,bp->bs", estimate.design, res.dx)
+    v = np.nan_to_num(estimate.residuals_m) - (estimate.design @ res.dx[..., None])[..., 0]
     est = replace(
         estimate,
         x=estimate.x + res.dx,
