@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from navtrack.gnss.solve import LsqStatus, _singular, gauss_newton
+from navtrack.estimation.least_squares import LsqStatus, _singular, gauss_newton
 
 
 def _eigen_decision(N: np.ndarray, rcond: float) -> np.ndarray:

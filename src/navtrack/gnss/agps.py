@@ -13,14 +13,15 @@ troposphere, ``|.|`` the geometric range with the Sagnac term
 (:func:`navtrack.gnss.corrections.geometric_range`), ``a, b`` the WGS-84 semi-axes and ``h`` the
 assumed height. Each fix starts at the base-station (cell) position with zero clock biases.
 
-Solvers (:func:`solve_agps`), all on the shared batched kernels of :mod:`navtrack.gnss.solve`:
+Solvers (:func:`solve_agps`), all on the shared batched kernels of
+:mod:`navtrack.estimation.least_squares`:
 
 ``gn``
-    Gauss–Newton, the paper's eq. (7): :func:`~navtrack.gnss.solve.gauss_newton` with the
-    paper's stopping rule ``||A^T f|| <= epsilon`` (``gtol``).
+    Gauss–Newton, the paper's eq. (7): :func:`~navtrack.estimation.least_squares.gauss_newton`
+    with the paper's stopping rule ``||A^T f|| <= epsilon`` (``gtol``).
 ``lm``
     Marquardt, the paper's steps 1–6 with ``mu_1 = 0.1``, ``beta = 10``, ``epsilon = 0.1``:
-    :func:`~navtrack.gnss.solve.marquardt`.
+    :func:`~navtrack.estimation.least_squares.marquardt`.
 ``map``
     Beyond the paper: maximum a posteriori with the cell position as a Gaussian prior of stated
     standard deviation (``AgpsConfig.prior_sigma_m``), pseudoranges and the height equation
@@ -387,7 +388,7 @@ def ellipsoid_residual(xyz_m: ArrayLike, height_m: ArrayLike) -> FloatArray:
 @dataclass(frozen=True, slots=True, eq=False)
 class _AgpsModel:
     """The five (``map``: eight) equations of a batch of fixes as a
-    :data:`navtrack.gnss.solve.ModelFn`: ``v = y - h(X)``, ``J = dh/dX``.
+    :data:`navtrack.estimation.least_squares.ModelFn`: ``v = y - h(X)``, ``J = dh/dX``.
 
     Rows 0..3 pseudoranges (weight ``w_pr``), row 4 the height equation times ``scale``
     (weight ``w_h``), rows 5..7 (``prior``) the pseudo-observations ``R = R_cell``.
@@ -455,7 +456,7 @@ def _singular_start(J: FloatArray, complete: BoolArray) -> BoolArray:
     """Fixes whose five equations are singular at the start — the same satellite twice, a start
     at the earth's centre, two epochs of the same geometry — by the singularity test of the
     Gauss–Newton kernel (``rcond = 1e-12`` on the scaled normal matrix)."""
-    from navtrack.gnss.solve import _singular
+    from navtrack.estimation.least_squares import _singular
 
     return np.asarray(_singular(np.einsum("bmp,bmq->bpq", J, J), 1e-12) & complete)
 
@@ -517,16 +518,17 @@ def solve_agps(
     ref. [8], Chen 2005): step 2 sets ``mu_k <- mu_k / beta`` before each linear solve of a new
     iterate, step 5 ``mu_k <- beta mu_k`` after a rejected trial; step 5 stops at ``X_k``,
     step 6 at ``X_{k+1}``, both when ``||A_k^T f_k|| <= epsilon``. The first trial step
-    therefore uses ``mu_1 / beta``; :func:`~navtrack.gnss.solve.marquardt` (which divides
-    after an accepted step) runs with ``mu0 = mu_1 / beta``. Gauss–Newton is eq. (7) with the
-    same stopping rule. Iterations count linear solves (the paper's measure of computation).
+    therefore uses ``mu_1 / beta``; :func:`~navtrack.estimation.least_squares.marquardt`
+    (which divides after an accepted step) runs with ``mu0 = mu_1 / beta``. Gauss–Newton is
+    eq. (7) with the same stopping rule. Iterations count linear solves (the paper's measure of
+    computation).
     A fix ends ``diverged`` when its estimate is not finite or not within
     :data:`navtrack.geodesy.NEAR_SURFACE_NORM_M` of the earth's centre, ``weak_geometry`` when
     its DOP exceeds ``max_dop`` or its predicted error ``max_sigma_m``, ``implausible`` when it
     lies off the assumed height or its pseudoranges do not close (``max_height_residual_m``,
     ``max_residual_m``), with the reason in :attr:`AgpsResult.reason`.
     """
-    from navtrack.gnss.solve import LsqStatus, gauss_newton, marquardt
+    from navtrack.estimation.least_squares import LsqStatus, gauss_newton, marquardt
 
     cfg = config or AgpsConfig()
     if solver not in SOLVERS:

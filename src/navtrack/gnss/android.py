@@ -46,13 +46,13 @@ import numpy as np
 
 from navtrack._typing import StrPath
 from navtrack.errors import FileFormatError
+from navtrack.geodesy import C_MPS
 from navtrack.gnss.observations import Observations, ObsHeader, SkippedLine
 from navtrack.gnss.rinex._io import read_bytes
 from navtrack.timescale import BDT_MINUS_GPST_S, GLONASST_MINUS_UTC_S, leap_seconds
 
 __all__ = ["SKIP_REASONS", "read_gnsslogger", "skipped_counts"]
 
-C_MPS = 299792458.0
 _WEEK_NS = 604800 * 10**9
 _DAY_NS = 86400 * 10**9
 _100MS_NS = 100 * 10**6

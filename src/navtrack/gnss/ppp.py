@@ -41,7 +41,7 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, IntArray
-from navtrack.geodesy import ecef_to_geodetic, enu_rotation
+from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
 
 if TYPE_CHECKING:
     from navtrack.gnss.observations import Observations
@@ -188,7 +188,7 @@ def solve_ppp(
     if not ok_spp.any():
         raise ValueError(f"obs: {obs.path!r}: no epoch has a single point solution")
     slips = detect_slips(sig, rcfg)
-    f = 299792458.0 / sig.wavelength_m  # (S, 2)
+    f = C_MPS / sig.wavelength_m  # (S, 2)
     code = ionofree(sig.code_m[..., 0], sig.code_m[..., 1], f[:, 0], f[:, 1])
     phase = ionofree(sig.phase_m[..., 0], sig.phase_m[..., 1], f[:, 0], f[:, 1])
     phase = np.where(np.isfinite(code), phase, np.nan)

@@ -9,8 +9,8 @@ masks, in the order of RTKLIB's ``pntpos``:
 3. :func:`corrected_measurements` -> :class:`Measurements`: pseudoranges corrected for satellite
    clock and group delay (ionosphere-free if asked), usability masks, clock groups (``prange``);
 4. :func:`estimate_position` -> :class:`Estimate`: one batched Gauss–Newton
-   (:func:`navtrack.gnss.solve.gauss_newton`) whose per-epoch model (the kernel) re-evaluates
-   elevation mask, ionosphere, troposphere and weights at every iterate, as RTKLIB's
+   (:func:`navtrack.estimation.least_squares.gauss_newton`) whose per-epoch model (the kernel)
+   re-evaluates elevation mask, ionosphere, troposphere and weights at every iterate, as RTKLIB's
    ``rescode`` does (``estpos``). It takes a per-(epoch, satellite) exclusion mask and a subset
    of epochs and returns residuals, design matrix, weights, state, covariance, redundancy,
    iterations and status: what fault detection and exclusion need (:func:`merge_estimates`
@@ -1104,7 +1104,7 @@ def estimate_position(
 
     Elevation mask, ionosphere, troposphere and weights are re-evaluated at every iterate, as
     RTKLIB's ``rescode`` does; all epochs iterate in one batched Gauss–Newton
-    (:func:`navtrack.gnss.solve.gauss_newton`, step-norm threshold ``xtol_m``).
+    (:func:`navtrack.estimation.least_squares.gauss_newton`, step-norm threshold ``xtol_m``).
 
     Parameters
     ----------
@@ -1124,7 +1124,7 @@ def estimate_position(
     -------
     Estimate
     """
-    from navtrack.gnss.solve import LsqStatus, gauss_newton
+    from navtrack.estimation.least_squares import LsqStatus, gauss_newton
 
     cfg = config or SppConfig()
     n_e, n_s = meas.usable.shape

@@ -6,7 +6,7 @@ the design matrix scaled by ``1/sigma``) and ``y = W^1/2 v`` (residuals in sigma
 ``used`` mask:
 
 * :func:`chi2_test`: residual test ``y^T y > chi2_{1-pfa}(dof)``, ``dof = n - 3 - clocks``;
-* :func:`normalised_residuals`: Baarda's w-test per satellite (:mod:`navtrack.smoothing.robust`);
+* :func:`normalised_residuals`: Baarda's w-test per satellite (:mod:`navtrack.estimation.robust`);
 * :func:`wraim_levels`: weighted-RAIM slopes and horizontal/vertical protection levels;
 * :func:`subset_solutions`: linearised re-solutions without given satellites (the fault
   hypotheses of exclusion and solution separation), by downdating the normal matrix;
@@ -41,7 +41,7 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
-from navtrack.smoothing.robust import redundancy_numbers, w_test
+from navtrack.estimation.robust import redundancy_numbers, w_test
 
 if TYPE_CHECKING:
     from navtrack.gnss.spp import Estimate, Measurements, SppConfig

@@ -74,7 +74,7 @@ Modules (this one re-exports the public names):
   "paper")``): conditional model, alternating filtering / VCE / expected-moment AR step;
 * :mod:`navtrack.smoothing.identifiability` — Cramér–Rao bounds of the sigmas at an estimate
   and the paper's "same order of magnitude" condition;
-* :mod:`navtrack.smoothing.robust` — weight functions and Baarda's w-test, generic over
+* :mod:`navtrack.estimation.robust` — weight functions and Baarda's w-test, generic over
   residuals (shared with integrity monitoring);
 * :mod:`navtrack.smoothing.fitting` — input checks, fixed-order fit, order selection,
   :func:`fit_ari`, :func:`regularize_time`;
@@ -114,12 +114,12 @@ R. Varadhan, C. Roland, "Simple and globally convergent methods for accelerating
 convergence of any EM algorithm", Scand. J. Stat. 35, 335–353, 2008.
 """
 
+from navtrack.estimation.robust import ROBUST_DEFAULTS, robust_weight
 from navtrack.smoothing.config import AriConfig
 from navtrack.smoothing.estimation import observed_information
 from navtrack.smoothing.fitting import fit_ari, fit_ari_order, regularize_time
 from navtrack.smoothing.model import ari_polynomial, gauss_markov_filter, simulate_ari
 from navtrack.smoothing.result import AriEpochStatus, AriResult, AriStatus
-from navtrack.smoothing.robust import ROBUST_DEFAULTS, robust_weight
 
 __all__ = [
     "ROBUST_DEFAULTS",

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from navtrack.smoothing.robust import ROBUST_DEFAULTS, RobustName
+from navtrack.estimation.robust import ROBUST_DEFAULTS, RobustName
 from navtrack.smoothing.vce import VCE_FORMS, VceForm
 
 __all__ = ["AriConfig"]
@@ -29,7 +29,7 @@ class AriConfig:
         ``robust_process`` is False).
     robust_c : tuple of float or None
         Tuning constants; ``None`` takes
-        :data:`navtrack.smoothing.robust.ROBUST_DEFAULTS`.
+        :data:`navtrack.estimation.robust.ROBUST_DEFAULTS`.
     robust_process : bool
         Reweight the process equations (3) too (the paper's treatment of edges and
         discontinuities). Off by default: an isolated gross error can be explained either by a

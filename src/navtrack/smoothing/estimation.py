@@ -12,7 +12,7 @@ vector ``vec = (phi_1..phi_p, log sigma_n^2, log sigma_e^2)``:
   expected information, used for series of 64000 epochs and more);
 * :func:`vce_iteration` — the reproducing VCE ``sigma_k^2 <- Omega_k / r_k`` with ``phi`` fixed;
 * :func:`robust_reweight` — new weights of both equation groups from their studentized
-  deletion residuals (:mod:`navtrack.smoothing.robust`);
+  deletion residuals (:mod:`navtrack.estimation.robust`);
 * :func:`estimate_exact_likelihood` — the estimator of :func:`navtrack.smoothing.ari.fit_ari`:
   several starts on a leading window, refinement on the whole series, IRLS inside the VCE, a
   final VCE iteration.
@@ -42,6 +42,7 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
+from navtrack.estimation.robust import deletion_statistic, robust_weight
 from navtrack.smoothing._banded import weighted_band_sums
 from navtrack.smoothing.config import AriConfig
 from navtrack.smoothing.model import (
@@ -54,7 +55,6 @@ from navtrack.smoothing.model import (
     solve_gauss_markov,
     with_inverse,
 )
-from navtrack.smoothing.robust import deletion_statistic, robust_weight
 
 __all__ = [
     "MIN_WEIGHT",

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
+from navtrack.estimation.robust import deletion_statistic, flag_outliers
 from navtrack.smoothing._banded import single_threaded_blas
 from navtrack.smoothing.alternation import estimate_alternating
 from navtrack.smoothing.config import AriConfig
@@ -35,7 +36,6 @@ from navtrack.smoothing.model import (
     stationary_prior,
 )
 from navtrack.smoothing.result import AriEpochStatus, AriResult, AriStatus, bad_result
-from navtrack.smoothing.robust import deletion_statistic, flag_outliers
 
 __all__ = ["fit_ari", "fit_ari_order", "regularize_time"]
 

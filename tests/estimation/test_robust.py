@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from navtrack.smoothing.robust import (
+from navtrack.estimation.robust import (
     ROBUST_DEFAULTS,
     danish_weight,
     deletion_statistic,

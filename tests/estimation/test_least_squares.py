@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from navtrack.gnss.solve import LsqStatus, gauss_newton, marquardt
+from navtrack.estimation.least_squares import LsqStatus, gauss_newton, marquardt
 
 
 def _range_problem(rng: np.random.Generator, n_batch: int, n_meas: int, noise_m: float):
