@@ -86,7 +86,9 @@ def fit_ari_order(
     y_arr, status, message = _check_input(y, t)
     if status != AriStatus.OK:
         return bad_result(y_arr, status, message, p, d)
-    with single_threaded_blas():
+    # the likelihood search probes parameters where the filter overflows; such trials come back
+    # non-finite, and the checks on the likelihood reject them or end the fit in a status
+    with single_threaded_blas(), np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         return _fit_fixed(y_arr, p, d, cfg, robust=True)
 
 
@@ -301,7 +303,9 @@ def fit_ari(
     y_arr, status, message = _check_input(y, t)
     if status != AriStatus.OK:
         return bad_result(y_arr, status, message)
-    with single_threaded_blas():
+    # the likelihood search probes parameters where the filter overflows; such trials come back
+    # non-finite, and the checks on the likelihood reject them or end the fit in a status
+    with single_threaded_blas(), np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         return _select_and_fit(y_arr, cfg, progress or (lambda: None))
 
 
