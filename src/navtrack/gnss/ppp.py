@@ -41,6 +41,7 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, IntArray
+from navtrack.estimation.covariance import restart_states
 from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
 
 if TYPE_CHECKING:
@@ -241,16 +242,12 @@ def solve_ppp(
         for c in range(n_c):  # white clock: restarted at the median code residual
             sel = ok & (sys_col == c)
             x[i_clk + c] = float(np.median((y_code[k] - geo)[sel])) if sel.any() else 0.0
-            P[i_clk + c, :] = 0.0
-            P[:, i_clk + c] = 0.0
-            P[i_clk + c, i_clk + c] = 100.0**2
+            restart_states(P, i_clk + c, 100.0**2)
         clk = np.where(sys_col >= 0, x[i_clk + np.maximum(sys_col, 0)], 0.0)
         restart = ok & (~active | reset[k] | (k - last > cfg.max_outage + 1))
         if restart.any():
             ri = amb[restart]
-            P[ri, :] = 0.0
-            P[:, ri] = 0.0
-            P[ri, ri] = cfg.sigma_amb0_m**2
+            restart_states(P, ri, cfg.sigma_amb0_m**2)
             x[ri] = (y_phase[k] - y_code[k])[restart]
         active |= restart
         last[ok] = k

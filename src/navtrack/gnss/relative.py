@@ -49,6 +49,7 @@ from scipy.special import chdtri
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.errors import NavtrackError
+from navtrack.estimation.covariance import restart_states
 from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
 from navtrack.gnss.ambiguity import AmbiguityConfig, condition_on_fix, resolve_ambiguities
 
@@ -762,9 +763,7 @@ def _run_filter(ep: _Epochs, cfg: RtkConfig, progress: ProgressFn | None = None)
             if x0 is None or not np.all(np.isfinite(ep.x_lin[k])):
                 continue
             x[:3] = x0
-            P[:3, :] = 0.0
-            P[:, :3] = 0.0
-            P[:3, :3] = np.eye(3) * var_pos0
+            restart_states(P, np.arange(3), var_pos0)
             have_pos = True
         el_f = ep.el[k]
         rep = np.repeat(np.arange(n_s), ep.n_f)
@@ -782,9 +781,7 @@ def _run_filter(ep: _Epochs, cfg: RtkConfig, progress: ProgressFn | None = None)
         out.slip[k] = np.bincount(rep, weights=(phase_ok & ep.reset[k]), minlength=n_s) > 0
         if restart.any():
             ri = amb[restart]
-            P[ri, :] = 0.0
-            P[:, ri] = 0.0
-            P[ri, ri] = (cfg.sigma_amb0_m / ep.lam[restart]) ** 2
+            restart_states(P, ri, (cfg.sigma_amb0_m / ep.lam[restart]) ** 2)
             x[ri] = (ep.sd_phase[k, restart] - ep.sd_code[k, restart]) / ep.lam[restart]
         active |= restart
         last_seen[phase_ok] = k
