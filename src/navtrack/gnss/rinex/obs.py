@@ -835,6 +835,10 @@ def _assemble(
 
     lead = 3 if v3 else 0
     n_lines = len(scan.data)
+    # RINEX 3 lines of other systems than those asked for are not decoded: their satellite and
+    # length are checked (below), their fields not read
+    select_lines = v3 and want_systems is not None
+    full = None if select_lines else _matrix(scan.data, lead)
     lines_per_epoch = np.asarray(scan.n_lines, dtype=np.int64)
     epoch_of_line = np.repeat(np.arange(n_e), lines_per_epoch)
     seg_of_line = np.repeat(np.asarray(scan.segment, dtype=np.int64), lines_per_epoch)
@@ -847,10 +851,13 @@ def _assemble(
 
     # Satellite of each data line.
     if v3:
-        heads = b"".join([row[:3] for row in scan.data])
-        if len(heads) != 3 * n_lines:  # a line shorter than its satellite id
-            heads = b"".join([row[:3].ljust(3) for row in scan.data])
-        raw_ids = np.frombuffer(heads, dtype="S3")
+        if full is not None:
+            raw_ids = np.ascontiguousarray(full[:, :3]).view("S3").ravel()
+        else:
+            heads = b"".join([row[:3] for row in scan.data])
+            if len(heads) != 3 * n_lines:  # a line shorter than its satellite id
+                heads = b"".join([row[:3].ljust(3) for row in scan.data])
+            raw_ids = np.frombuffer(heads, dtype="S3")
         offset = np.zeros(n_lines, dtype=np.int64)
         part = np.zeros(n_lines, dtype=np.int64)
     else:
@@ -901,18 +908,17 @@ def _assemble(
         sat_of_line = uniq_col[inverse][rec_of_line] if n_lines else np.zeros(0, np.int64)
         sys_of_line = np.zeros(n_lines, dtype=np.int64)  # RINEX 2: one type list for all
 
-    # Lines whose fields are decoded: RINEX 3 lines of other systems than those asked for are
-    # checked from their satellite and length only (below).
-    if v3 and want_systems is not None:
+    # Lines whose fields are decoded.
+    if full is None:
         letter = raw_ids.view(np.uint8).reshape(-1, 3)[:, 0]
         other = np.isin(letter, np.frombuffer(SYSTEMS.encode(), np.uint8)) & ~np.isin(
-            letter, np.frombuffer(want_systems.upper().encode(), np.uint8)
+            letter, np.frombuffer(str(want_systems).upper().encode(), np.uint8)
         )
         decode = np.flatnonzero(~other)
         mat = _matrix([scan.data[i] for i in decode.tolist()], lead)
     else:
         decode = np.arange(n_lines)
-        mat = _matrix(scan.data, lead)
+        mat = full
     n_dec = mat.shape[0]
     n_f = (mat.shape[1] - lead) // _FIELD
 
