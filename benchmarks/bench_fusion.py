@@ -73,7 +73,7 @@ def worker(scans: Path) -> None:
     writes the posteriors kept so far."""
     from navtrack.experiments.sdcmsjpda.scenario import SdCmsjpdaParams, sensors
     from navtrack.tracking.models import constant_velocity
-    from navtrack.tracking.multisensor import FusionConfig, MultiScans, run_fusion
+    from navtrack.tracking.trackers.multisensor import FusionConfig, MultiScans, run_fusion
 
     d = np.load(scans)
     params = SdCmsjpdaParams()

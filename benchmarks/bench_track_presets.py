@@ -10,8 +10,8 @@ tunes on the reports as read):
 
 - ``ships`` and ``aircraft``: the presets (chosen on the whole Solent / OpenSky file: in sample
   on their own file, out of sample on the other);
-- ``auto on h1``: :func:`~navtrack.tracking.autotune.auto_config` run on the first half (its
-  rule constants were chosen on the first halves, two of them on the Solent west half: see
+- ``auto on h1``: :func:`~navtrack.tracking.trackers.autotune.auto_config` run on the first half
+  (its rule constants were chosen on the first halves, two of them on the Solent west half: see
   the module notes of ``autotune``), the config then tracks the second half;
 - ``auto in sample``: ``auto_config`` on the scored part itself (what ``navtrack track`` does
   with no tuning flags; it never sees the ids).
@@ -35,9 +35,9 @@ from pathlib import Path
 import numpy as np
 
 from navtrack.io.tracks import read_tracks, stale_repeats, to_local_enu, velocity_local_enu
-from navtrack.tracking.autotune import auto_config
 from navtrack.tracking.scoring import score_tracks, scoring_rule
-from navtrack.tracking.tracker import TrackerConfig, run_tracker
+from navtrack.tracking.trackers.autotune import auto_config
+from navtrack.tracking.trackers.tracker import TrackerConfig, run_tracker
 
 DATA = Path(os.environ.get("NAVTRACK_SHARED_DATA", "../shared/data")) / "tracking"
 

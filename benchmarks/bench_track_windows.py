@@ -24,9 +24,9 @@ from pathlib import Path
 import numpy as np
 
 from navtrack.io.tracks import read_tracks, stale_repeats, to_local_enu, velocity_local_enu
-from navtrack.tracking.autotune import auto_config
 from navtrack.tracking.scoring import score_tracks, scoring_rule
-from navtrack.tracking.tracker import run_tracker
+from navtrack.tracking.trackers.autotune import auto_config
+from navtrack.tracking.trackers.tracker import run_tracker
 
 DATA = Path(os.environ.get("NAVTRACK_SHARED_DATA", "../shared/data")) / "tracking"
 FILES = (("SolentAIS_20160112_130211.csv", "ais"), ("OpenSky_Plane_States.csv", "opensky"))

@@ -11,7 +11,7 @@ import pytest
 
 from navtrack.experiments import EXPERIMENTS, ReproduceOptions, get_experiment, reproduce
 from navtrack.experiments.sdcmsjpda import SdCmsjpdaParams, summarize_runs
-from navtrack.tracking.multisensor import ALGORITHMS
+from navtrack.tracking.trackers.multisensor import ALGORITHMS
 
 
 def test_registered() -> None:

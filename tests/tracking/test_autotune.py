@@ -1,4 +1,5 @@
-"""Self-tuning (``tracking.autotune``) and scan windows, on simulated tracks with known noise."""
+"""Self-tuning (``tracking.trackers.autotune``) and scan windows, on simulated tracks with
+known noise."""
 
 from __future__ import annotations
 
@@ -7,7 +8,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from navtrack.tracking.autotune import (
+from navtrack.tracking.gating import gate
+from navtrack.tracking.models import constant_velocity
+from navtrack.tracking.trackers.autotune import (
     AIRCRAFT_Q,
     SHIP_IMM_Q,
     QTrial,
@@ -17,9 +20,7 @@ from navtrack.tracking.autotune import (
     select_q,
     steady_innovation_variance,
 )
-from navtrack.tracking.gating import gate
-from navtrack.tracking.models import constant_velocity
-from navtrack.tracking.tracker import TrackerConfig, run_tracker, scan_windows
+from navtrack.tracking.trackers.tracker import TrackerConfig, run_tracker, scan_windows
 
 
 def _cv_tracks(rng, n_targets, q, sigma, t_end, mean_dt, speed, spacing_m=5000.0):

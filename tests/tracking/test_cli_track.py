@@ -128,7 +128,7 @@ def test_track_progress_bar_counts_the_tracked_detections(
     import numpy as np
 
     from navtrack.cli.track import PROGRESS_MIN_DETECTIONS, _progress
-    from navtrack.tracking.tracker import TrackerConfig, run_tracker
+    from navtrack.tracking.trackers.tracker import TrackerConfig, run_tracker
 
     class Terminal(io.StringIO):
         def isatty(self) -> bool:

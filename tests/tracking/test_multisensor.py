@@ -18,7 +18,7 @@ from navtrack.tracking.models import (
     measure,
     wrap_angle,
 )
-from navtrack.tracking.multisensor import (
+from navtrack.tracking.trackers.multisensor import (
     ALGORITHMS,
     FusionConfig,
     MultiScans,
@@ -42,7 +42,7 @@ P0 = np.diag([300.0**2, 30.0**2, 300.0**2, 30.0**2])[None]
 def gauss_newton(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
     """Run a test through each path of the equivalent measurement's Gauss-Newton loop: the
     NumPy loop, and the compiled range-bearing loop (skipped without numba)."""
-    import navtrack.tracking.multisensor as ms
+    import navtrack.tracking.trackers.multisensor as ms
 
     if request.param == "numpy":
         monkeypatch.setattr(ms, "_compiled_gauss_newton", lambda: None)
@@ -132,7 +132,7 @@ def test_literal_sdcmsjpda_two_sensors_two_measurements_by_hand() -> None:
     ``b = 2 m (1 - P_D P_G) / (γ P_D)`` (n_z = 2: ``(2π/γ) / π``), eq. 25's weights, eq.
     24's tuple estimates, and the covariance (31-32) as the moments of the mixture of the
     prediction (weight ``β(L) β₀(L)``) and the single-sensor updates (``β(L) w_s(L)``)."""
-    from navtrack.tracking.multisensor import fusion_step, nonparametric_b
+    from navtrack.tracking.trackers.multisensor import fusion_step, nonparametric_b
 
     sens = [linear_position(4, (0, 2), 50.0), linear_position(4, (0, 2), 100.0)]
     motion = constant_velocity(2, 1.0)
@@ -229,7 +229,7 @@ def test_equivalent_measurement_is_the_ml_fusion_of_the_tuple(gauss_newton: str)
     (``scipy.optimize.least_squares``) on the whitened residuals."""
     from scipy.optimize import least_squares
 
-    from navtrack.tracking.multisensor import equivalent_measurement
+    from navtrack.tracking.trackers.multisensor import equivalent_measurement
 
     rng = np.random.default_rng(4)
     pos = np.array([[-20000.0, 30000.0], [15000.0, 25000.0], [-3000.0, 40000.0]])
@@ -335,7 +335,7 @@ def test_two_target_parallel_step_is_the_mixture_over_enumerated_events(seed: in
     mixture, over its tuples, of the stacked EKF oracle weighted by the enumerated eq. 21."""
     xp, Pp, z, cfg = _two_target_terms(seed)
     x, P = xp.copy(), Pp.copy()  # zero time step: the prediction is the prior
-    from navtrack.tracking.multisensor import fusion_step
+    from navtrack.tracking.trackers.multisensor import fusion_step
 
     xn, Pn, _ = fusion_step("parallel", x, P, z, [0.0] * 3, SENSORS, MOTION, cfg)
     terms = _sensor_terms(xp, Pp, z, SENSORS, cfg)
@@ -355,7 +355,7 @@ def test_equivalent_measurement_not_converged_keeps_the_linearised_step(gauss_ne
     """A target passing over sensor 1 (true range 150 m, measured range below zero): the
     Gauss-Newton fit of that single detection does not settle; the tuple keeps its first,
     prediction-linearised step."""
-    from navtrack.tracking.multisensor import equivalent_measurement
+    from navtrack.tracking.trackers.multisensor import equivalent_measurement
 
     x_ref = np.array([-450.0, 300.0, -360.0, -400.0])
     z = np.array([[[-250.0, 1.2], [0.0, 0.0], [0.0, 0.0]]])
@@ -374,7 +374,7 @@ def test_joint_tuple_likelihood_marginals_equal_enumeration(seed: int) -> None:
     prediction covariance (no shared prediction error) the factorised marginals of eq. 15."""
     from scipy.stats import multivariate_normal
 
-    from navtrack.tracking.multisensor import _joint_tuple_marginals
+    from navtrack.tracking.trackers.multisensor import _joint_tuple_marginals
 
     xp, Pp, z, cfg = _two_target_terms(seed)
     terms = _sensor_terms(xp, Pp, z, SENSORS, cfg)
@@ -494,7 +494,7 @@ def test_measure_stacks_the_sensors_models() -> None:
 def test_equivalent_measurement_of_linear_sensors_is_the_information_mean() -> None:
     """Three observed components (the general solve, not the 2 x 2 closed form): linear
     position sensors fuse to the information-weighted mean in one step."""
-    from navtrack.tracking.multisensor import equivalent_measurement
+    from navtrack.tracking.trackers.multisensor import equivalent_measurement
 
     rng = np.random.default_rng(6)
     sig = [10.0, 20.0, 40.0]
@@ -532,7 +532,7 @@ def test_compiled_gauss_newton_equals_the_numpy_loop(
     """The compiled range-bearing loop and the NumPy loop of ``equivalent_measurement`` give
     the same equivalent measurements (rounding only) on noisy tuples of 1-3 detections, also
     with the position components in reverse order and bearings from north."""
-    import navtrack.tracking.multisensor as ms
+    import navtrack.tracking.trackers.multisensor as ms
 
     if ms._compiled_gauss_newton() is None:
         pytest.skip("numba is not installed")

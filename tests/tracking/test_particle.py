@@ -15,7 +15,7 @@ import pytest
 
 from navtrack.tracking.kalman import kf_predict
 from navtrack.tracking.models import FovealScan, FovealSensor, constant_velocity
-from navtrack.tracking.particle import (
+from navtrack.tracking.trackers.particle import (
     MAX_HYPOTHESES,
     JmpdConfig,
     JmpdState,

@@ -99,7 +99,7 @@ def _hypotheses(shared_data: Path, name: str, source: str):
         hf, hid, hpos = _perturbed(tf, tid, tpos, match_m, seed=11)
     else:
         from navtrack.io.tracks import velocity_local_enu
-        from navtrack.tracking.tracker import TrackerConfig, run_tracker
+        from navtrack.tracking.trackers.tracker import TrackerConfig, run_tracker
 
         res = run_tracker(
             det.t_gps_s,

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from navtrack.tracking.sensor_control import (
+from navtrack.tracking.trackers.sensor_control import (
     configure,
     expected_posterior_variance,
     foveal_gain,

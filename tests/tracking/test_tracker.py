@@ -10,7 +10,7 @@ import pytest
 from navtrack.tracking.metrics import clear_mot
 from navtrack.tracking.models import constant_velocity, linear_position
 from navtrack.tracking.simulate import simulate_detections, simulate_truth
-from navtrack.tracking.tracker import DetStatus, TrackerConfig, run_tracker
+from navtrack.tracking.trackers.tracker import DetStatus, TrackerConfig, run_tracker
 
 
 def test_simulators_are_seeded_and_statistically_right() -> None:

@@ -18,7 +18,7 @@ from navtrack.tracking.kalman import (
     kf_update,
 )
 from navtrack.tracking.models import RangeBearing, constant_velocity, linear_position
-from navtrack.tracking.tracker import (
+from navtrack.tracking.trackers.tracker import (
     DET_STATUS_NAMES,
     DetStatus,
     Seeds,

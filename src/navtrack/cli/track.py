@@ -7,8 +7,8 @@ purity, HOTA) on a regular grid of report times where each id's true position is
 between its own reports.
 
 The tracker model is ``--preset auto`` unless a preset is named: chosen and tuned from the
-detections without their ids (:mod:`navtrack.tracking.autotune`); the model options override
-single values of the preset. The model as used is printed and written with ``--out`` (a
+detections without their ids (:mod:`navtrack.tracking.trackers.autotune`); the model options
+override single values of the preset. The model as used is printed and written with ``--out`` (a
 ``.json`` beside a ``.csv``; in a ``.parquet`` file, the frame's ``attrs["navtrack"]``
 as JSON, read back by ``pandas.read_parquet(F).attrs``).
 """
@@ -62,7 +62,8 @@ def register(subparsers: Any) -> None:
     m = p.add_argument_group(
         "tracker model",
         "--preset auto (the default) chooses and tunes the model from the detections without "
-        "their ids (navtrack.tracking.autotune); ships / aircraft are the presets tuned on the "
+        "their ids (navtrack.tracking.trackers.autotune); ships / aircraft are the presets "
+        "tuned on the "
         "Solent AIS / OpenSky files. The options below override the preset's values.",
     )
     m.add_argument("--preset", choices=("auto", "ships", "aircraft"), default="auto")
@@ -157,7 +158,7 @@ def run_track(args: argparse.Namespace) -> int:
         velocity_local_enu,
     )
     from navtrack.tracking.scoring import ScoringRule, score_tracks, scoring_rule
-    from navtrack.tracking.tracker import DET_STATUS_NAMES, run_tracker
+    from navtrack.tracking.trackers.tracker import DET_STATUS_NAMES, run_tracker
 
     for name, value in (
         ("--report-s", args.report_s),
@@ -359,11 +360,12 @@ def _positive(name: str, value: float | None, upper: float | None = None) -> Non
 
 def model_config(args: argparse.Namespace, t_s: Any, en: Any, vel: Any) -> tuple[Any, Any]:
     """The tracker config of ``--preset`` with the model options applied over it, and the
-    :class:`~navtrack.tracking.autotune.AutoTune` when the preset is ``auto`` (else None)."""
+    :class:`~navtrack.tracking.trackers.autotune.AutoTune` when the preset is ``auto``
+    (else None)."""
     import dataclasses
 
     from navtrack.tracking.models import constant_velocity
-    from navtrack.tracking.tracker import TrackerConfig
+    from navtrack.tracking.trackers.tracker import TrackerConfig
 
     _positive("--sigma-m", args.sigma_m)
     _positive("--pd", args.pd, 1.0)
@@ -378,7 +380,7 @@ def model_config(args: argparse.Namespace, t_s: Any, en: Any, vel: Any) -> tuple
     elif args.preset == "aircraft":
         cfg = TrackerConfig.for_aircraft(args.associator)
     else:
-        from navtrack.tracking.autotune import auto_config
+        from navtrack.tracking.trackers.autotune import auto_config
 
         tune = auto_config(t_s, en, vel, args.associator)
         cfg = tune.config
@@ -559,7 +561,7 @@ def _write(
 
     from navtrack.io.tracks import local_enu_to_geodetic
     from navtrack.timescale import gps_to_utc, to_datetime64
-    from navtrack.tracking.tracker import TRACK_END_NAMES
+    from navtrack.tracking.trackers.tracker import TRACK_END_NAMES
 
     def utc(t_s: Any) -> Any:
         return pd.to_datetime(to_datetime64(gps_to_utc(t_s))).strftime("%Y-%m-%dT%H:%M:%S.%fZ")

@@ -44,7 +44,7 @@ def plot_tracks(
         Directory for the figure (created if missing).
     en : array-like, shape (n_detections, 2)
         Detections, east and north (m) in the local frame of the tracker.
-    result : navtrack.tracking.tracker.TrackerResult
+    result : navtrack.tracking.trackers.tracker.TrackerResult
         Tracker output; the lines are ``track_x[:, 0]`` (east) against ``track_x[:, 2]``
         (north) of the rows of each confirmed ``track_id``.
     title : str, optional

@@ -2,8 +2,8 @@
 
 Rule (1) and the SO gain were damaged in the extraction; this check settles them: for one
 target, the gain minimising the expected posterior position variance
-(:func:`~navtrack.tracking.sensor_control.optimal_gain`) against rule (1) in both readings of
-its exponent; for SO, the optimum for two targets at ``±D/2`` fitted by a power law in the
+(:func:`~navtrack.tracking.trackers.sensor_control.optimal_gain`) against rule (1) in both readings
+of its exponent; for SO, the optimum for two targets at ``±D/2`` fitted by a power law in the
 spread ``S``.
 """
 
@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from navtrack.tracking.sensor_control import (
+from navtrack.tracking.trackers.sensor_control import (
     SO_SPREAD_FACTORS,
     expected_posterior_variance,
     foveal_gain,

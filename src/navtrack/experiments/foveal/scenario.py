@@ -3,9 +3,9 @@
 :func:`track_foveal` runs ``B`` filters side by side, one per batch row (the three control rules
 on one truth in a reproduction run, or many Monte Carlo truths of one configuration in the speed
 benchmark): each scan it predicts the estimates (Table 1 step 4), configures the sensor
-(:func:`navtrack.tracking.sensor_control.configure`), simulates the scan
+(:func:`navtrack.tracking.trackers.sensor_control.configure`), simulates the scan
 (:meth:`navtrack.tracking.models.FovealSensor.scan`) and updates the filter
-(:func:`navtrack.tracking.particle.jmpd_step`).
+(:func:`navtrack.tracking.trackers.particle.jmpd_step`).
 """
 
 from __future__ import annotations
@@ -18,14 +18,14 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray, IntArray
 from navtrack.tracking.models import FovealSensor, LinearMotion
-from navtrack.tracking.particle import (
+from navtrack.tracking.trackers.particle import (
     JmpdConfig,
     StepStatus,
     jmpd_init,
     jmpd_step,
     predicted_estimates,
 )
-from navtrack.tracking.sensor_control import ControlRule, configure
+from navtrack.tracking.trackers.sensor_control import ControlRule, configure
 
 __all__ = ["FovealTrack", "converged", "simulate_truth", "track_foveal"]
 
@@ -45,7 +45,7 @@ class FovealTrack:
     centre_m : (B, K) float
         Foveal centre ``d_k``, m.
     status_counts : (B, 4) int
-        Scans per :class:`~navtrack.tracking.particle.StepStatus` value.
+        Scans per :class:`~navtrack.tracking.trackers.particle.StepStatus` value.
     resamplings : (B,) int
         Scans after which the particles were resampled.
     """

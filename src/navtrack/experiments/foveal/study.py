@@ -22,8 +22,8 @@ import numpy as np
 from navtrack._typing import FloatArray
 from navtrack.experiments.foveal.scenario import converged, simulate_truth, track_foveal
 from navtrack.tracking.models import FovealSensor, constant_velocity
-from navtrack.tracking.particle import JmpdConfig, Proposal, StepStatus
-from navtrack.tracking.sensor_control import ControlRule
+from navtrack.tracking.trackers.particle import JmpdConfig, Proposal, StepStatus
+from navtrack.tracking.trackers.sensor_control import ControlRule
 
 __all__ = [
     "CONDITIONS",
@@ -61,7 +61,8 @@ class FovealParams:
         ``truth_q = 0`` keeps them on parallel straight lines ``spacing_m`` apart. Fitted on
         Table 3's KP row (``docs/foveal.md``, calibration).
     noise : {"continuous", "discrete"}
-        Form of Q (the paper does not say; see :class:`~navtrack.tracking.particle.JmpdConfig`).
+        Form of Q (the paper does not say; see
+        :class:`~navtrack.tracking.trackers.particle.JmpdConfig`).
     R : float
         Measurement-noise variance, rad² (paper: 0.05).
     dt_s : float

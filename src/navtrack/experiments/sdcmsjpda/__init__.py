@@ -3,7 +3,7 @@
 ``navtrack reproduce sdcmsjpda --out DIR`` runs :data:`EXPERIMENT`:
 
 * :mod:`~navtrack.experiments.sdcmsjpda.scenario` — parameters, sensors, detections and clutter,
-  one Monte Carlo run of the five fusion trackers of :mod:`navtrack.tracking.multisensor`;
+  one Monte Carlo run of the five fusion trackers of :mod:`navtrack.tracking.trackers.multisensor`;
 * :mod:`~navtrack.experiments.sdcmsjpda.experiment` — summary (Table 1, Figs. 1-6), tables,
   figures and the :class:`~navtrack.experiments.Experiment`.
 """

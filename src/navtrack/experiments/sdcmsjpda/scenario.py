@@ -15,14 +15,14 @@ import numpy as np
 from navtrack._typing import FloatArray
 from navtrack.tracking.gating import chi2_threshold
 from navtrack.tracking.models import RangeBearing, constant_velocity, wrap_angle
-from navtrack.tracking.multisensor import (
+from navtrack.tracking.simulate import simulate_truth
+from navtrack.tracking.trackers.multisensor import (
     ALGORITHMS,
     Algorithm,
     FusionConfig,
     MultiScans,
     run_fusion,
 )
-from navtrack.tracking.simulate import simulate_truth
 
 __all__ = ["SdCmsjpdaParams", "clutter_density", "paper3_run", "sensors", "simulate_scans"]
 

@@ -35,8 +35,8 @@ from navtrack.experiments.sdcmsjpda.scenario import (
     simulate_scans,
 )
 from navtrack.tracking.models import constant_velocity
-from navtrack.tracking.multisensor import Algorithm, FusionConfig, run_fusion
 from navtrack.tracking.simulate import simulate_truth
+from navtrack.tracking.trackers.multisensor import Algorithm, FusionConfig, run_fusion
 
 __all__ = ["PAPER_RATIO", "TIMED", "both_paths", "main", "ratio_markdown", "time_ratios"]
 

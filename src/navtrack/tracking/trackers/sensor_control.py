@@ -140,7 +140,7 @@ def configure(
     ----------
     rule : {"so", "to", "wo"}
     x_pred : (B, T, n) float
-        Predicted target states (:func:`navtrack.tracking.particle.predicted_estimates`).
+        Predicted target states (:func:`navtrack.tracking.trackers.particle.predicted_estimates`).
     P_pred : (B, T, n, n) float
         Their covariances.
     R : float

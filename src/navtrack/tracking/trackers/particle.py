@@ -5,7 +5,7 @@ A particle is the concatenation of one *partition* (state) per target,
 run side by side), ``N`` particles, ``T`` targets, ``n`` states per target. Weights are kept as
 normalised log-weights ``(B, N)``. One call of :func:`jmpd_step` is steps 7-12 of Table 1 of Xi &
 Morrell; the predicted estimates of step 4 come from :func:`predicted_estimates` and the sensor
-configuration of step 5 from :mod:`navtrack.tracking.sensor_control`.
+configuration of step 5 from :mod:`navtrack.tracking.trackers.sensor_control`.
 
 Stages (each a small function, batched over ``B`` and ``N``):
 

@@ -300,7 +300,7 @@ class TrackerCounts:
     jpda_exact_clusters, jpda_kbest_clusters : JPDA clusters (summed over scans) solved exactly
         / by k-best (:class:`~navtrack.tracking.jpda.JpdaMethod`)
     ambiguous_detections : detections inside the gates of two or more confirmed tracks
-        (gates wide for the spacing of the targets; :mod:`navtrack.tracking.autotune`)
+        (gates wide for the spacing of the targets; :mod:`navtrack.tracking.trackers.autotune`)
     """
 
     scans: int = 0
@@ -337,11 +337,11 @@ class TrackerResult:
     det_nis : (N,) float
         Normalised innovation squared ``νᵀ S⁻¹ ν`` of each detection against the track it
         updated, at the prediction, the smallest over the motion models (NaN for detections
-        that updated no track; :mod:`navtrack.tracking.autotune` reads it).
+        that updated no track; :mod:`navtrack.tracking.trackers.autotune` reads it).
     det_log_likelihood : (N,) float
         ``log N(z; h(x), S)`` of each detection against the track it updated, mixed over the
         motion models with their predicted probabilities (NaN for detections that updated no
-        track; the likelihood :mod:`navtrack.tracking.autotune` maximises over q).
+        track; the likelihood :mod:`navtrack.tracking.trackers.autotune` maximises over q).
     end_id, end_time_s, end_reason : (K,)
         One row per track: its id, when it ended (s; the time of the scan that deleted it, or
         of the last scan) and why (a :class:`TrackEnd`).

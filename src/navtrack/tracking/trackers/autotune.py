@@ -1,7 +1,7 @@
 """Tracker model chosen and tuned from the detections themselves, without their ids.
 
-:func:`auto_config` runs the tracker of :mod:`navtrack.tracking.tracker` once on a sample of
-the detections (the first ``SAMPLE_SPAN`` of the time span, at most ``SAMPLE_DETECTIONS``)
+:func:`auto_config` runs the tracker of :mod:`navtrack.tracking.trackers.tracker` once on a sample
+of the detections (the first ``SAMPLE_SPAN`` of the time span, at most ``SAMPLE_DETECTIONS``)
 with a generic model, an IMM of three CV models (a moored ship to a manoeuvring target: the
 last model's q is ``BOOT_Q[2]`` at ``BOOT_SPEED_MPS`` and scales with the square of the
 initiation speed limit, at least ``BOOT_Q_MIN_TOP``), sets the model from what that pass
@@ -13,7 +13,7 @@ shows, then searches q by a few more runs; it never reads the ids:
    (``COAST_INTERVALS`` intervals), the confirmation window (1.5 × the coast time); the 95 %
    point the seed age of two-point initiation (two intervals); the 10 % point
    of all intervals sets the scan window (at most 10 s;
-   :func:`~navtrack.tracking.tracker.scan_windows` keeps two reports of one target apart).
+   :func:`~navtrack.tracking.trackers.tracker.scan_windows` keeps two reports of one target apart).
    The 99 % point of all intervals is for fast reports with gaps: at 1 s ADS-B reports each
    aircraft's median interval is 1 s while its gaps last seconds, and a coast of two median
    intervals deletes the track at every gap (a new track follows: identity lost). On the
@@ -135,7 +135,7 @@ from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray
 from navtrack.tracking.gating import chi2_threshold
 from navtrack.tracking.models import constant_velocity
-from navtrack.tracking.tracker import DetStatus, TrackerConfig, TrackerResult, run_tracker
+from navtrack.tracking.trackers.tracker import DetStatus, TrackerConfig, TrackerResult, run_tracker
 
 __all__ = [
     "AutoTune",
@@ -440,7 +440,7 @@ def auto_config(
     z : (N, 2) east/north positions, m
     velocity : (N, 2) or None
         Reported velocities (m/s, NaN unknown), used for one-point initiation as in
-        :func:`~navtrack.tracking.tracker.run_tracker` and for the speed distribution.
+        :func:`~navtrack.tracking.trackers.tracker.run_tracker` and for the speed distribution.
     associator : the associator of the returned config (the first pass and the q trials
         use GNN)
     sample_detections : int
