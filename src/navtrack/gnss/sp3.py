@@ -18,6 +18,7 @@ Remondi, SP3-a, 1989).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from os import fspath
@@ -30,6 +31,8 @@ from navtrack._typing import FloatArray, Int8Array, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.geodesy import OMEGA_E_RAD_S
 from navtrack.gnss.observations import SkippedLine
+from navtrack.gnss.rinex._io import read_bytes
+from navtrack.gnss.rinex_clock import RinexClock
 from navtrack.timescale import calendar_gps_seconds, to_datetime64, to_gps
 
 __all__ = ["Sp3", "Sp3Header", "read_sp3"]
@@ -144,6 +147,9 @@ class Sp3:
     warnings : tuple of str
         What was read leniently: a header epoch count that disagrees with the records (both
         counts named).
+    clock : RinexClock or None
+        Satellite clocks of a RINEX clock file used instead of :attr:`clock_s` where the
+        satellite positions are evaluated (:meth:`with_clock`); None: the SP3 clocks.
 
     References
     ----------
@@ -163,6 +169,7 @@ class Sp3:
     flags: Int8Array | None = None
     implausible: tuple[SkippedLine, ...] = ()
     warnings: tuple[str, ...] = ()
+    clock: RinexClock | None = None
 
     def __post_init__(self) -> None:
         n_e, n_s = len(self.t_gps_s), len(self.sats)
@@ -187,6 +194,10 @@ class Sp3:
     def time(self) -> np.ndarray:
         """Epoch times as GPST calendar ``datetime64[ns]``."""
         return to_datetime64(self.t_gps_s)
+
+    def with_clock(self, clock: RinexClock | None) -> Sp3:
+        """The same orbits with the satellite clocks of a RINEX clock file (None: the SP3's)."""
+        return dataclasses.replace(self, clock=clock)
 
     def sat_index(self, sat: str) -> int:
         """Column of a satellite id in the satellite axis."""
@@ -239,8 +250,6 @@ def read_sp3(path: StrPath) -> Sp3:
         header, a data record before the first epoch, or a file whose number of epochs
         differs from the header's (truncated file); the message names the file and line.
     """
-    from navtrack.gnss.rinex._io import read_bytes
-
     text = read_bytes(path).decode("ascii", "replace")
     lines = text.splitlines()
     first = lines[0]
