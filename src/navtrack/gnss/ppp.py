@@ -42,14 +42,41 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, IntArray
 from navtrack.estimation.covariance import restart_states
-from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
+from navtrack.geodesy import C_MPS, ecef_to_enu, ecef_to_geodetic, enu_rotation
+from navtrack.gnss.corrections import geometric_range, ionofree, saastamoinen_delay_m
+from navtrack.gnss.relative import (
+    ReceiverSignals,
+    RtkConfig,
+    Slips,
+    detect_slips,
+    receiver_signals,
+)
+from navtrack.tracking.kalman import gain_update, innovation_gain
 
 if TYPE_CHECKING:
     from navtrack.gnss.observations import Observations
     from navtrack.gnss.rinex.nav import NavData
     from navtrack.gnss.sp3 import Sp3
 
-__all__ = ["PppConfig", "PppResult", "convergence", "solution_frame", "solve_ppp"]
+__all__ = [
+    "CODE_CORRELATION_S",
+    "PHASE_CORRELATION_S",
+    "PppConfig",
+    "PppResult",
+    "convergence",
+    "solution_frame",
+    "solve_ppp",
+]
+
+
+CODE_CORRELATION_S = 0.0
+"""Correlation time of the code errors (s): the code variance is multiplied by
+``max(1, tau / interval)``, so that code epochs closer than ``tau`` count as one (multipath is
+correlated over minutes, not seconds). How it was chosen: ``docs/ppp.md``, method notes."""
+
+PHASE_CORRELATION_S = 0.0
+"""Correlation time of the phase errors left by the model (s), applied as
+:data:`CODE_CORRELATION_S` to the phase variance (``docs/ppp.md``, method notes)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,6 +94,9 @@ class PppConfig:
         the ionosphere-free combination (RTKLIB ``err``, ``EFACT``).
     code_phase_ratio : float
         Code to phase standard deviation ratio (RTKLIB ``eratio`` 100).
+    code_correlation_s, phase_correlation_s : float
+        Correlation times of the code and phase errors (:data:`CODE_CORRELATION_S`,
+        :data:`PHASE_CORRELATION_S`); 0 treats every epoch as independent.
     sigma_zwd0_m : float
         Start standard deviation of the zenith wet delay (RTKLIB: 0.3 m).
     q_zwd_m : float
@@ -85,6 +115,8 @@ class PppConfig:
     elmask_deg: float = 15.0
     sigma_phase_m: tuple[float, float] = (0.003, 0.003)
     code_phase_ratio: float = 100.0
+    code_correlation_s: float = CODE_CORRELATION_S
+    phase_correlation_s: float = PHASE_CORRELATION_S
     sigma_zwd0_m: float = 0.3
     q_zwd_m: float = 1e-4
     sigma_amb0_m: float = 30.0
@@ -97,6 +129,8 @@ class PppConfig:
             raise ValueError(f"systems: expected letters of GECJ, got {self.systems!r}")
         if self.min_sats < 4:
             raise ValueError(f"min_sats: expected >= 4, got {self.min_sats}")
+        if self.code_correlation_s < 0 or self.phase_correlation_s < 0:
+            raise ValueError("code_correlation_s, phase_correlation_s: expected >= 0")
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -111,6 +145,8 @@ class PppResult:
         update).
     sd_enu_m : ndarray, shape (E, 3)
         Its formal standard deviation, east/north/up (m).
+    cov_enu_m2 : ndarray, shape (E, 3, 3)
+        Its formal covariance in east/north/up (m^2).
     zwd_m : ndarray, shape (E,)
         Zenith wet delay (m).
     n_sats : ndarray of int, shape (E,)
@@ -124,6 +160,7 @@ class PppResult:
     t_gps_s: FloatArray
     pos_m: FloatArray
     sd_enu_m: FloatArray
+    cov_enu_m2: FloatArray
     zwd_m: FloatArray
     n_sats: IntArray
     updated: np.ndarray
@@ -137,16 +174,102 @@ class PppResult:
         """RTKLIB solution quality: 6 (PPP) where updated, 0 elsewhere."""
         return np.where(self.updated, 6, 0).astype(np.int64)
 
+    def inside_bound(self, ref_xyz_m: FloatArray, probability: float = 0.95) -> np.ndarray:
+        """Whether the error against a reference lies inside the formal ``probability``
+        ellipsoid of each updated epoch (``e^T C^-1 e <= chi2_3(probability)``; False where
+        not updated)."""
+        from scipy.stats import chi2  # scipy.stats costs a noticeable import: only when asked
+
+        enu = ecef_to_enu(self.pos_m, np.asarray(ref_xyz_m, dtype=float))
+        out = np.zeros(self.t_gps_s.size, dtype=bool)
+        k = np.flatnonzero(self.updated)
+        q = np.einsum("ei,eij,ej->e", enu[k], np.linalg.inv(self.cov_enu_m2[k]), enu[k])
+        out[k] = q <= chi2.ppf(probability, 3)
+        return out
+
 
 def _wet_mapping(lat: FloatArray, h: FloatArray, el: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Dry slant delay (m) and wet mapping function (Saastamoinen wet slant / wet zenith)."""
-    from navtrack.gnss.corrections import saastamoinen_delay_m
-
     dry = np.asarray(saastamoinen_delay_m(lat, h, el, humidity=0.0))
     wet = np.asarray(saastamoinen_delay_m(lat, h, el, humidity=0.7)) - dry
     dry_z = np.asarray(saastamoinen_delay_m(lat, h, np.full_like(el, np.pi / 2), humidity=0.0))
     wet_z = np.asarray(saastamoinen_delay_m(lat, h, np.full_like(el, np.pi / 2))) - dry_z
     return dry, wet / wet_z
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _Problem:
+    """Ionosphere-free observables reduced by the a priori model, per epoch and satellite.
+
+    ``y_code``/``y_phase`` are the IF code and phase minus the range to the linearisation point
+    ``x_lin`` and the dry delay; ``G`` the design rows of the position, ``m_w`` the wet
+    mapping, ``var_*`` the measurement variances (m^2), ``sys_col`` each satellite's clock
+    (-1: system not solved), ``reset`` a slip restarting the ambiguity.
+    """
+
+    t_gps_s: FloatArray
+    x_lin: FloatArray
+    y_code: FloatArray
+    y_phase: FloatArray
+    G: FloatArray
+    m_w: FloatArray
+    el: FloatArray
+    var_code: FloatArray
+    var_phase: FloatArray
+    sys_col: IntArray
+    n_clk: int
+    reset: np.ndarray
+
+
+def _range_elevation(sat_pos: FloatArray, rcv: FloatArray) -> tuple[FloatArray, ...]:
+    """Range (Sagnac included), line of sight and elevation of ``(E, S, 3)`` satellites from
+    one receiver position."""
+    rho, los = geometric_range(sat_pos, rcv)
+    llh = ecef_to_geodetic(rcv)
+    up = np.einsum("j,esj->es", enu_rotation(llh[0], llh[1])[2], los)
+    return rho, los, np.arcsin(np.clip(up, -1.0, 1.0))
+
+
+def _correlation_factor(t_gps_s: FloatArray, tau_s: float) -> float:
+    """Variance factor ``max(1, tau / interval)`` for errors correlated over ``tau_s``."""
+    steps = np.diff(t_gps_s)
+    interval = float(np.median(steps)) if steps.size else 1.0
+    return max(1.0, tau_s / interval) if interval > 0 else 1.0
+
+
+def _problem(sig: ReceiverSignals, slips: Slips, cfg: PppConfig) -> _Problem:
+    """The reduced observables of :class:`_Problem` from a receiver's signals."""
+    f = C_MPS / sig.wavelength_m  # (S, 2)
+    code = ionofree(sig.code_m[..., 0], sig.code_m[..., 1], f[:, 0], f[:, 1])
+    phase = ionofree(sig.phase_m[..., 0], sig.phase_m[..., 1], f[:, 0], f[:, 1])
+    phase = np.where(np.isfinite(code), phase, np.nan)
+    ok_spp = np.all(np.isfinite(sig.spp_pos_m), axis=1)
+    # geometry at a fixed linearisation point (the median SPP): the state is linear in the
+    # offset from it to well below a millimetre for offsets of metres
+    x_lin = np.nanmedian(sig.spp_pos_m[ok_spp], axis=0)
+    rho, los, el = _range_elevation(sig.sat_pos_m, x_lin)
+    llh = ecef_to_geodetic(x_lin)
+    dry, m_w = _wet_mapping(np.full_like(el, llh[0]), np.full_like(el, llh[2]), el)
+    a, b = cfg.sigma_phase_m
+    var_phase = 9.0 * (a * a + b * b / np.maximum(np.sin(el), 0.05) ** 2)
+    systems = [s for s in cfg.systems if any(x[0] == s for x in sig.sats)]
+    sys_col = np.array([systems.index(x[0]) if x[0] in systems else -1 for x in sig.sats])
+    return _Problem(
+        t_gps_s=sig.t_gps_s,
+        x_lin=x_lin,
+        y_code=code - rho - dry,
+        y_phase=phase - rho - dry,
+        G=np.where(np.isfinite(los), -los, 0.0),
+        m_w=m_w,
+        el=el,
+        var_code=var_phase
+        * cfg.code_phase_ratio**2
+        * _correlation_factor(sig.t_gps_s, cfg.code_correlation_s),
+        var_phase=var_phase * _correlation_factor(sig.t_gps_s, cfg.phase_correlation_s),
+        sys_col=sys_col.astype(np.int64),
+        n_clk=len(systems),
+        reset=np.asarray(slips.any.any(axis=2)),
+    )
 
 
 def solve_ppp(
@@ -164,7 +287,8 @@ def solve_ppp(
     nav : NavData or sequence of NavData, optional
         Broadcast data (GLONASS channels, Klobuchar for the start position only).
     sp3 : Sp3
-        Precise orbits and clocks (clocks interpolated from the SP3 epochs).
+        Precise orbits and clocks (clocks interpolated from the SP3 epochs, or from the RINEX
+        clock file attached with :meth:`Sp3.with_clock`).
     config : PppConfig, optional
 
     Returns
@@ -176,113 +300,103 @@ def solve_ppp(
     ValueError
         No epoch with a single point solution, or no second-frequency carrier.
     """
-    from navtrack.gnss.corrections import ionofree
-    from navtrack.gnss.relative import RtkConfig, detect_slips, receiver_signals
-    from navtrack.tracking.kalman import gain_update, innovation_gain
-
     cfg = config or PppConfig()
     rcfg = RtkConfig(systems=cfg.systems, frequencies=2, elmask_deg=cfg.elmask_deg)
     sig = receiver_signals(obs, nav, rcfg, sp3=sp3)
     if not np.isfinite(sig.phase_cyc[..., 1]).any():
         raise ValueError(f"obs: {obs.path!r} has no second-frequency carrier phase for PPP")
-    ok_spp = np.all(np.isfinite(sig.spp_pos_m), axis=1)
-    if not ok_spp.any():
+    if not np.all(np.isfinite(sig.spp_pos_m), axis=1).any():
         raise ValueError(f"obs: {obs.path!r}: no epoch has a single point solution")
     slips = detect_slips(sig, rcfg)
-    f = C_MPS / sig.wavelength_m  # (S, 2)
-    code = ionofree(sig.code_m[..., 0], sig.code_m[..., 1], f[:, 0], f[:, 1])
-    phase = ionofree(sig.phase_m[..., 0], sig.phase_m[..., 1], f[:, 0], f[:, 1])
-    phase = np.where(np.isfinite(code), phase, np.nan)
-    reset: np.ndarray = np.asarray(slips.any.any(axis=2))
-    # geometry at a fixed linearisation point (the median SPP): the state is linear in the
-    # offset from it to well below a millimetre for offsets of metres
-    from navtrack.gnss.relative import _elevation
+    prob = _problem(sig, slips, cfg)
+    pos, cov, zwd, n_used, updated = _run_filter(prob, cfg)
+    llh = ecef_to_geodetic(prob.x_lin)
+    rot = enu_rotation(llh[0], llh[1])
+    cov_enu = np.einsum("ij,ejk,lk->eil", rot, cov, rot)
+    sd = np.sqrt(np.abs(np.einsum("eii->ei", cov_enu)))
+    return PppResult(
+        t_gps_s=sig.t_gps_s.copy(),
+        pos_m=pos,
+        sd_enu_m=sd,
+        cov_enu_m2=cov_enu,
+        zwd_m=zwd,
+        n_sats=n_used,
+        updated=updated,
+        slips=slips.counts(),
+    )
 
-    x_lin = np.nanmedian(sig.spp_pos_m[ok_spp], axis=0)
-    n_e, n_s = code.shape
-    rho, los, el = _elevation(sig.sat_pos_m, np.broadcast_to(x_lin, (n_e, 3)))
-    llh = ecef_to_geodetic(x_lin)
-    dry, m_w = _wet_mapping(np.full_like(el, llh[0]), np.full_like(el, llh[2]), el)
-    y_code = code - rho - dry
-    y_phase = phase - rho - dry
-    G = np.where(np.isfinite(los), -los, 0.0)
-    a, b = cfg.sigma_phase_m
-    var_phase = 9.0 * (a * a + b * b / np.maximum(np.sin(el), 0.05) ** 2)
-    systems = [s for s in cfg.systems if any(x[0] == s for x in sig.sats)]
-    sys_col = np.array([systems.index(x[0]) if x[0] in systems else -1 for x in sig.sats])
-    n_c = len(systems)
-    i_clk, i_zwd, i_amb = 3, 3 + n_c, 4 + n_c
-    n_x = i_amb + n_s
-    x = np.zeros(n_x)
-    x[:3] = x_lin
-    P = np.zeros((n_x, n_x))
+
+def _run_filter(prob: _Problem, cfg: PppConfig) -> tuple[FloatArray, ...]:
+    """The Kalman filter over all epochs: position, its covariance (ECEF), ZWD, satellites
+    used and whether each epoch was updated."""
+    n_e, n_s = prob.y_code.shape
+    i_clk, i_zwd, i_amb = 3, 3 + prob.n_clk, 4 + prob.n_clk
+    x = np.zeros(i_amb + n_s)
+    x[:3] = prob.x_lin
+    x[i_zwd] = 0.1
+    P = np.zeros((x.size, x.size))
     P[:3, :3] = np.eye(3) * cfg.sigma_pos0_m**2
     P[i_zwd, i_zwd] = cfg.sigma_zwd0_m**2
-    x[i_zwd] = 0.1
     active = np.zeros(n_s, dtype=bool)
     last = np.full(n_s, -(10**9), dtype=np.int64)
     pos = np.full((n_e, 3), np.nan)
     cov = np.full((n_e, 3, 3), np.nan)
     zwd = np.full(n_e, np.nan)
     n_used = np.zeros(n_e, dtype=np.int64)
-    updated = np.zeros(n_e, dtype=bool)
     mask = math.radians(cfg.elmask_deg)
-    amb = np.arange(n_s) + i_amb
     t_prev = None
     for k in range(n_e):
-        t = sig.t_gps_s[k]
-        dt = 0.0 if t_prev is None else t - t_prev
-        ok = np.isfinite(y_phase[k]) & (el[k] >= mask) & (sys_col >= 0)
+        ok = np.isfinite(prob.y_phase[k]) & (prob.el[k] >= mask) & (prob.sys_col >= 0)
         if ok.sum() < cfg.min_sats:
             continue
+        t = prob.t_gps_s[k]
+        P[i_zwd, i_zwd] += cfg.q_zwd_m**2 * (0.0 if t_prev is None else t - t_prev)
         t_prev = t
-        P[i_zwd, i_zwd] += cfg.q_zwd_m**2 * dt
-        # model at the prior: geometry offset, troposphere, then clocks from the code
-        geo = G[k] @ (x[:3] - x_lin) + m_w[k] * x[i_zwd]
-        for c in range(n_c):  # white clock: restarted at the median code residual
-            sel = ok & (sys_col == c)
-            x[i_clk + c] = float(np.median((y_code[k] - geo)[sel])) if sel.any() else 0.0
-            restart_states(P, i_clk + c, 100.0**2)
-        clk = np.where(sys_col >= 0, x[i_clk + np.maximum(sys_col, 0)], 0.0)
-        restart = ok & (~active | reset[k] | (k - last > cfg.max_outage + 1))
-        if restart.any():
-            ri = amb[restart]
-            restart_states(P, ri, cfg.sigma_amb0_m**2)
-            x[ri] = (y_phase[k] - y_code[k])[restart]
+        restart = ok & (~active | prob.reset[k] | (k - last > cfg.max_outage + 1))
         active |= restart
         last[ok] = k
-        idx = np.flatnonzero(ok)
-        m = idx.size
-        H = np.zeros((2 * m, n_x))
-        for rows, with_amb in ((slice(0, m), True), (slice(m, 2 * m), False)):
-            H[rows, :3] = G[k, idx]
-            H[rows, i_clk + sys_col[idx]] = 1.0
-            H[rows, i_zwd] = m_w[k, idx]
-            if with_amb:
-                H[np.arange(m), amb[idx]] = 1.0
-        pred = geo[idx] + clk[idx]
-        y = np.concatenate([y_phase[k, idx] - pred - x[amb[idx]], y_code[k, idx] - pred])
-        R = np.diag(
-            np.concatenate([var_phase[k, idx], var_phase[k, idx] * cfg.code_phase_ratio**2])
-        )
-        S, K = innovation_gain(P, H, R)
-        x, P = gain_update(x, P, y, K, S)
-        pos[k] = x[:3]
-        cov[k] = P[:3, :3]
-        zwd[k] = x[i_zwd]
-        n_used[k] = m
-        updated[k] = True
-    rot = enu_rotation(llh[0], llh[1])
-    sd = np.sqrt(np.abs(np.einsum("ij,ejk,ik->ei", rot, cov, rot)))
-    return PppResult(
-        t_gps_s=sig.t_gps_s.copy(),
-        pos_m=pos,
-        sd_enu_m=sd,
-        zwd_m=zwd,
-        n_sats=n_used,
-        updated=updated,
-        slips=slips.counts(),
-    )
+        x, P = _update(prob, cfg, k, ok, restart, x, P)
+        pos[k], cov[k], zwd[k], n_used[k] = x[:3], P[:3, :3], x[i_zwd], ok.sum()
+    return pos, cov, zwd, n_used, n_used > 0
+
+
+def _update(
+    prob: _Problem,
+    cfg: PppConfig,
+    k: int,
+    ok: np.ndarray,
+    restart: np.ndarray,
+    x: FloatArray,
+    P: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
+    """One epoch: clocks restarted from the code, new ambiguities started from phase minus
+    code, then the Kalman update with the phase and code of the satellites ``ok``."""
+    i_clk, i_zwd, i_amb = 3, 3 + prob.n_clk, 4 + prob.n_clk
+    amb = np.arange(prob.sys_col.size) + i_amb
+    sys_col = prob.sys_col
+    # model at the prior: geometry offset, troposphere, then clocks from the code
+    geo = prob.G[k] @ (x[:3] - prob.x_lin) + prob.m_w[k] * x[i_zwd]
+    for c in range(prob.n_clk):  # white clock: restarted at the median code residual
+        sel = ok & (sys_col == c)
+        x[i_clk + c] = float(np.median((prob.y_code[k] - geo)[sel])) if sel.any() else 0.0
+        restart_states(P, i_clk + c, 100.0**2)
+    clk = np.where(sys_col >= 0, x[i_clk + np.maximum(sys_col, 0)], 0.0)
+    if restart.any():
+        restart_states(P, amb[restart], cfg.sigma_amb0_m**2)
+        x[amb[restart]] = (prob.y_phase[k] - prob.y_code[k])[restart]
+    idx = np.flatnonzero(ok)
+    m = idx.size
+    H = np.zeros((2 * m, x.size))
+    for rows in (slice(0, m), slice(m, 2 * m)):
+        H[rows, :3] = prob.G[k, idx]
+        H[rows, i_clk + sys_col[idx]] = 1.0
+        H[rows, i_zwd] = prob.m_w[k, idx]
+    H[np.arange(m), amb[idx]] = 1.0
+    pred = geo[idx] + clk[idx]
+    y = np.concatenate([prob.y_phase[k, idx] - pred - x[amb[idx]], prob.y_code[k, idx] - pred])
+    R = np.diag(np.concatenate([prob.var_phase[k, idx], prob.var_code[k, idx]]))
+    S, K = innovation_gain(P, H, R)
+    return gain_update(x, P, y, K, S)
 
 
 def convergence(
@@ -293,8 +407,6 @@ def convergence(
     """Error of the static solution against a reference after given times from the first
     epoch: rows ``(t_s, horizontal_m, up_m, 3d_m)`` for each time the data reach (the last
     updated epoch at or before it)."""
-    from navtrack.geodesy import ecef_to_enu
-
     t0 = result.t_gps_s[0]
     enu = ecef_to_enu(result.pos_m, np.asarray(ref_xyz_m, dtype=float))
     rows = []
