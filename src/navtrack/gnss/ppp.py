@@ -69,14 +69,19 @@ __all__ = [
 ]
 
 
-CODE_CORRELATION_S = 0.0
+CODE_CORRELATION_S = 600.0
 """Correlation time of the code errors (s): the code variance is multiplied by
 ``max(1, tau / interval)``, so that code epochs closer than ``tau`` count as one (multipath is
 correlated over minutes, not seconds). How it was chosen: ``docs/ppp.md``, method notes."""
 
-PHASE_CORRELATION_S = 0.0
+PHASE_CORRELATION_S = 30.0
 """Correlation time of the phase errors left by the model (s), applied as
 :data:`CODE_CORRELATION_S` to the phase variance (``docs/ppp.md``, method notes)."""
+
+SIGMA_MODEL_M = 0.03
+"""Standard deviation (m, at zenith; divided by ``sin(el)``) of the range errors the model
+leaves in code and phase alike: satellite clock interpolation, orbit, antenna phase centres,
+wind-up, tides and troposphere mapping (``docs/ppp.md``, method notes)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -97,6 +102,9 @@ class PppConfig:
     code_correlation_s, phase_correlation_s : float
         Correlation times of the code and phase errors (:data:`CODE_CORRELATION_S`,
         :data:`PHASE_CORRELATION_S`); 0 treats every epoch as independent.
+    sigma_model_m : float
+        Range error left by the model (:data:`SIGMA_MODEL_M`), added to the code and phase
+        variances.
     sigma_zwd0_m : float
         Start standard deviation of the zenith wet delay (RTKLIB: 0.3 m).
     q_zwd_m : float
@@ -117,6 +125,7 @@ class PppConfig:
     code_phase_ratio: float = 100.0
     code_correlation_s: float = CODE_CORRELATION_S
     phase_correlation_s: float = PHASE_CORRELATION_S
+    sigma_model_m: float = SIGMA_MODEL_M
     sigma_zwd0_m: float = 0.3
     q_zwd_m: float = 1e-4
     sigma_amb0_m: float = 30.0
@@ -129,8 +138,10 @@ class PppConfig:
             raise ValueError(f"systems: expected letters of GECJ, got {self.systems!r}")
         if self.min_sats < 4:
             raise ValueError(f"min_sats: expected >= 4, got {self.min_sats}")
-        if self.code_correlation_s < 0 or self.phase_correlation_s < 0:
-            raise ValueError("code_correlation_s, phase_correlation_s: expected >= 0")
+        if min(self.code_correlation_s, self.phase_correlation_s, self.sigma_model_m) < 0:
+            raise ValueError(
+                "code_correlation_s, phase_correlation_s, sigma_model_m: expected >= 0"
+            )
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -251,7 +262,9 @@ def _problem(sig: ReceiverSignals, slips: Slips, cfg: PppConfig) -> _Problem:
     llh = ecef_to_geodetic(x_lin)
     dry, m_w = _wet_mapping(np.full_like(el, llh[0]), np.full_like(el, llh[2]), el)
     a, b = cfg.sigma_phase_m
-    var_phase = 9.0 * (a * a + b * b / np.maximum(np.sin(el), 0.05) ** 2)
+    sin_el2 = np.maximum(np.sin(el), 0.05) ** 2
+    var_phase = 9.0 * (a * a + b * b / sin_el2)
+    var_model = cfg.sigma_model_m**2 / sin_el2
     systems = [s for s in cfg.systems if any(x[0] == s for x in sig.sats)]
     sys_col = np.array([systems.index(x[0]) if x[0] in systems else -1 for x in sig.sats])
     return _Problem(
@@ -262,10 +275,10 @@ def _problem(sig: ReceiverSignals, slips: Slips, cfg: PppConfig) -> _Problem:
         G=np.where(np.isfinite(los), -los, 0.0),
         m_w=m_w,
         el=el,
-        var_code=var_phase
-        * cfg.code_phase_ratio**2
+        var_code=(var_phase * cfg.code_phase_ratio**2 + var_model)
         * _correlation_factor(sig.t_gps_s, cfg.code_correlation_s),
-        var_phase=var_phase * _correlation_factor(sig.t_gps_s, cfg.phase_correlation_s),
+        var_phase=(var_phase + var_model)
+        * _correlation_factor(sig.t_gps_s, cfg.phase_correlation_s),
         sys_col=sys_col.astype(np.int64),
         n_clk=len(systems),
         reset=np.asarray(slips.any.any(axis=2)),
