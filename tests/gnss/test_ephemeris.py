@@ -248,7 +248,11 @@ def test_sp3_interpolation_reproduces_dropped_nodes() -> None:
 
     _, sp3 = _sept()
     thin = SimpleNamespace(
-        sats=sp3.sats, t_gps_s=sp3.t_gps_s[::2], pos_m=sp3.pos_m[::2], clock_s=sp3.clock_s[::2]
+        sats=sp3.sats,
+        t_gps_s=sp3.t_gps_s[::2],
+        pos_m=sp3.pos_m[::2],
+        clock_s=sp3.clock_s[::2],
+        clock=None,
     )
     sats = [s for s in sp3.sats if s[0] in "GEJ"][:20]
     cols = [list(sp3.sats).index(s) for s in sats]

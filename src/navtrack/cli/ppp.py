@@ -25,6 +25,7 @@ from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex_clock import read_clock
 from navtrack.gnss.sp3 import Sp3, read_sp3
 from navtrack.io.solution import FORMATS, write_solution
+from navtrack.timescale import to_datetime64
 
 PPP_EXAMPLE = (
     "SEPT078M_120.21O",
@@ -85,9 +86,10 @@ def _resolve_inputs(args: argparse.Namespace) -> None:
             raise SystemExit(f"navtrack ppp: file {str(path)!r} not found")
 
 
-def _precise_products(args: argparse.Namespace) -> Sp3:
+def _precise_products(args: argparse.Namespace, t_obs_s: np.ndarray) -> Sp3:
     """The SP3 orbits, with the clock file's satellite clocks when ``--clk`` is given; every
-    leniency of the readers is printed as a warning."""
+    leniency of the readers is printed as a warning. A clock file that covers none of the
+    observation epochs ``t_obs_s`` is refused."""
     sp3 = read_sp3(args.sp3)
     for why in sp3.warnings:
         print(f"warning        {args.sp3}: {why}", file=sys.stderr)
@@ -96,6 +98,13 @@ def _precise_products(args: argparse.Namespace) -> Sp3:
     clock = read_clock(args.clk)
     for why in clock.warnings:
         print(f"warning        {args.clk}: {why}", file=sys.stderr)
+    t0, t1 = clock.t_gps_s[0], clock.t_gps_s[-1]
+    if t_obs_s.size and (t_obs_s[-1] < t0 or t_obs_s[0] > t1):
+        span = " to ".join(str(t)[:19] for t in to_datetime64(np.array([t0, t1])))
+        obs = " to ".join(str(t)[:19] for t in to_datetime64(t_obs_s[[0, -1]]))
+        raise SystemExit(
+            f"navtrack ppp: --clk {args.clk} covers {span} GPST, the observations {obs}"
+        )
     return sp3.with_clock(clock)
 
 
@@ -108,7 +117,7 @@ def run_ppp(args: argparse.Namespace) -> int:
         raise SystemExit(f"navtrack ppp: {exc}") from None
     obs, log_nav = read_observations(args.obs)
     navs = [read_nav(p) for p in args.nav] + ([log_nav] if log_nav is not None else [])
-    sp3 = _precise_products(args)
+    sp3 = _precise_products(args, obs.t_gps_s)
     try:
         result = solve_ppp(obs, navs, sp3, config)
     except ValueError as exc:

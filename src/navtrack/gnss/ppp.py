@@ -339,11 +339,13 @@ def solve_ppp(
     )
 
 
-def _run_filter(prob: _Problem, cfg: PppConfig) -> tuple[FloatArray, ...]:
+def _run_filter(
+    prob: _Problem, cfg: PppConfig
+) -> tuple[FloatArray, FloatArray, FloatArray, IntArray, np.ndarray]:
     """The Kalman filter over all epochs: position, its covariance (ECEF), ZWD, satellites
     used and whether each epoch was updated."""
     n_e, n_s = prob.y_code.shape
-    i_clk, i_zwd, i_amb = 3, 3 + prob.n_clk, 4 + prob.n_clk
+    _i_clk, i_zwd, i_amb = 3, 3 + prob.n_clk, 4 + prob.n_clk
     x = np.zeros(i_amb + n_s)
     x[:3] = prob.x_lin
     x[i_zwd] = 0.1

@@ -133,7 +133,9 @@ def sp3_states(
         dts = sp3_clock(sp3, sat, ts, max_gap_s)
         t = ts - np.nan_to_num(dts)
         p0 = _orbit(sp3, j, t, n_nodes, max_gap_s)
-        v = _orbit(sp3, j, t + 0.5, n_nodes, max_gap_s) - _orbit(sp3, j, t - 0.5, n_nodes, max_gap_s)
+        v = _orbit(sp3, j, t + 0.5, n_nodes, max_gap_s) - _orbit(
+            sp3, j, t - 0.5, n_nodes, max_gap_s
+        )
         pos[ok, c_] = p0
         vel[ok, c_] = v
         clk[ok, c_] = dts - 2.0 * np.einsum("ni,ni->n", p0, v) / C_MPS**2

@@ -145,8 +145,10 @@ def read_clock(path: StrPath) -> RinexClock:
     if not rows:
         raise FileFormatError(path, len(lines), "no satellite clock records (AS)")
     if skipped:
-        warnings.append(f"{len(skipped)} damaged AS record(s) skipped (first at line "
-                        f"{skipped[0].line}: {skipped[0].reason})")
+        warnings.append(
+            f"{len(skipped)} damaged AS record(s) skipped (first at line "
+            f"{skipped[0].line}: {skipped[0].reason})"
+        )
     sats = tuple(sorted({r[0] for r in rows}))
     _check_satellites(head, sats, warnings)
     t_cal = np.array([r[1] for r in rows])
@@ -183,8 +185,9 @@ def _header(path: StrPath, lines: list[bytes]) -> _Header:
     """Fields of the header lines (label in columns 61-80)."""
     first = lines[0].decode("ascii", "replace")
     if first[60:80].strip() != "RINEX VERSION / TYPE" or first[20:21] != "C":
-        raise FileFormatError(path, 1, "not a RINEX clock file (line 1 is not a type C "
-                              "'RINEX VERSION / TYPE' line)")
+        raise FileFormatError(
+            path, 1, "not a RINEX clock file (line 1 is not a type C 'RINEX VERSION / TYPE' line)"
+        )
     version = first[:9].strip()
     agency, time_system = "", "GPS"
     interval, n_sats = math.nan, -1
@@ -229,7 +232,8 @@ def _satellite_record(
             int(parts[2])
         except (ValueError, IndexError):
             return SkippedLine(lineno, "unreadable satellite record")
-        raise FileFormatError(path, lineno, f"unreadable AS record {line[:40]!r}") from None
+        text = line[:40].decode("ascii", "replace").rstrip()
+        raise FileFormatError(path, lineno, f"unreadable AS record {text!r}") from None
     sd = float(parts[10]) if n_values >= 2 and len(parts) > 10 else math.nan
     return sat, calendar_gps_seconds(y, mo, d, h, mi, sec), clock, sd
 
