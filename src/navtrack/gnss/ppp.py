@@ -15,11 +15,14 @@ and ``N_s`` a float ambiguity (m) per satellite arc, restarted by every cycle sl
 Kalman filter is the recursive least-squares solution of all epochs so far, and its position
 at each epoch is the convergence series.
 
-Not applied (the inputs give no ANTEX file, and RTKLIB 2.4.3's ``-p 7`` defaults leave them
-off too): satellite and receiver antenna phase-centre offsets and variations, phase wind-up,
-solid-earth, ocean-loading and pole tides (solid-earth tide: up to ~0.3 m vertical, nearly
-constant over an hour; it stays in the estimated position), differential code biases between
-the tracked code (``C1C``) and the code of the SP3 clocks (``C1W``).
+The station is corrected for the solid Earth tide (IERS 2010 step 1,
+:mod:`navtrack.gnss.tides`). Not applied: satellite and receiver antenna phase-centre offsets
+and variations, phase wind-up, ocean-loading and pole tides, differential code biases between
+the tracked code (``C1C``) and the code of the SP3 clocks (``C1W``). The errors they leave are
+part of the measurement model instead: code errors correlated over
+:data:`CODE_CORRELATION_S`, phase errors over :data:`PHASE_CORRELATION_S`, and a range error
+of :data:`SIGMA_MODEL_M` common to code and phase, so that the formal covariance describes the
+error of the position (``docs/ppp.md``).
 
 References
 ----------
@@ -51,6 +54,7 @@ from navtrack.gnss.relative import (
     detect_slips,
     receiver_signals,
 )
+from navtrack.gnss.tides import solid_tide_m, sun_moon_ecef_m
 from navtrack.tracking.kalman import gain_update, innovation_gain
 
 if TYPE_CHECKING:
@@ -113,6 +117,9 @@ class PppConfig:
         Standard deviation of a (re-)started ambiguity (m).
     sigma_pos0_m : float
         Standard deviation of the start position (the median single point solution).
+    solid_tide : bool
+        Correct the station for the solid Earth tide (:func:`navtrack.gnss.tides.solid_tide_m`,
+        IERS 2010 step 1); off leaves up to ~0.4 m of twice-daily motion in the position.
     min_sats : int
         Fewest satellites with both code and phase for an update.
     max_outage : int
@@ -130,6 +137,7 @@ class PppConfig:
     q_zwd_m: float = 1e-4
     sigma_amb0_m: float = 30.0
     sigma_pos0_m: float = 100.0
+    solid_tide: bool = True
     min_sats: int = 5
     max_outage: int = 5
 
@@ -259,6 +267,10 @@ def _problem(sig: ReceiverSignals, slips: Slips, cfg: PppConfig) -> _Problem:
     # offset from it to well below a millimetre for offsets of metres
     x_lin = np.nanmedian(sig.spp_pos_m[ok_spp], axis=0)
     rho, los, el = _range_elevation(sig.sat_pos_m, x_lin)
+    G = np.where(np.isfinite(los), -los, 0.0)
+    if cfg.solid_tide:  # the station moves by d(t): the range changes by G d(t)
+        tide = solid_tide_m(x_lin, *sun_moon_ecef_m(sig.t_gps_s))
+        rho = rho + np.einsum("esj,ej->es", G, tide)
     llh = ecef_to_geodetic(x_lin)
     dry, m_w = _wet_mapping(np.full_like(el, llh[0]), np.full_like(el, llh[2]), el)
     a, b = cfg.sigma_phase_m
@@ -272,7 +284,7 @@ def _problem(sig: ReceiverSignals, slips: Slips, cfg: PppConfig) -> _Problem:
         x_lin=x_lin,
         y_code=code - rho - dry,
         y_phase=phase - rho - dry,
-        G=np.where(np.isfinite(los), -los, 0.0),
+        G=G,
         m_w=m_w,
         el=el,
         var_code=(var_phase * cfg.code_phase_ratio**2 + var_model)
