@@ -47,3 +47,10 @@ def test_ppp_names_the_line_of_a_damaged_clock_file(
     assert main([*args, "--sp3", str(sp3), "--clk", str(bad)]) == 2
     err = capsys.readouterr().err
     assert f"bad.clk:{end + 2}: unreadable AS record 'AS G05  2023  1 xx'" in err
+
+
+def test_ppp_plot_writes_the_error_figure(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    assert main(["ppp", "--example", "--plot", str(tmp_path / "fig")]) == 0
+    png = tmp_path / "fig" / "ppp_error.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"figures        {png}" in capsys.readouterr().out

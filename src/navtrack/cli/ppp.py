@@ -62,6 +62,12 @@ def register(subparsers: Any) -> None:
     q.add_argument(
         "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
     )
+    q.add_argument(
+        "--plot",
+        type=Path,
+        metavar="DIR",
+        help="write the error and its formal 95 %% bound over time (needs --ref or --ref-llh)",
+    )
     q.set_defaults(func=run_ppp)
 
 
@@ -110,7 +116,7 @@ def _precise_products(args: argparse.Namespace, t_obs_s: np.ndarray) -> Sp3:
 
 def run_ppp(args: argparse.Namespace) -> int:
     _resolve_inputs(args)
-    check_outputs("navtrack ppp", args.out, FORMATS)
+    check_outputs("navtrack ppp", args.out, FORMATS, args.plot)
     try:
         config = PppConfig(systems=args.systems.upper(), elmask_deg=args.elmask)
     except ValueError as exc:
@@ -124,6 +130,12 @@ def run_ppp(args: argparse.Namespace) -> int:
         raise SystemExit(f"navtrack ppp: {exc}") from None
     solved = _print_summary(args, config, result)
     code = 0 if solved else 1
+    ref = _reference(args) if args.ref_pos is None else None
+    if args.plot is not None and solved and ref is not None:
+        from navtrack.plots.ppp import plot_ppp  # matplotlib only when a figure is asked for
+
+        paths = plot_ppp(result, np.asarray(ref), args.plot)
+        print(f"figures        {', '.join(str(p) for p in paths)}")
     if args.out is not None:
         try:
             path = write_solution(solution_frame(result), args.out, ok_status="ppp")
