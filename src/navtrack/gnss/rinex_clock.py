@@ -123,41 +123,22 @@ def read_clock(path: StrPath) -> RinexClock:
     """
     lines = read_bytes(path).splitlines()
     head = _header(path, lines)
+    counts, records, skipped = _records(path, lines, head.end_line)
+    sat_raw, t_cal, values, sds = records
     warnings: list[str] = []
-    skipped: list[SkippedLine] = []
-    counts = {t.decode(): 0 for t in _RECORD_TYPES}
-    rows: list[tuple[str, float, float, float]] = []
-    for k in range(head.end_line, len(lines)):
-        line = lines[k]
-        kind = line[:2]
-        if kind == b"AS":
-            counts["AS"] += 1
-            rec = _satellite_record(path, k + 1, line, k == len(lines) - 1)
-            if isinstance(rec, SkippedLine):
-                skipped.append(rec)
-            else:
-                rows.append(rec)
-        elif kind in _RECORD_TYPES:
-            counts[kind.decode()] += 1
-        elif line[:2].strip() and not line[:1].isspace():
-            text = line[:20].decode("ascii", "replace")
-            raise FileFormatError(path, k + 1, f"unknown record type {text!r}")
-    if not rows:
-        raise FileFormatError(path, len(lines), "no satellite clock records (AS)")
     if skipped:
         warnings.append(
             f"{len(skipped)} damaged AS record(s) skipped (first at line "
             f"{skipped[0].line}: {skipped[0].reason})"
         )
-    sats = tuple(sorted({r[0] for r in rows}))
+    sats = tuple(sorted(set(sat_raw.tolist())))
     _check_satellites(head, sats, warnings)
-    t_cal = np.array([r[1] for r in rows])
     epochs, e_idx = np.unique(t_cal, return_inverse=True)
-    s_idx = np.searchsorted(np.array(sats), np.array([r[0] for r in rows]))
+    s_idx = np.searchsorted(np.array(sats), sat_raw)
     clock = np.full((epochs.size, len(sats)), np.nan)
     sd = np.full_like(clock, np.nan)
-    clock[e_idx, s_idx] = [r[2] for r in rows]
-    sd[e_idx, s_idx] = [r[3] for r in rows]
+    clock[e_idx, s_idx] = values
+    sd[e_idx, s_idx] = sds
     try:
         t_gps_s = np.asarray(to_gps(epochs, head.time_system), dtype=float)
     except ValueError:
@@ -179,6 +160,72 @@ def read_clock(path: StrPath) -> RinexClock:
         skipped=tuple(skipped),
         warnings=tuple(warnings),
     )
+
+
+_Records = tuple[np.ndarray, FloatArray, FloatArray, FloatArray]  # sat, calendar s, clock, sd
+
+
+def _records(
+    path: StrPath, lines: list[bytes], start: int
+) -> tuple[dict[str, int], _Records, list[SkippedLine]]:
+    """Record counts per type, the AS records as arrays, and the damaged AS records skipped.
+
+    The AS records are converted together (:func:`_convert`); a file with a damaged one is
+    read line by line to name it (:func:`_satellite_record`).
+    """
+    counts = {t.decode(): 0 for t in _RECORD_TYPES}
+    as_lines = []
+    for k in range(start, len(lines)):
+        kind = lines[k][:2]
+        if kind == b"AS":
+            as_lines.append(k)
+        elif kind in _RECORD_TYPES:
+            counts[kind.decode()] += 1
+        elif kind.strip() and not kind[:1].isspace():
+            text = lines[k][:20].decode("ascii", "replace")
+            raise FileFormatError(path, k + 1, f"unknown record type {text!r}")
+    counts["AS"] = len(as_lines)
+    if not as_lines:
+        raise FileFormatError(path, len(lines), "no satellite clock records (AS)")
+    fast = _convert([lines[k] for k in as_lines])
+    if fast is not None:
+        return counts, fast, []
+    rows, skipped = [], []
+    for k in as_lines:
+        rec = _satellite_record(path, k + 1, lines[k], k == len(lines) - 1)
+        (skipped if isinstance(rec, SkippedLine) else rows).append(rec)
+    if not rows:
+        raise FileFormatError(path, len(lines), "no readable satellite clock records (AS)")
+    sat, t, clk, sd = zip(*rows, strict=True)  # type: ignore[misc]
+    return counts, (np.array(sat), np.array(t), np.array(clk), np.array(sd)), skipped
+
+
+def _convert(as_lines: list[bytes]) -> _Records | None:
+    """All AS records converted at once, or None if any is damaged."""
+    tokens = [ln.split(None, 10) for ln in as_lines]
+    if min(len(t) for t in tokens) < 10:
+        return None
+    try:
+        fields = np.array([t[:10] for t in tokens], dtype="S24")
+        date = fields[:, 2:7].astype(np.int64)
+        sec = fields[:, 7].astype(float)
+        n_values = fields[:, 8].astype(np.int64)
+        clock = fields[:, 9].astype(float)
+        raw_ids, sat_idx = np.unique(fields[:, 1], return_inverse=True)
+        ids = np.array([_sat_id(r.decode("ascii")) for r in raw_ids])
+        sd = np.array(
+            [
+                float(t[10].split()[0]) if len(t) > 10 and n > 1 else np.nan
+                for t, n in zip(tokens, n_values, strict=True)
+            ]
+        )
+    except (ValueError, IndexError, UnicodeDecodeError):
+        return None
+    month = (date[:, 0] - 1970).astype("datetime64[Y]").astype("datetime64[M]") + (date[:, 1] - 1)
+    day = month.astype("datetime64[D]") + (date[:, 2] - 1)
+    days = (day - np.datetime64("1980-01-06")).astype(np.int64)
+    t_cal = days * 86400.0 + date[:, 3] * 3600.0 + date[:, 4] * 60.0 + sec
+    return ids[sat_idx.ravel()], t_cal, clock, sd
 
 
 def _header(path: StrPath, lines: list[bytes]) -> _Header:
