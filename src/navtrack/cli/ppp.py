@@ -1,4 +1,4 @@
-"""``navtrack ppp OBS NAV... --sp3 FILE [--clk FILE]``: static precise point positioning.
+"""``navtrack ppp OBS NAV... --sp3 FILE [--clk FILE] [--antex FILE]``: static PPP.
 
 Reads a dual-frequency observation file (RINEX or u-blox UBX), optional navigation files, an SP3
 precise orbit file and optionally a RINEX clock file whose 30 s or 5 s satellite clocks replace
@@ -20,6 +20,7 @@ import numpy as np
 from navtrack.cli.inputs import read_observations
 from navtrack.cli.outputs import check_outputs
 from navtrack.cli.pos import _reference, add_reference_options
+from navtrack.gnss.antex import read_antex
 from navtrack.gnss.ppp import PppConfig, PppResult, convergence, solution_frame, solve_ppp
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex_clock import read_clock
@@ -49,6 +50,11 @@ def register(subparsers: Any) -> None:
         "--clk",
         type=Path,
         help="RINEX clock file (30 s or 5 s satellite clocks, used instead of the SP3 clocks)",
+    )
+    q.add_argument(
+        "--antex",
+        type=Path,
+        help="ANTEX file: receiver (header ANT # / TYPE) and satellite antenna phase centres",
     )
     q.add_argument(
         "--example",
@@ -87,7 +93,8 @@ def _resolve_inputs(args: argparse.Namespace) -> None:
             args.ref = list(REFERENCE_XYZ_M[PPP_EXAMPLE[0]])
     if args.obs is None or args.sp3 is None:
         raise SystemExit("navtrack ppp: give OBS and --sp3 SP3, or --example")
-    for path in [args.obs, *args.nav, args.sp3, *([args.clk] if args.clk else [])]:
+    optional = [p for p in (args.clk, args.antex) if p is not None]
+    for path in [args.obs, *args.nav, args.sp3, *optional]:
         if not path.is_file():
             raise SystemExit(f"navtrack ppp: file {str(path)!r} not found")
 
@@ -124,10 +131,13 @@ def run_ppp(args: argparse.Namespace) -> int:
     obs, log_nav = read_observations(args.obs)
     navs = [read_nav(p) for p in args.nav] + ([log_nav] if log_nav is not None else [])
     sp3 = _precise_products(args, obs.t_gps_s)
+    antex = read_antex(args.antex) if args.antex is not None else None
     try:
-        result = solve_ppp(obs, navs, sp3, config)
+        result = solve_ppp(obs, navs, sp3, config, antex=antex)
     except ValueError as exc:
         raise SystemExit(f"navtrack ppp: {exc}") from None
+    for why in result.warnings:
+        print(f"warning        {why}", file=sys.stderr)
     solved = _print_summary(args, config, result)
     code = 0 if solved else 1
     ref = _reference(args) if args.ref_pos is None else None
@@ -150,6 +160,8 @@ def _print_summary(args: argparse.Namespace, config: PppConfig, result: PppResul
     """Print what was solved; whether any epoch was."""
     print(f"observations   {args.obs}")
     print(f"orbits/clocks  {args.sp3}" + (f", clocks {args.clk}" if args.clk else ""))
+    if args.antex is not None:
+        print(f"antennas       {args.antex}")
     print(f"systems        {config.systems}, elevation mask {config.elmask_deg:g} deg, static")
     print(f"epochs         {result.t_gps_s.size}, updated {int(result.updated.sum())}")
     s = result.slips

@@ -46,7 +46,9 @@ from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, IntArray
 from navtrack.estimation.covariance import restart_states
 from navtrack.geodesy import C_MPS, ecef_to_enu, ecef_to_geodetic, enu_rotation
+from navtrack.gnss.antex import AntennaPattern, Antex, receiver_range_m, satellite_offset_m
 from navtrack.gnss.corrections import geometric_range, ionofree, saastamoinen_delay_m
+from navtrack.gnss.observations import ObsHeader
 from navtrack.gnss.relative import (
     ReceiverSignals,
     RtkConfig,
@@ -67,6 +69,7 @@ __all__ = [
     "PHASE_CORRELATION_S",
     "PppConfig",
     "PppResult",
+    "antenna_range_m",
     "convergence",
     "solution_frame",
     "solve_ppp",
@@ -174,6 +177,8 @@ class PppResult:
         The epoch had enough satellites for an update.
     slips : mapping of str to int
         Slips per detector.
+    warnings : tuple of str
+        Corrections left out (an antenna missing from the ANTEX file).
     """
 
     t_gps_s: FloatArray
@@ -184,6 +189,7 @@ class PppResult:
     n_sats: IntArray
     updated: np.ndarray
     slips: dict[str, int]
+    warnings: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -256,8 +262,80 @@ def _correlation_factor(t_gps_s: FloatArray, tau_s: float) -> float:
     return max(1.0, tau_s / interval) if interval > 0 else 1.0
 
 
-def _problem(sig: ReceiverSignals, slips: Slips, cfg: PppConfig) -> _Problem:
-    """The reduced observables of :class:`_Problem` from a receiver's signals."""
+_BAND_CODES = ((1575.42e6, "01"), (1227.60e6, "02"), (1176.45e6, "05"), (1207.14e6, "07"))
+"""Carrier frequencies (Hz) and their ANTEX frequency numbers (L1/E1, L2, L5/E5a, E5b)."""
+
+
+def _antenna_codes(sat: str, f_hz: FloatArray, patterns: dict[str, AntennaPattern]) -> list[str]:
+    """ANTEX frequency codes of a satellite's two carriers; the GPS code of the same band when
+    the antenna has none of that system (the usual case for receiver antennas)."""
+    codes = []
+    for f in f_hz:
+        band = next((c for freq, c in _BAND_CODES if abs(freq - f) < 1e5), "")
+        code = sat[0] + band
+        codes.append(code if code in patterns else "G" + band)
+    return codes
+
+
+def antenna_range_m(
+    sig: ReceiverSignals,
+    header: ObsHeader,
+    antex: Antex | None,
+    los_m: FloatArray,
+    sun_m: FloatArray,
+) -> tuple[FloatArray, list[str]]:
+    """Ionosphere-free range corrections (m, ``(E, S)``) of the antennas, and warnings.
+
+    Always the antenna reference point's eccentricity (``ANTENNA: DELTA H/E/N``); with an ANTEX
+    file the receiver antenna's offsets and zenith variations and the satellites' offsets (nominal
+    attitude), each combined like the observations. A missing antenna is a warning and its
+    correction is left out.
+    """
+    f = C_MPS / sig.wavelength_m  # (S, 2)
+    w1 = f[:, 0] ** 2 / (f[:, 0] ** 2 - f[:, 1] ** 2)
+    w2 = 1.0 - w1
+    llh = ecef_to_geodetic(np.nanmedian(sig.spp_pos_m, axis=0))
+    rot = enu_rotation(llh[0], llh[1])
+    los_enu = np.einsum("ij,esj->esi", rot, np.nan_to_num(los_m))
+    h, e, n = header.antenna_delta_hen_m if header.antenna_delta_hen_m is not None else (0, 0, 0)
+    out = -(los_enu[..., 0] * e + los_enu[..., 1] * n + los_enu[..., 2] * h)
+    if antex is None:
+        return out, []
+    warnings: list[str] = []
+    try:
+        rcv, note = antex.receiver(header.antenna)
+        warnings += [note] if note else []
+    except KeyError as exc:
+        rcv, warnings = {}, [f"{exc.args[0]}: receiver phase centre not corrected"]
+    t_mid = float(np.median(sig.t_gps_s))
+    missing = []
+    for s, sat in enumerate(sig.sats):
+        if rcv:
+            c1, c2 = _antenna_codes(sat, f[s], rcv)
+            if c1 in rcv and c2 in rcv:
+                d1 = receiver_range_m(rcv[c1], los_enu[:, s])
+                out[:, s] += w1[s] * d1 + w2[s] * receiver_range_m(rcv[c2], los_enu[:, s])
+        pats = antex.satellite(sat, t_mid)
+        codes = _antenna_codes(sat, f[s], pats) if pats else []
+        if not pats or not all(c in pats for c in codes):
+            missing.append(sat)
+            continue
+        body = w1[s] * pats[codes[0]].offset_m + w2[s] * pats[codes[1]].offset_m
+        off = satellite_offset_m(body, sig.sat_pos_m[:, s], sun_m)
+        out[:, s] += np.einsum("ej,ej->e", np.nan_to_num(los_m[:, s]), off)
+    if missing:
+        warnings.append(
+            f"no antenna valid at the observations in {antex.path} for {', '.join(missing)}: "
+            "their satellite phase centres not corrected"
+        )
+    return out, warnings
+
+
+def _problem(
+    sig: ReceiverSignals, slips: Slips, cfg: PppConfig, antenna: tuple[ObsHeader, Antex | None]
+) -> tuple[_Problem, list[str]]:
+    """The reduced observables of :class:`_Problem` from a receiver's signals, and the
+    warnings of the antenna corrections."""
     f = C_MPS / sig.wavelength_m  # (S, 2)
     code = ionofree(sig.code_m[..., 0], sig.code_m[..., 1], f[:, 0], f[:, 1])
     phase = ionofree(sig.phase_m[..., 0], sig.phase_m[..., 1], f[:, 0], f[:, 1])
@@ -268,9 +346,11 @@ def _problem(sig: ReceiverSignals, slips: Slips, cfg: PppConfig) -> _Problem:
     x_lin = np.nanmedian(sig.spp_pos_m[ok_spp], axis=0)
     rho, los, el = _range_elevation(sig.sat_pos_m, x_lin)
     G = np.where(np.isfinite(los), -los, 0.0)
+    sun, moon = sun_moon_ecef_m(sig.t_gps_s)
     if cfg.solid_tide:  # the station moves by d(t): the range changes by G d(t)
-        tide = solid_tide_m(x_lin, *sun_moon_ecef_m(sig.t_gps_s))
-        rho = rho + np.einsum("esj,ej->es", G, tide)
+        rho = rho + np.einsum("esj,ej->es", G, solid_tide_m(x_lin, sun, moon))
+    d_ant, warnings = antenna_range_m(sig, antenna[0], antenna[1], los, sun)
+    rho = rho + d_ant
     llh = ecef_to_geodetic(x_lin)
     dry, m_w = _wet_mapping(np.full_like(el, llh[0]), np.full_like(el, llh[2]), el)
     a, b = cfg.sigma_phase_m
@@ -279,7 +359,7 @@ def _problem(sig: ReceiverSignals, slips: Slips, cfg: PppConfig) -> _Problem:
     var_model = cfg.sigma_model_m**2 / sin_el2
     systems = [s for s in cfg.systems if any(x[0] == s for x in sig.sats)]
     sys_col = np.array([systems.index(x[0]) if x[0] in systems else -1 for x in sig.sats])
-    return _Problem(
+    prob = _Problem(
         t_gps_s=sig.t_gps_s,
         x_lin=x_lin,
         y_code=code - rho - dry,
@@ -295,6 +375,7 @@ def _problem(sig: ReceiverSignals, slips: Slips, cfg: PppConfig) -> _Problem:
         n_clk=len(systems),
         reset=np.asarray(slips.any.any(axis=2)),
     )
+    return prob, warnings
 
 
 def solve_ppp(
@@ -302,6 +383,7 @@ def solve_ppp(
     nav: NavData | Sequence[NavData] | None,
     sp3: Sp3,
     config: PppConfig | None = None,
+    antex: Antex | None = None,
 ) -> PppResult:
     """Static PPP of every epoch of a dual-frequency observation file.
 
@@ -315,6 +397,9 @@ def solve_ppp(
         Precise orbits and clocks (clocks interpolated from the SP3 epochs, or from the RINEX
         clock file attached with :meth:`Sp3.with_clock`).
     config : PppConfig, optional
+    antex : Antex, optional
+        Antenna phase centres (:func:`navtrack.gnss.antex.read_antex`) for the receiver antenna
+        named in the observation header and the satellites (:func:`antenna_range_m`).
 
     Returns
     -------
@@ -333,7 +418,7 @@ def solve_ppp(
     if not np.all(np.isfinite(sig.spp_pos_m), axis=1).any():
         raise ValueError(f"obs: {obs.path!r}: no epoch has a single point solution")
     slips = detect_slips(sig, rcfg)
-    prob = _problem(sig, slips, cfg)
+    prob, warnings = _problem(sig, slips, cfg, (obs.header, antex))
     pos, cov, zwd, n_used, updated = _run_filter(prob, cfg)
     llh = ecef_to_geodetic(prob.x_lin)
     rot = enu_rotation(llh[0], llh[1])
@@ -348,6 +433,7 @@ def solve_ppp(
         n_sats=n_used,
         updated=updated,
         slips=slips.counts(),
+        warnings=tuple(warnings),
     )
 
 
