@@ -163,7 +163,8 @@ def _antenna(path: StrPath, lines: list[str], k: int, out: Antex) -> int:
         elif label in ("VALID FROM", "VALID UNTIL"):
             parts = line[:43].split()
             try:
-                t = calendar_gps_seconds(*(int(p) for p in parts[:5]), float(parts[5]))
+                y, mo, d, h, mi = (int(p) for p in parts[:5])
+                t = calendar_gps_seconds(y, mo, d, h, mi, float(parts[5]))
             except (ValueError, IndexError):
                 raise FileFormatError(path, k + 1, f"unreadable {label.lower()} date") from None
             start, end = (t, end) if label == "VALID FROM" else (start, t)

@@ -36,6 +36,7 @@ from navtrack.timescale import calendar_gps_seconds, to_gps
 __all__ = ["RinexClock", "interpolate_clock", "read_clock"]
 
 _RECORD_TYPES = (b"AR", b"AS", b"CR", b"DR", b"MS")
+_GPS_EPOCH_UNIX_DAYS = 3657  # 1980-01-06 in days from 1970-01-01
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -190,13 +191,17 @@ def _records(
     fast = _convert([lines[k] for k in as_lines])
     if fast is not None:
         return counts, fast, []
-    rows, skipped = [], []
+    rows: list[tuple[str, float, float, float]] = []
+    skipped: list[SkippedLine] = []
     for k in as_lines:
         rec = _satellite_record(path, k + 1, lines[k], k == len(lines) - 1)
-        (skipped if isinstance(rec, SkippedLine) else rows).append(rec)
+        if isinstance(rec, SkippedLine):
+            skipped.append(rec)
+        else:
+            rows.append(rec)
     if not rows:
         raise FileFormatError(path, len(lines), "no readable satellite clock records (AS)")
-    sat, t, clk, sd = zip(*rows, strict=True)  # type: ignore[misc]
+    sat, t, clk, sd = zip(*rows, strict=True)
     return counts, (np.array(sat), np.array(t), np.array(clk), np.array(sd)), skipped
 
 
@@ -223,7 +228,7 @@ def _convert(as_lines: list[bytes]) -> _Records | None:
         return None
     month = (date[:, 0] - 1970).astype("datetime64[Y]").astype("datetime64[M]") + (date[:, 1] - 1)
     day = month.astype("datetime64[D]") + (date[:, 2] - 1)
-    days = (day - np.datetime64("1980-01-06")).astype(np.int64)
+    days = day.astype(np.int64) - _GPS_EPOCH_UNIX_DAYS
     t_cal = days * 86400.0 + date[:, 3] * 3600.0 + date[:, 4] * 60.0 + sec
     return ids[sat_idx.ravel()], t_cal, clock, sd
 
