@@ -88,6 +88,7 @@ def register(subparsers: Any) -> None:
 RTK_EXAMPLE = ("07590920.05o", "30400920.05o", "07590920.05n")
 """The bundled files of ``rtk --example`` (``navtrack/data/README.md``)."""
 
+
 def _base_position(args: argparse.Namespace) -> tuple[FloatArray, str]:
     import numpy as np
 
