@@ -37,6 +37,11 @@ from pathlib import Path
 import numpy as np
 
 from navtrack.geodesy import ecef_to_enu, ecef_to_geodetic, enu_rotation
+from navtrack.gnss.ppp import solve_ppp
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.rinex_clock import read_clock
+from navtrack.gnss.sp3 import read_sp3
 from navtrack.io.rtklib import read_pos
 from navtrack.io.solution import read_solution
 
@@ -115,12 +120,6 @@ def _scores(t: np.ndarray, pos: np.ndarray, cov: np.ndarray, ref: np.ndarray) ->
 
 
 def _compare(case: tuple, tmp: Path) -> None:  # type: ignore[type-arg]
-    from navtrack.gnss.ppp import solve_ppp
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.rinex.obs import read_obs
-    from navtrack.gnss.rinex_clock import read_clock
-    from navtrack.gnss.sp3 import read_sp3
-
     obs_p, nav_p, sp3_p, clk_p, ref_t = case
     ref = np.asarray(ref_t, dtype=float)
     sp3 = read_sp3(sp3_p)

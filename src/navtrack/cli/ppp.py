@@ -20,12 +20,14 @@ import numpy as np
 from navtrack.cli.inputs import read_observations
 from navtrack.cli.outputs import check_outputs
 from navtrack.cli.pos import _reference, add_reference_options
+from navtrack.data import REFERENCE_XYZ_M, sample_path
 from navtrack.gnss.antex import read_antex
 from navtrack.gnss.ppp import PppConfig, PppResult, convergence, solution_frame, solve_ppp
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex_clock import read_clock
 from navtrack.gnss.sp3 import Sp3, read_sp3
 from navtrack.io.solution import FORMATS, write_solution
+from navtrack.plots.ppp import plot_ppp  # matplotlib is imported only when a figure is drawn
 from navtrack.timescale import to_datetime64
 
 PPP_EXAMPLE = (
@@ -82,8 +84,6 @@ def _resolve_inputs(args: argparse.Namespace) -> None:
     if args.example:
         if args.obs is not None or args.sp3 is not None:
             raise SystemExit("navtrack ppp: give either OBS --sp3 SP3 or --example, not both")
-        from navtrack.data import REFERENCE_XYZ_M, sample_path
-
         args.obs, args.nav, args.sp3 = (
             sample_path(PPP_EXAMPLE[0]),
             [sample_path(PPP_EXAMPLE[1])],
@@ -142,8 +142,6 @@ def run_ppp(args: argparse.Namespace) -> int:
     code = 0 if solved else 1
     ref = _reference(args) if args.ref_pos is None else None
     if args.plot is not None and solved and ref is not None:
-        from navtrack.plots.ppp import plot_ppp  # matplotlib only when a figure is asked for
-
         paths = plot_ppp(result, np.asarray(ref), args.plot)
         print(f"figures        {', '.join(str(p) for p in paths)}")
     if args.out is not None:
