@@ -11,6 +11,7 @@ import pytest
 from navtrack.data import sample_path
 from navtrack.geodesy import C_MPS, ecef_to_geodetic
 from navtrack.gnss import ephemeris as eph
+from navtrack.gnss.precise import sp3_states
 
 TEST_DATA = Path(__file__).resolve().parents[1] / "data"
 
@@ -43,7 +44,7 @@ def test_broadcast_agrees_with_precise_orbits(
     st = eph.broadcast_states(tables, sats, t, t_tx + 0.0)
     # broadcast_states removes the clock from t_tx; evaluate SP3 at the same true GPS time
     t_true = t_tx - st.clock_s
-    ref = eph.sp3_states(sp3, sats, t_true + _sp3_clock(sp3, sats, t_true))
+    ref = sp3_states(sp3, sats, t_true + _sp3_clock(sp3, sats, t_true))
     ok = st.valid & ref.valid
     assert ok.mean() > 0.9
     d = np.linalg.norm(st.pos_m - ref.pos_m, axis=-1)[ok]
@@ -247,7 +248,11 @@ def test_sp3_interpolation_reproduces_dropped_nodes() -> None:
 
     _, sp3 = _sept()
     thin = SimpleNamespace(
-        sats=sp3.sats, t_gps_s=sp3.t_gps_s[::2], pos_m=sp3.pos_m[::2], clock_s=sp3.clock_s[::2]
+        sats=sp3.sats,
+        t_gps_s=sp3.t_gps_s[::2],
+        pos_m=sp3.pos_m[::2],
+        clock_s=sp3.clock_s[::2],
+        clock=None,
     )
     sats = [s for s in sp3.sats if s[0] in "GEJ"][:20]
     cols = [list(sp3.sats).index(s) for s in sats]
@@ -255,7 +260,7 @@ def test_sp3_interpolation_reproduces_dropped_nodes() -> None:
     t = sp3.t_gps_s[mid]
     tt = np.broadcast_to(t[:, None], (t.size, len(sats))).copy()
     clk = sp3.clock_s[mid][:, cols]
-    st = eph.sp3_states(thin, sats, tt + np.nan_to_num(clk))
+    st = sp3_states(thin, sats, tt + np.nan_to_num(clk))
     truth = sp3.pos_m[mid][:, cols]
     ok = st.valid & np.isfinite(truth).all(axis=-1)
     assert ok.mean() > 0.8
@@ -266,6 +271,6 @@ def test_sp3_interpolation_reproduces_dropped_nodes() -> None:
     dclk = (st.clock_s - rel - clk)[ok]
     assert np.max(np.abs(dclk)) < 1e-9
     t_nodes = np.broadcast_to(sp3.t_gps_s[20:22, None], (2, len(sats)))
-    at_nodes = eph.sp3_states(sp3, sats, t_nodes + sp3.clock_s[20:22][:, cols])
+    at_nodes = sp3_states(sp3, sats, t_nodes + sp3.clock_s[20:22][:, cols])
     ok2 = at_nodes.valid
     np.testing.assert_allclose(at_nodes.pos_m[ok2], sp3.pos_m[20:22][:, cols][ok2], atol=1e-6)

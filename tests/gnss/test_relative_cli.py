@@ -1,4 +1,4 @@
-"""``navtrack rtk`` and ``navtrack ppp`` on the shared data: summary, output columns, refusals."""
+"""``navtrack rtk`` on the shared data: summary, output columns, refusals."""
 
 from __future__ import annotations
 
@@ -58,26 +58,6 @@ def test_rtk_nmea_quality_and_plots(gnss_data: Path, tmp_path: Path) -> None:
 def test_rtk_refuses_missing_file(tmp_path: Path) -> None:
     with pytest.raises(SystemExit, match="not found"):
         main(["rtk", str(tmp_path / "r.obs"), str(tmp_path / "b.obs"), str(tmp_path / "n")])
-
-
-def test_ppp_refuses_clock_rinex(gnss_data: Path, tmp_path: Path) -> None:
-    d = gnss_data / "cssrlib_sept"
-    with pytest.raises(SystemExit, match="--clk"):
-        main(["ppp", str(d / "SEPT078M.21O"), "--sp3", str(tmp_path / "x.sp3"), "--clk", "c.clk"])
-
-
-def test_ppp_example_presents_the_formal_sd_as_what_it_is(capsys: pytest.CaptureFixture) -> None:
-    from navtrack.cli import main
-
-    assert main(["ppp", "--example"]) == 0
-    out = capsys.readouterr().out
-    assert "epochs         120, updated 120" in out
-    assert "formal sd      E/N/U" in out
-    assert "not an accuracy" in out
-    # against the station's reference: the convergence table after 60 s, metres off in 2 min
-    row = out.split("(m, error vs ref)\n")[1].split()
-    assert float(row[0]) == 60.0
-    assert 0.0 < float(row[3]) < 10.0
 
 
 def test_rtk_example_fixes_the_geonet_baseline(capsys: pytest.CaptureFixture) -> None:

@@ -39,7 +39,6 @@ from typing import Any, TextIO
 from navtrack import __version__
 
 # The module of each command, with ``register(subparsers)``, in the order ``--help`` lists them.
-# ``rtk`` also registers ``ppp``.
 COMMANDS = {
     "pos": "navtrack.cli.pos",
     "rinex": "navtrack.cli.rinex",
@@ -48,7 +47,7 @@ COMMANDS = {
     "smooth": "navtrack.cli.smooth",
     "reproduce": "navtrack.cli.reproduce",
     "rtk": "navtrack.cli.rtk",
-    "ppp": "navtrack.cli.rtk",
+    "ppp": "navtrack.cli.ppp",
     "agps": "navtrack.cli.agps",
     "attitude": "navtrack.cli.attitude",
 }

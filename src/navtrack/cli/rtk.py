@@ -1,6 +1,4 @@
-"""``navtrack rtk ROVER BASE NAV...`` and ``navtrack ppp OBS NAV... --sp3 FILE``: precise positions.
-
-``rtk``: carrier-phase relative positions of a rover against a base.
+"""``navtrack rtk ROVER BASE NAV...``: carrier-phase relative positions of a rover against a base.
 
 Reads the rover and base observations (RINEX), the navigation file(s) and optionally an SP3
 file, solves every rover epoch with double-differenced code and carrier phase and integer
@@ -9,9 +7,6 @@ receiver and in common, count of each status, fix rate, slips per detector, rati
 input warnings, and with ``--ref``/``--ref-pos`` the error statistics), and writes the solution
 with ``--out`` (CSV, Parquet, NMEA GGA, KML, GPX by suffix) with RTKLIB's ``quality`` column.
 The exit code is 1 when no epoch has a relative solution or the input cannot be read.
-
-``ppp``: static precise point positioning (:func:`navtrack.gnss.ppp.solve_ppp`) with the
-convergence of the position against ``--ref`` over time.
 """
 
 from __future__ import annotations
@@ -89,42 +84,9 @@ def register(subparsers: Any) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run_rtk)
 
-    q = subparsers.add_parser(
-        "ppp",
-        help="static precise point positioning with SP3 orbits and clocks",
-        description="Dual-frequency ionosphere-free code and phase, Saastamoinen + estimated "
-        "zenith wet delay, float ambiguities, static position (convergence over time).",
-    )
-    q.add_argument("obs", type=Path, nargs="?", help="RINEX observation file (dual frequency)")
-    q.add_argument("nav", nargs="*", type=Path, help="RINEX navigation file(s) (optional)")
-    q.add_argument("--sp3", type=Path, help="precise orbits and clocks (SP3)")
-    q.add_argument(
-        "--example",
-        action="store_true",
-        help=f"two minutes of the bundled SEPT station ({PPP_EXAMPLE[0]}) with the bundled CODE "
-        "orbits and clocks, against the station's reference position",
-    )
-    q.add_argument(
-        "--clk", type=Path, help="clock RINEX (not read yet: refused rather than ignored)"
-    )
-    q.add_argument("--systems", default="G", help="systems to use (default G)")
-    q.add_argument("--elmask", type=float, default=15.0, metavar="DEG", help="elevation mask")
-    add_reference_options(q, trajectory=True)
-    q.add_argument(
-        "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
-    )
-    q.set_defaults(func=run_ppp)
-
 
 RTK_EXAMPLE = ("07590920.05o", "30400920.05o", "07590920.05n")
 """The bundled files of ``rtk --example`` (``navtrack/data/README.md``)."""
-
-PPP_EXAMPLE = (
-    "SEPT078M_120.21O",
-    "SEPT078M.21P",
-    "COD0MGXFIN_20210780000_01D_05M_ORB_1045-1330.SP3",
-)
-"""The bundled files of ``ppp --example`` (``navtrack/data/README.md``)."""
 
 
 def _base_position(args: argparse.Namespace) -> tuple[FloatArray, str]:
@@ -363,90 +325,3 @@ def _print_summary(
                     f"  {name:<12} {np.median(e):8.3f}  {np.percentile(e, 95):8.3f}  "
                     f"{e.max():8.3f}  ({sel.sum()} epochs)"
                 )
-
-
-def run_ppp(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from navtrack.gnss.ppp import PppConfig, convergence, solution_frame, solve_ppp
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.sp3 import read_sp3
-
-    if args.clk is not None:
-        raise SystemExit(
-            "navtrack ppp: --clk: clock RINEX files are not read yet; the SP3 clocks are used "
-            "when --clk is left out"
-        )
-    if args.example:
-        if args.obs is not None or args.sp3 is not None:
-            raise SystemExit("navtrack ppp: give either OBS --sp3 SP3 or --example, not both")
-        from navtrack.data import REFERENCE_XYZ_M, sample_path
-
-        args.obs, args.nav, args.sp3 = (
-            sample_path(PPP_EXAMPLE[0]),
-            [sample_path(PPP_EXAMPLE[1])],
-            sample_path(PPP_EXAMPLE[2]),
-        )
-        if args.ref is None and args.ref_llh is None and args.ref_pos is None:
-            args.ref = list(REFERENCE_XYZ_M[PPP_EXAMPLE[0]])
-    if args.obs is None or args.sp3 is None:
-        raise SystemExit("navtrack ppp: give OBS and --sp3 SP3, or --example")
-    for path in [args.obs, *args.nav, args.sp3]:
-        if not path.is_file():
-            raise SystemExit(f"navtrack ppp: file {str(path)!r} not found")
-    from navtrack.cli.outputs import check_outputs
-    from navtrack.io.solution import FORMATS
-
-    check_outputs("navtrack ppp", args.out, FORMATS)
-    try:
-        config = PppConfig(systems=args.systems.upper(), elmask_deg=args.elmask)
-    except ValueError as exc:
-        raise SystemExit(f"navtrack ppp: {exc}") from None
-    from navtrack.cli.inputs import read_observations
-
-    obs, log_nav = read_observations(args.obs)
-    navs = [read_nav(p) for p in args.nav] + ([log_nav] if log_nav is not None else [])
-    sp3 = read_sp3(args.sp3)
-    for why in sp3.warnings:
-        print(f"warning        {args.sp3}: {why}", file=sys.stderr)
-    try:
-        result = solve_ppp(obs, navs, sp3, config)
-    except ValueError as exc:
-        raise SystemExit(f"navtrack ppp: {exc}") from None
-    n = result.t_gps_s.size
-    print(f"observations   {args.obs}")
-    print(f"orbits/clocks  {args.sp3}")
-    print(f"systems        {config.systems}, elevation mask {config.elmask_deg:g} deg, static")
-    print(f"epochs         {n}, updated {int(result.updated.sum())}")
-    s = result.slips
-    print(
-        f"slips          lli {s['lli']}, doppler {s['doppler']}, geometry-free {s['geometry_free']}"
-    )
-    last = np.flatnonzero(result.updated)
-    if last.size:
-        x, y, z = result.pos_m[last[-1]]
-        e, nn, u = result.sd_enu_m[last[-1]]
-        print(f"final position {x:.4f} {y:.4f} {z:.4f}")
-        print(
-            f"formal sd      E/N/U {e:.3f} {nn:.3f} {u:.3f} m (the filter's own model, not an "
-            "accuracy: float ambiguities and unmodelled errors are not in it; compare --ref)"
-        )
-        print(f"final ZWD      {result.zwd_m[last[-1]]:.3f} m")
-    from navtrack.cli.pos import _reference
-
-    ref = _reference(args) if args.ref_pos is None else None
-    if ref is not None and last.size:
-        print("convergence    time (s)  horizontal  up      3D   (m, error vs ref)")
-        for t, h, u, d in convergence(result, np.asarray(ref)):
-            print(f"  {t:14.0f}  {h:10.3f}  {u:7.3f}  {d:7.3f}")
-    code = 0 if last.size else 1
-    if args.out is not None:
-        from navtrack.io.solution import write_solution
-
-        try:
-            path = write_solution(solution_frame(result), args.out, ok_status="ppp")
-            print(f"written        {path}")
-        except OSError as exc:
-            print(f"navtrack ppp: solution NOT written: {exc}", file=sys.stderr)
-            code = 1
-    return code

@@ -1,10 +1,10 @@
-"""Satellite position, velocity and clock from broadcast ephemerides or SP3 precise orbits.
+"""Satellite position, velocity and clock from broadcast ephemerides.
 
 Everything is vectorised over ``(epochs, satellites)``: an ephemeris is *selected* per epoch and
 satellite (:func:`select_ephemeris`), its parameters are gathered into flat arrays and evaluated
 in one pass per system (:func:`kepler_orbit`, :func:`glonass_orbit`).
 
-Satellite clock offsets ``clock_s`` are those of the broadcast clock polynomial (or SP3 clock)
+Satellite clock offsets ``clock_s`` are those of the broadcast clock polynomial
 *including* the relativistic correction and *excluding* group delays: the single-frequency user
 applies :func:`group_delay_s` (TGD/BGD) for the signal used.
 
@@ -13,9 +13,8 @@ References
 IS-GPS-200N, 20.3.3.3.3 (clock, relativity, TGD) and 20.3.3.4.3 table 20-IV (orbit, velocity);
 IS-QZSS-PNT-005 (QZSS as GPS); Galileo OS SIS ICD 2.1, 5.1.1-5.1.5 (BGD, data sources);
 BDS-SIS-ICD-B1I 3.0, 5.2.4 (constants, GEO transformation, TGD1);
-GLONASS ICD 5.1 (2008), A.3.1.2 (PZ-90 equations of motion, 4th-order Runge-Kutta);
-M. Schenewerk, "A brief review of basic GPS orbit interpolation strategies", GPS Solutions 6,
-2003 (SP3 interpolation in an inertial frame by rotating the nodes for earth rotation).
+GLONASS ICD 5.1 (2008), A.3.1.2 (PZ-90 equations of motion, 4th-order Runge-Kutta).
+Precise orbits and clocks (SP3, RINEX clock) are evaluated by :mod:`navtrack.gnss.precise`.
 """
 
 from __future__ import annotations
@@ -35,7 +34,6 @@ if TYPE_CHECKING:
     import pandas as pd
 
     from navtrack.gnss.rinex.nav import NavData
-    from navtrack.gnss.sp3 import Sp3
 
 # Gravitational constants (m^3/s^2) and earth rotation rates (rad/s) per system.
 MU_M3S2 = {
@@ -698,111 +696,3 @@ def merge_tables(tables: list[dict[str, EphemerisTable]]) -> dict[str, Ephemeris
             cols[name] = np.concatenate([p.get(name) for p in parts])
         out[sys] = EphemerisTable(sys, np.concatenate([p.sat for p in parts]), cols)
     return out
-
-
-# --------------------------------------------------------------------------- SP3
-def _lagrange_weights(t_nodes: FloatArray, t: FloatArray) -> FloatArray:
-    """Lagrange basis polynomials at ``t`` for nodes ``(N, n)``, returned ``(N, n)``."""
-    n = t_nodes.shape[-1]
-    d = t[:, None] - t_nodes  # (N, n)
-    w = np.ones_like(t_nodes)
-    for k in range(n):
-        for m in range(n):
-            if m != k:
-                w[:, k] *= d[:, m] / (t_nodes[:, k] - t_nodes[:, m])
-    return w
-
-
-def sp3_states(
-    sp3: Sp3,
-    sats: tuple[str, ...] | list[str],
-    t_tx_gps_s: FloatArray,
-    *,
-    order: int = 10,
-    max_gap_s: float = 900.0,
-) -> SatStates:
-    """Satellite states from an SP3 precise orbit/clock file by interpolation.
-
-    Positions: Lagrange polynomial of degree ``order`` per ECEF axis through the ``order + 1``
-    nodes around ``t``, each node first rotated about z by ``Omega_e (t_node - t)`` so that the
-    interpolation runs in the (quasi-)inertial frame of time ``t`` (Schenewerk 2003). Clocks:
-    linear between the two bracketing epochs (both present). Velocity by a central difference
-    over +-0.5 s. The relativistic clock correction ``-2 r.v / c^2`` is added to ``clock_s``
-    (IS-GPS-200 20.3.3.3.3.1 in vector form); ``var_m2`` is 0 (precise).
-
-    Parameters
-    ----------
-    sp3 : Sp3
-        ``t_gps_s (K,)``, ``sats``, ``pos_m (K, S', 3)``, ``clock_s (K, S')`` with NaN missing.
-    sats : sequence of str, length S
-    t_tx_gps_s : ndarray, shape (E, S)
-        Transmission times by the satellite clock (the clock is removed here, one step).
-    order : int
-        Polynomial degree (10 as RTKLIB and the IGS practice for 15-min and 5-min orbits).
-    max_gap_s : float
-        ``t`` may lie at most this far outside the node span (extrapolation, as RTKLIB's 900 s)
-        and the clock at most this far from its nearest epoch.
-
-    Returns
-    -------
-    SatStates
-        ``svh`` is 0 where valid.
-    """
-    from navtrack.geodesy import OMEGA_E_RAD_S as WE
-
-    t_sv = np.asarray(t_tx_gps_s, dtype=float)
-    n_e, n_s = t_sv.shape
-    tn = np.asarray(sp3.t_gps_s, dtype=float)
-    k_n = tn.size
-    n_nodes = min(order + 1, k_n)
-    pos = np.full((n_e, n_s, 3), np.nan)
-    vel = np.full((n_e, n_s, 3), np.nan)
-    clk = np.full((n_e, n_s), np.nan)
-    sp3_sats = list(sp3.sats)
-
-    def interp(j: int, t: FloatArray) -> FloatArray:
-        i0 = np.searchsorted(tn, t) - (n_nodes + 1) // 2
-        i0 = np.clip(i0, 0, k_n - n_nodes)
-        ii = i0[:, None] + np.arange(n_nodes)  # (N, n)
-        tt = tn[ii]
-        pp = sp3.pos_m[ii, j]  # (N, n, 3)
-        ang = WE * (tt - t[:, None])
-        c, s = np.cos(ang), np.sin(ang)
-        x = c * pp[..., 0] - s * pp[..., 1]
-        y = s * pp[..., 0] + c * pp[..., 1]
-        w = _lagrange_weights(tt - t[:, None], np.zeros_like(t))
-        out = np.stack([(w * x).sum(-1), (w * y).sum(-1), (w * pp[..., 2]).sum(-1)], axis=-1)
-        bad = ~np.isfinite(pp).all(axis=(1, 2))
-        bad |= (t < tn[0] - max_gap_s) | (t > tn[-1] + max_gap_s)
-        out[bad] = np.nan
-        return out
-
-    for c_, sat in enumerate(sats):
-        if sat not in sp3_sats:
-            continue
-        j = sp3_sats.index(sat)
-        ok = np.isfinite(t_sv[:, c_])
-        if not ok.any():
-            continue
-        ts = t_sv[ok, c_]
-        # clock: linear between bracketing epochs
-        i1 = np.clip(np.searchsorted(tn, ts), 1, k_n - 1)
-        t0, t1 = tn[i1 - 1], tn[i1]
-        c0, c1 = sp3.clock_s[i1 - 1, j], sp3.clock_s[i1, j]
-        dts = c0 + (c1 - c0) * (ts - t0) / (t1 - t0)
-        near = np.minimum(np.abs(ts - t0), np.abs(ts - t1)) <= max_gap_s
-        dts = np.where(near, dts, np.nan)
-        t = ts - np.nan_to_num(dts)
-        p0 = interp(j, t)
-        pp = interp(j, t + 0.5)
-        pm = interp(j, t - 0.5)
-        v = pp - pm
-        rel = -2.0 * np.einsum("ni,ni->n", p0, v) / C_MPS**2
-        pos[ok, c_] = p0
-        vel[ok, c_] = v
-        clk[ok, c_] = dts + rel
-    valid = np.isfinite(clk) & np.isfinite(pos).all(axis=-1)
-    var = np.where(valid, 0.0, np.nan)
-    svh = np.where(valid, 0, -1).astype(np.int64)
-    index = np.where(valid, 0, -1).astype(np.int64)
-    return SatStates(pos, vel, clk, var, svh, index, valid)

@@ -15,11 +15,14 @@ and ``N_s`` a float ambiguity (m) per satellite arc, restarted by every cycle sl
 Kalman filter is the recursive least-squares solution of all epochs so far, and its position
 at each epoch is the convergence series.
 
-Not applied (the inputs give no ANTEX file, and RTKLIB 2.4.3's ``-p 7`` defaults leave them
-off too): satellite and receiver antenna phase-centre offsets and variations, phase wind-up,
-solid-earth, ocean-loading and pole tides (solid-earth tide: up to ~0.3 m vertical, nearly
-constant over an hour; it stays in the estimated position), differential code biases between
-the tracked code (``C1C``) and the code of the SP3 clocks (``C1W``).
+The station is corrected for the solid Earth tide (IERS 2010 step 1,
+:mod:`navtrack.gnss.tides`). Not applied: satellite and receiver antenna phase-centre offsets
+and variations, phase wind-up, ocean-loading and pole tides, differential code biases between
+the tracked code (``C1C``) and the code of the SP3 clocks (``C1W``). The errors they leave are
+part of the measurement model instead: code errors correlated over
+:data:`CODE_CORRELATION_S`, phase errors over :data:`PHASE_CORRELATION_S`, and a range error
+of :data:`SIGMA_MODEL_M` common to code and phase, so that the formal covariance describes the
+error of the position (``docs/ppp.md``).
 
 References
 ----------
@@ -42,14 +45,50 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, IntArray
 from navtrack.estimation.covariance import restart_states
-from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
+from navtrack.geodesy import C_MPS, ecef_to_enu, ecef_to_geodetic, enu_rotation
+from navtrack.gnss.antex import AntennaPattern, Antex, receiver_range_m, satellite_offset_m
+from navtrack.gnss.corrections import geometric_range, ionofree, saastamoinen_delay_m
+from navtrack.gnss.observations import ObsHeader
+from navtrack.gnss.relative import (
+    ReceiverSignals,
+    RtkConfig,
+    Slips,
+    detect_slips,
+    receiver_signals,
+)
+from navtrack.gnss.tides import solid_tide_m, sun_moon_ecef_m
+from navtrack.tracking.kalman import gain_update, innovation_gain
 
 if TYPE_CHECKING:
     from navtrack.gnss.observations import Observations
     from navtrack.gnss.rinex.nav import NavData
     from navtrack.gnss.sp3 import Sp3
 
-__all__ = ["PppConfig", "PppResult", "convergence", "solution_frame", "solve_ppp"]
+__all__ = [
+    "CODE_CORRELATION_S",
+    "PHASE_CORRELATION_S",
+    "PppConfig",
+    "PppResult",
+    "antenna_range_m",
+    "convergence",
+    "solution_frame",
+    "solve_ppp",
+]
+
+
+CODE_CORRELATION_S = 600.0
+"""Correlation time of the code errors (s): the code variance is multiplied by
+``max(1, tau / interval)``, so that code epochs closer than ``tau`` count as one (multipath is
+correlated over minutes, not seconds). How it was chosen: ``docs/ppp.md``, method notes."""
+
+PHASE_CORRELATION_S = 30.0
+"""Correlation time of the phase errors left by the model (s), applied as
+:data:`CODE_CORRELATION_S` to the phase variance (``docs/ppp.md``, method notes)."""
+
+SIGMA_MODEL_M = 0.03
+"""Standard deviation (m, at zenith; divided by ``sin(el)``) of the range errors the model
+leaves in code and phase alike: satellite clock interpolation, orbit, antenna phase centres,
+wind-up, tides and troposphere mapping (``docs/ppp.md``, method notes)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,6 +106,12 @@ class PppConfig:
         the ionosphere-free combination (RTKLIB ``err``, ``EFACT``).
     code_phase_ratio : float
         Code to phase standard deviation ratio (RTKLIB ``eratio`` 100).
+    code_correlation_s, phase_correlation_s : float
+        Correlation times of the code and phase errors (:data:`CODE_CORRELATION_S`,
+        :data:`PHASE_CORRELATION_S`); 0 treats every epoch as independent.
+    sigma_model_m : float
+        Range error left by the model (:data:`SIGMA_MODEL_M`), added to the code and phase
+        variances.
     sigma_zwd0_m : float
         Start standard deviation of the zenith wet delay (RTKLIB: 0.3 m).
     q_zwd_m : float
@@ -75,6 +120,9 @@ class PppConfig:
         Standard deviation of a (re-)started ambiguity (m).
     sigma_pos0_m : float
         Standard deviation of the start position (the median single point solution).
+    solid_tide : bool
+        Correct the station for the solid Earth tide (:func:`navtrack.gnss.tides.solid_tide_m`,
+        IERS 2010 step 1); off leaves up to ~0.4 m of twice-daily motion in the position.
     min_sats : int
         Fewest satellites with both code and phase for an update.
     max_outage : int
@@ -85,10 +133,14 @@ class PppConfig:
     elmask_deg: float = 15.0
     sigma_phase_m: tuple[float, float] = (0.003, 0.003)
     code_phase_ratio: float = 100.0
+    code_correlation_s: float = CODE_CORRELATION_S
+    phase_correlation_s: float = PHASE_CORRELATION_S
+    sigma_model_m: float = SIGMA_MODEL_M
     sigma_zwd0_m: float = 0.3
     q_zwd_m: float = 1e-4
     sigma_amb0_m: float = 30.0
     sigma_pos0_m: float = 100.0
+    solid_tide: bool = True
     min_sats: int = 5
     max_outage: int = 5
 
@@ -97,6 +149,10 @@ class PppConfig:
             raise ValueError(f"systems: expected letters of GECJ, got {self.systems!r}")
         if self.min_sats < 4:
             raise ValueError(f"min_sats: expected >= 4, got {self.min_sats}")
+        if min(self.code_correlation_s, self.phase_correlation_s, self.sigma_model_m) < 0:
+            raise ValueError(
+                "code_correlation_s, phase_correlation_s, sigma_model_m: expected >= 0"
+            )
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -111,6 +167,8 @@ class PppResult:
         update).
     sd_enu_m : ndarray, shape (E, 3)
         Its formal standard deviation, east/north/up (m).
+    cov_enu_m2 : ndarray, shape (E, 3, 3)
+        Its formal covariance in east/north/up (m^2).
     zwd_m : ndarray, shape (E,)
         Zenith wet delay (m).
     n_sats : ndarray of int, shape (E,)
@@ -119,15 +177,19 @@ class PppResult:
         The epoch had enough satellites for an update.
     slips : mapping of str to int
         Slips per detector.
+    warnings : tuple of str
+        Corrections left out (an antenna missing from the ANTEX file).
     """
 
     t_gps_s: FloatArray
     pos_m: FloatArray
     sd_enu_m: FloatArray
+    cov_enu_m2: FloatArray
     zwd_m: FloatArray
     n_sats: IntArray
     updated: np.ndarray
     slips: dict[str, int]
+    warnings: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
@@ -137,11 +199,22 @@ class PppResult:
         """RTKLIB solution quality: 6 (PPP) where updated, 0 elsewhere."""
         return np.where(self.updated, 6, 0).astype(np.int64)
 
+    def inside_bound(self, ref_xyz_m: FloatArray, probability: float = 0.95) -> np.ndarray:
+        """Whether the error against a reference lies inside the formal ``probability``
+        ellipsoid of each updated epoch (``e^T C^-1 e <= chi2_3(probability)``; False where
+        not updated)."""
+        from scipy.stats import chi2  # scipy.stats costs a noticeable import: only when asked
+
+        enu = ecef_to_enu(self.pos_m, np.asarray(ref_xyz_m, dtype=float))
+        out = np.zeros(self.t_gps_s.size, dtype=bool)
+        k = np.flatnonzero(self.updated)
+        q = np.einsum("ei,eij,ej->e", enu[k], np.linalg.inv(self.cov_enu_m2[k]), enu[k])
+        out[k] = q <= chi2.ppf(probability, 3)
+        return out
+
 
 def _wet_mapping(lat: FloatArray, h: FloatArray, el: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Dry slant delay (m) and wet mapping function (Saastamoinen wet slant / wet zenith)."""
-    from navtrack.gnss.corrections import saastamoinen_delay_m
-
     dry = np.asarray(saastamoinen_delay_m(lat, h, el, humidity=0.0))
     wet = np.asarray(saastamoinen_delay_m(lat, h, el, humidity=0.7)) - dry
     dry_z = np.asarray(saastamoinen_delay_m(lat, h, np.full_like(el, np.pi / 2), humidity=0.0))
@@ -149,11 +222,168 @@ def _wet_mapping(lat: FloatArray, h: FloatArray, el: FloatArray) -> tuple[FloatA
     return dry, wet / wet_z
 
 
+@dataclass(frozen=True, slots=True, eq=False)
+class _Problem:
+    """Ionosphere-free observables reduced by the a priori model, per epoch and satellite.
+
+    ``y_code``/``y_phase`` are the IF code and phase minus the range to the linearisation point
+    ``x_lin`` and the dry delay; ``G`` the design rows of the position, ``m_w`` the wet
+    mapping, ``var_*`` the measurement variances (m^2), ``sys_col`` each satellite's clock
+    (-1: system not solved), ``reset`` a slip restarting the ambiguity.
+    """
+
+    t_gps_s: FloatArray
+    x_lin: FloatArray
+    y_code: FloatArray
+    y_phase: FloatArray
+    G: FloatArray
+    m_w: FloatArray
+    el: FloatArray
+    var_code: FloatArray
+    var_phase: FloatArray
+    sys_col: IntArray
+    n_clk: int
+    reset: np.ndarray
+
+
+def _range_elevation(sat_pos: FloatArray, rcv: FloatArray) -> tuple[FloatArray, ...]:
+    """Range (Sagnac included), line of sight and elevation of ``(E, S, 3)`` satellites from
+    one receiver position."""
+    rho, los = geometric_range(sat_pos, rcv)
+    llh = ecef_to_geodetic(rcv)
+    up = np.einsum("j,esj->es", enu_rotation(llh[0], llh[1])[2], los)
+    return rho, los, np.arcsin(np.clip(up, -1.0, 1.0))
+
+
+def _correlation_factor(t_gps_s: FloatArray, tau_s: float) -> float:
+    """Variance factor ``max(1, tau / interval)`` for errors correlated over ``tau_s``."""
+    steps = np.diff(t_gps_s)
+    interval = float(np.median(steps)) if steps.size else 1.0
+    return max(1.0, tau_s / interval) if interval > 0 else 1.0
+
+
+_BAND_CODES = ((1575.42e6, "01"), (1227.60e6, "02"), (1176.45e6, "05"), (1207.14e6, "07"))
+"""Carrier frequencies (Hz) and their ANTEX frequency numbers (L1/E1, L2, L5/E5a, E5b)."""
+
+
+def _antenna_codes(sat: str, f_hz: FloatArray, patterns: dict[str, AntennaPattern]) -> list[str]:
+    """ANTEX frequency codes of a satellite's two carriers; the GPS code of the same band when
+    the antenna has none of that system (the usual case for receiver antennas)."""
+    codes = []
+    for f in f_hz:
+        band = next((c for freq, c in _BAND_CODES if abs(freq - f) < 1e5), "")
+        code = sat[0] + band
+        codes.append(code if code in patterns else "G" + band)
+    return codes
+
+
+def antenna_range_m(
+    sig: ReceiverSignals,
+    header: ObsHeader,
+    antex: Antex | None,
+    los_m: FloatArray,
+    sun_m: FloatArray,
+) -> tuple[FloatArray, list[str]]:
+    """Ionosphere-free range corrections (m, ``(E, S)``) of the antennas, and warnings.
+
+    Always the antenna reference point's eccentricity (``ANTENNA: DELTA H/E/N``); with an ANTEX
+    file the receiver antenna's offsets and zenith variations and the satellites' offsets (nominal
+    attitude), each combined like the observations. A missing antenna is a warning and its
+    correction is left out.
+    """
+    f = C_MPS / sig.wavelength_m  # (S, 2)
+    w1 = f[:, 0] ** 2 / (f[:, 0] ** 2 - f[:, 1] ** 2)
+    w2 = 1.0 - w1
+    llh = ecef_to_geodetic(np.nanmedian(sig.spp_pos_m, axis=0))
+    rot = enu_rotation(llh[0], llh[1])
+    los_enu = np.einsum("ij,esj->esi", rot, np.nan_to_num(los_m))
+    h, e, n = header.antenna_delta_hen_m if header.antenna_delta_hen_m is not None else (0, 0, 0)
+    out = -(los_enu[..., 0] * e + los_enu[..., 1] * n + los_enu[..., 2] * h)
+    if antex is None:
+        return out, []
+    warnings: list[str] = []
+    try:
+        rcv, note = antex.receiver(header.antenna)
+        warnings += [note] if note else []
+    except KeyError as exc:
+        rcv, warnings = {}, [f"{exc.args[0]}: receiver phase centre not corrected"]
+    t_mid = float(np.median(sig.t_gps_s))
+    missing = []
+    for s, sat in enumerate(sig.sats):
+        if rcv:
+            c1, c2 = _antenna_codes(sat, f[s], rcv)
+            if c1 in rcv and c2 in rcv:
+                d1 = receiver_range_m(rcv[c1], los_enu[:, s])
+                out[:, s] += w1[s] * d1 + w2[s] * receiver_range_m(rcv[c2], los_enu[:, s])
+        pats = antex.satellite(sat, t_mid)
+        codes = _antenna_codes(sat, f[s], pats) if pats else []
+        if not pats or not all(c in pats for c in codes):
+            missing.append(sat)
+            continue
+        body = w1[s] * pats[codes[0]].offset_m + w2[s] * pats[codes[1]].offset_m
+        off = satellite_offset_m(body, sig.sat_pos_m[:, s], sun_m)
+        out[:, s] += np.einsum("ej,ej->e", np.nan_to_num(los_m[:, s]), off)
+    if missing:
+        warnings.append(
+            f"no antenna valid at the observations in {antex.path} for {', '.join(missing)}: "
+            "their satellite phase centres not corrected"
+        )
+    return out, warnings
+
+
+def _problem(
+    sig: ReceiverSignals, slips: Slips, cfg: PppConfig, antenna: tuple[ObsHeader, Antex | None]
+) -> tuple[_Problem, list[str]]:
+    """The reduced observables of :class:`_Problem` from a receiver's signals, and the
+    warnings of the antenna corrections."""
+    f = C_MPS / sig.wavelength_m  # (S, 2)
+    code = ionofree(sig.code_m[..., 0], sig.code_m[..., 1], f[:, 0], f[:, 1])
+    phase = ionofree(sig.phase_m[..., 0], sig.phase_m[..., 1], f[:, 0], f[:, 1])
+    phase = np.where(np.isfinite(code), phase, np.nan)
+    ok_spp = np.all(np.isfinite(sig.spp_pos_m), axis=1)
+    # geometry at a fixed linearisation point (the median SPP): the state is linear in the
+    # offset from it to well below a millimetre for offsets of metres
+    x_lin = np.nanmedian(sig.spp_pos_m[ok_spp], axis=0)
+    rho, los, el = _range_elevation(sig.sat_pos_m, x_lin)
+    G = np.where(np.isfinite(los), -los, 0.0)
+    sun, moon = sun_moon_ecef_m(sig.t_gps_s)
+    if cfg.solid_tide:  # the station moves by d(t): the range changes by G d(t)
+        rho = rho + np.einsum("esj,ej->es", G, solid_tide_m(x_lin, sun, moon))
+    d_ant, warnings = antenna_range_m(sig, antenna[0], antenna[1], los, sun)
+    rho = rho + d_ant
+    llh = ecef_to_geodetic(x_lin)
+    dry, m_w = _wet_mapping(np.full_like(el, llh[0]), np.full_like(el, llh[2]), el)
+    a, b = cfg.sigma_phase_m
+    sin_el2 = np.maximum(np.sin(el), 0.05) ** 2
+    var_phase = 9.0 * (a * a + b * b / sin_el2)
+    var_model = cfg.sigma_model_m**2 / sin_el2
+    systems = [s for s in cfg.systems if any(x[0] == s for x in sig.sats)]
+    sys_col = np.array([systems.index(x[0]) if x[0] in systems else -1 for x in sig.sats])
+    prob = _Problem(
+        t_gps_s=sig.t_gps_s,
+        x_lin=x_lin,
+        y_code=code - rho - dry,
+        y_phase=phase - rho - dry,
+        G=G,
+        m_w=m_w,
+        el=el,
+        var_code=(var_phase * cfg.code_phase_ratio**2 + var_model)
+        * _correlation_factor(sig.t_gps_s, cfg.code_correlation_s),
+        var_phase=(var_phase + var_model)
+        * _correlation_factor(sig.t_gps_s, cfg.phase_correlation_s),
+        sys_col=sys_col.astype(np.int64),
+        n_clk=len(systems),
+        reset=np.asarray(slips.any.any(axis=2)),
+    )
+    return prob, warnings
+
+
 def solve_ppp(
     obs: Observations,
     nav: NavData | Sequence[NavData] | None,
     sp3: Sp3,
     config: PppConfig | None = None,
+    antex: Antex | None = None,
 ) -> PppResult:
     """Static PPP of every epoch of a dual-frequency observation file.
 
@@ -164,8 +394,12 @@ def solve_ppp(
     nav : NavData or sequence of NavData, optional
         Broadcast data (GLONASS channels, Klobuchar for the start position only).
     sp3 : Sp3
-        Precise orbits and clocks (clocks interpolated from the SP3 epochs).
+        Precise orbits and clocks (clocks interpolated from the SP3 epochs, or from the RINEX
+        clock file attached with :meth:`Sp3.with_clock`).
     config : PppConfig, optional
+    antex : Antex, optional
+        Antenna phase centres (:func:`navtrack.gnss.antex.read_antex`) for the receiver antenna
+        named in the observation header and the satellites (:func:`antenna_range_m`).
 
     Returns
     -------
@@ -176,113 +410,106 @@ def solve_ppp(
     ValueError
         No epoch with a single point solution, or no second-frequency carrier.
     """
-    from navtrack.gnss.corrections import ionofree
-    from navtrack.gnss.relative import RtkConfig, detect_slips, receiver_signals
-    from navtrack.tracking.kalman import gain_update, innovation_gain
-
     cfg = config or PppConfig()
     rcfg = RtkConfig(systems=cfg.systems, frequencies=2, elmask_deg=cfg.elmask_deg)
     sig = receiver_signals(obs, nav, rcfg, sp3=sp3)
     if not np.isfinite(sig.phase_cyc[..., 1]).any():
         raise ValueError(f"obs: {obs.path!r} has no second-frequency carrier phase for PPP")
-    ok_spp = np.all(np.isfinite(sig.spp_pos_m), axis=1)
-    if not ok_spp.any():
+    if not np.all(np.isfinite(sig.spp_pos_m), axis=1).any():
         raise ValueError(f"obs: {obs.path!r}: no epoch has a single point solution")
     slips = detect_slips(sig, rcfg)
-    f = C_MPS / sig.wavelength_m  # (S, 2)
-    code = ionofree(sig.code_m[..., 0], sig.code_m[..., 1], f[:, 0], f[:, 1])
-    phase = ionofree(sig.phase_m[..., 0], sig.phase_m[..., 1], f[:, 0], f[:, 1])
-    phase = np.where(np.isfinite(code), phase, np.nan)
-    reset: np.ndarray = np.asarray(slips.any.any(axis=2))
-    # geometry at a fixed linearisation point (the median SPP): the state is linear in the
-    # offset from it to well below a millimetre for offsets of metres
-    from navtrack.gnss.relative import _elevation
+    prob, warnings = _problem(sig, slips, cfg, (obs.header, antex))
+    pos, cov, zwd, n_used, updated = _run_filter(prob, cfg)
+    llh = ecef_to_geodetic(prob.x_lin)
+    rot = enu_rotation(llh[0], llh[1])
+    cov_enu = np.einsum("ij,ejk,lk->eil", rot, cov, rot)
+    sd = np.sqrt(np.abs(np.einsum("eii->ei", cov_enu)))
+    return PppResult(
+        t_gps_s=sig.t_gps_s.copy(),
+        pos_m=pos,
+        sd_enu_m=sd,
+        cov_enu_m2=cov_enu,
+        zwd_m=zwd,
+        n_sats=n_used,
+        updated=updated,
+        slips=slips.counts(),
+        warnings=tuple(warnings),
+    )
 
-    x_lin = np.nanmedian(sig.spp_pos_m[ok_spp], axis=0)
-    n_e, n_s = code.shape
-    rho, los, el = _elevation(sig.sat_pos_m, np.broadcast_to(x_lin, (n_e, 3)))
-    llh = ecef_to_geodetic(x_lin)
-    dry, m_w = _wet_mapping(np.full_like(el, llh[0]), np.full_like(el, llh[2]), el)
-    y_code = code - rho - dry
-    y_phase = phase - rho - dry
-    G = np.where(np.isfinite(los), -los, 0.0)
-    a, b = cfg.sigma_phase_m
-    var_phase = 9.0 * (a * a + b * b / np.maximum(np.sin(el), 0.05) ** 2)
-    systems = [s for s in cfg.systems if any(x[0] == s for x in sig.sats)]
-    sys_col = np.array([systems.index(x[0]) if x[0] in systems else -1 for x in sig.sats])
-    n_c = len(systems)
-    i_clk, i_zwd, i_amb = 3, 3 + n_c, 4 + n_c
-    n_x = i_amb + n_s
-    x = np.zeros(n_x)
-    x[:3] = x_lin
-    P = np.zeros((n_x, n_x))
+
+def _run_filter(
+    prob: _Problem, cfg: PppConfig
+) -> tuple[FloatArray, FloatArray, FloatArray, IntArray, np.ndarray]:
+    """The Kalman filter over all epochs: position, its covariance (ECEF), ZWD, satellites
+    used and whether each epoch was updated."""
+    n_e, n_s = prob.y_code.shape
+    _i_clk, i_zwd, i_amb = 3, 3 + prob.n_clk, 4 + prob.n_clk
+    x = np.zeros(i_amb + n_s)
+    x[:3] = prob.x_lin
+    x[i_zwd] = 0.1
+    P = np.zeros((x.size, x.size))
     P[:3, :3] = np.eye(3) * cfg.sigma_pos0_m**2
     P[i_zwd, i_zwd] = cfg.sigma_zwd0_m**2
-    x[i_zwd] = 0.1
     active = np.zeros(n_s, dtype=bool)
     last = np.full(n_s, -(10**9), dtype=np.int64)
     pos = np.full((n_e, 3), np.nan)
     cov = np.full((n_e, 3, 3), np.nan)
     zwd = np.full(n_e, np.nan)
     n_used = np.zeros(n_e, dtype=np.int64)
-    updated = np.zeros(n_e, dtype=bool)
     mask = math.radians(cfg.elmask_deg)
-    amb = np.arange(n_s) + i_amb
     t_prev = None
     for k in range(n_e):
-        t = sig.t_gps_s[k]
-        dt = 0.0 if t_prev is None else t - t_prev
-        ok = np.isfinite(y_phase[k]) & (el[k] >= mask) & (sys_col >= 0)
+        ok = np.isfinite(prob.y_phase[k]) & (prob.el[k] >= mask) & (prob.sys_col >= 0)
         if ok.sum() < cfg.min_sats:
             continue
+        t = prob.t_gps_s[k]
+        P[i_zwd, i_zwd] += cfg.q_zwd_m**2 * (0.0 if t_prev is None else t - t_prev)
         t_prev = t
-        P[i_zwd, i_zwd] += cfg.q_zwd_m**2 * dt
-        # model at the prior: geometry offset, troposphere, then clocks from the code
-        geo = G[k] @ (x[:3] - x_lin) + m_w[k] * x[i_zwd]
-        for c in range(n_c):  # white clock: restarted at the median code residual
-            sel = ok & (sys_col == c)
-            x[i_clk + c] = float(np.median((y_code[k] - geo)[sel])) if sel.any() else 0.0
-            restart_states(P, i_clk + c, 100.0**2)
-        clk = np.where(sys_col >= 0, x[i_clk + np.maximum(sys_col, 0)], 0.0)
-        restart = ok & (~active | reset[k] | (k - last > cfg.max_outage + 1))
-        if restart.any():
-            ri = amb[restart]
-            restart_states(P, ri, cfg.sigma_amb0_m**2)
-            x[ri] = (y_phase[k] - y_code[k])[restart]
+        restart = ok & (~active | prob.reset[k] | (k - last > cfg.max_outage + 1))
         active |= restart
         last[ok] = k
-        idx = np.flatnonzero(ok)
-        m = idx.size
-        H = np.zeros((2 * m, n_x))
-        for rows, with_amb in ((slice(0, m), True), (slice(m, 2 * m), False)):
-            H[rows, :3] = G[k, idx]
-            H[rows, i_clk + sys_col[idx]] = 1.0
-            H[rows, i_zwd] = m_w[k, idx]
-            if with_amb:
-                H[np.arange(m), amb[idx]] = 1.0
-        pred = geo[idx] + clk[idx]
-        y = np.concatenate([y_phase[k, idx] - pred - x[amb[idx]], y_code[k, idx] - pred])
-        R = np.diag(
-            np.concatenate([var_phase[k, idx], var_phase[k, idx] * cfg.code_phase_ratio**2])
-        )
-        S, K = innovation_gain(P, H, R)
-        x, P = gain_update(x, P, y, K, S)
-        pos[k] = x[:3]
-        cov[k] = P[:3, :3]
-        zwd[k] = x[i_zwd]
-        n_used[k] = m
-        updated[k] = True
-    rot = enu_rotation(llh[0], llh[1])
-    sd = np.sqrt(np.abs(np.einsum("ij,ejk,ik->ei", rot, cov, rot)))
-    return PppResult(
-        t_gps_s=sig.t_gps_s.copy(),
-        pos_m=pos,
-        sd_enu_m=sd,
-        zwd_m=zwd,
-        n_sats=n_used,
-        updated=updated,
-        slips=slips.counts(),
-    )
+        x, P = _update(prob, cfg, k, ok, restart, x, P)
+        pos[k], cov[k], zwd[k], n_used[k] = x[:3], P[:3, :3], x[i_zwd], ok.sum()
+    return pos, cov, zwd, n_used, n_used > 0
+
+
+def _update(
+    prob: _Problem,
+    cfg: PppConfig,
+    k: int,
+    ok: np.ndarray,
+    restart: np.ndarray,
+    x: FloatArray,
+    P: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
+    """One epoch: clocks restarted from the code, new ambiguities started from phase minus
+    code, then the Kalman update with the phase and code of the satellites ``ok``."""
+    i_clk, i_zwd, i_amb = 3, 3 + prob.n_clk, 4 + prob.n_clk
+    amb = np.arange(prob.sys_col.size) + i_amb
+    sys_col = prob.sys_col
+    # model at the prior: geometry offset, troposphere, then clocks from the code
+    geo = prob.G[k] @ (x[:3] - prob.x_lin) + prob.m_w[k] * x[i_zwd]
+    for c in range(prob.n_clk):  # white clock: restarted at the median code residual
+        sel = ok & (sys_col == c)
+        x[i_clk + c] = float(np.median((prob.y_code[k] - geo)[sel])) if sel.any() else 0.0
+        restart_states(P, i_clk + c, 100.0**2)
+    clk = np.where(sys_col >= 0, x[i_clk + np.maximum(sys_col, 0)], 0.0)
+    if restart.any():
+        restart_states(P, amb[restart], cfg.sigma_amb0_m**2)
+        x[amb[restart]] = (prob.y_phase[k] - prob.y_code[k])[restart]
+    idx = np.flatnonzero(ok)
+    m = idx.size
+    H = np.zeros((2 * m, x.size))
+    for rows in (slice(0, m), slice(m, 2 * m)):
+        H[rows, :3] = prob.G[k, idx]
+        H[rows, i_clk + sys_col[idx]] = 1.0
+        H[rows, i_zwd] = prob.m_w[k, idx]
+    H[np.arange(m), amb[idx]] = 1.0
+    pred = geo[idx] + clk[idx]
+    y = np.concatenate([prob.y_phase[k, idx] - pred - x[amb[idx]], prob.y_code[k, idx] - pred])
+    R = np.diag(np.concatenate([prob.var_phase[k, idx], prob.var_code[k, idx]]))
+    S, K = innovation_gain(P, H, R)
+    return gain_update(x, P, y, K, S)
 
 
 def convergence(
@@ -293,8 +520,6 @@ def convergence(
     """Error of the static solution against a reference after given times from the first
     epoch: rows ``(t_s, horizontal_m, up_m, 3d_m)`` for each time the data reach (the last
     updated epoch at or before it)."""
-    from navtrack.geodesy import ecef_to_enu
-
     t0 = result.t_gps_s[0]
     enu = ecef_to_enu(result.pos_m, np.asarray(ref_xyz_m, dtype=float))
     rows = []

@@ -18,6 +18,7 @@ Remondi, SP3-a, 1989).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from os import fspath
@@ -30,6 +31,8 @@ from navtrack._typing import FloatArray, Int8Array, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.geodesy import OMEGA_E_RAD_S
 from navtrack.gnss.observations import SkippedLine
+from navtrack.gnss.rinex._io import read_bytes
+from navtrack.gnss.rinex_clock import RinexClock
 from navtrack.timescale import calendar_gps_seconds, to_datetime64, to_gps
 
 __all__ = ["Sp3", "Sp3Header", "read_sp3"]
@@ -144,6 +147,9 @@ class Sp3:
     warnings : tuple of str
         What was read leniently: a header epoch count that disagrees with the records (both
         counts named).
+    clock : RinexClock or None
+        Satellite clocks of a RINEX clock file used instead of :attr:`clock_s` where the
+        satellite positions are evaluated (:meth:`with_clock`); None: the SP3 clocks.
 
     References
     ----------
@@ -163,6 +169,7 @@ class Sp3:
     flags: Int8Array | None = None
     implausible: tuple[SkippedLine, ...] = ()
     warnings: tuple[str, ...] = ()
+    clock: RinexClock | None = None
 
     def __post_init__(self) -> None:
         n_e, n_s = len(self.t_gps_s), len(self.sats)
@@ -187,6 +194,10 @@ class Sp3:
     def time(self) -> np.ndarray:
         """Epoch times as GPST calendar ``datetime64[ns]``."""
         return to_datetime64(self.t_gps_s)
+
+    def with_clock(self, clock: RinexClock | None) -> Sp3:
+        """The same orbits with the satellite clocks of a RINEX clock file (None: the SP3's)."""
+        return dataclasses.replace(self, clock=clock)
 
     def sat_index(self, sat: str) -> int:
         """Column of a satellite id in the satellite axis."""
@@ -239,14 +250,69 @@ def read_sp3(path: StrPath) -> Sp3:
         header, a data record before the first epoch, or a file whose number of epochs
         differs from the header's (truncated file); the message names the file and line.
     """
-    from navtrack.gnss.rinex._io import read_bytes
+    lines = read_bytes(path).decode("ascii", "replace").splitlines()
+    header, sats, sat_ids, i = _read_header(path, lines)
+    sat_col = {s: k for k, s in enumerate(sats)}
+    # SP3-a ids are written "  1" (blank system letter = GPS) in records as in the header
+    for raw, s in zip(sat_ids, sats, strict=True):
+        sat_col.setdefault(raw, sat_col[s])
+    data = _data_section(path, lines, i, header.n_epochs)
+    p_rows = _rows(path, data.chars, data.kinds, "P", data.star, sat_col, i)
+    v_rows = _rows(path, data.chars, data.kinds, "V", data.star, sat_col, i)
+    n_e, n_s = len(data.epochs), len(sats)
+    t_gps_s = _gps_times(path, np.array(data.epochs, dtype=float), header.time_system)
+    base_pos, base_clk = header.base_pos_vel, header.base_clk_rate
+    pos_m, clock_s, pos_sd, clk_sd, flags = _records(path, p_rows, n_e, n_s, base_pos, base_clk)
+    pos_m *= 1e3
+    clock_s *= 1e-6
+    implausible = _implausible(pos_m, clock_s, p_rows)
+    jumps = _jumps(t_gps_s, pos_m, clock_s, p_rows)
+    if jumps:
+        implausible = tuple(sorted((*implausible, *jumps), key=lambda sk: sk.line))
+    vel_mps = clock_rate = None
+    if len(v_rows[2]):
+        vel, rate, _, _, _ = _records(path, v_rows, n_e, n_s, base_pos, base_clk)
+        vel_mps = vel * 0.1  # dm/s
+        clock_rate = rate * 1e-10  # 1e-4 us/s
+    return Sp3(
+        path=fspath(path),
+        header=header,
+        t_gps_s=t_gps_s,
+        sats=sats,
+        pos_m=pos_m,
+        clock_s=clock_s,
+        vel_mps=vel_mps,
+        clock_rate=clock_rate,
+        pos_sd_m=pos_sd,
+        clock_sd_s=clk_sd,
+        flags=flags,
+        implausible=implausible,
+        warnings=data.warnings,
+    )
 
-    text = read_bytes(path).decode("ascii", "replace")
-    lines = text.splitlines()
+
+@dataclass
+class _HeaderLines:
+    """What the ``+``, ``++``, ``%c``, ``%f`` and ``/*`` header lines give."""
+
+    sat_ids: list[str] = field(default_factory=list)
+    acc_exp: list[int] = field(default_factory=list)
+    n_sats: int = -1
+    file_type: str = "G"
+    time_system: str = "GPS"
+    base_pos: float = math.nan
+    base_clk: float = math.nan
+    comments: list[str] = field(default_factory=list)
+
+
+def _read_header(
+    path: StrPath, lines: list[str]
+) -> tuple[Sp3Header, tuple[str, ...], list[str], int]:
+    """The header, the satellite ids (``G01``) and as written, and the index of the first data
+    line."""
     first = lines[0]
     if not (first.startswith("#") and len(first) > 2 and first[1] in "abcd"):
         raise FileFormatError(path, 1, "not an SP3 file (line 1 does not start with #a/#c/#d)")
-    version = first[1]
     pos_vel = first[2]
     if pos_vel not in "PV":
         raise FileFormatError(path, 1, f"position/velocity flag {pos_vel!r} is not P or V")
@@ -257,62 +323,84 @@ def read_sp3(path: StrPath) -> Sp3:
     interval_s = math.nan
     if len(lines) > 1 and lines[1].startswith("##"):
         interval_s = _float(path, 2, lines[1][24:38], "epoch interval")
+    h, i = _header_lines(path, lines)
+    if h.n_sats < 0:
+        raise FileFormatError(path, 3, "no satellite list ('+' lines) in the header")
+    sat_ids = h.sat_ids[: h.n_sats]
+    sats = tuple(_sat_id(path, s) for s in sat_ids)
+    if len(sats) < h.n_sats:
+        raise FileFormatError(path, i, f"header lists {len(sats)} of {h.n_sats} satellites")
+    exps = np.array((h.acc_exp + [0] * h.n_sats)[: h.n_sats], dtype=float)
+    header = Sp3Header(
+        version=first[1],
+        pos_vel=pos_vel,
+        n_epochs=n_epochs,
+        data_used=first[40:45].strip(),
+        coordinate_system=first[46:51].strip(),
+        orbit_type=first[52:55].strip(),
+        agency=first[56:60].strip(),
+        file_type=h.file_type,
+        time_system="GPS" if h.time_system.upper() in ("CCC", "CC", "") else h.time_system,
+        interval_s=interval_s,
+        accuracy_m=np.where(exps > 0, 2.0**exps * 1e-3, np.nan),
+        base_pos_vel=h.base_pos,
+        base_clk_rate=h.base_clk,
+        comments=tuple(h.comments),
+    )
+    return header, sats, sat_ids, i
 
-    sat_ids: list[str] = []
-    acc_exp: list[int] = []
-    n_sats = -1
-    file_type, time_system = "G", "GPS"
-    base_pos, base_clk = math.nan, math.nan
-    comments: list[str] = []
+
+def _header_lines(path: StrPath, lines: list[str]) -> tuple[_HeaderLines, int]:
+    """Read the header lines from line 3 to the first epoch line (its index is returned)."""
+    h = _HeaderLines()
     n_c = n_f = 0
     i = 2
-    n_lines = len(lines)
-    while i < n_lines and not lines[i].startswith("*"):
-        line = lines[i]
-        lineno = i + 1
+    while i < len(lines) and not lines[i].startswith("*"):
+        line, lineno = lines[i], i + 1
         if line.startswith("++"):
-            acc_exp.extend(_int(path, lineno, line[k : k + 3]) for k in range(9, 60, 3))
+            h.acc_exp.extend(_int(path, lineno, line[k : k + 3]) for k in range(9, 60, 3))
         elif line.startswith("+"):
-            if n_sats < 0:
-                n_sats = _int(path, lineno, line[3:6])
-            sat_ids.extend(line[k : k + 3] for k in range(9, 60, 3))
+            if h.n_sats < 0:
+                h.n_sats = _int(path, lineno, line[3:6])
+            h.sat_ids.extend(line[k : k + 3] for k in range(9, 60, 3))
         elif line.startswith("%c"):
             if n_c == 0:  # SP3-a writers fill the unused %c fields with "c"
                 file_type = line[3:5].strip()
-                file_type = file_type if file_type.upper() in _FILE_TYPES else "G"
-                time_system = line[9:12].strip()
+                h.file_type = file_type if file_type.upper() in _FILE_TYPES else "G"
+                h.time_system = line[9:12].strip()
             n_c += 1
         elif line.startswith("%f"):
             if n_f == 0:
                 base_pos = _float(path, lineno, line[3:13], "position base")
                 base_clk = _float(path, lineno, line[14:26], "clock base")
                 # 0 means "not used" (SP3-a writers and files without standard deviations)
-                base_pos = base_pos if base_pos > 0 else math.nan
-                base_clk = base_clk if base_clk > 0 else math.nan
+                h.base_pos = base_pos if base_pos > 0 else math.nan
+                h.base_clk = base_clk if base_clk > 0 else math.nan
             n_f += 1
         elif line.startswith("/*"):
-            comments.append(line[3:].rstrip())
-        elif line.startswith("%i"):
-            pass
-        elif line.strip() and not line.startswith("EOF"):
+            h.comments.append(line[3:].rstrip())
+        elif line.strip() and not line.startswith(("%i", "EOF")):
             raise FileFormatError(path, lineno, f"unexpected header line {line[:20]!r}")
         i += 1
-    if n_sats < 0:
-        raise FileFormatError(path, 3, "no satellite list ('+' lines) in the header")
-    sats = tuple(_sat_id(path, s) for s in sat_ids[:n_sats])
-    if len(sats) < n_sats:
-        raise FileFormatError(path, i, f"header lists {len(sats)} of {n_sats} satellites")
-    if time_system.upper() in ("CCC", "CC", ""):
-        time_system = "GPS"
-    exps = np.array((acc_exp + [0] * n_sats)[:n_sats], dtype=float)
-    accuracy_m = np.where(exps > 0, 2.0**exps * 1e-3, np.nan)
-    sat_col = {s: k for k, s in enumerate(sats)}
-    # SP3-a ids are written "  1" (blank system letter = GPS) in records as in the header
-    for raw, s in zip(sat_ids[:n_sats], sats, strict=True):
-        sat_col.setdefault(raw, sat_col[s])
+    return h, i
 
-    # Data section as an (n_lines, 80) character matrix: records are fixed-width, so every
-    # field is a column slice of it.
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _DataSection:
+    """The data lines as an ``(n_lines, 80)`` character matrix (records are fixed-width, so
+    every field is a column slice of it), their record kinds, the epoch lines (``star``), the
+    epochs (calendar s) and what was read leniently."""
+
+    chars: np.ndarray
+    kinds: np.ndarray
+    star: np.ndarray
+    epochs: list[float]
+    warnings: tuple[str, ...]
+
+
+def _data_section(path: StrPath, lines: list[str], i: int, n_epochs: int) -> _DataSection:
+    """The data section from line index ``i``, checked: record kinds, the epochs, a last epoch
+    cut short, and the header's epoch count (a mismatch is a warning naming both counts)."""
     data = lines[i:]
     chars = np.frombuffer(
         bytearray("".join(ln[:80].ljust(80) for ln in data).encode("ascii", "replace")),
@@ -341,60 +429,17 @@ def read_sp3(path: StrPath) -> Sp3:
             + ("" if saw_eof else " and has no EOF line")
             + "; read as found"
         )
-    p_rows = _rows(path, chars, kinds, "P", star, sat_col, i)
-    v_rows = _rows(path, chars, kinds, "V", star, sat_col, i)
-    n_e, n_s = len(epochs), len(sats)
-    t_cal = np.array(epochs, dtype=float)
+    return _DataSection(chars, kinds, star, epochs, tuple(warnings))
+
+
+def _gps_times(path: StrPath, t_cal: FloatArray, time_system: str) -> FloatArray:
+    """GPS seconds of epochs written in ``time_system``'s calendar."""
     if time_system.upper() == "TAI":
-        t_gps_s = t_cal - 19.0  # GPST = TAI - 19 s
-    else:
-        try:
-            t_gps_s = np.asarray(to_gps(t_cal, time_system), dtype=float)
-        except ValueError:
-            raise FileFormatError(path, 13, f"unknown time system {time_system!r}") from None
-    pos_m, clock_s, pos_sd, clk_sd, flags = _records(path, p_rows, n_e, n_s, base_pos, base_clk)
-    pos_m *= 1e3
-    clock_s *= 1e-6
-    implausible = _implausible(pos_m, clock_s, p_rows)
-    jumps = _jumps(t_gps_s, pos_m, clock_s, p_rows)
-    if jumps:
-        implausible = tuple(sorted((*implausible, *jumps), key=lambda sk: sk.line))
-    vel_mps = clock_rate = None
-    if len(v_rows[2]):
-        vel, rate, _, _, _ = _records(path, v_rows, n_e, n_s, base_pos, base_clk)
-        vel_mps = vel * 0.1  # dm/s
-        clock_rate = rate * 1e-10  # 1e-4 us/s
-    header = Sp3Header(
-        version=version,
-        pos_vel=pos_vel,
-        n_epochs=n_epochs,
-        data_used=first[40:45].strip(),
-        coordinate_system=first[46:51].strip(),
-        orbit_type=first[52:55].strip(),
-        agency=first[56:60].strip(),
-        file_type=file_type,
-        time_system=time_system,
-        interval_s=interval_s,
-        accuracy_m=accuracy_m,
-        base_pos_vel=base_pos,
-        base_clk_rate=base_clk,
-        comments=tuple(comments),
-    )
-    return Sp3(
-        path=fspath(path),
-        header=header,
-        t_gps_s=t_gps_s,
-        sats=sats,
-        pos_m=pos_m,
-        clock_s=clock_s,
-        vel_mps=vel_mps,
-        clock_rate=clock_rate,
-        pos_sd_m=pos_sd,
-        clock_sd_s=clk_sd,
-        flags=flags,
-        implausible=implausible,
-        warnings=tuple(warnings),
-    )
+        return t_cal - 19.0  # GPST = TAI - 19 s
+    try:
+        return np.asarray(to_gps(t_cal, time_system), dtype=float)
+    except ValueError:
+        raise FileFormatError(path, 13, f"unknown time system {time_system!r}") from None
 
 
 def _check_last_epoch(

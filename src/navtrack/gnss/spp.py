@@ -641,6 +641,7 @@ def satellite_states(
     """
     from navtrack.gnss import ephemeris as eph
     from navtrack.gnss.corrections import FREQ_L1_HZ, frequency_hz, transmit_time
+    from navtrack.gnss.precise import sp3_states
 
     cfg = config or SppConfig()
     tables = navigation_tables(nav, ephemeris)
@@ -656,7 +657,7 @@ def satellite_states(
     n_e, n_s = t_rx.size, len(sats)
     t_sv = np.where(pr.observed, transmit_time(t_rx, pr.pr_m), np.nan)
     if sp3 is not None:
-        states = eph.sp3_states(sp3, sats, t_sv)
+        states = sp3_states(sp3, sats, t_sv)
     else:
         states = eph.broadcast_states(
             tables,
