@@ -13,6 +13,8 @@ RTKLIB-like baseline: leave-one-out on RTKLIB's own variances (factor 1), RTKLIB
 from __future__ import annotations
 
 import dataclasses
+import shutil
+import subprocess
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -21,7 +23,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from navtrack._typing import FloatArray, IntArray
 from navtrack.geodesy import ecef_to_enu
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.rinex.obs import read_obs
 from navtrack.gnss.spp import (
     Estimate,
     Measurements,
@@ -33,6 +38,7 @@ from navtrack.gnss.spp import (
     satellite_states,
 )
 from navtrack.integrity.raim import RaimConfig, RaimStatus, monitor, variance_factor
+from navtrack.io.rtklib import read_pos
 
 __all__ = [
     "STATIONS",
@@ -40,6 +46,7 @@ __all__ = [
     "Station",
     "StationData",
     "injection_run",
+    "raim_config",
     "rtklib_live_raim",
     "station_data",
     "summarize_study",
@@ -154,9 +161,6 @@ class StationData:
 @lru_cache(maxsize=8)
 def station_data(gnss_dir: str, name: str, iono: str = "klobuchar") -> StationData:
     """Read and solve a station once per process (cached)."""
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.rinex.obs import read_obs
-
     st = STATIONS[name]
     obs = read_obs(Path(gnss_dir) / st.obs)
     nav = read_nav(Path(gnss_dir) / st.nav)
@@ -169,7 +173,10 @@ def station_data(gnss_dir: str, name: str, iono: str = "klobuchar") -> StationDa
     )
 
 
-def _raim(params: RaimFcmParams, method: str, s2: float) -> RaimConfig:
+def raim_config(params: RaimFcmParams, method: str, s2: float) -> RaimConfig:
+    """The RAIM configuration of a study method (``rtklib``: navtrack's ``loo`` with RTKLIB's
+    unit variance factor) with the study's ``pfa``, ``pmd``, FCM exponent and the station's
+    variance factor ``s2``."""
     if method == "rtklib":
         return RaimConfig("loo", pfa=params.pfa, pmd=params.pmd, variance_factor=1.0)
     return RaimConfig(
@@ -233,7 +240,9 @@ def injection_run(params: RaimFcmParams, rng: np.random.Generator, gnss_dir: str
             est = estimate_position(mf, data.config, epochs=ep, x0_m=clean.x[ep])
             key = "clean" if k == 0 else f"k{k}_b{b:g}"
             st[key] = {
-                m: _trial_outcomes(data, est, mf, fault, _raim(params, m, data.variance_factor))
+                m: _trial_outcomes(
+                    data, est, mf, fault, raim_config(params, m, data.variance_factor)
+                )
                 for m in params.methods
             }
         st["variance_factor"] = data.variance_factor
@@ -342,8 +351,6 @@ def _rtklib_used(stat_path: Path) -> dict[int, set[str]]:
 
 
 def _run_rnx2rtkp(exe: str, conf: Path, obs: Path, nav: Path, pos: Path) -> dict[int, set[str]]:
-    import subprocess
-
     cmd = [exe, "-k", str(conf), str(obs), str(nav), "-o", str(pos)]
     subprocess.run(cmd, check=True, capture_output=True)
     return _rtklib_used(Path(str(pos) + ".stat"))
@@ -367,10 +374,6 @@ def rtklib_live_raim(
         ``{bias: {"rtklib": {...}, "fde": {...}}}`` with ``trials``, ``identification``,
         ``wrong_exclusion``, ``exclusion``, ``err_h_p95_m``.
     """
-    import shutil
-
-    from navtrack.io.rtklib import read_pos
-
     exe = shutil.which("rnx2rtkp")
     if exe is None:
         return {"skipped": "rnx2rtkp not on PATH"}
@@ -404,29 +407,42 @@ def rtklib_live_raim(
         for k, tow in enumerate(tows):
             excl = clean_used[tow] - used[tow]
             rows["rtklib"].append((excl, float(np.hypot(enu[k, 0], enu[k, 1]))))
-        fault = np.zeros(meas.y_m.shape, dtype=bool)
-        fault[np.arange(n_e), pick] = True
-        y = np.array(meas.y_m) + b * sign[:, None] * fault
-        mf = dataclasses.replace(meas, y_m=y)
-        est = estimate_position(mf, data.config, x0_m=clean.x)
-        final, _, integ = monitor(mf, est, data.config, _raim(params, "fde", data.variance_factor))
-        enu_n = ecef_to_enu(final.x[:, :3], data.ref_xyz_m)
-        for e in range(n_e):
-            excl = {meas.sats[j] for j in np.flatnonzero(integ.excluded[e])}
-            rows["fde"].append((excl, float(np.hypot(enu_n[e, 0], enu_n[e, 1]))))
-        res_b: dict[str, Any] = {}
-        for name, r in rows.items():
-            truth = [{meas.sats[pick[e]]} for e in range(len(r))]
-            res_b[name] = {
-                "trials": len(r),
-                "identification": float(
-                    np.mean([x == t for (x, _), t in zip(r, truth, strict=True)])
-                ),
-                "wrong_exclusion": float(
-                    np.mean([bool(x - t) for (x, _), t in zip(r, truth, strict=True)])
-                ),
-                "exclusion": float(np.mean([bool(x) for x, _ in r])),
-                "err_h_p95_m": float(np.percentile([h for _, h in r], 95)),
-            }
-        out[f"{b:g}"] = res_b
+        rows["fde"] = _fde_rows(params, data, pick, b * sign)
+        truth = [{meas.sats[pick[e]]} for e in range(n_e)]
+        out[f"{b:g}"] = {name: _single_fault_rates(r, truth) for name, r in rows.items()}
     return out
+
+
+def _fde_rows(
+    params: RaimFcmParams, data: StationData, pick: IntArray, bias_m: FloatArray
+) -> list[tuple[set[str], float]]:
+    """navtrack ``fde`` on one fault per epoch (satellite ``pick[e]``, bias ``bias_m[e]``):
+    the satellites excluded and the horizontal error of each epoch."""
+    meas, n_e = data.meas, data.meas.y_m.shape[0]
+    fault = np.zeros(meas.y_m.shape, dtype=bool)
+    fault[np.arange(n_e), pick] = True
+    mf = dataclasses.replace(meas, y_m=np.array(meas.y_m) + bias_m[:, None] * fault)
+    est = estimate_position(mf, data.config, x0_m=data.clean.x)
+    cfg = raim_config(params, "fde", data.variance_factor)
+    final, _, integ = monitor(mf, est, data.config, cfg)
+    enu = ecef_to_enu(final.x[:, :3], data.ref_xyz_m)
+    return [
+        (
+            {meas.sats[j] for j in np.flatnonzero(integ.excluded[e])},
+            float(np.hypot(enu[e, 0], enu[e, 1])),
+        )
+        for e in range(n_e)
+    ]
+
+
+def _single_fault_rates(r: list[tuple[set[str], float]], truth: list[set[str]]) -> dict[str, Any]:
+    """Identification, wrong exclusion, exclusion and 95th percentile horizontal error of
+    single-fault trials (excluded set and error per trial, against the faulty satellite)."""
+    pairs = list(zip(r, truth, strict=True))
+    return {
+        "trials": len(r),
+        "identification": float(np.mean([x == t for (x, _), t in pairs])),
+        "wrong_exclusion": float(np.mean([bool(x - t) for (x, _), t in pairs])),
+        "exclusion": float(np.mean([bool(x) for x, _ in r])),
+        "err_h_p95_m": float(np.percentile([h for _, h in r], 95)),
+    }
