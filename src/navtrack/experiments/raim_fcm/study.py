@@ -37,6 +37,7 @@ from navtrack.gnss.spp import (
     estimate_position,
     satellite_states,
 )
+from navtrack.integrity.ism import Ism, read_ism
 from navtrack.integrity.raim import RaimConfig, RaimStatus, monitor, variance_factor
 from navtrack.io.rtklib import read_pos
 
@@ -117,6 +118,9 @@ class RaimFcmParams:
         Ionosphere handling of the stations' SPP (:class:`navtrack.gnss.spp.SppConfig`); the
         injected fault is added to the pseudorange the solution uses (the ionosphere-free
         combination with ``ionofree``). The RTKLIB live comparison stays on L1.
+    ism : str
+        Integrity support message file of every method's error model and of ARAIM's priors
+        (:func:`navtrack.integrity.ism.read_ism`); empty: the default (the ADD baseline).
     """
 
     stations: tuple[str, ...] = ("SEPT", "ARL1", "0759", "YAMATOGAWA")
@@ -128,6 +132,7 @@ class RaimFcmParams:
     pmd: float = 1e-3
     fcm_m: float = 2.0
     iono: str = "klobuchar"
+    ism: str = ""
 
     def __post_init__(self) -> None:
         if self.iono not in ("klobuchar", "ionofree"):
@@ -177,11 +182,17 @@ def raim_config(params: RaimFcmParams, method: str, s2: float) -> RaimConfig:
     """The RAIM configuration of a study method (``rtklib``: navtrack's ``loo`` with RTKLIB's
     unit variance factor) with the study's ``pfa``, ``pmd``, FCM exponent and the station's
     variance factor ``s2``."""
+    ism = _read_ism(params.ism) if params.ism else None
     if method == "rtklib":
-        return RaimConfig("loo", pfa=params.pfa, pmd=params.pmd, variance_factor=1.0)
+        return RaimConfig("loo", pfa=params.pfa, pmd=params.pmd, variance_factor=1.0, ism=ism)
     return RaimConfig(
-        method, pfa=params.pfa, pmd=params.pmd, fcm_m=params.fcm_m, variance_factor=s2
+        method, pfa=params.pfa, pmd=params.pmd, fcm_m=params.fcm_m, variance_factor=s2, ism=ism
     )
+
+
+@lru_cache(maxsize=4)
+def _read_ism(path: str) -> Ism:
+    return read_ism(path)
 
 
 def _trial_outcomes(
