@@ -38,10 +38,16 @@ def test_protection_levels_match_the_octave_reference(case: int) -> None:
     assert [ism.constellations[s].p_sat for s in letters] == c["p_sat"]
     g = np.array(c["g_enu"])
     g = g[:, np.abs(g).sum(axis=0) > 0]
+    var_int, var_acc, b_int, b_acc = (
+        np.array(c[k]) for k in ("var_int_m2", "var_acc_m2", "b_int_m", "b_acc_m")
+    )
     ep = araim_epoch(
         g,
         np.zeros(len(letters)),
-        *(np.array(c[k]) for k in ("var_int_m2", "var_acc_m2", "b_int_m", "b_acc_m")),
+        var_int,
+        var_acc,
+        b_int,
+        b_acc,
         np.array([systems.index(s) for s in letters]),
         systems,
         ism,
@@ -180,9 +186,9 @@ def test_batched_araim_equals_the_algorithm_run_epoch_by_epoch(tmp_path: Path) -
         const = np.array([systems.index(s) for s in letters[cols]])
         # one receiver clock per constellation (the ADD's parametrisation)
         g_enu = np.column_stack([g[:, :3] @ est.enu_rotation[b].T, np.eye(len(systems))[const]])
-        err = [f[b, cols] for f in fields]
+        vi, va, bi, ba = (f[b, cols] for f in fields)
         v = np.nan_to_num(est.residuals_m[b, cols])
-        ep = araim_epoch(g_enu, v, *err, const, systems, ism)
+        ep = araim_epoch(g_enu, v, vi, va, bi, ba, const, systems, ism)
         assert ep.ok == (not res.detected[b])
         if not ep.ok:
             size = ep.modes.removed.sum(axis=1)
@@ -191,8 +197,9 @@ def test_batched_araim_equals_the_algorithm_run_epoch_by_epoch(tmp_path: Path) -
             for h in order[:8]:
                 keep = ~ep.modes.removed[h]
                 sub = araim_epoch(
-                    g_enu[keep], v[keep], *(e[keep] for e in err), const[keep], systems, ism
-                )
+                    g_enu[keep], v[keep], vi[keep], va[keep], bi[keep], ba[keep], const[keep],
+                    systems, ism,
+                )  # fmt: skip
                 if sub.ok:
                     assert set(cols[~keep]) == set(np.flatnonzero(res.excluded[b]))
                     ep = sub
