@@ -49,7 +49,6 @@ from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.special import ndtr, ndtri
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, IntArray
@@ -77,6 +76,10 @@ processed in chunks of this size to bound memory."""
 
 def _qinv(p: FloatArray | float) -> FloatArray:
     """``Q^-1(p)``, the upper-tail normal quantile."""
+    # scipy.special costs 160-220 ms to import and ``pos`` loads this module for every RAIM
+    # method (:func:`araim_model`): imported where a level is computed
+    from scipy.special import ndtri
+
     return np.asarray(-ndtri(np.asarray(p, dtype=float)))
 
 
@@ -236,6 +239,8 @@ def protection_level(
     alloc : ndarray, shape (..., A, H)
         ``Q'`` of each mode at the level.
     """
+    from scipy.special import ndtr  # lazy: see _qinv
+
     phmi = np.asarray(phmi, dtype=float)
     pf = np.asarray(p_fault, dtype=float)[..., None, :]
     good = phmi > 0.0
