@@ -11,10 +11,28 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.integrity.test_pos_raim import _faulty_sample
+from scipy.stats import norm
 
+from navtrack.data import sample_path
 from navtrack.errors import NavtrackError
-from navtrack.integrity.araim import araim_epoch, fault_modes, protection_level
+from navtrack.gnss.observations import Observations
+from navtrack.gnss.rinex import read_obs
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.spp import (
+    SppConfig,
+    code_pseudoranges,
+    corrected_measurements,
+    estimate_position,
+    satellite_states,
+    solve_spp,
+)
+from navtrack.integrity.araim import (
+    araim,
+    araim_epoch,
+    araim_model,
+    fault_modes,
+    protection_level,
+)
 from navtrack.integrity.ism import (
     DEFAULT_ISM_PATH,
     IONOFREE_NOISE_FACTOR,
@@ -22,8 +40,17 @@ from navtrack.integrity.ism import (
     error_model,
     read_ism,
 )
+from navtrack.integrity.raim import RaimConfig
 
 DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+def _sample_with_g28_fault() -> Observations:
+    """The bundled SEPT sample with +40 m on G28's C1C in epochs 20-39."""
+    obs = read_obs(sample_path("SEPT078M_120.21O"))
+    values = np.array(obs.values)
+    values[20:40, obs.sats.index("G28"), obs.codes.index("C1C")] += 40.0
+    return replace(obs, values=values)
 
 
 @pytest.mark.parametrize("case", range(4))
@@ -75,8 +102,6 @@ def test_fault_mode_priors_by_hand() -> None:
 def test_protection_level_solves_the_allocation() -> None:
     """One mode and the fault-free term: the level is where ``2 Q((PL - b0)/s0) +
     p Q((PL - T)/s1)`` equals the allocation."""
-    from scipy.stats import norm
-
     sigma = np.array([[1.0, 2.0]])
     bias = np.array([[0.5, 6.0]])
     pf = np.array([2.0, 1e-4])
@@ -127,14 +152,8 @@ def test_ism_file_reads_and_rejects(tmp_path: Path) -> None:
         read_ism(bad)
 
 
-def test_araim_on_the_sample_bounds_and_excludes_an_injected_fault(tmp_path: Path) -> None:
-    from navtrack.data import sample_path
-    from navtrack.gnss.rinex import read_obs
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.spp import SppConfig, solve_spp
-    from navtrack.integrity.raim import RaimConfig
-
-    obs = read_obs(_faulty_sample(tmp_path))
+def test_araim_on_the_sample_bounds_and_excludes_an_injected_fault() -> None:
+    obs = _sample_with_g28_fault()
     nav = read_nav(sample_path("SEPT078M.21P"))
     cfg = SppConfig(systems="GE", iono="ionofree")
     res = solve_spp(obs, nav, config=cfg, raim=RaimConfig("araim"))
@@ -151,24 +170,12 @@ def test_araim_on_the_sample_bounds_and_excludes_an_injected_fault(tmp_path: Pat
     assert np.all(integ.emt_m[integ.status == 0] > 0)
 
 
-def test_batched_araim_equals_the_algorithm_run_epoch_by_epoch(tmp_path: Path) -> None:
+def test_batched_araim_equals_the_algorithm_run_epoch_by_epoch() -> None:
     """``araim`` stacks the epochs that share their fault modes (and batches the exclusion
     candidates per round); each epoch's outcome equals ``araim_epoch`` on that epoch alone,
     with the exclusion of the module docstring's step 6 done by hand."""
-    from navtrack.data import sample_path
-    from navtrack.gnss.rinex import read_obs
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.spp import (
-        SppConfig,
-        code_pseudoranges,
-        corrected_measurements,
-        estimate_position,
-        satellite_states,
-    )
-    from navtrack.integrity.araim import araim, araim_model
-
     cfg = SppConfig(systems="GE", iono="ionofree")
-    pr = code_pseudoranges(read_obs(_faulty_sample(tmp_path)), cfg)
+    pr = code_pseudoranges(_sample_with_g28_fault(), cfg)
     meas = corrected_measurements(
         pr, satellite_states(pr, [read_nav(sample_path("SEPT078M.21P"))], config=cfg), cfg
     )

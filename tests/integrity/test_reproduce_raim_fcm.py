@@ -68,7 +68,8 @@ def test_whole_day_protection_on_the_bundled_sample(monkeypatch: pytest.MonkeyPa
     from navtrack.experiments.raim_fcm import wholeday
 
     obs, nav = sample_path("SEPT078M_120.21O"), sample_path("SEPT078M.21P")
-    ref = tuple(REFERENCE_XYZ_M["SEPT078M_120.21O"])
+    x, y, z = REFERENCE_XYZ_M["SEPT078M_120.21O"]
+    ref = (float(x), float(y), float(z))
     monkeypatch.setattr(
         wholeday, "DAY_STATIONS", {"SEPT": wholeday.DayStation(obs.name, nav.name, "GE", ref)}
     )
