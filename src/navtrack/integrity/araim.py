@@ -255,7 +255,7 @@ def protection_level(
 
     def risk(pl: FloatArray) -> FloatArray:
         with np.errstate(divide="ignore", invalid="ignore"):
-            q = np.nan_to_num(ndtr((bias - pl[..., None]) / sigma), nan=0.0)
+            q = np.fmax(ndtr((bias - pl[..., None]) / sigma), 0.0)  # NaN (0 / 0) to 0
         return np.where(q > 0.5, 1.0, q)
 
     for _ in range(200):
