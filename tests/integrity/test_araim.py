@@ -11,10 +11,28 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.integrity.test_pos_raim import _faulty_sample
+from scipy.stats import norm
 
+from navtrack.data import sample_path
 from navtrack.errors import NavtrackError
-from navtrack.integrity.araim import araim_epoch, fault_modes, protection_level
+from navtrack.gnss.observations import Observations
+from navtrack.gnss.rinex import read_obs
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.spp import (
+    SppConfig,
+    code_pseudoranges,
+    corrected_measurements,
+    estimate_position,
+    satellite_states,
+    solve_spp,
+)
+from navtrack.integrity.araim import (
+    araim,
+    araim_epoch,
+    araim_model,
+    fault_modes,
+    protection_level,
+)
 from navtrack.integrity.ism import (
     DEFAULT_ISM_PATH,
     IONOFREE_NOISE_FACTOR,
@@ -22,8 +40,17 @@ from navtrack.integrity.ism import (
     error_model,
     read_ism,
 )
+from navtrack.integrity.raim import RaimConfig
 
 DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+def _sample_with_g28_fault() -> Observations:
+    """The bundled SEPT sample with +40 m on G28's C1C in epochs 20-39."""
+    obs = read_obs(sample_path("SEPT078M_120.21O"))
+    values = np.array(obs.values)
+    values[20:40, obs.sats.index("G28"), obs.codes.index("C1C")] += 40.0
+    return replace(obs, values=values)
 
 
 @pytest.mark.parametrize("case", range(4))
@@ -38,10 +65,16 @@ def test_protection_levels_match_the_octave_reference(case: int) -> None:
     assert [ism.constellations[s].p_sat for s in letters] == c["p_sat"]
     g = np.array(c["g_enu"])
     g = g[:, np.abs(g).sum(axis=0) > 0]
+    var_int, var_acc, b_int, b_acc = (
+        np.array(c[k]) for k in ("var_int_m2", "var_acc_m2", "b_int_m", "b_acc_m")
+    )
     ep = araim_epoch(
         g,
         np.zeros(len(letters)),
-        *(np.array(c[k]) for k in ("var_int_m2", "var_acc_m2", "b_int_m", "b_acc_m")),
+        var_int,
+        var_acc,
+        b_int,
+        b_acc,
         np.array([systems.index(s) for s in letters]),
         systems,
         ism,
@@ -69,8 +102,6 @@ def test_fault_mode_priors_by_hand() -> None:
 def test_protection_level_solves_the_allocation() -> None:
     """One mode and the fault-free term: the level is where ``2 Q((PL - b0)/s0) +
     p Q((PL - T)/s1)`` equals the allocation."""
-    from scipy.stats import norm
-
     sigma = np.array([[1.0, 2.0]])
     bias = np.array([[0.5, 6.0]])
     pf = np.array([2.0, 1e-4])
@@ -121,14 +152,8 @@ def test_ism_file_reads_and_rejects(tmp_path: Path) -> None:
         read_ism(bad)
 
 
-def test_araim_on_the_sample_bounds_and_excludes_an_injected_fault(tmp_path: Path) -> None:
-    from navtrack.data import sample_path
-    from navtrack.gnss.rinex import read_obs
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.spp import SppConfig, solve_spp
-    from navtrack.integrity.raim import RaimConfig
-
-    obs = read_obs(_faulty_sample(tmp_path))
+def test_araim_on_the_sample_bounds_and_excludes_an_injected_fault() -> None:
+    obs = _sample_with_g28_fault()
     nav = read_nav(sample_path("SEPT078M.21P"))
     cfg = SppConfig(systems="GE", iono="ionofree")
     res = solve_spp(obs, nav, config=cfg, raim=RaimConfig("araim"))
@@ -143,3 +168,81 @@ def test_araim_on_the_sample_bounds_and_excludes_an_injected_fault(tmp_path: Pat
     assert integ.excluded.sum() == integ.excluded[:, g28].sum()
     assert np.all(np.isfinite(integ.vpl_m[integ.status <= 1]))
     assert np.all(integ.emt_m[integ.status == 0] > 0)
+
+
+def test_batched_araim_equals_the_algorithm_run_epoch_by_epoch() -> None:
+    """``araim`` stacks the epochs that share their fault modes (and batches the exclusion
+    candidates per round); each epoch's outcome equals ``araim_epoch`` on that epoch alone,
+    with the exclusion of the module docstring's step 6 done by hand."""
+    cfg = SppConfig(systems="GE", iono="ionofree")
+    pr = code_pseudoranges(_sample_with_g28_fault(), cfg)
+    meas = corrected_measurements(
+        pr, satellite_states(pr, [read_nav(sample_path("SEPT078M.21P"))], config=cfg), cfg
+    )
+    est = estimate_position(meas, cfg)
+    ism = default_ism()
+    model = araim_model(meas, est, ism)
+    res = araim(est, meas.sats, model, ism)
+    assert res.detected[20:40].all()  # the 40 m fault on G28
+    letters = np.array([s[0] for s in meas.sats])
+    fields = (model.var_int_m2, model.var_acc_m2, model.b_int_m, model.b_acc_m)
+    for b in range(est.design.shape[0]):
+        cols = np.flatnonzero(est.used[b] & model.covered)
+        g = est.design[b, cols]
+        systems = "".join(dict.fromkeys(letters[cols]))
+        const = np.array([systems.index(s) for s in letters[cols]])
+        # one receiver clock per constellation (the ADD's parametrisation)
+        g_enu = np.column_stack([g[:, :3] @ est.enu_rotation[b].T, np.eye(len(systems))[const]])
+        vi, va, bi, ba = (f[b, cols] for f in fields)
+        v = np.nan_to_num(est.residuals_m[b, cols])
+        ep = araim_epoch(g_enu, v, vi, va, bi, ba, const, systems, ism)
+        assert ep.ok == (not res.detected[b])
+        if not ep.ok:
+            size = ep.modes.removed.sum(axis=1)
+            dof = np.maximum((~ep.modes.removed).sum(axis=1) - g_enu.shape[1], 1)
+            order = np.argsort(np.where(size == 0, np.inf, size * 1e6 + ep.chi2 / dof))
+            for h in order[:8]:
+                keep = ~ep.modes.removed[h]
+                sub = araim_epoch(
+                    g_enu[keep], v[keep], vi[keep], va[keep], bi[keep], ba[keep], const[keep],
+                    systems, ism,
+                )  # fmt: skip
+                if sub.ok:
+                    assert set(cols[~keep]) == set(np.flatnonzero(res.excluded[b]))
+                    ep = sub
+                    break
+        assert res.hpl_m[b] == pytest.approx(ep.hpl_m, rel=1e-9)
+        assert res.vpl_m[b] == pytest.approx(ep.vpl_m, rel=1e-9)
+        assert res.emt_m[b] == pytest.approx(ep.emt_m, rel=1e-9)
+
+
+def test_protection_levels_of_a_stack_equal_those_of_each_epoch() -> None:
+    """The bisection of a stack of epochs stops each epoch when its own rows converge: the
+    levels equal those of the epochs solved one at a time (bit for bit)."""
+    rng = np.random.default_rng(3)
+    sigma = rng.uniform(0.5, 3.0, size=(5, 3, 6))
+    bias = rng.uniform(0.0, 20.0, size=(5, 3, 6))
+    pf = np.concatenate([np.full((5, 1), 2.0), rng.uniform(1e-7, 1e-4, size=(5, 5))], axis=1)
+    pf[2, 3] = 0.0  # a mode not monitored in one epoch
+    phmi = np.array([1e-9, 1e-9, 4e-9]) * rng.uniform(0.5, 1.0, size=(5, 1))
+    stack, _ = protection_level(sigma, bias, pf, phmi)
+    for b in range(5):
+        live = pf[b] > 0
+        one, _ = protection_level(sigma[b][:, live], bias[b][:, live], pf[b][live], phmi[b])
+        np.testing.assert_array_equal(stack[b], one)
+
+
+def test_gps_pairs_are_monitored_when_the_satellite_prior_is_raised() -> None:
+    """Seven GPS satellites: with P_sat 1e-5 (the ADD baseline) two simultaneous faults are
+    about 21 x 1e-10 per epoch and no pair is monitored; with P_sat 1e-3 all 21 pairs are (the
+    priors, not the algorithm, decide whether ARAIM protects against two faults; the
+    sensitivity of the fault-injection study in docs/integrity.md)."""
+    base = default_ism()
+    fm = fault_modes(np.zeros(7, dtype=np.int64), base, "G")
+    assert fm.removed.sum(axis=1).max() == 1
+    g = replace(base.constellations["G"], p_sat=1e-3)
+    raised = replace(base, constellations={**base.constellations, "G": g})
+    fm = fault_modes(np.zeros(7, dtype=np.int64), raised, "G")
+    pairs = fm.removed[fm.removed.sum(axis=1) == 2]
+    assert len({tuple(np.flatnonzero(r)) for r in pairs}) == 21
+    assert fm.p_unmonitored < raised.p_thres

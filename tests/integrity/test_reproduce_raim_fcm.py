@@ -10,7 +10,9 @@ import pytest
 
 from navtrack.experiments import ReproduceOptions, get_experiment, reproduce
 from navtrack.experiments import raim_fcm as exp
+from navtrack.experiments.raim_fcm.study import raim_config
 from navtrack.experiments.runner import run_generator
+from navtrack.integrity.ism import DEFAULT_ISM_PATH
 
 
 def test_registered_and_validated() -> None:
@@ -68,7 +70,8 @@ def test_whole_day_protection_on_the_bundled_sample(monkeypatch: pytest.MonkeyPa
     from navtrack.experiments.raim_fcm import wholeday
 
     obs, nav = sample_path("SEPT078M_120.21O"), sample_path("SEPT078M.21P")
-    ref = tuple(REFERENCE_XYZ_M["SEPT078M_120.21O"])
+    x, y, z = REFERENCE_XYZ_M["SEPT078M_120.21O"]
+    ref = (float(x), float(y), float(z))
     monkeypatch.setattr(
         wholeday, "DAY_STATIONS", {"SEPT": wholeday.DayStation(obs.name, nav.name, "GE", ref)}
     )
@@ -83,3 +86,16 @@ def test_whole_day_protection_on_the_bundled_sample(monkeypatch: pytest.MonkeyPa
     assert res["SEPT GE IF"]["araim"]["availability_v"] == 1.0
     eh, hpl, ev, vpl = art["SEPT_GE_IF"]["araim"]
     assert eh.shape == hpl.shape == ev.shape == vpl.shape == (120,)
+
+
+def test_the_study_takes_its_error_model_from_an_ism_file(tmp_path: Path) -> None:
+    """``--set ism=FILE``: every method of the study (and ARAIM's priors) uses the file's
+    ISM; empty, the default one."""
+    raised = tmp_path / "ism.toml"
+    raised.write_text(DEFAULT_ISM_PATH.read_text().replace("p_sat = 1e-5", "p_sat = 1e-3"))
+    params = exp.RaimFcmParams(ism=str(raised))
+    for method in ("rtklib", "fde", "araim"):
+        ism = raim_config(params, method, 0.05).ism
+        assert ism is not None
+        assert ism.constellations["G"].p_sat == 1e-3
+    assert raim_config(exp.RaimFcmParams(), "araim", 0.05).ism is None

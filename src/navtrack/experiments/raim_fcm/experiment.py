@@ -18,16 +18,26 @@ from typing import Any
 
 import numpy as np
 
-from navtrack.experiments.contract import Experiment, ExperimentContext, ExtraResult, Outcome
+from navtrack.experiments.contract import (
+    Experiment,
+    ExperimentContext,
+    ExtraResult,
+    Outcome,
+    shared_data_dir,
+)
 from navtrack.experiments.raim_fcm.example import paper_example
 from navtrack.experiments.raim_fcm.study import (
     RaimFcmParams,
     injection_run,
+    raim_config,
     rtklib_live_raim,
     station_data,
     summarize_study,
 )
 from navtrack.experiments.raim_fcm.wholeday import whole_day_protection
+from navtrack.geodesy import ecef_to_enu
+from navtrack.integrity.raim import RaimStatus, monitor
+from navtrack.plots import integrity as plots
 
 __all__ = ["EXPERIMENT", "RaimFcmExperiment", "clean_protection"]
 
@@ -36,8 +46,6 @@ _RATES = ("detection", "identification", "wrong_exclusion")
 
 
 def _gnss_dir() -> str:
-    from navtrack.experiments.contract import shared_data_dir
-
     return str(shared_data_dir(required=True) / "gnss")
 
 
@@ -53,10 +61,6 @@ def clean_protection(params: RaimFcmParams, gnss_dir: str) -> tuple[dict[str, An
     artifacts : dict
         ``{station: {method: (err_h, hpl, err_v, vpl)}}`` arrays for the Stanford diagrams.
     """
-    from navtrack.experiments.raim_fcm.study import _raim
-    from navtrack.geodesy import ecef_to_enu
-    from navtrack.integrity.raim import RaimStatus, monitor
-
     res: dict[str, Any] = {}
     art: dict[str, Any] = {}
     for name in params.stations:
@@ -64,7 +68,7 @@ def clean_protection(params: RaimFcmParams, gnss_dir: str) -> tuple[dict[str, An
         res[name], art[name] = {}, {}
         for m in params.methods:
             final, _, integ = monitor(
-                data.meas, data.clean, data.config, _raim(params, m, data.variance_factor)
+                data.meas, data.clean, data.config, raim_config(params, m, data.variance_factor)
             )
             enu = ecef_to_enu(final.x[:, :3], data.ref_xyz_m)
             eh, ev = np.hypot(enu[:, 0], enu[:, 1]), np.abs(enu[:, 2])
@@ -122,8 +126,6 @@ class RaimFcmExperiment(Experiment[RaimFcmParams, _RunResult]):
         return tables_markdown(results)
 
     def figures(self, outcome: Outcome[RaimFcmParams, _RunResult], out_dir: Path) -> list[Path]:
-        from navtrack.plots import integrity as plots
-
         paths = [plots.membership_figure_file(outcome.results["example"], out_dir)]
         paths += plots.stanford_figure_files(outcome.artifacts, out_dir)
         return paths
@@ -136,95 +138,113 @@ def _fmt(v: float | None) -> str:
     return "-" if v is None else f"{v:.3f}"
 
 
-def tables_markdown(results: dict[str, Any]) -> str:
-    """Markdown: the paper example, fault-injection rates, clean-data protection levels."""
-    out = ["# RAIM by fuzzy clustering (paper 2)", ""]
-    ex = results.get("example", {})
-    if ex:
-        out += [
-            "## Paper example (section 5)",
-            "",
-            "| case | injected | FCM | hierarchical | max abs(F - printed) |",
-            "|---|---|---|---|---|",
+def _example_lines(ex: dict[str, Any]) -> list[str]:
+    out = [
+        "## Paper example (section 5)",
+        "",
+        "| case | injected | FCM | hierarchical | max abs(F - printed) |",
+        "|---|---|---|---|---|",
+    ]
+    for case in ("single", "double"):
+        c = ex[case]
+        out.append(
+            f"| {case} | {c['injected']} | {c['fcm_gross_errors']} | "
+            f"{c['hierarchical_gross_errors']} | {c['max_abs_difference']:.4f} |"
+        )
+    return [*out, ""]
+
+
+def _injection_lines(name: str, st: dict[str, Any]) -> list[str]:
+    methods = list(next(iter(st["cases"].values())))
+    out = [f"## {name}: fault injection (variance factor {st['variance_factor']:.3f})", ""]
+    out.append("| case | " + " | ".join(f"{m} det/id/wrong" for m in methods) + " |")
+    out.append("|---|" + "---|" * len(methods))
+    for case, d in st["cases"].items():
+        cells = [
+            "/".join(f"{d[m][r]:.2f}" for r in _RATES) + f" (e95 {d[m]['err_h_p95_m']:.1f})"
+            for m in methods
         ]
-        for case in ("single", "double"):
-            c = ex[case]
+        out.append(f"| {case} | " + " | ".join(cells) + " |")
+    return [*out, ""]
+
+
+def _rtklib_live_lines(live: dict[str, Any]) -> list[str]:
+    out = [
+        "## ARL1 single faults: RTKLIB 2.4.3 rnx2rtkp RAIM FDE (live) vs navtrack fde",
+        "",
+        "| bias (m) | trials | RTKLIB id / wrong / excl | fde id / wrong / excl "
+        "| RTKLIB e95 H (m) | fde e95 H (m) |",
+        "|---|---|---|---|---|---|",
+    ]
+    for b, d in live.items():
+        r, f = d["rtklib"], d["fde"]
+        out.append(
+            f"| {b} | {r['trials']} | {r['identification']:.2f} / {r['wrong_exclusion']:.2f}"
+            f" / {r['exclusion']:.2f} | {f['identification']:.2f} / "
+            f"{f['wrong_exclusion']:.2f} / {f['exclusion']:.2f} | {r['err_h_p95_m']:.1f} "
+            f"| {f['err_h_p95_m']:.1f} |"
+        )
+    return [*out, ""]
+
+
+def _protection_lines(prot: dict[str, Any]) -> list[str]:
+    out = ["## Clean epochs: protection levels against actual errors", ""]
+    out += [
+        "| station | method | epochs | HPL bounds | VPL bounds | median HPL | median VPL "
+        "| exclusions |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name, d in prot.items():
+        for m, v in d.items():
             out.append(
-                f"| {case} | {c['injected']} | {c['fcm_gross_errors']} | "
-                f"{c['hierarchical_gross_errors']} | {c['max_abs_difference']:.4f} |"
+                f"| {name} | {m} | {v['epochs']} | {v['bounded_h']:.4f} "
+                f"| {v['bounded_v']:.4f} | {_fmt(v['hpl_median_m'])} "
+                f"| {_fmt(v['vpl_median_m'])} | {v['exclusion']:.4f} |"
             )
-        out.append("")
+    return [*out, ""]
+
+
+def _whole_day_lines(day: dict[str, Any]) -> list[str]:
+    out = [
+        "## Whole days: misleading information and availability",
+        "",
+        "Misleading information (MI): epochs with status ok or excluded whose error exceeds "
+        "the protection level. Availability: HPL <= 40 m and VPL <= 35 m (LPV-200), and "
+        "HPL <= 40 m alone, over all epochs.",
+        "",
+        "| run | method | epochs | ok / excl / alert / unav | MI H / V | median HPL / VPL "
+        "| 95 % error H / V | VPL <= 35 m | LPV-200 | horizontal |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for key, d in day.items():
+        for m, v in d.items():
+            s = v["statuses"]
+            out.append(
+                f"| {key} | {m} | {v['epochs']} | {s['ok']} / {s['excluded']} / "
+                f"{s['alert']} / {s['unavailable']} | {v['mi_h']} / {v['mi_v']} | "
+                f"{_fmt(v['hpl_median_m'])} / {_fmt(v['vpl_median_m'])} | "
+                f"{_fmt(v['err_h_p95_m'])} / {_fmt(v['err_v_p95_m'])} | "
+                f"{v['vpl_le_val']:.3f} | {v['availability_v']:.3f} | "
+                f"{v['availability_h']:.3f} |"
+            )
+    return [*out, ""]
+
+
+def tables_markdown(results: dict[str, Any]) -> str:
+    """Markdown: the paper example, fault-injection rates, the live RTKLIB comparison,
+    clean-data protection levels and the whole days."""
+    out = ["# RAIM by fuzzy clustering (paper 2)", ""]
+    if results.get("example"):
+        out += _example_lines(results["example"])
     for name, st in results.get("injection", {}).items():
-        methods = list(next(iter(st["cases"].values())))
-        out += [f"## {name}: fault injection (variance factor {st['variance_factor']:.3f})", ""]
-        out.append("| case | " + " | ".join(f"{m} det/id/wrong" for m in methods) + " |")
-        out.append("|---|" + "---|" * len(methods))
-        for case, d in st["cases"].items():
-            cells = [
-                "/".join(f"{d[m][r]:.2f}" for r in _RATES) + f" (e95 {d[m]['err_h_p95_m']:.1f})"
-                for m in methods
-            ]
-            out.append(f"| {case} | " + " | ".join(cells) + " |")
-        out.append("")
+        out += _injection_lines(name, st)
     live = results.get("rtklib_live", {})
     if live and "skipped" not in live:
-        out += [
-            "## ARL1 single faults: RTKLIB 2.4.3 rnx2rtkp RAIM FDE (live) vs navtrack fde",
-            "",
-            "| bias (m) | trials | RTKLIB id / wrong / excl | fde id / wrong / excl "
-            "| RTKLIB e95 H (m) | fde e95 H (m) |",
-            "|---|---|---|---|---|---|",
-        ]
-        for b, d in live.items():
-            r, f = d["rtklib"], d["fde"]
-            out.append(
-                f"| {b} | {r['trials']} | {r['identification']:.2f} / {r['wrong_exclusion']:.2f}"
-                f" / {r['exclusion']:.2f} | {f['identification']:.2f} / "
-                f"{f['wrong_exclusion']:.2f} / {f['exclusion']:.2f} | {r['err_h_p95_m']:.1f} "
-                f"| {f['err_h_p95_m']:.1f} |"
-            )
-        out.append("")
-    prot = results.get("clean_protection", {})
-    if prot:
-        out += ["## Clean epochs: protection levels against actual errors", ""]
-        out += [
-            "| station | method | epochs | HPL bounds | VPL bounds | median HPL | median VPL "
-            "| exclusions |",
-            "|---|---|---|---|---|---|---|---|",
-        ]
-        for name, d in prot.items():
-            for m, v in d.items():
-                out.append(
-                    f"| {name} | {m} | {v['epochs']} | {v['bounded_h']:.4f} "
-                    f"| {v['bounded_v']:.4f} | {_fmt(v['hpl_median_m'])} "
-                    f"| {_fmt(v['vpl_median_m'])} | {v['exclusion']:.4f} |"
-                )
-        out.append("")
-    day = results.get("whole_day", {})
-    if day:
-        out += [
-            "## Whole days: misleading information and availability",
-            "",
-            "Misleading information (MI): epochs with status ok or excluded whose error exceeds "
-            "the protection level. Availability: HPL <= 40 m and VPL <= 35 m (LPV-200), and "
-            "HPL <= 40 m alone, over all epochs.",
-            "",
-            "| run | method | epochs | ok / excl / alert / unav | MI H / V | median HPL / VPL "
-            "| 95 % error H / V | VPL <= 35 m | LPV-200 | horizontal |",
-            "|---|---|---|---|---|---|---|---|---|---|",
-        ]
-        for key, d in day.items():
-            for m, v in d.items():
-                s = v["statuses"]
-                out.append(
-                    f"| {key} | {m} | {v['epochs']} | {s['ok']} / {s['excluded']} / "
-                    f"{s['alert']} / {s['unavailable']} | {v['mi_h']} / {v['mi_v']} | "
-                    f"{_fmt(v['hpl_median_m'])} / {_fmt(v['vpl_median_m'])} | "
-                    f"{_fmt(v['err_h_p95_m'])} / {_fmt(v['err_v_p95_m'])} | "
-                    f"{v['vpl_le_val']:.3f} | {v['availability_v']:.3f} | "
-                    f"{v['availability_h']:.3f} |"
-                )
-        out.append("")
+        out += _rtklib_live_lines(live)
+    if results.get("clean_protection"):
+        out += _protection_lines(results["clean_protection"])
+    if results.get("whole_day"):
+        out += _whole_day_lines(results["whole_day"])
     return "\n".join(out)
 
 

@@ -13,6 +13,8 @@ RTKLIB-like baseline: leave-one-out on RTKLIB's own variances (factor 1), RTKLIB
 from __future__ import annotations
 
 import dataclasses
+import shutil
+import subprocess
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -21,7 +23,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from navtrack._typing import FloatArray, IntArray
 from navtrack.geodesy import ecef_to_enu
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.rinex.obs import read_obs
 from navtrack.gnss.spp import (
     Estimate,
     Measurements,
@@ -32,7 +37,9 @@ from navtrack.gnss.spp import (
     estimate_position,
     satellite_states,
 )
+from navtrack.integrity.ism import Ism, read_ism
 from navtrack.integrity.raim import RaimConfig, RaimStatus, monitor, variance_factor
+from navtrack.io.rtklib import read_pos
 
 __all__ = [
     "STATIONS",
@@ -40,6 +47,7 @@ __all__ = [
     "Station",
     "StationData",
     "injection_run",
+    "raim_config",
     "rtklib_live_raim",
     "station_data",
     "summarize_study",
@@ -110,6 +118,9 @@ class RaimFcmParams:
         Ionosphere handling of the stations' SPP (:class:`navtrack.gnss.spp.SppConfig`); the
         injected fault is added to the pseudorange the solution uses (the ionosphere-free
         combination with ``ionofree``). The RTKLIB live comparison stays on L1.
+    ism : str
+        Integrity support message file of every method's error model and of ARAIM's priors
+        (:func:`navtrack.integrity.ism.read_ism`); empty: the default (the ADD baseline).
     """
 
     stations: tuple[str, ...] = ("SEPT", "ARL1", "0759", "YAMATOGAWA")
@@ -121,6 +132,7 @@ class RaimFcmParams:
     pmd: float = 1e-3
     fcm_m: float = 2.0
     iono: str = "klobuchar"
+    ism: str = ""
 
     def __post_init__(self) -> None:
         if self.iono not in ("klobuchar", "ionofree"):
@@ -154,9 +166,6 @@ class StationData:
 @lru_cache(maxsize=8)
 def station_data(gnss_dir: str, name: str, iono: str = "klobuchar") -> StationData:
     """Read and solve a station once per process (cached)."""
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.rinex.obs import read_obs
-
     st = STATIONS[name]
     obs = read_obs(Path(gnss_dir) / st.obs)
     nav = read_nav(Path(gnss_dir) / st.nav)
@@ -169,12 +178,21 @@ def station_data(gnss_dir: str, name: str, iono: str = "klobuchar") -> StationDa
     )
 
 
-def _raim(params: RaimFcmParams, method: str, s2: float) -> RaimConfig:
+def raim_config(params: RaimFcmParams, method: str, s2: float) -> RaimConfig:
+    """The RAIM configuration of a study method (``rtklib``: navtrack's ``loo`` with RTKLIB's
+    unit variance factor) with the study's ``pfa``, ``pmd``, FCM exponent and the station's
+    variance factor ``s2``."""
+    ism = _read_ism(params.ism) if params.ism else None
     if method == "rtklib":
-        return RaimConfig("loo", pfa=params.pfa, pmd=params.pmd, variance_factor=1.0)
+        return RaimConfig("loo", pfa=params.pfa, pmd=params.pmd, variance_factor=1.0, ism=ism)
     return RaimConfig(
-        method, pfa=params.pfa, pmd=params.pmd, fcm_m=params.fcm_m, variance_factor=s2
+        method, pfa=params.pfa, pmd=params.pmd, fcm_m=params.fcm_m, variance_factor=s2, ism=ism
     )
+
+
+@lru_cache(maxsize=4)
+def _read_ism(path: str) -> Ism:
+    return read_ism(path)
 
 
 def _trial_outcomes(
@@ -233,7 +251,9 @@ def injection_run(params: RaimFcmParams, rng: np.random.Generator, gnss_dir: str
             est = estimate_position(mf, data.config, epochs=ep, x0_m=clean.x[ep])
             key = "clean" if k == 0 else f"k{k}_b{b:g}"
             st[key] = {
-                m: _trial_outcomes(data, est, mf, fault, _raim(params, m, data.variance_factor))
+                m: _trial_outcomes(
+                    data, est, mf, fault, raim_config(params, m, data.variance_factor)
+                )
                 for m in params.methods
             }
         st["variance_factor"] = data.variance_factor
@@ -342,8 +362,6 @@ def _rtklib_used(stat_path: Path) -> dict[int, set[str]]:
 
 
 def _run_rnx2rtkp(exe: str, conf: Path, obs: Path, nav: Path, pos: Path) -> dict[int, set[str]]:
-    import subprocess
-
     cmd = [exe, "-k", str(conf), str(obs), str(nav), "-o", str(pos)]
     subprocess.run(cmd, check=True, capture_output=True)
     return _rtklib_used(Path(str(pos) + ".stat"))
@@ -367,10 +385,6 @@ def rtklib_live_raim(
         ``{bias: {"rtklib": {...}, "fde": {...}}}`` with ``trials``, ``identification``,
         ``wrong_exclusion``, ``exclusion``, ``err_h_p95_m``.
     """
-    import shutil
-
-    from navtrack.io.rtklib import read_pos
-
     exe = shutil.which("rnx2rtkp")
     if exe is None:
         return {"skipped": "rnx2rtkp not on PATH"}
@@ -404,29 +418,42 @@ def rtklib_live_raim(
         for k, tow in enumerate(tows):
             excl = clean_used[tow] - used[tow]
             rows["rtklib"].append((excl, float(np.hypot(enu[k, 0], enu[k, 1]))))
-        fault = np.zeros(meas.y_m.shape, dtype=bool)
-        fault[np.arange(n_e), pick] = True
-        y = np.array(meas.y_m) + b * sign[:, None] * fault
-        mf = dataclasses.replace(meas, y_m=y)
-        est = estimate_position(mf, data.config, x0_m=clean.x)
-        final, _, integ = monitor(mf, est, data.config, _raim(params, "fde", data.variance_factor))
-        enu_n = ecef_to_enu(final.x[:, :3], data.ref_xyz_m)
-        for e in range(n_e):
-            excl = {meas.sats[j] for j in np.flatnonzero(integ.excluded[e])}
-            rows["fde"].append((excl, float(np.hypot(enu_n[e, 0], enu_n[e, 1]))))
-        res_b: dict[str, Any] = {}
-        for name, r in rows.items():
-            truth = [{meas.sats[pick[e]]} for e in range(len(r))]
-            res_b[name] = {
-                "trials": len(r),
-                "identification": float(
-                    np.mean([x == t for (x, _), t in zip(r, truth, strict=True)])
-                ),
-                "wrong_exclusion": float(
-                    np.mean([bool(x - t) for (x, _), t in zip(r, truth, strict=True)])
-                ),
-                "exclusion": float(np.mean([bool(x) for x, _ in r])),
-                "err_h_p95_m": float(np.percentile([h for _, h in r], 95)),
-            }
-        out[f"{b:g}"] = res_b
+        rows["fde"] = _fde_rows(params, data, pick, b * sign)
+        truth = [{meas.sats[pick[e]]} for e in range(n_e)]
+        out[f"{b:g}"] = {name: _single_fault_rates(r, truth) for name, r in rows.items()}
     return out
+
+
+def _fde_rows(
+    params: RaimFcmParams, data: StationData, pick: IntArray, bias_m: FloatArray
+) -> list[tuple[set[str], float]]:
+    """navtrack ``fde`` on one fault per epoch (satellite ``pick[e]``, bias ``bias_m[e]``):
+    the satellites excluded and the horizontal error of each epoch."""
+    meas, n_e = data.meas, data.meas.y_m.shape[0]
+    fault = np.zeros(meas.y_m.shape, dtype=bool)
+    fault[np.arange(n_e), pick] = True
+    mf = dataclasses.replace(meas, y_m=np.array(meas.y_m) + bias_m[:, None] * fault)
+    est = estimate_position(mf, data.config, x0_m=data.clean.x)
+    cfg = raim_config(params, "fde", data.variance_factor)
+    final, _, integ = monitor(mf, est, data.config, cfg)
+    enu = ecef_to_enu(final.x[:, :3], data.ref_xyz_m)
+    return [
+        (
+            {meas.sats[j] for j in np.flatnonzero(integ.excluded[e])},
+            float(np.hypot(enu[e, 0], enu[e, 1])),
+        )
+        for e in range(n_e)
+    ]
+
+
+def _single_fault_rates(r: list[tuple[set[str], float]], truth: list[set[str]]) -> dict[str, Any]:
+    """Identification, wrong exclusion, exclusion and 95th percentile horizontal error of
+    single-fault trials (excluded set and error per trial, against the faulty satellite)."""
+    pairs = list(zip(r, truth, strict=True))
+    return {
+        "trials": len(r),
+        "identification": float(np.mean([x == t for (x, _), t in pairs])),
+        "wrong_exclusion": float(np.mean([bool(x - t) for (x, _), t in pairs])),
+        "exclusion": float(np.mean([bool(x) for x, _ in r])),
+        "err_h_p95_m": float(np.percentile([h for _, h in r], 95)),
+    }

@@ -17,6 +17,12 @@ from typing import Any
 
 import numpy as np
 
+from navtrack.geodesy import ecef_to_enu
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.spp import SppConfig, solve_spp
+from navtrack.integrity.raim import RaimConfig, RaimStatus
+
 __all__ = ["DAY_STATIONS", "DayStation", "whole_day_protection"]
 
 
@@ -67,9 +73,6 @@ _IONO = {"L1": "klobuchar", "IF": "ionofree"}
 def _outcome(
     integ: Any, pos_m: np.ndarray, ref: np.ndarray, hal_m: float, val_m: float
 ) -> tuple[dict[str, Any], tuple[np.ndarray, ...]]:
-    from navtrack.geodesy import ecef_to_enu
-    from navtrack.integrity.raim import RaimStatus
-
     enu = ecef_to_enu(pos_m, ref)
     eh, ev = np.hypot(enu[:, 0], enu[:, 1]), np.abs(enu[:, 2])
     ok = (integ.status == RaimStatus.OK) | (integ.status == RaimStatus.EXCLUDED)
@@ -122,11 +125,6 @@ def whole_day_protection(
         ``{"STATION_GEC_IF": {method: (err_h, hpl, err_v, vpl)}}`` for the Stanford diagrams
         (levels NaN where the status is neither ``ok`` nor ``excluded``).
     """
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.rinex.obs import read_obs
-    from navtrack.gnss.spp import SppConfig, solve_spp
-    from navtrack.integrity.raim import RaimConfig
-
     by_name = {p.name: p for p in inputs}
     results: dict[str, Any] = {}
     art: dict[str, Any] = {}
