@@ -18,21 +18,22 @@ from navtrack.tracking.kalman import (
     kf_update,
 )
 from navtrack.tracking.models import RangeBearing, constant_velocity, linear_position
-from navtrack.tracking.trackers.tracker import (
-    DET_STATUS_NAMES,
-    DetStatus,
+from navtrack.tracking.trackers.management import initiate, manage
+from navtrack.tracking.trackers.stages import (
     Seeds,
-    TrackerConfig,
-    TrackerModel,
     TrackStore,
     associate,
     associate_gnn,
     associate_jpda,
     gate_scan,
-    initiate,
-    manage,
     predict,
     update,
+)
+from navtrack.tracking.trackers.track_config import (
+    DET_STATUS_NAMES,
+    DetStatus,
+    TrackerConfig,
+    TrackerModel,
 )
 
 
