@@ -465,65 +465,17 @@ def auto_config(
     Z = np.asarray(z, dtype=float)
     if t.size == 0:
         raise ValueError("no detections to tune on")
-    span_end = t[0] + SAMPLE_SPAN * (t[-1] - t[0])
-    k = min(int(np.searchsorted(t, span_end, "right")), sample_detections)
-    ts, zs = t[:k], Z[:k]
-    vs = None if velocity is None else np.asarray(velocity, dtype=float)[:k]
-    speed = None if vs is None else np.hypot(vs[:, 0], vs[:, 1])
-    speed = None if speed is None or np.isfinite(speed).sum() < 20 else speed[np.isfinite(speed)]
-    v_boot = BOOT_SPEED_MPS if speed is None else float(1.5 * np.quantile(speed, 0.99))
-    q_top = float(np.clip(BOOT_Q[2] * (v_boot / BOOT_SPEED_MPS) ** 2, BOOT_Q_MIN_TOP, BOOT_Q[2]))
-    boot = TrackerConfig(
-        motion=constant_velocity(2, BOOT_Q[0], "continuous"),
-        sigma_m=BOOT_SIGMA_M,
-        imm_q=(BOOT_Q[0], BOOT_Q[1], q_top),
-        clutter_density=1e-9,
-        init_max_speed_mps=max(v_boot, 1.0),
-        init_max_dt_s=400.0,
-        confirm_window_s=900.0,
-        max_coast_s=600.0,
-        max_position_std_m=1e6,  # tracks end by coasting only (the q = 100 model of a moored
-        init_from="unassociated",  # ship's track grows km wide between its reports)
-        scan_window_s=1.0,
-    )
-    first = run_tracker(ts, zs, boot, velocity=vs)
-    tri = track_triplets(ts, zs, first)
-    if tri.shape[0] < MIN_TRIPLETS and k < min(t.size, sample_detections):
-        k = min(t.size, sample_detections)  # a short file: the whole of it (capped)
-        ts, zs = t[:k], Z[:k]
-        vs = None if velocity is None else np.asarray(velocity, dtype=float)[:k]
-        first = run_tracker(ts, zs, boot, velocity=vs)
-        tri = track_triplets(ts, zs, first)
-    if tri.shape[0] >= MIN_TRIPLETS:
-        fit = fit_noise(tri)
-    else:  # too few tracks to fit: the floor below sets σ (NaN shows it in the summary)
-        fit = NoiseFit(float("nan"), float("nan"), int(tri.shape[0]), 0)
-    dt_all, dt_track = _track_intervals(ts, first)
-    dt50, dt95 = (
-        (float(np.quantile(dt_track, 0.5)), float(np.quantile(dt_track, 0.95)))
-        if dt_track.size
-        else (60.0, 60.0)
-    )
-    dt10 = float(np.quantile(dt_all, 0.1)) if dt_all.size else 0.0
-    # the coast spans the long gaps of a track, not only its typical interval (step 1)
-    gap99 = float(np.quantile(dt_all, 0.99)) if dt_all.size else dt95
-    source = "reported"
-    if speed is None:
-        conf = first.track_confirmed
-        speed, source = np.hypot(first.track_x[conf, 1], first.track_x[conf, 3]), "tracks"
-    v50, v99 = (
-        (float(np.quantile(speed, 0.5)), float(np.quantile(speed, 0.99)))
-        if speed.size
-        else (10.0, BOOT_SPEED_MPS)
-    )
-    still = float(np.mean(speed < STATIONARY_MPS)) if speed.size else 0.0
-    family: Literal["cv", "imm"]
-    if v50 > AIRCRAFT_MPS:
-        q, imm_q, family = AIRCRAFT_Q, None, "cv"
-    elif min(still, 1 - still) >= IMM_MIN_SHARE:
-        q, imm_q, family = SHIP_IMM_Q[0], SHIP_IMM_Q, "imm"
-    else:
-        q, imm_q, family = SHIP_IMM_Q[1], None, "cv"
+    V = None if velocity is None else np.asarray(velocity, dtype=float)
+    first = _first_pass(t, Z, V, sample_detections)
+    fit = (
+        fit_noise(first.triplets)
+        if first.triplets.shape[0] >= MIN_TRIPLETS
+        else NoiseFit(float("nan"), float("nan"), int(first.triplets.shape[0]), 0)
+    )  # too few tracks to fit: the floor sets σ (NaN shows it in the summary)
+    st = _first_pass_statistics(first)
+    dt50, dt95, dt10, gap99 = st.dt50, st.dt95, st.dt10, st.gap99
+    v50, v99, still = st.v50, st.v99, st.still
+    q, imm_q, family = _motion_family(v50, still)
     sigma = SIGMA_FLOOR_M if not fit.sigma_m > SIGMA_FLOOR_M else fit.sigma_m
     pd, pg = 0.9, 0.9999
     coast = COAST_INTERVALS * max(dt95, gap99)
@@ -545,11 +497,111 @@ def auto_config(
         scan_window_s=min(dt10, 10.0),
     )
     kq = min(t.size, TRIAL_DETECTIONS)
-    vq = None if velocity is None else np.asarray(velocity, dtype=float)[:kq]
+    vq = None if V is None else V[:kq]
     gnn = replace(cfg, associator="gnn")  # the trials, like the first pass, use GNN
     q_fit, trials = fit_q(t[:kq], Z[:kq], vq, gnn, q if imm_q is None else imm_q[1])
     cfg = replace(_with_q(cfg, q_fit), gnn_density_at_gate=imm_q is None)
     if associator == "jpda":  # module notes, step 5
         s_bar = steady_innovation_variance(q_fit if imm_q is None else imm_q[0], sigma, dt50)
         cfg = replace(cfg, clutter_density=gate_edge_density(pd, pg, s_bar))
-    return AutoTune(cfg, family, fit, dt50, dt95, v50, v99, still, source, k, trials)
+    return AutoTune(cfg, family, fit, dt50, dt95, v50, v99, still, st.source, first.k, trials)
+
+
+@dataclass(frozen=True, slots=True)
+class _Statistics:
+    """Report intervals (s) and speeds (m/s) of the first pass (module notes, steps 1-2)."""
+
+    dt50: float
+    dt95: float
+    dt10: float
+    gap99: float
+    v50: float
+    v99: float
+    still: float
+    source: str
+
+
+def _first_pass_statistics(first: _FirstPass) -> _Statistics:
+    """Median and 95 % point of the tracks' median report intervals, 10 % and 99 % points of
+    all their intervals; median and 99 % point of the speeds (reported, else the confirmed
+    tracks'), and the share below ``STATIONARY_MPS``."""
+    dt_all, dt_track = _track_intervals(first.t_s, first.result)
+    dt50, dt95 = (
+        (float(np.quantile(dt_track, 0.5)), float(np.quantile(dt_track, 0.95)))
+        if dt_track.size
+        else (60.0, 60.0)
+    )
+    dt10 = float(np.quantile(dt_all, 0.1)) if dt_all.size else 0.0
+    # the coast spans the long gaps of a track, not only its typical interval (step 1)
+    gap99 = float(np.quantile(dt_all, 0.99)) if dt_all.size else dt95
+    speed, source = first.speed, "reported"
+    if speed is None:
+        conf = first.result.track_confirmed
+        speed, source = (
+            np.hypot(first.result.track_x[conf, 1], first.result.track_x[conf, 3]),
+            "tracks",
+        )
+    v50, v99 = (
+        (float(np.quantile(speed, 0.5)), float(np.quantile(speed, 0.99)))
+        if speed.size
+        else (10.0, BOOT_SPEED_MPS)
+    )
+    still = float(np.mean(speed < STATIONARY_MPS)) if speed.size else 0.0
+    return _Statistics(dt50, dt95, dt10, gap99, v50, v99, still, source)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _FirstPass:
+    """The generic first pass of :func:`auto_config` on the first ``k`` detections."""
+
+    k: int
+    t_s: FloatArray
+    result: TrackerResult
+    triplets: FloatArray
+    speed: FloatArray | None  # finite reported speeds of the sample (None: too few)
+
+
+def _first_pass(
+    t: FloatArray, Z: FloatArray, V: FloatArray | None, sample_detections: int
+) -> _FirstPass:
+    """Run the first-pass IMM (module notes) on the sample; a short file: the whole of it."""
+    span_end = t[0] + SAMPLE_SPAN * (t[-1] - t[0])
+    k = min(int(np.searchsorted(t, span_end, "right")), sample_detections)
+    vs = None if V is None else V[:k]
+    speed = None if vs is None else np.hypot(vs[:, 0], vs[:, 1])
+    speed = None if speed is None or np.isfinite(speed).sum() < 20 else speed[np.isfinite(speed)]
+    v_boot = BOOT_SPEED_MPS if speed is None else float(1.5 * np.quantile(speed, 0.99))
+    q_top = float(np.clip(BOOT_Q[2] * (v_boot / BOOT_SPEED_MPS) ** 2, BOOT_Q_MIN_TOP, BOOT_Q[2]))
+    boot = TrackerConfig(
+        motion=constant_velocity(2, BOOT_Q[0], "continuous"),
+        sigma_m=BOOT_SIGMA_M,
+        imm_q=(BOOT_Q[0], BOOT_Q[1], q_top),
+        clutter_density=1e-9,
+        init_max_speed_mps=max(v_boot, 1.0),
+        init_max_dt_s=400.0,
+        confirm_window_s=900.0,
+        max_coast_s=600.0,
+        max_position_std_m=1e6,  # tracks end by coasting only (the q = 100 model of a moored
+        init_from="unassociated",  # ship's track grows km wide between its reports)
+        scan_window_s=1.0,
+    )
+    first = run_tracker(t[:k], Z[:k], boot, velocity=vs)
+    tri = track_triplets(t[:k], Z[:k], first)
+    if tri.shape[0] < MIN_TRIPLETS and k < min(t.size, sample_detections):
+        k = min(t.size, sample_detections)  # a short file: the whole of it (capped)
+        vs = None if V is None else V[:k]
+        first = run_tracker(t[:k], Z[:k], boot, velocity=vs)
+        tri = track_triplets(t[:k], Z[:k], first)
+    return _FirstPass(k, t[:k], first, tri, speed)
+
+
+def _motion_family(
+    v50: float, still: float
+) -> tuple[float, tuple[float, float] | None, Literal["cv", "imm"]]:
+    """Starting q, IMM levels (None: one CV model) and family from the median speed and the
+    stationary share (module notes, step 2)."""
+    if v50 > AIRCRAFT_MPS:
+        return AIRCRAFT_Q, None, "cv"
+    if min(still, 1 - still) >= IMM_MIN_SHARE:
+        return SHIP_IMM_Q[0], SHIP_IMM_Q, "imm"
+    return SHIP_IMM_Q[1], None, "cv"
