@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from navtrack._typing import ArrayLike, FloatArray
+from navtrack.tracking.metrics import clear_mot, hota, id_scores, interpolate_truth
 
 __all__ = ["MATCH_M", "MIN_GAP_S", "Scores", "ScoringRule", "score_tracks", "scoring_rule"]
 
@@ -105,8 +106,6 @@ def score_tracks(
 ) -> Scores:
     """Score confirmed tracks at ``frame_times`` (``TrackerResult.report_*``) against the
     truth interpolated from the reports ``t_s, pos (N, 2), ids`` (stale repeats left out)."""
-    from navtrack.tracking.metrics import clear_mot, hota, id_scores, interpolate_truth
-
     ids = np.asarray(ids)
     tf, tid, tpos = interpolate_truth(frame_times, t_s, ids, pos, rule.max_gap_s)
     args = (tf, tid, tpos, report_frame, report_id, report_xy, rule.match_m)
