@@ -45,7 +45,7 @@ from navtrack.io.tracks import read_tracks, stale_repeats, to_local_enu, velocit
 from navtrack.tracking.gating import chi2_threshold
 from navtrack.tracking.scoring import Scores, score_tracks, scoring_rule
 from navtrack.tracking.trackers.autotune import auto_config
-from navtrack.tracking.trackers.tracker import run_tracker
+from navtrack.tracking.trackers.tracker import TrackerConfig, run_tracker
 
 DATA = Path(os.environ.get("NAVTRACK_SHARED_DATA", "../shared/data")) / "tracking"
 FILES = {
@@ -212,7 +212,7 @@ def score_stonesoup(half: tuple, assoc: str, setting: dict, fixed: dict, scan_s:
     return score_tracks(grid, tf, ef, idf, *report(times, live, grid), rule), elapsed
 
 
-def score_navtrack(half: tuple, assoc: str, cfg) -> tuple[Scores, float]:
+def score_navtrack(half: tuple, assoc: str, cfg: TrackerConfig) -> tuple[Scores, float]:
     (t, en, vel, _ids), (tf, ef, idf), _read = half
     rule = scoring_rule(tf, idf)
     grid = t[0] + np.arange(0.0, t[-1] - t[0] + 1e-9, rule.report_s)
@@ -261,7 +261,8 @@ def main(argv: list[str] | None = None) -> int:
                     best, best_h = st, sc.hota
             h2 = halves["h2"]
             clock = time.perf_counter()
-            cfg = auto_config(*h2[2], assoc).config
+            t2, en2, vel2 = h2[2]
+            cfg = auto_config(t2, en2, vel2, assoc).config
             tune_s = time.perf_counter() - clock
             t_ss, t_nt = [], []
             for _ in range(a.reps):
