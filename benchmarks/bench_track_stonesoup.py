@@ -1,7 +1,9 @@
 """A tuned Stone Soup tracker beside ``navtrack track`` on the same real report files.
 
 Run: ``NAVTRACK_SHARED_DATA=../shared/data PYTHONPATH=src python
-benchmarks/bench_track_stonesoup.py [--files opensky,solent] [--reps 1]``.
+benchmarks/bench_track_stonesoup.py [--files opensky,solent] [--reps 1]``; a file of another
+kind is given as ``KIND:PATH`` (``--files adsb:monterey.csv``; kinds: the keys of
+:data:`GRID`, ``adsb`` for ADS-B at fast report rates in any layout ``navtrack track`` reads).
 
 Each file is split in time at the middle of its span. Stone Soup (``stonesoup``, the
 ``compare`` extra) runs the tracker of its own tutorials: a nearly-constant-velocity model per
@@ -43,33 +45,34 @@ from navtrack.io.tracks import read_tracks, stale_repeats, to_local_enu, velocit
 from navtrack.tracking.gating import chi2_threshold
 from navtrack.tracking.scoring import Scores, score_tracks, scoring_rule
 from navtrack.tracking.trackers.autotune import auto_config
-from navtrack.tracking.trackers.tracker import run_tracker
+from navtrack.tracking.trackers.tracker import TrackerConfig, run_tracker
 
 DATA = Path(os.environ.get("NAVTRACK_SHARED_DATA", "../shared/data")) / "tracking"
 FILES = {
-    "opensky": ("OpenSky_Plane_States.csv", "opensky"),
-    "solent": ("SolentAIS_20160112_130211.csv", "ais"),
+    "opensky": (DATA / "OpenSky_Plane_States.csv", "opensky"),
+    "solent": (DATA / "SolentAIS_20160112_130211.csv", "ais"),
 }
 # Stone Soup's parameters searched on the first half: q (m²/s³), deleter time (s); σ (m),
 # initial velocity standard deviation (m/s), P_D and λ (JPDA) fixed per kind.
 GRID = {
     "opensky": {"q": (30.0, 300.0, 3000.0), "delete_s": (30.0, 60.0)},
     "solent": {"q": (1e-3, 1e-2, 1e-1), "delete_s": (300.0, 600.0)},
+    "adsb": {"q": (3.0, 30.0, 300.0), "delete_s": (20.0, 60.0)},
 }
 FIXED = {
     "opensky": {"sigma_m": 25.0, "v0_mps": 300.0, "pd": 0.9, "clutter": 1e-10},
     "solent": {"sigma_m": 25.0, "v0_mps": 10.0, "pd": 0.9, "clutter": 1e-7},
+    "adsb": {"sigma_m": 25.0, "v0_mps": 300.0, "pd": 0.9, "clutter": 1e-10},
 }
-SCAN_S = {"opensky": 5.0, "solent": 1.0}
+SCAN_S = {"opensky": 5.0, "solent": 1.0, "adsb": 1.0}
 EPOCH = dt.datetime(2000, 1, 1)
 
 
-def load(name: str) -> dict[str, tuple]:
+def load(path: Path, fmt: str | None) -> dict[str, tuple]:
     """First and second halves: (t, en, vel, ids) with stale repeats left out, the scoring
     truth (fresh reports within each id), and (t, en, vel) as read (``auto`` tunes on them,
     as ``navtrack track`` does)."""
-    fname, fmt = FILES[name]
-    det = read_tracks(DATA / fname, fmt)
+    det = read_tracks(path, fmt)
     en, ref = to_local_enu(det)
     vel = velocity_local_enu(det, *ref)
     t, ids = det.t_gps_s, det.id
@@ -209,7 +212,7 @@ def score_stonesoup(half: tuple, assoc: str, setting: dict, fixed: dict, scan_s:
     return score_tracks(grid, tf, ef, idf, *report(times, live, grid), rule), elapsed
 
 
-def score_navtrack(half: tuple, assoc: str, cfg) -> tuple[Scores, float]:
+def score_navtrack(half: tuple, assoc: str, cfg: TrackerConfig) -> tuple[Scores, float]:
     (t, en, vel, _ids), (tf, ef, idf), _read = half
     rule = scoring_rule(tf, idf)
     grid = t[0] + np.arange(0.0, t[-1] - t[0] + 1e-9, rule.report_s)
@@ -237,14 +240,15 @@ def main(argv: list[str] | None = None) -> int:
     except ImportError:
         print("Stone Soup is not installed (pip install -e '.[compare]'): nothing to compare")
         return 0
-    for name in a.files.split(","):
-        halves = load(name)
+    for item in a.files.split(","):
+        name, _, path = item.partition(":")
+        halves = load(Path(path), None) if path else load(*FILES[name])
         fixed, scan_s = FIXED[name], SCAN_S[name]
         settings = [
             {"q": q, "delete_s": d} for q in GRID[name]["q"] for d in GRID[name]["delete_s"]
         ]
         for assoc in a.associators.split(","):
-            print(f"\n{name}, {assoc}: Stone Soup's grid on h1 (HOTA / MOTA / IDF1 / switches)")
+            print(f"\n{item}, {assoc}: Stone Soup's grid on h1 (HOTA / MOTA / IDF1 / switches)")
             best, best_h = settings[0], -np.inf
             for st in settings:
                 sc, el = score_stonesoup(halves["h1"], assoc, st, fixed, scan_s)
@@ -257,7 +261,8 @@ def main(argv: list[str] | None = None) -> int:
                     best, best_h = st, sc.hota
             h2 = halves["h2"]
             clock = time.perf_counter()
-            cfg = auto_config(*h2[2], assoc).config
+            t2, en2, vel2 = h2[2]
+            cfg = auto_config(t2, en2, vel2, assoc).config
             tune_s = time.perf_counter() - clock
             t_ss, t_nt = [], []
             for _ in range(a.reps):
@@ -269,10 +274,10 @@ def main(argv: list[str] | None = None) -> int:
             print(
                 f"\n{name} h2, {assoc} (Stone Soup: q={best['q']:g}, delete {best['delete_s']:g} s)"
             )
-            print("| tracker | HOTA | MOTA | IDF1 | id switches | ids |")
+            print("| tracker | HOTA | MOTA | IDF1 | id switches | tracks / ids |")
             print("|---|---|---|---|---|---|")
-            print(_row("Stone Soup, tuned on h1", ss, str(n_ids)))
-            print(_row("navtrack, no flags", nt, str(n_ids)))
+            print(_row("Stone Soup, tuned on h1", ss, f"{ss.n_tracks} / {n_ids}"))
+            print(_row("navtrack, no flags", nt, f"{nt.n_tracks} / {n_ids}"))
             med_ss, med_nt = float(np.median(t_ss)), float(np.median(t_nt))
             print(
                 f"tracking time (s): Stone Soup {med_ss:.2f}, navtrack {med_nt:.2f} "

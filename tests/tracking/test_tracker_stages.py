@@ -18,22 +18,29 @@ from navtrack.tracking.kalman import (
     kf_update,
 )
 from navtrack.tracking.models import RangeBearing, constant_velocity, linear_position
-from navtrack.tracking.trackers.tracker import (
-    DET_STATUS_NAMES,
-    DetStatus,
+from navtrack.tracking.trackers.management import (
+    initiate,
+    manage,
+    repeat_reports,
+    same_scan_repeats,
+)
+from navtrack.tracking.trackers.stages import (
     Seeds,
-    TrackerConfig,
-    TrackerModel,
     TrackStore,
     associate,
     associate_gnn,
     associate_jpda,
     gate_scan,
-    initiate,
-    manage,
     predict,
     update,
 )
+from navtrack.tracking.trackers.track_config import (
+    DET_STATUS_NAMES,
+    DetStatus,
+    TrackerConfig,
+    TrackerModel,
+)
+from navtrack.tracking.trackers.tracker import run_tracker
 
 
 def _spd(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -336,3 +343,88 @@ def test_closed_form_2x2_inverse_and_gate_match_lapack() -> None:
     np.testing.assert_allclose(g.log_norm, g3.log_norm + 0.5 * np.log(2 * np.pi), rtol=1e-12)
     with pytest.raises(ValueError, match="not positive definite"):
         gate(zp[:1], -S[:1], z, 9.21)
+
+
+def _aircraft_model() -> TrackerModel:
+    cfg = TrackerConfig(
+        motion=constant_velocity(2, 30.0, "continuous"), sigma_m=25.0, init_max_speed_mps=300.0
+    )
+    return TrackerModel.from_config(cfg)
+
+
+def test_same_scan_repeats_are_moving_reports_agreeing_in_place_and_velocity() -> None:
+    model = _aircraft_model()
+    r_z = np.sqrt(2 * model.gamma) * model.config.sigma_m  # 152 m at σ 25 m, P_G 0.9999
+    z = np.array(
+        [
+            [0.0, 0.0],  # 0: first report of an aircraft
+            [30.0, 10.0],  # 1: the same aircraft again (same velocity): a repeat of 0
+            [5000.0, 0.0],  # 2: another aircraft, same velocity, far
+            [10.0, 0.0],  # 3: beside 0 but flying the other way: not a repeat
+            [-0.98 * r_z, 0.0],  # 4: just inside the position gate of 0: a repeat
+            [0.0, -1.02 * r_z],  # 5: just outside it (and the others): not a repeat
+            [3000.0, 0.0],  # 6: a still target ...
+            [3020.0, 0.0],  # 7: ... and another beside it: still targets are never repeats
+        ]
+    )
+    v = np.array(
+        [[50, 0], [50.5, 0.3], [50, 0], [-50, 0], [50, 0], [50, 0], [0, 0], [0.2, 0]], float
+    )
+    twice = same_scan_repeats(z, v, model)
+    np.testing.assert_array_equal(twice, [False, True, False, False, True, False, False, False])
+    no_velocity = np.full_like(v, np.nan)
+    assert not same_scan_repeats(z, no_velocity, model).any()
+
+
+def test_repeat_reports_lie_in_the_updated_gate_of_a_track_hit_this_scan() -> None:
+    model = _aircraft_model()
+    store = TrackStore(4, 1)
+    P = np.diag([20.0**2, 4.0, 20.0**2, 4.0])
+    store.add(np.array([0.0, 50.0, 0.0, 0.0]), P, t_s=0.0, hits=3)  # hit this scan
+    store.add(np.array([10_000.0, 50.0, 0.0, 0.0]), P, t_s=0.0, hits=3)  # not hit
+    z = np.array([[40.0, 0.0], [2000.0, 0.0], [10_000.0, 0.0]])
+    hit = np.array([True, False])
+    S = P[[0, 2]][:, [0, 2]] + model.measurement.R
+    d2 = 40.0**2 / S[0, 0]
+    assert d2 < model.gamma  # the first report sits inside the updated gate of track 0
+    np.testing.assert_array_equal(repeat_reports(store, z, hit, model), [True, False, False])
+    # a report at the scan time minus 2 s is compared with the track moved back along its
+    # velocity (100 m): 140 m from the track's position is then 40 m from where it was
+    dt = np.array([-2.0, 0.0, 0.0])
+    z_early = np.array([[-60.0, 0.0], [2000.0, 0.0], [10_000.0, 0.0]])
+    np.testing.assert_array_equal(
+        repeat_reports(store, z_early, hit, model, dt), [True, False, False]
+    )
+
+
+def test_a_target_reported_twice_in_a_scan_keeps_one_track() -> None:
+    """Three aircraft at 1 s reports with reported velocities; every fifth second each is
+    reported twice (two trace points stamped with one second, 40 m apart). One confirmed
+    track per aircraft, every second report of a second set aside as a repeat."""
+    rng = np.random.default_rng(7)
+    cfg = TrackerConfig(
+        motion=constant_velocity(2, 30.0, "continuous"),
+        sigma_m=25.0,
+        init_max_speed_mps=300.0,
+        init_max_dt_s=10.0,
+        confirm_window_s=30.0,
+        max_coast_s=20.0,
+        init_from="unassociated",
+        gnn_density_at_gate=True,
+    )
+    starts = np.array([[0.0, 0.0], [0.0, 3000.0], [5000.0, -2000.0]])
+    vel = np.array([[60.0, 0.0], [50.0, 20.0], [-40.0, 40.0]])
+    t, z, v, dup = [], [], [], []
+    for k in range(120):
+        for i in range(3):
+            p = starts[i] + vel[i] * k
+            for j in range(2 if k % 5 == 0 else 1):
+                t.append(float(k))
+                z.append(p + rng.normal(0, 10, 2) + (40.0 * j, 0.0))
+                v.append(vel[i])
+                dup.append(j == 1)
+    res = run_tracker(np.array(t), np.array(z), cfg, velocity=np.array(v))
+    assert res.counts.tracks_confirmed == 3
+    assert res.counts.tracks_started == 3
+    dup = np.array(dup)
+    assert np.all(res.det_status[dup] == DetStatus.UNUSED)

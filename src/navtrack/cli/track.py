@@ -17,9 +17,42 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
+import json
+import sys
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from navtrack.cli.outputs import check_outputs
+from navtrack.data import sample_path
+from navtrack.errors import FileFormatError
+from navtrack.geodesy import enu_rotation
+from navtrack.io.tracks import (
+    TrackDetections,
+    detect_format,
+    local_enu_to_geodetic,
+    read_tracks,
+    stale_repeats,
+    to_local_enu,
+    velocity_local_enu,
+)
+from navtrack.timescale import gps_to_utc, to_datetime64
+from navtrack.tracking.models import constant_velocity
+from navtrack.tracking.scoring import ScoringRule, score_tracks, scoring_rule
+from navtrack.tracking.trackers.autotune import AutoTune, auto_config
+from navtrack.tracking.trackers.tracker import (
+    DET_STATUS_NAMES,
+    TRACK_END_NAMES,
+    TrackerConfig,
+    TrackerResult,
+    run_tracker,
+)
 
 MAX_REPORT_FRAMES = 1_000_000  # scoring grid size refused before it is allocated
 EXAMPLE = "SolentAIS_20160112_130211_20min.csv"
@@ -53,41 +86,7 @@ def register(subparsers: Any) -> None:
         help="the generic layout's columns in this file, e.g. "
         "'time=Time,lat=latitude,lon=longitude,alt_m=altitude (m)' (implies --format csv)",
     )
-    p.add_argument(
-        "--associator",
-        choices=("gnn", "jpda"),
-        default="gnn",
-        help="data association: global nearest neighbour or joint probabilistic",
-    )
-    m = p.add_argument_group(
-        "tracker model",
-        "--preset auto (the default) chooses and tunes the model from the detections without "
-        "their ids (navtrack.tracking.trackers.autotune); ships / aircraft are the presets "
-        "tuned on the "
-        "Solent AIS / OpenSky files. The options below override the preset's values.",
-    )
-    m.add_argument("--preset", choices=("auto", "ships", "aircraft"), default="auto")
-    m.add_argument(
-        "--motion",
-        choices=("cv", "imm"),
-        help="cv = one nearly-constant-velocity model; imm = IMM of a quiet and a "
-        "manoeuvring CV model",
-    )
-    m.add_argument(
-        "--q",
-        metavar="Q[,Q_HI]",
-        help="process-noise PSD per axis, m^2/s^3 (imm: quiet,manoeuvring)",
-    )
-    m.add_argument("--sigma-m", type=float, help="measurement noise per axis, m")
-    m.add_argument("--pd", type=float, help="detection probability per scan, in (0, 1)")
-    m.add_argument("--clutter-density", type=float, help="competing-report density, 1/m^2")
-    m.add_argument(
-        "--confirm",
-        metavar="M/W",
-        help="confirm a track after M updates within W seconds of its birth (e.g. 3/900)",
-    )
-    m.add_argument("--max-coast-s", type=float, help="delete a track after this long unupdated")
-    m.add_argument("--gate-prob", type=float, help="chi-square gate probability, in (0, 1)")
+    _add_model_options(p)
     p.add_argument("--out", type=Path, help="write track states to this .csv or .parquet file")
     p.add_argument("--plot", type=Path, metavar="DIR", help="write a map of the tracks here")
     p.add_argument(
@@ -130,6 +129,45 @@ def register(subparsers: Any) -> None:
     p.set_defaults(func=run_track)
 
 
+def _add_model_options(p: argparse.ArgumentParser) -> None:
+    """``--associator`` and the tracker model group."""
+    p.add_argument(
+        "--associator",
+        choices=("gnn", "jpda"),
+        default="gnn",
+        help="data association: global nearest neighbour or joint probabilistic",
+    )
+    m = p.add_argument_group(
+        "tracker model",
+        "--preset auto (the default) chooses and tunes the model from the detections without "
+        "their ids (navtrack.tracking.trackers.autotune); ships / aircraft are the presets "
+        "tuned on the "
+        "Solent AIS / OpenSky files. The options below override the preset's values.",
+    )
+    m.add_argument("--preset", choices=("auto", "ships", "aircraft"), default="auto")
+    m.add_argument(
+        "--motion",
+        choices=("cv", "imm"),
+        help="cv = one nearly-constant-velocity model; imm = IMM of a quiet and a "
+        "manoeuvring CV model",
+    )
+    m.add_argument(
+        "--q",
+        metavar="Q[,Q_HI]",
+        help="process-noise PSD per axis, m^2/s^3 (imm: quiet,manoeuvring)",
+    )
+    m.add_argument("--sigma-m", type=float, help="measurement noise per axis, m")
+    m.add_argument("--pd", type=float, help="detection probability per scan, in (0, 1)")
+    m.add_argument("--clutter-density", type=float, help="competing-report density, 1/m^2")
+    m.add_argument(
+        "--confirm",
+        metavar="M/W",
+        help="confirm a track after M updates within W seconds of its birth (e.g. 3/900)",
+    )
+    m.add_argument("--max-coast-s", type=float, help="delete a track after this long unupdated")
+    m.add_argument("--gate-prob", type=float, help="chi-square gate probability, in (0, 1)")
+
+
 def _column_map(text: str | None) -> dict[str, str]:
     """``--columns time=Time,lat=latitude`` as a mapping (empty without the option)."""
     if not text:
@@ -144,22 +182,68 @@ def _column_map(text: str | None) -> dict[str, str]:
 
 
 def run_track(args: argparse.Namespace) -> int:
-    import sys
-    import time
-
-    import numpy as np
-
-    from navtrack.errors import FileFormatError
-    from navtrack.io.tracks import (
-        detect_format,
-        read_tracks,
-        stale_repeats,
-        to_local_enu,
-        velocity_local_enu,
+    _check_options(args)
+    det, t_read = _read(args)
+    summary: dict[str, Any] = det.summary()
+    if len(det) == 0:
+        return _no_detections(summary, det)
+    en, ref = to_local_enu(det)
+    # truth: each id's own reports, its stale repeats left out (navtrack.tracking.scoring)
+    fresh = ~stale_repeats(det.t_gps_s, en, det.speed_mps, det.id)
+    rule = scoring_rule(det.t_gps_s[fresh], det.id[fresh])
+    rule = ScoringRule(
+        rule.report_s if args.report_s is None else args.report_s,
+        rule.max_gap_s,
+        rule.match_m if args.match_m is None else args.match_m,
     )
-    from navtrack.tracking.scoring import ScoringRule, score_tracks, scoring_rule
-    from navtrack.tracking.trackers.tracker import DET_STATUS_NAMES, run_tracker
+    vel = None if args.no_velocity else velocity_local_enu(det, *ref) if det.geodetic else None
+    if vel is not None and not np.isfinite(vel).any():
+        vel = None
+    for key, value in input_warnings(det, en).items():
+        summary[key] = value
+        print(f"navtrack track: {key}: {value}", file=sys.stderr)
+    use = ~_stale(args, det, en, summary)
+    clock = time.perf_counter()
+    cfg, tune = model_config(args, det.t_gps_s, en, vel)  # tuned on the reports as read
+    t_tune = time.perf_counter() - clock
+    grid = _report_grid(det.t_gps_s, rule.report_s)
+    clock = time.perf_counter()
+    with _progress(len(det), quiet=args.quiet) as progress:
+        res = run_tracker(
+            det.t_gps_s[use],
+            en[use],
+            cfg,
+            report_times=grid,
+            velocity=None if vel is None else vel[use],
+            progress=progress,
+        )
+    t_track = time.perf_counter() - clock
+    summary["reference (lat, lon deg)"] = f"{ref[0]:.6f} {ref[1]:.6f}"
+    summary["associator"] = args.associator
+    model = model_summary(args.preset, cfg, tune)
+    summary.update(model)
+    summary.update(_run_lines(args.associator, vel, res))
+    if np.any(det.id != ""):
+        args_truth = (det.t_gps_s[fresh], en[fresh], det.id[fresh])
+        summary.update(_score_lines(grid, args_truth, res, rule))
+    summary["time read / tune / track (s)"] = f"{t_read:.2f} {t_tune:.2f} {t_track:.2f}"
+    _print(summary)
+    if args.out:
+        meta = {"associator": args.associator, **model}
+        table = _write(args.out, res, ref, meta, det.t_gps_s[use], det.alt_m[use])
+        print(f"tracks written to {args.out}, one row per track to {table}")
+    if args.plot:
+        from navtrack.plots.tracks import plot_tracks  # matplotlib: imported when asked for
 
+        path = plot_tracks(
+            args.plot, en[use], res, title=f"{args.file.name} ({args.associator})", ref_deg=ref
+        )
+        print(f"plot written to {path}")
+    return 0
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse non-positive numeric options, resolve ``--example``, check the outputs' paths."""
     for name, value in (
         ("--report-s", args.report_s),
         ("--match-m", args.match_m),
@@ -171,14 +255,14 @@ def run_track(args: argparse.Namespace) -> int:
     if args.example:
         if args.file is not None:
             raise SystemExit("navtrack track: give either FILE or --example, not both")
-        from navtrack.data import sample_path
-
         args.file = sample_path(EXAMPLE)
     if args.file is None:
         raise SystemExit("navtrack track: give a detections FILE, or --example")
-    from navtrack.cli.outputs import check_outputs
-
     check_outputs("navtrack track", args.out, (".csv", ".parquet"), args.plot)
+
+
+def _read(args: argparse.Namespace) -> tuple[TrackDetections, float]:
+    """The detections of ``args.file`` in the layout given or detected, and the reading time."""
     columns = _column_map(args.columns)
     if args.fmt is None:
         args.fmt = "csv" if columns else detect_format(args.file)
@@ -192,38 +276,26 @@ def run_track(args: argparse.Namespace) -> int:
         if isinstance(exc, FileFormatError):
             raise
         raise SystemExit(f"navtrack track: --{exc}") from None
-    t_read = time.perf_counter() - clock
-    summary: dict[str, Any] = det.summary()
-    if len(det) == 0:
-        _print(summary)
-        skipped = len(det.bad_lines)
-        print(
-            "no usable detections"
-            + (
-                f": all {skipped} rows were skipped (reasons above; --max-range-km and "
-                "--max-time-days set how far from the median position and time a row may lie)"
-                if skipped
-                else ""
-            )
+    return det, time.perf_counter() - clock
+
+
+def _no_detections(summary: dict[str, Any], det: TrackDetections) -> int:
+    _print(summary)
+    skipped = len(det.bad_lines)
+    print(
+        "no usable detections"
+        + (
+            f": all {skipped} rows were skipped (reasons above; --max-range-km and "
+            "--max-time-days set how far from the median position and time a row may lie)"
+            if skipped
+            else ""
         )
-        return 1
-    en, ref = to_local_enu(det)
-    has_ids = bool(np.any(det.id != ""))
-    # truth: each id's own reports, its stale repeats left out (navtrack.tracking.scoring)
-    fresh = ~stale_repeats(det.t_gps_s, en, det.speed_mps, det.id)
-    rule = scoring_rule(det.t_gps_s[fresh], det.id[fresh])
-    rule = ScoringRule(
-        rule.report_s if args.report_s is None else args.report_s,
-        rule.max_gap_s,
-        rule.match_m if args.match_m is None else args.match_m,
     )
-    report_s = rule.report_s
-    vel = None if args.no_velocity else velocity_local_enu(det, *ref) if det.geodetic else None
-    if vel is not None and not np.isfinite(vel).any():
-        vel = None
-    for key, value in input_warnings(det, en).items():
-        summary[key] = value
-        print(f"navtrack track: {key}: {value}", file=sys.stderr)
+    return 1
+
+
+def _stale(args: argparse.Namespace, det: TrackDetections, en: Any, summary: dict[str, Any]) -> Any:
+    """The stale repeats the tracker skips (none with ``--keep-stale``), with their lines."""
     stale = stale_repeats(det.t_gps_s, en, det.speed_mps)
     if args.keep_stale:
         if stale.any():
@@ -231,102 +303,71 @@ def run_track(args: argparse.Namespace) -> int:
             summary[key] = f"{int(stale.sum())} reports repeat an earlier position (--keep-stale)"
             print(f"navtrack track: {key}: {summary[key]}", file=sys.stderr)
         stale[:] = False
-    use = ~stale
     summary["stale repeats skipped"] = int(stale.sum())
-    clock = time.perf_counter()
-    cfg, tune = model_config(args, det.t_gps_s, en, vel)  # tuned on the reports as read
-    t_tune = time.perf_counter() - clock
-    t0 = det.t_gps_s[0]
-    n_frames = int((det.t_gps_s[-1] - t0) // report_s) + 1
+    return stale
+
+
+def _report_grid(t_s: Any, report_s: float) -> Any:
+    """The scoring frame times, refused when there would be more than ``MAX_REPORT_FRAMES``."""
+    t0 = t_s[0]
+    n_frames = int((t_s[-1] - t0) // report_s) + 1
     if n_frames > MAX_REPORT_FRAMES:
         raise SystemExit(
-            f"navtrack track: --report-s {report_s:g} over {det.t_gps_s[-1] - t0:.0f} s of "
+            f"navtrack track: --report-s {report_s:g} over {t_s[-1] - t0:.0f} s of "
             f"detections gives {n_frames} report times, more than {MAX_REPORT_FRAMES}; "
             "give a larger --report-s (or a smaller --max-time-days)"
         )
-    grid = t0 + np.arange(0.0, det.t_gps_s[-1] - t0 + 1e-9, report_s)
-    clock = time.perf_counter()
-    with _progress(len(det), quiet=args.quiet) as progress:
-        res = run_tracker(
-            det.t_gps_s[use],
-            en[use],
-            cfg,
-            report_times=grid,
-            velocity=None if vel is None else vel[use],
-            progress=progress,
-        )
-    t_track = time.perf_counter() - clock
+    return t0 + np.arange(0.0, t_s[-1] - t0 + 1e-9, report_s)
+
+
+def _run_lines(associator: str, vel: Any, res: TrackerResult) -> dict[str, Any]:
+    """Summary lines of the run: velocities used, scans, fates, births, deletions."""
     status = np.bincount(res.det_status, minlength=len(DET_STATUS_NAMES))
-    summary["reference (lat, lon deg)"] = f"{ref[0]:.6f} {ref[1]:.6f}"
-    summary["associator"] = args.associator
-    model = model_summary(args.preset, cfg, tune)
-    summary.update(model)
-    summary["reported velocity used for initiation"] = (
-        "no" if vel is None else f"yes ({int(np.isfinite(vel).all(axis=1).sum())} rows)"
-    )
-    summary["scans"] = res.counts.scans
-    summary["detections by fate"] = {
-        n: int(c) for n, c in zip(DET_STATUS_NAMES, status, strict=True)
+    out: dict[str, Any] = {
+        "reported velocity used for initiation": (
+            "no" if vel is None else f"yes ({int(np.isfinite(vel).all(axis=1).sum())} rows)"
+        ),
+        "scans": res.counts.scans,
+        "detections by fate": {n: int(c) for n, c in zip(DET_STATUS_NAMES, status, strict=True)},
+        "tracks started / confirmed": (
+            f"{res.counts.tracks_started} / {res.counts.tracks_confirmed}"
+        ),
+        "tracks deleted (coast, covariance, unconfirmed)": (
+            f"{res.counts.deleted_coast} {res.counts.deleted_covariance} "
+            f"{res.counts.deleted_unconfirmed}"
+        ),
     }
-    summary["tracks started / confirmed"] = (
-        f"{res.counts.tracks_started} / {res.counts.tracks_confirmed}"
-    )
-    summary["tracks deleted (coast, covariance, unconfirmed)"] = (
-        f"{res.counts.deleted_coast} {res.counts.deleted_covariance} "
-        f"{res.counts.deleted_unconfirmed}"
-    )
-    if args.associator == "jpda":
-        summary["jpda clusters (exact, k-best)"] = (
+    if associator == "jpda":
+        out["jpda clusters (exact, k-best)"] = (
             f"{res.counts.jpda_exact_clusters} {res.counts.jpda_kbest_clusters}"
         )
-    if has_ids:
-        scores = score_tracks(
-            grid,
-            det.t_gps_s[fresh],
-            en[fresh],
-            det.id[fresh],
-            res.report_frame,
-            res.report_id,
-            res.report_xy,
-            rule,
-        )
-        summary["scoring"] = (
+    return out
+
+
+def _score_lines(
+    grid: Any, truth: tuple[Any, Any, Any], res: TrackerResult, rule: ScoringRule
+) -> dict[str, Any]:
+    """Summary lines of the scores of the confirmed tracks against the ids' own reports."""
+    scores = score_tracks(grid, *truth, res.report_frame, res.report_id, res.report_xy, rule)
+    return {
+        "scoring": (
             f"{len(grid)} frames every {rule.report_s:g} s, match within {rule.match_m:g} m, "
             f"truth interpolated over gaps <= {rule.max_gap_s:g} s"
-        )
-        summary["MOTA"] = round(scores.mota, 4)
-        summary["HOTA (DetA, AssA)"] = (
+        ),
+        "MOTA": round(scores.mota, 4),
+        "HOTA (DetA, AssA)": (
             f"{scores.hota:.4f} ({scores.det_a:.4f}, {scores.ass_a:.4f}; similarity 1 - d / match)"
-        )
-        summary["IDF1 (IDP, IDR)"] = f"{scores.idf1:.4f} ({scores.idp:.4f}, {scores.idr:.4f})"
-        summary["MOTP (m)"] = round(scores.motp_m, 1)
-        summary["truth objects / matches / misses / false"] = (
+        ),
+        "IDF1 (IDP, IDR)": f"{scores.idf1:.4f} ({scores.idp:.4f}, {scores.idr:.4f})",
+        "MOTP (m)": round(scores.motp_m, 1),
+        "truth objects / matches / misses / false": (
             f"{scores.n_truth} {scores.n_matches} {scores.n_misses} {scores.n_false}"
-        )
-        summary["id switches"] = scores.id_switches
-        summary["fragmentations"] = scores.fragmentations
-        summary["track purity"] = round(scores.purity, 4)
-        summary["ids / confirmed tracks"] = f"{scores.n_ids} / {res.counts.tracks_confirmed}"
-    summary["time read / tune / track (s)"] = f"{t_read:.2f} {t_tune:.2f} {t_track:.2f}"
-    _print(summary)
-    if args.out:
-        table = _write(
-            args.out,
-            res,
-            ref,
-            {"associator": args.associator, **model},
-            det.t_gps_s[use],
-            det.alt_m[use],
-        )
-        print(f"tracks written to {args.out}, one row per track to {table}")
-    if args.plot:
-        from navtrack.plots.tracks import plot_tracks
-
-        path = plot_tracks(
-            args.plot, en[use], res, title=f"{args.file.name} ({args.associator})", ref_deg=ref
-        )
-        print(f"plot written to {path}")
-    return 0
+        ),
+        "id switches": scores.id_switches,
+        "fragmentations": scores.fragmentations,
+        "track purity": round(scores.purity, 4),
+        "ids / confirmed tracks": f"{scores.n_ids} / {res.counts.tracks_confirmed}",
+    }
 
 
 PROGRESS_MIN_DETECTIONS = 5000  # files this long take seconds: show that the tracker runs
@@ -342,10 +383,6 @@ def _progress(n_detections: int, *, quiet: bool) -> Iterator[Callable[[int], obj
     if quiet or n_detections < PROGRESS_MIN_DETECTIONS:
         yield None
         return
-    import sys
-
-    from tqdm import tqdm
-
     with tqdm(
         total=n_detections, desc="tracking", unit=" det", file=sys.stderr, disable=None, leave=False
     ) as bar:
@@ -358,15 +395,12 @@ def _positive(name: str, value: float | None, upper: float | None = None) -> Non
         raise SystemExit(f"navtrack track: {name} must be {bound}, got {value:g}")
 
 
-def model_config(args: argparse.Namespace, t_s: Any, en: Any, vel: Any) -> tuple[Any, Any]:
+def model_config(
+    args: argparse.Namespace, t_s: Any, en: Any, vel: Any
+) -> tuple[TrackerConfig, AutoTune | None]:
     """The tracker config of ``--preset`` with the model options applied over it, and the
     :class:`~navtrack.tracking.trackers.autotune.AutoTune` when the preset is ``auto``
     (else None)."""
-    import dataclasses
-
-    from navtrack.tracking.models import constant_velocity
-    from navtrack.tracking.trackers.tracker import TrackerConfig
-
     _positive("--sigma-m", args.sigma_m)
     _positive("--pd", args.pd, 1.0)
     _positive("--clutter-density", args.clutter_density)
@@ -380,8 +414,6 @@ def model_config(args: argparse.Namespace, t_s: Any, en: Any, vel: Any) -> tuple
     elif args.preset == "aircraft":
         cfg = TrackerConfig.for_aircraft(args.associator)
     else:
-        from navtrack.tracking.trackers.autotune import auto_config
-
         tune = auto_config(t_s, en, vel, args.associator)
         cfg = tune.config
     over: dict[str, Any] = {}
@@ -447,8 +479,6 @@ def _confirm(text: str | None) -> tuple[int, float] | None:
 
 def model_summary(preset: str, cfg: Any, tune: Any) -> dict[str, Any]:
     """The model as used (summary lines; also the output's metadata)."""
-    import numpy as np
-
     q = cfg.imm_q if cfg.imm_q is not None else (cfg.motion.q,)
     out: dict[str, Any] = {
         "preset": preset,
@@ -488,8 +518,6 @@ def input_warnings(det: Any, en: Any) -> dict[str, str]:
     """Summary lines (``warning: ...``) for input the tracker can run on but that is likely
     wrong: all reports at one time, one id reported at one time at two positions, reported
     speeds that disagree with the positions (a knots column read as m/s)."""
-    import numpy as np
-
     out: dict[str, str] = {}
     t = det.t_gps_s
     n_times = np.unique(t).size
@@ -541,7 +569,7 @@ def _print(summary: dict[str, Any]) -> None:
 
 def _write(
     path: Path,
-    res: Any,
+    res: TrackerResult,
     ref: tuple[float, float],
     meta: dict[str, Any],
     report_t_s: Any,
@@ -554,22 +582,34 @@ def _write(
 
     ``report_t_s``, ``report_alt_m``: the tracked reports' times and altitudes (the altitude of
     a row is that of the last report the track took; the tracker is 2-D)."""
-    import json
+    df = _update_rows(res, ref, report_t_s, report_alt_m)
+    per = _track_table(df, res)
+    meta = {"reference_lat_deg": ref[0], "reference_lon_deg": ref[1], **meta}
+    table = path.with_name(f"{path.stem}.tracks{path.suffix}")
+    if path.suffix == ".parquet":
+        df.attrs["navtrack"] = json.dumps(meta)
+        df.to_parquet(path, index=False)
+        per.to_parquet(table, index=False)
+    else:
+        df.to_csv(path, index=False)
+        per.to_csv(table, index=False)
+        Path(f"{path}.json").write_text(json.dumps(meta, indent=1) + "\n")
+    return table
 
-    import numpy as np
-    import pandas as pd
 
-    from navtrack.io.tracks import local_enu_to_geodetic
-    from navtrack.timescale import gps_to_utc, to_datetime64
-    from navtrack.tracking.trackers.tracker import TRACK_END_NAMES
+def _utc(t_s: Any) -> Any:
+    """GPS seconds as ISO 8601 UTC text."""
+    return pd.to_datetime(to_datetime64(gps_to_utc(t_s))).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
-    def utc(t_s: Any) -> Any:
-        return pd.to_datetime(to_datetime64(gps_to_utc(t_s))).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
+def _update_rows(
+    res: TrackerResult, ref: tuple[float, float], report_t_s: Any, report_alt_m: Any
+) -> pd.DataFrame:
+    """One row per track update: state, position on the ellipsoid, speed, course, altitude."""
     x = res.track_x
     df = pd.DataFrame(
         {
-            "time": utc(res.track_time_s),
+            "time": _utc(res.track_time_s),
             "track_id": res.track_id,
             "confirmed": res.track_confirmed,
             "p_update": res.track_p_update,
@@ -582,8 +622,6 @@ def _write(
     )
     v_en = x[:, [1, 3]]
     if np.isfinite(ref[0]):
-        from navtrack.geodesy import enu_rotation
-
         latlon = local_enu_to_geodetic(x[:, [0, 2]], ref[0], ref[1])
         df["lat_deg"] = latlon[:, 0]
         df["lon_deg"] = latlon[:, 1]
@@ -605,6 +643,13 @@ def _write(
             rows.sort_values("t"), reps.sort_values("t"), on="t", by="track_id"
         ).sort_values("row")
         df["alt_m"] = both["alt_m"].to_numpy()
+    return df
+
+
+def _track_table(df: pd.DataFrame, res: TrackerResult) -> pd.DataFrame:
+    """One row per track: first and last update, updates, reports taken, confirmed, mean
+    position standard deviation, end time and reason."""
+    took = res.det_track >= 0
     per = df.groupby("track_id").agg(
         first_update=("time", "first"),
         last_update=("time", "last"),
@@ -615,22 +660,11 @@ def _write(
     per["reports"] = pd.Series(res.det_track[took]).value_counts().reindex(per.index, fill_value=0)
     ends = pd.DataFrame(
         {
-            "end_time": utc(res.end_time_s),
+            "end_time": _utc(res.end_time_s),
             "end_reason": np.asarray(TRACK_END_NAMES)[res.end_reason],
         },
         index=pd.Index(res.end_id, name="track_id"),
     )
     per = per.join(ends, how="outer").reset_index()  # (tracks never updated: ends only)
     per = per.fillna({"updates": 0, "reports": 0, "confirmed": False})
-    per = per.astype({"updates": int, "reports": int, "confirmed": bool})
-    meta = {"reference_lat_deg": ref[0], "reference_lon_deg": ref[1], **meta}
-    table = path.with_name(f"{path.stem}.tracks{path.suffix}")
-    if path.suffix == ".parquet":
-        df.attrs["navtrack"] = json.dumps(meta)
-        df.to_parquet(path, index=False)
-        per.to_parquet(table, index=False)
-    else:
-        df.to_csv(path, index=False)
-        per.to_csv(table, index=False)
-        Path(f"{path}.json").write_text(json.dumps(meta, indent=1) + "\n")
-    return table
+    return per.astype({"updates": int, "reports": int, "confirmed": bool})

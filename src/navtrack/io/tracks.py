@@ -19,6 +19,8 @@ UTF-8 CSV (gzip, binary, JSON, bytes that are not UTF-8) raises :class:`FileForm
 
 from __future__ import annotations
 
+import csv
+import io
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -28,7 +30,16 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError
+from navtrack.geodesy import (
+    WGS84_A_M,
+    WGS84_E2,
+    ecef_to_enu,
+    ecef_to_geodetic,
+    enu_rotation,
+    geodetic_to_ecef,
+)
 from navtrack.io.tables import last_row_cut, read_csv_text
+from navtrack.timescale import gps_seconds, utc_to_gps
 
 __all__ = [
     "GENERIC_COLUMNS",
@@ -118,8 +129,6 @@ class TrackDetections:
 
 def _read_frame(path: StrPath) -> tuple[Any, bool]:
     """The file as a frame of strings, and whether its last row was cut short."""
-    import io
-
     import pandas as pd
 
     text = read_csv_text(path)
@@ -151,8 +160,6 @@ def _num(df: Any, col: str | None) -> FloatArray:
 def _iso_utc_to_gps(values: Any) -> FloatArray:
     import pandas as pd
 
-    from navtrack.timescale import gps_seconds, utc_to_gps
-
     dt = pd.DatetimeIndex(
         pd.to_datetime(np.asarray(values), errors="coerce", utc=True, format="mixed")
     )
@@ -164,27 +171,66 @@ def _iso_utc_to_gps(values: Any) -> FloatArray:
     return out
 
 
+@dataclass(frozen=True, slots=True, eq=False)
+class _Rows:
+    """The columns of a file as read, one value per row, before the row checks."""
+
+    t: FloatArray
+    lat: FloatArray
+    lon: FloatArray
+    x: FloatArray
+    y: FloatArray
+    alt: FloatArray
+    speed: FloatArray
+    course: FloatArray
+    ids: np.ndarray
+
+
 def _finish(
     path: StrPath,
     fmt: str,
     df: Any,
-    t: FloatArray,
-    lat: FloatArray,
-    lon: FloatArray,
-    x: FloatArray,
-    y: FloatArray,
-    alt: FloatArray,
-    speed: FloatArray,
-    course: FloatArray,
-    ids: np.ndarray,
+    rows: _Rows,
     used: list[str],
     cut_last: bool,
-    max_range_km: float | None,
-    max_time_days: float | None,
+    limits: tuple[float | None, float | None],
 ) -> TrackDetections:
-    n = len(t)
+    """Rows checked (``limits``: ``max_range_km``, ``max_time_days``), the good ones sorted by
+    time."""
+    r = rows
+    n = len(r.t)
     line = np.arange(2, n + 2, dtype=np.int64)  # header is line 1
+    reason = _row_reasons(r, cut_last, *limits)
+    ok = reason == ""
+    idx = np.flatnonzero(ok)
+    order = idx[np.argsort(r.t[idx], kind="stable")]
+    return TrackDetections(
+        path=str(path),
+        format=fmt,
+        t_gps_s=r.t[order],
+        lat_deg=r.lat[order],
+        lon_deg=r.lon[order],
+        x_m=r.x[order],
+        y_m=r.y[order],
+        alt_m=r.alt[order],
+        speed_mps=r.speed[order],
+        course_deg=r.course[order],
+        id=np.asarray(r.ids, dtype=str)[order],
+        line=line[order],
+        bad_lines=line[~ok],
+        bad_reasons=tuple(str(v) for v in reason[~ok]),
+        n_reordered=int(np.sum(np.diff(r.t[idx]) < 0)),
+        ignored_columns=tuple(c for c in df.columns if c not in used),
+    )
+
+
+def _row_reasons(
+    r: _Rows, cut_last: bool, max_range_km: float | None, max_time_days: float | None
+) -> np.ndarray:
+    """Why each row is skipped (module notes; the first reason found), ``""`` for a good row."""
+    n = len(r.t)
     reason = np.full(n, "", dtype=object)
+    lat, lon, x, y, t = r.lat, r.lon, r.x, r.y, r.t
     geo = not np.all(np.isnan(lat) & np.isnan(lon)) or np.all(np.isnan(x))
 
     def flag(mask: np.ndarray, why: str) -> None:
@@ -210,8 +256,6 @@ def _finish(
     ok = reason == ""
     if max_range_km is not None and ok.any():
         if geo:
-            from navtrack.geodesy import geodetic_to_ecef
-
             llh = np.stack([np.radians(lat), np.radians(lon), np.zeros(n)], axis=-1)
             llh[~ok] = 0.0
             xyz = geodetic_to_ecef(llh)
@@ -225,29 +269,7 @@ def _finish(
             ok & (dist > max_range_km * 1e3),
             f"position more than {max_range_km:g} km from the median position",
         )
-    ok = reason == ""
-    idx = np.flatnonzero(ok)
-    order = idx[np.argsort(t[idx], kind="stable")]
-    n_reordered = int(np.sum(np.diff(t[idx]) < 0))
-    ignored = tuple(c for c in df.columns if c not in used)
-    return TrackDetections(
-        str(path),
-        fmt,
-        t[order],
-        lat[order],
-        lon[order],
-        x[order],
-        y[order],
-        alt[order],
-        speed[order],
-        course[order],
-        np.asarray(ids, dtype=str)[order],
-        line[order],
-        line[~ok],
-        tuple(str(r) for r in reason[~ok]),
-        n_reordered,
-        ignored,
-    )
+    return reason
 
 
 def read_ais_csv(
@@ -263,19 +285,20 @@ def read_ais_csv(
         path,
         "ais",
         df,
-        _iso_utc_to_gps(df["Time"]),
-        _num(df, "Latitude_degrees"),
-        _num(df, "Longitude_degrees"),
-        np.full(n, np.nan),
-        np.full(n, np.nan),
-        np.full(n, np.nan),
-        _num(df, "SOG_knots") * KNOT_MPS,
-        _num(df, "COG_degrees"),
-        df["MMSI"].to_numpy(),
+        _Rows(
+            t=_iso_utc_to_gps(df["Time"]),
+            lat=_num(df, "Latitude_degrees"),
+            lon=_num(df, "Longitude_degrees"),
+            x=np.full(n, np.nan),
+            y=np.full(n, np.nan),
+            alt=np.full(n, np.nan),
+            speed=_num(df, "SOG_knots") * KNOT_MPS,
+            course=_num(df, "COG_degrees"),
+            ids=df["MMSI"].to_numpy(),
+        ),
         [*cols, "COG_degrees", "SOG_knots"],
         cut_last,
-        max_range_km,
-        max_time_days,
+        (max_range_km, max_time_days),
     )
 
 
@@ -284,7 +307,6 @@ def read_opensky_csv(
 ) -> TrackDetections:
     """OpenSky state vectors: ``time`` (Unix s), ``icao24``, ``lat``, ``lon``, ``velocity``
     (m/s), ``heading`` (deg), ``geoaltitude`` (m, else ``baroaltitude``)."""
-    from navtrack.timescale import utc_to_gps
 
     df, cut_last = _read_frame(path)
     cols = ["time", "icao24", "lat", "lon"]
@@ -296,19 +318,20 @@ def read_opensky_csv(
         path,
         "opensky",
         df,
-        t,
-        _num(df, "lat"),
-        _num(df, "lon"),
-        np.full(n, np.nan),
-        np.full(n, np.nan),
-        _num(df, alt_col),
-        _num(df, "velocity"),
-        _num(df, "heading"),
-        df["icao24"].to_numpy(),
+        _Rows(
+            t=t,
+            lat=_num(df, "lat"),
+            lon=_num(df, "lon"),
+            x=np.full(n, np.nan),
+            y=np.full(n, np.nan),
+            alt=_num(df, alt_col),
+            speed=_num(df, "velocity"),
+            course=_num(df, "heading"),
+            ids=df["icao24"].to_numpy(),
+        ),
         [*cols, alt_col, "velocity", "heading"],
         cut_last,
-        max_range_km,
-        max_time_days,
+        (max_range_km, max_time_days),
     )
 
 
@@ -331,9 +354,6 @@ def detect_format(path: StrPath) -> str:
     FileFormatError
         An empty or unreadable file.
     """
-    import csv
-    import io
-
     text = read_csv_text(path)
     header = next(csv.reader(io.StringIO(text.split("\n", 1)[0])), [])
     if not header:
@@ -389,19 +409,20 @@ def read_track_csv(
         path,
         "csv",
         df,
-        _iso_utc_to_gps(df["time"]),
-        _num(df, "lat") if has_ll else nan,
-        _num(df, "lon") if has_ll else nan,
-        nan if has_ll else _num(df, "x_m"),
-        nan if has_ll else _num(df, "y_m"),
-        _num(df, "alt_m"),
-        _num(df, "speed_mps"),
-        _num(df, "course_deg"),
-        ids,
+        _Rows(
+            t=_iso_utc_to_gps(df["time"]),
+            lat=_num(df, "lat") if has_ll else nan,
+            lon=_num(df, "lon") if has_ll else nan,
+            x=nan if has_ll else _num(df, "x_m"),
+            y=nan if has_ll else _num(df, "y_m"),
+            alt=_num(df, "alt_m"),
+            speed=_num(df, "speed_mps"),
+            course=_num(df, "course_deg"),
+            ids=ids,
+        ),
         used,
         cut_last,
-        max_range_km,
-        max_time_days,
+        (max_range_km, max_time_days),
     )
 
 
@@ -466,7 +487,6 @@ def to_local_enu(
     en : (N, 2) east, north, m
     ref : (lat_deg, lon_deg)
     """
-    from navtrack.geodesy import ecef_to_enu, geodetic_to_ecef
 
     if not det.geodetic:
         return np.stack([det.x_m, det.y_m], axis=-1), (float("nan"), float("nan"))
@@ -493,7 +513,6 @@ def velocity_local_enu(
     -------
     v_en : (N, 2)
     """
-    from navtrack.geodesy import enu_rotation
 
     s = np.asarray(det.speed_mps, dtype=float)
     c = np.asarray(det.course_deg, dtype=float)
@@ -543,13 +562,6 @@ def local_enu_to_geodetic(en_m: ArrayLike, ref_lat_deg: float, ref_lon_deg: floa
         ``en_m`` not of shape (n, 2), or a point beyond the ellipsoid's horizon seen along the
         reference's normal (more than about 6 000 km from the reference).
     """
-    from navtrack.geodesy import (
-        WGS84_A_M,
-        WGS84_E2,
-        ecef_to_geodetic,
-        enu_rotation,
-        geodetic_to_ecef,
-    )
 
     en = np.asarray(en_m, dtype=float)
     if en.ndim != 2 or en.shape[1] != 2:

@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from navtrack._typing import ArrayLike, FloatArray, StrPath
+from navtrack.geodesy import ecef_to_enu, geodetic_to_ecef
+from navtrack.io.tracks import local_enu_to_geodetic
 from navtrack.plots.canvas import figure_dir, new_figure, save_figure
 
 if TYPE_CHECKING:
@@ -96,6 +98,7 @@ def tracks_figure(
             )
     if ref_deg is not None and np.isfinite(ref_deg).all():
         lat, lon = ref_deg
+        _latlon_grid(ax, en, lat, lon)
         origin = (
             f"of the reference {abs(lat):.5f}°{'N' if lat >= 0 else 'S'} "
             f"{abs(lon):.5f}°{'E' if lon >= 0 else 'W'} (tangent plane at height 0)"
@@ -108,3 +111,34 @@ def tracks_figure(
     ax.set_title(f"{title}\n{len(confirmed_ids)} confirmed tracks")
     ax.legend(loc="best", fontsize=8)
     return fig
+
+
+def _latlon_grid(ax: Any, en: FloatArray, lat0: float, lon0: float) -> None:
+    """Thin lines of constant latitude and longitude over the detections' extent, labelled in
+    degrees at the lower and left edges (the tangent plane's east/north axes are not the
+    meridians and parallels away from the reference)."""
+    from matplotlib.ticker import MaxNLocator  # matplotlib: imported with the figure
+
+    lo, hi = en.min(axis=0), en.max(axis=0)
+    corners = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [lo[0], hi[1]], [hi[0], hi[1]]])
+    ll = local_enu_to_geodetic(corners, lat0, lon0)
+    lat_rng = (ll[:, 0].min(), ll[:, 0].max())
+    lon_rng = (ll[:, 1].min(), ll[:, 1].max())
+    ref = geodetic_to_ecef([np.radians(lat0), np.radians(lon0), 0.0])
+
+    def en_km(lat: FloatArray, lon: FloatArray) -> FloatArray:
+        llh = np.stack([np.radians(lat), np.radians(lon), np.zeros(lat.size)], axis=-1)
+        return np.asarray(ecef_to_enu(geodetic_to_ecef(llh), ref)[:, :2]) / 1e3
+
+    s = np.linspace(0.0, 1.0, 60)
+    style = {"color": "0.55", "lw": 0.4, "ls": ":", "zorder": 0}
+    for v in MaxNLocator(6).tick_values(*lat_rng):
+        if lat_rng[0] <= v <= lat_rng[1]:
+            p = en_km(np.full(s.size, v), lon_rng[0] + s * (lon_rng[1] - lon_rng[0]))
+            ax.plot(p[:, 0], p[:, 1], **style)
+            ax.annotate(f"{v:g}°", p[0], fontsize=6, color="0.4", ha="right", va="center")
+    for v in MaxNLocator(6).tick_values(*lon_rng):
+        if lon_rng[0] <= v <= lon_rng[1]:
+            p = en_km(lat_rng[0] + s * (lat_rng[1] - lat_rng[0]), np.full(s.size, v))
+            ax.plot(p[:, 0], p[:, 1], **style)
+            ax.annotate(f"{v:g}°", p[0], fontsize=6, color="0.4", ha="center", va="top")

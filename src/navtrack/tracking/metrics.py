@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from navtrack._typing import ArrayLike, FloatArray, IntArray
 
@@ -62,8 +63,6 @@ def _dist(X: FloatArray, Y: FloatArray) -> FloatArray:
 
 def ospa(X: ArrayLike, Y: ArrayLike, c: float, p: float = 2.0) -> float:
     """OSPA distance (order ``p``, cut-off ``c``) between point sets ``X (n, d)``, ``Y (m, d)``."""
-    from scipy.optimize import linear_sum_assignment
-
     X = _points(X)
     Y = _points(Y)
     n, m = len(X), len(Y)
@@ -94,10 +93,21 @@ class GospaResult:
     n_switches: float
 
 
+def _frame_rows(
+    tf: np.ndarray, hf: np.ndarray, frames: np.ndarray
+) -> list[tuple[IntArray, IntArray]]:
+    """Rows of the truth and of the hypotheses in each of ``frames``, in increasing order."""
+    t_order = np.argsort(tf, kind="stable")
+    h_order = np.argsort(hf, kind="stable")
+    t_lo = np.searchsorted(tf[t_order], frames, side="left")
+    t_hi = np.searchsorted(tf[t_order], frames, side="right")
+    h_lo = np.searchsorted(hf[h_order], frames, side="left")
+    h_hi = np.searchsorted(hf[h_order], frames, side="right")
+    return [(t_order[a:b], h_order[c:d]) for a, b, c, d in zip(t_lo, t_hi, h_lo, h_hi, strict=True)]
+
+
 def _gospa_assign(X: FloatArray, Y: FloatArray, c: float, p: float) -> tuple[IntArray, float]:
     """Truth-to-estimate assignment (``-1`` = missed) and its localisation term."""
-    from scipy.optimize import linear_sum_assignment
-
     n = len(X)
     a = np.full(n, -1, dtype=np.int64)
     if n == 0 or len(Y) == 0:
@@ -218,55 +228,22 @@ def clear_mot(
     hyp_frame (H,), hyp_id (H,), hyp_pos (H, d)
     threshold : float, m
     """
-    from scipy.optimize import linear_sum_assignment
-
     tf = np.asarray(truth_frame)
     tid = np.asarray(truth_id)
     tp = _points(truth_pos)  # (N, d); (0, 1) when empty: distances need both sides non-empty
     hf = np.asarray(hyp_frame)
     hid = np.asarray(hyp_id)
     hp = _points(hyp_pos)
-    frames = np.union1d(tf, hf)
-    t_order = np.argsort(tf, kind="stable")
-    h_order = np.argsort(hf, kind="stable")
-    t_bounds = (
-        np.searchsorted(tf[t_order], frames, side="left"),
-        np.searchsorted(tf[t_order], frames, side="right"),
-    )
-    h_bounds = (
-        np.searchsorted(hf[h_order], frames, side="left"),
-        np.searchsorted(hf[h_order], frames, side="right"),
-    )
     last_match: dict[object, object] = {}
     was_tracked: dict[object, bool] = {}
     pair_counts: dict[tuple[object, object], int] = {}
     n_truth = n_match = n_miss = n_false = n_sw = n_frag = 0
     dist_sum = 0.0
-    for f in range(len(frames)):
-        ti = t_order[t_bounds[0][f] : t_bounds[1][f]]
-        hi = h_order[h_bounds[0][f] : h_bounds[1][f]]
+    for ti, hi in _frame_rows(tf, hf, np.union1d(tf, hf)):
         T_ids = tid[ti].tolist()
         H_ids = hid[hi].tolist()
         D = _dist(tp[ti], hp[hi]) if len(ti) and len(hi) else np.zeros((len(ti), len(hi)))
-        match: dict[int, int] = {}
-        h_pos = {h: k for k, h in enumerate(H_ids)}
-        used_h: set[int] = set()
-        for a, t in enumerate(T_ids):  # keep each object's last correspondence
-            h = last_match.get(t)
-            if h is not None and h in h_pos and h_pos[h] not in used_h:
-                b = h_pos[h]
-                if D[a, b] <= threshold:
-                    match[a] = b
-                    used_h.add(b)
-        free_t = [a for a in range(len(T_ids)) if a not in match]
-        free_h = [b for b in range(len(H_ids)) if b not in used_h]
-        if free_t and free_h:
-            sub = D[np.ix_(free_t, free_h)]
-            cost = np.where(sub <= threshold, sub, 1e12)
-            r, c = linear_sum_assignment(cost)
-            for i, j in zip(r, c, strict=True):
-                if sub[i, j] <= threshold:
-                    match[free_t[i]] = free_h[j]
+        match = _match_frame(T_ids, H_ids, D, last_match, threshold)
         for a, t in enumerate(T_ids):
             if a in match:
                 h = H_ids[match[a]]
@@ -278,32 +255,61 @@ def clear_mot(
                 was_tracked[t] = True
                 dist_sum += float(D[a, match[a]])
                 pair_counts[(t, h)] = pair_counts.get((t, h), 0) + 1
-            else:
-                if t in was_tracked:
-                    was_tracked[t] = False
+            elif t in was_tracked:
+                was_tracked[t] = False
         n_truth += len(T_ids)
         n_match += len(match)
         n_miss += len(T_ids) - len(match)
         n_false += len(H_ids) - len(match)
-    per_track: dict[object, list[int]] = {}
-    for (_, h), cnt in pair_counts.items():
-        per_track.setdefault(h, []).append(cnt)
-    matched = sum(sum(v) for v in per_track.values())
-    purity = sum(max(v) for v in per_track.values()) / matched if matched else float("nan")
-    mota = 1.0 - (n_miss + n_false + n_sw) / n_truth if n_truth else float("nan")
-    motp = dist_sum / n_match if n_match else float("nan")
     return ClearMot(
-        mota,
-        motp,
+        1.0 - (n_miss + n_false + n_sw) / n_truth if n_truth else float("nan"),
+        dist_sum / n_match if n_match else float("nan"),
         n_truth,
         n_match,
         n_miss,
         n_false,
         n_sw,
         n_frag,
-        purity,
+        _purity(pair_counts),
         len(np.unique(hid)) if len(hid) else 0,
     )
+
+
+def _match_frame(
+    T_ids: list, H_ids: list, D: FloatArray, last_match: dict[object, object], threshold: float
+) -> dict[int, int]:
+    """CLEAR-MOT matching of one frame: truth row -> hypothesis row. Each object's last
+    correspondence is kept while its hypothesis is present within ``threshold``; the rest are
+    matched by a minimum-distance assignment with the same threshold."""
+    match: dict[int, int] = {}
+    h_pos = {h: k for k, h in enumerate(H_ids)}
+    used_h: set[int] = set()
+    for a, t in enumerate(T_ids):  # keep each object's last correspondence
+        h = last_match.get(t)
+        if h is not None and h in h_pos and h_pos[h] not in used_h:
+            b = h_pos[h]
+            if D[a, b] <= threshold:
+                match[a] = b
+                used_h.add(b)
+    free_t = [a for a in range(len(T_ids)) if a not in match]
+    free_h = [b for b in range(len(H_ids)) if b not in used_h]
+    if free_t and free_h:
+        sub = D[np.ix_(free_t, free_h)]
+        cost = np.where(sub <= threshold, sub, 1e12)
+        r, c = linear_sum_assignment(cost)
+        for i, j in zip(r, c, strict=True):
+            if sub[i, j] <= threshold:
+                match[free_t[i]] = free_h[j]
+    return match
+
+
+def _purity(pair_counts: dict[tuple[object, object], int]) -> float:
+    """Share of the matches of each track that went to its most frequent truth id, pooled."""
+    per_track: dict[object, list[int]] = {}
+    for (_, h), cnt in pair_counts.items():
+        per_track.setdefault(h, []).append(cnt)
+    matched = sum(sum(v) for v in per_track.values())
+    return sum(max(v) for v in per_track.values()) / matched if matched else float("nan")
 
 
 @dataclass(frozen=True, slots=True)
@@ -359,8 +365,6 @@ def hota(
     hyp_frame (H,), hyp_id (H,), hyp_pos (H, d)
     threshold : float, m
     """
-    from scipy.optimize import linear_sum_assignment
-
     if not threshold > 0:
         raise ValueError(f"threshold must be > 0, got {threshold}")
     tf = np.asarray(truth_frame)
@@ -371,11 +375,8 @@ def hota(
     k_names, k = np.unique(np.asarray(hyp_id), return_inverse=True)
     G, K = g_names.size, k_names.size
     alphas = np.arange(1, 20) / 20.0
-    frames = np.union1d(tf, hf)
     per_frame = []
-    for f in frames:
-        ti = np.flatnonzero(tf == f)
-        hi = np.flatnonzero(hf == f)
+    for ti, hi in _frame_rows(tf, hf, np.union1d(tf, hf)):
         S = (
             np.maximum(0.0, 1.0 - _dist(tp[ti], hp[hi]) / threshold)
             if ti.size and hi.size
@@ -384,27 +385,8 @@ def hota(
         per_frame.append((g[ti], k[hi], S))
     n_g = np.bincount(g, minlength=G).astype(float)
     n_k = np.bincount(k, minlength=K).astype(float)
-    P = np.zeros((G, K))
-    for gi, ki, S in per_frame:
-        if S.size:
-            denom = S.sum(axis=1, keepdims=True) + S.sum(axis=0, keepdims=True) - S
-            soft = np.divide(S, denom, out=np.zeros_like(S), where=denom > np.finfo(float).eps)
-            np.add.at(P, (gi[:, None], ki[None, :]), soft)
-    align = P / np.maximum(n_g[:, None] + n_k[None, :] - P, np.finfo(float).eps)
-    A = alphas.size
-    TP = np.zeros(A)
-    loc = np.zeros(A)
-    pair_tp = np.zeros((A, G, K))
-    for gi, ki, S in per_frame:
-        if not S.size:
-            continue
-        r, c = linear_sum_assignment(-(align[np.ix_(gi, ki)] * S))
-        s_rc = S[r, c]
-        for a, alpha in enumerate(alphas):
-            ok = s_rc >= alpha - np.finfo(float).eps
-            TP[a] += ok.sum()
-            loc[a] += s_rc[ok].sum()
-            np.add.at(pair_tp[a], (gi[r[ok]], ki[c[ok]]), 1.0)
+    align = _hota_alignment(per_frame, n_g, n_k)
+    TP, loc, pair_tp = _hota_true_positives(per_frame, align, alphas)
     n_truth, n_hyp = float(tf.size), float(hf.size)
     FN, FP = n_truth - TP, n_hyp - TP
     det_a = TP / np.maximum(TP + FN + FP, 1.0)
@@ -422,6 +404,40 @@ def hota(
         tuple(float(v) for v in det_a),
         tuple(float(v) for v in ass_a),
     )
+
+
+def _hota_alignment(per_frame: list, n_g: FloatArray, n_k: FloatArray) -> FloatArray:
+    """Global alignment ``P / (n_g + n_k - P)`` of every truth id and hypothesis id, ``P``
+    their summed frame-wise soft overlap (:func:`hota`)."""
+    P = np.zeros((n_g.size, n_k.size))
+    for gi, ki, S in per_frame:
+        if S.size:
+            denom = S.sum(axis=1, keepdims=True) + S.sum(axis=0, keepdims=True) - S
+            soft = np.divide(S, denom, out=np.zeros_like(S), where=denom > np.finfo(float).eps)
+            np.add.at(P, (gi[:, None], ki[None, :]), soft)
+    return P / np.maximum(n_g[:, None] + n_k[None, :] - P, np.finfo(float).eps)
+
+
+def _hota_true_positives(
+    per_frame: list, align: FloatArray, alphas: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Per ``alpha``: true positives, their summed similarity, and the true positives of each
+    (truth id, hypothesis id) pair, the matching of a frame maximising the aligned similarity."""
+    A = alphas.size
+    TP = np.zeros(A)
+    loc = np.zeros(A)
+    pair_tp = np.zeros((A, *align.shape))
+    for gi, ki, S in per_frame:
+        if not S.size:
+            continue
+        r, c = linear_sum_assignment(-(align[np.ix_(gi, ki)] * S))
+        s_rc = S[r, c]
+        for a, alpha in enumerate(alphas):
+            ok = s_rc >= alpha - np.finfo(float).eps
+            TP[a] += ok.sum()
+            loc[a] += s_rc[ok].sum()
+            np.add.at(pair_tp[a], (gi[r[ok]], ki[c[ok]]), 1.0)
+    return TP, loc, pair_tp
 
 
 @dataclass(frozen=True, slots=True)
@@ -462,8 +478,6 @@ def id_scores(
     summed counts (IDTP, :func:`scipy.optimize.linear_sum_assignment`). Arguments as for
     :func:`clear_mot`.
     """
-    from scipy.optimize import linear_sum_assignment
-
     tf = np.asarray(truth_frame)
     hf = np.asarray(hyp_frame)
     tp = _points(truth_pos)
@@ -471,15 +485,7 @@ def id_scores(
     g_names, g = np.unique(np.asarray(truth_id), return_inverse=True)
     h_names, h = np.unique(np.asarray(hyp_id), return_inverse=True)
     counts = np.zeros((g_names.size, h_names.size))
-    t_order = np.argsort(tf, kind="stable")
-    h_order = np.argsort(hf, kind="stable")
-    frames = np.intersect1d(tf, hf)
-    t_lo = np.searchsorted(tf[t_order], frames, side="left")
-    t_hi = np.searchsorted(tf[t_order], frames, side="right")
-    h_lo = np.searchsorted(hf[h_order], frames, side="left")
-    h_hi = np.searchsorted(hf[h_order], frames, side="right")
-    for a, b, c, d in zip(t_lo, t_hi, h_lo, h_hi, strict=True):
-        ti, hi = t_order[a:b], h_order[c:d]
+    for ti, hi in _frame_rows(tf, hf, np.intersect1d(tf, hf)):
         near = _dist(tp[ti], hp[hi]) <= threshold
         gi, hj = np.nonzero(near)
         np.add.at(counts, (g[ti][gi], h[hi][hj]), 1.0)

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from navtrack._typing import ArrayLike, FloatArray
+from navtrack.tracking.metrics import clear_mot, hota, id_scores, interpolate_truth
 
 __all__ = ["MATCH_M", "MIN_GAP_S", "Scores", "ScoringRule", "score_tracks", "scoring_rule"]
 
@@ -71,6 +72,7 @@ class Scores:
     hota, det_a, ass_a : HOTA (:func:`~navtrack.tracking.metrics.hota`)
     idf1, idp, idr : identity scores (:func:`~navtrack.tracking.metrics.id_scores`)
     n_ids : distinct true ids
+    n_tracks : distinct track ids reported at the frames (confirmed tracks)
     """
 
     mota: float
@@ -89,6 +91,7 @@ class Scores:
     idp: float
     idr: float
     n_ids: int
+    n_tracks: int
 
 
 def score_tracks(
@@ -103,8 +106,6 @@ def score_tracks(
 ) -> Scores:
     """Score confirmed tracks at ``frame_times`` (``TrackerResult.report_*``) against the
     truth interpolated from the reports ``t_s, pos (N, 2), ids`` (stale repeats left out)."""
-    from navtrack.tracking.metrics import clear_mot, hota, id_scores, interpolate_truth
-
     ids = np.asarray(ids)
     tf, tid, tpos = interpolate_truth(frame_times, t_s, ids, pos, rule.max_gap_s)
     args = (tf, tid, tpos, report_frame, report_id, report_xy, rule.match_m)
@@ -112,20 +113,21 @@ def score_tracks(
     hot = hota(*args)
     ids_ = id_scores(*args)
     return Scores(
-        mot.mota,
-        mot.motp,
-        mot.id_switches,
-        mot.fragmentations,
-        mot.purity,
-        mot.n_truth,
-        mot.n_matches,
-        mot.n_misses,
-        mot.n_false,
-        hot.hota,
-        hot.det_a,
-        hot.ass_a,
-        ids_.idf1,
-        ids_.idp,
-        ids_.idr,
-        int(np.unique(ids).size),
+        mota=mot.mota,
+        motp_m=mot.motp,
+        id_switches=mot.id_switches,
+        fragmentations=mot.fragmentations,
+        purity=mot.purity,
+        n_truth=mot.n_truth,
+        n_matches=mot.n_matches,
+        n_misses=mot.n_misses,
+        n_false=mot.n_false,
+        hota=hot.hota,
+        det_a=hot.det_a,
+        ass_a=hot.ass_a,
+        idf1=ids_.idf1,
+        idp=ids_.idp,
+        idr=ids_.idr,
+        n_ids=int(np.unique(ids).size),
+        n_tracks=mot.n_tracks,
     )

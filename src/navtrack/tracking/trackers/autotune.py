@@ -4,29 +4,19 @@
 of the detections (the first ``SAMPLE_SPAN`` of the time span, at most ``SAMPLE_DETECTIONS``)
 with a generic model, an IMM of three CV models (a moored ship to a manoeuvring target: the
 last model's q is ``BOOT_Q[2]`` at ``BOOT_SPEED_MPS`` and scales with the square of the
-initiation speed limit, at least ``BOOT_Q_MIN_TOP``), sets the model from what that pass
-shows, then searches q by a few more runs; it never reads the ids:
+initiation speed limit, at least ``BOOT_Q_MIN_TOP``, since a manoeuvre of a given turn rate has
+an acceleration proportional to the speed), sets the model from what that pass shows, then
+searches q by a few more runs; it never reads the ids:
 
 1. **Time scales** from the first-pass tracks: the report interval of a target is the median
    interval between consecutive detections of a confirmed track; its 95 % point over the
-   tracks, or the 99 % point of all the tracks' intervals if longer, sets the coast time
-   (``COAST_INTERVALS`` intervals), the confirmation window (1.5 × the coast time); the 95 %
-   point the seed age of two-point initiation (two intervals); the 10 % point
-   of all intervals sets the scan window (at most 10 s;
-   :func:`~navtrack.tracking.trackers.tracker.scan_windows` keeps two reports of one target apart).
-   The 99 % point of all intervals is for fast reports with gaps: at 1 s ADS-B reports each
-   aircraft's median interval is 1 s while its gaps last seconds, and a coast of two median
-   intervals deletes the track at every gap (a new track follows: identity lost). On the
-   Solent and OpenSky files and their parts the 95 % point of the medians is the longer (the
-   99 % point of all intervals is 63–130 s against 137–181 s on the Solent parts, 10 s on
-   both sides on OpenSky), so nothing changes there; no file with such gaps judged it.
-   The first pass's manoeuvring model scales with the speeds because a fixed aircraft-sized
-   one (q = 100 m²/s³) grows a gate of kilometres over a moored ship's 3 min between
-   reports: one track then swallows the reports of its neighbours, the first pass sees 10 s
-   intervals where the ships report every 3 min, and the coast time came out 85 s on the
-   west half of the Solent file (tracks fragmenting, MOTA 0.36 against 0.45 for the ships
-   preset). A manoeuvre of a given turn rate has an acceleration proportional to the speed,
-   hence q proportional to its square.
+   tracks, or the 99 % point of all the tracks' intervals if longer (fast reports with gaps:
+   a coast of two median intervals of a 1 s reporter would delete its track at every gap),
+   sets the coast time (``COAST_INTERVALS`` intervals) and the confirmation window (1.5 × the
+   coast time); the 95 % point the seed age of two-point initiation (two intervals); the 10 %
+   point of all intervals the scan window (at most 10 s;
+   :func:`~navtrack.tracking.trackers.tracker.scan_windows` keeps two reports of one target
+   apart).
 2. **Speed distribution** (reported speeds where the file has them, else the first-pass track
    speeds) sets the initiation speed limit (1.5 × its 99 % point) and the **motion family**:
    a median speed above ``AIRCRAFT_MPS`` gives the aircraft model (CV, starting
@@ -42,86 +32,37 @@ shows, then searches q by a few more runs; it never reads the ids:
    ``v = σ² (1 + (1 + a)² + a²) + q d2² (d1 + d2) / 3`` (the velocity at ``t1`` cancels and
    the two integrated Brownian increments are independent, with variances ``q d2³/3`` and
    ``a² q d1³/3``), so one pass gives σ (dominant at short intervals) apart from q (long
-   intervals), without inheriting the first pass's guessed noise as a normalised innovation
-   test would. σ is floored at ``SIGMA_FLOOR_M``: reported positions carry time-stamp
-   latency and stale reports that the tracker must absorb and the bulk of the residuals hides.
+   intervals). σ is floored at ``SIGMA_FLOOR_M``: reported positions carry time-stamp latency
+   and stale reports that the tracker must absorb and the bulk of the residuals hides.
    During the q search (step 4) ``clutter_density`` is the density at which a report just
    inside the chi-square gate of a track with measurement noise alone scores as well as a new
-   track (GNN cost zero there): ``λ = P_D / (1 - P_D P_G) · exp(-γ / 2) / (2π σ²)``
-   (:func:`gate_edge_density`).
+   track: ``λ = P_D / (1 - P_D P_G) · exp(-γ / 2) / (2π σ²)`` (:func:`gate_edge_density`).
 4. **Process noise q by the tracker's own likelihood, among the runs that need the fewest
    tracks** (:func:`fit_q`): the model of steps 1–3 tracks the first ``TRIAL_DETECTIONS``
    detections at the family's q, a decade below and a decade above (one more decade while an
    end wins, at most ``Q_DECADES`` from the family's value; an IMM keeps its quiet model and
    varies the manoeuvring one). Each run scores every detection by the tracker's own
-   density: the Gaussian innovation density of the track it updated, or the clutter /
-   new-track density λ for a detection that started a track or was left over
-   (:func:`q_trial`). Runs whose births lie within ``TIE_SIGMAS`` Poisson standard deviations
-   of the fewest are candidates; the likeliest of them is chosen, unless its paired gain per
-   detection over the family's value is within ``TIE_SIGMAS`` standard errors
-   (:func:`select_q`).
-5. **The clutter / new-track density of a JPDA run** follows the same rule with the gate
-   the tracker actually has: ``σ²`` is replaced by the steady-state innovation variance
-   ``S̄`` of the tuned CV model (the fitted q; for an IMM its quiet model, whose tighter gate
-   scores the reports it explains) at the median report interval
-   (:func:`steady_innovation_variance`). Why: a track's report is scored by
-   its Gaussian density under the predicted innovation covariance, not under σ²; with 20 s
-   between OpenSky reports ``√S̄`` is ~1 km against σ = 25 m, a report's density inside the
-   gate was of the order of the σ-based λ, its summed JPDA association probability fell below
-   1/2 and it started a duplicate track (756 confirmed tracks for 84 ids). With ``S̄`` the
-   tie sits on the gate of the track as predicted at the report interval, as the rule meant.
-   The q trials keep the σ-based λ (``S̄`` needs the q they search).
+   density: the Gaussian innovation density of the track it updated, or λ for a detection
+   that started a track or was left over (:func:`q_trial`). Runs whose births lie within
+   ``TIE_SIGMAS`` Poisson standard deviations of the fewest are candidates; the likeliest of
+   them is chosen, unless its paired gain per detection over the family's value is within
+   ``TIE_SIGMAS`` standard errors (:func:`select_q`). The likelihood alone would prefer a small
+   q (a lost report costs only ``log λ``); births alone would not see neighbours' reports
+   entering wider gates.
+5. **The clutter / new-track density of a JPDA run** follows the same rule with the gate the
+   tracker actually has: ``σ²`` is replaced by the steady-state innovation variance ``S̄`` of
+   the tuned CV model (an IMM's quiet model) at the median report interval
+   (:func:`steady_innovation_variance`), so that a report inside the gate of a track as
+   predicted over a report interval is not shared with a new track.
 6. **GNN's competing-report density per track** for the CV family
    (``TrackerConfig.gnn_density_at_gate``): each track's λ is the one at which a report on the
    edge of its own predicted gate ties a miss, so that any report inside a gate is worth
-   assigning. With the one σ-based λ, a track whose prediction has spread (10 s ADS-B
-   reports: ``√S`` ~ 400 m against σ = 25 m) kept a report only below a normalised distance
-   of about 7 while its gate admits 18.4; the reports it left started duplicate tracks (GNN
-   on the OpenSky file: 23 id switches and 106 tracks for 84 aircraft against JPDA's 15 and
-   98; with the rule GNN scores as JPDA there, on all six OpenSky parts). The IMM (ships)
-   family keeps the σ-based λ: in a harbour the competitors of a report are the neighbouring
-   ships, whose reports the per-track rule lets a manoeuvring-model track take (Solent HOTA
-   0.597 to 0.571, MOTA 0.589 to 0.622; the parts of both files chose this split, none
-   judged it).
+   assigning. The IMM (ships) family keeps the σ-based λ: in a harbour the competitors of a
+   report are the neighbouring ships.
 
 The tuning sees the reports as read, stale repeats included (the tracker skips them,
-:func:`navtrack.io.tracks.stale_repeats`): without them the first 1500 OpenSky reports no
-longer tell q = 30 from 300 by births (71 against 65, within the tie), the search takes 30 and
-the whole file then needs 146 tracks against 104 (HOTA 0.877 against 0.932).
-
-Why this criterion. The likelihood alone is not enough: a too small q buys a sharper density
-for the bulk of the reports (straight flight, steady courses) and pays only ``log λ`` for each
-report it loses, so on the OpenSky file it falls steadily with q (−11.9 per report at
-q = 3 m²/s³, −14.1 at 300) while MOTA rises (first half: 0.70 at q = 1, 0.91 at 300): the 11 % of
-OpenSky reports that repeat the previous position (stale reports) must be held by the gate.
-What a lost target costs shows in the births instead (315 tracks started at q = 3 against 69
-at 300 on the first 2000 OpenSky reports): the tracker needs more tracks to explain the same
-reports. Births alone do not decide either: on the AIS file they fall slowly as the gates
-widen (59, 56, 54 for q = 1e-3, 1e-2, 1e-1), while the wider gates start to let neighbouring
-ships' reports in, which the likelihood sees (its maximum is at 1e-2, where MOTA is too).
-Rejected before: the NIS of confirmed updates brought to its chi-square value (tracks that
-lose their target leave no innovation to count: q = 10 on OpenSky, MOTA 0.81 against 0.92 at
-300), the largest q before gates share reports (not monotone in q), and the q of the
-three-point fit of step 3 (the bulk again: 2e-13 m²/s³ on OpenSky, 0.4 on Solent where 1e-2
-is best).
-
-Step 5 adds no constant. Its interval (the median) was fixed from the OpenSky diagnosis
-before any benchmark run and judged on the second halves, the 20 s OpenSky part and the
-regional parts (docs/tracking.md); its IMM model and its restriction to JPDA were not: the
-manoeuvring model lowered MOTA on the Solent second half and west part (GNN 0.505 to 0.491
-and 0.501, JPDA 0.496 to 0.486, 0.471 to 0.469), the quiet model less on GNN west (0.499)
-and JPDA h2 (0.494) but more on JPDA west (0.459), and GNN then kept the σ-based λ, so
-those Solent parts judged the first choices and chose the last. Which data chose the
-constants:
-``COAST_INTERVALS`` (2, from 1.5–6), ``SAMPLE_DETECTIONS`` (1500, from 4000) and
-``TRIAL_DETECTIONS`` (from the run time on the Solent file, and the
-≥ 1500 detections the OpenSky trials need to tell q = 30 from 300), ``TIE_SIGMAS`` and
-``Q_DECADES`` were chosen on the first halves in time of the Solent AIS and OpenSky files; the
-first-pass scaling of step 1 (with ``BOOT_Q_MIN_TOP``) and the detection (rather than
-scan-window) count of the trial sample were chosen while diagnosing the Solent west half,
-which is therefore not a clean hold-out for them. The other constants are older (set while
-looking at the first halves and the whole files). docs/tracking.md scores the
-rules on the second halves and on variants of both files, and says what that leaves untested.
+:func:`navtrack.io.tracks.stale_repeats`). How each constant was chosen, on which data, and
+which data judged it: ``docs/tracking.md``, "Method notes" and "Which data chose what".
 """
 
 from __future__ import annotations
@@ -158,7 +99,10 @@ BOOT_Q_MIN_TOP = 1.0  # m²/s³, the manoeuvring first-pass model never below th
 COAST_INTERVALS = 2.0
 STATIONARY_MPS = 0.5
 IMM_MIN_SHARE = 0.1
-AIRCRAFT_MPS = 50.0
+AIRCRAFT_MPS = 25.0
+"""Median speed (m/s) above which the motion family is the aircraft model: above the fastest
+ships (high-speed craft, ~20 m/s) and below fixed-wing aircraft in flight (docs/tracking.md,
+"Which data chose what")."""
 AIRCRAFT_Q = 300.0  # m²/s³, TrackerConfig.for_aircraft
 SHIP_IMM_Q = (1e-5, 1e-2)  # m²/s³, TrackerConfig.for_ships
 SIGMA_FLOOR_M = 25.0
@@ -465,65 +409,17 @@ def auto_config(
     Z = np.asarray(z, dtype=float)
     if t.size == 0:
         raise ValueError("no detections to tune on")
-    span_end = t[0] + SAMPLE_SPAN * (t[-1] - t[0])
-    k = min(int(np.searchsorted(t, span_end, "right")), sample_detections)
-    ts, zs = t[:k], Z[:k]
-    vs = None if velocity is None else np.asarray(velocity, dtype=float)[:k]
-    speed = None if vs is None else np.hypot(vs[:, 0], vs[:, 1])
-    speed = None if speed is None or np.isfinite(speed).sum() < 20 else speed[np.isfinite(speed)]
-    v_boot = BOOT_SPEED_MPS if speed is None else float(1.5 * np.quantile(speed, 0.99))
-    q_top = float(np.clip(BOOT_Q[2] * (v_boot / BOOT_SPEED_MPS) ** 2, BOOT_Q_MIN_TOP, BOOT_Q[2]))
-    boot = TrackerConfig(
-        motion=constant_velocity(2, BOOT_Q[0], "continuous"),
-        sigma_m=BOOT_SIGMA_M,
-        imm_q=(BOOT_Q[0], BOOT_Q[1], q_top),
-        clutter_density=1e-9,
-        init_max_speed_mps=max(v_boot, 1.0),
-        init_max_dt_s=400.0,
-        confirm_window_s=900.0,
-        max_coast_s=600.0,
-        max_position_std_m=1e6,  # tracks end by coasting only (the q = 100 model of a moored
-        init_from="unassociated",  # ship's track grows km wide between its reports)
-        scan_window_s=1.0,
-    )
-    first = run_tracker(ts, zs, boot, velocity=vs)
-    tri = track_triplets(ts, zs, first)
-    if tri.shape[0] < MIN_TRIPLETS and k < min(t.size, sample_detections):
-        k = min(t.size, sample_detections)  # a short file: the whole of it (capped)
-        ts, zs = t[:k], Z[:k]
-        vs = None if velocity is None else np.asarray(velocity, dtype=float)[:k]
-        first = run_tracker(ts, zs, boot, velocity=vs)
-        tri = track_triplets(ts, zs, first)
-    if tri.shape[0] >= MIN_TRIPLETS:
-        fit = fit_noise(tri)
-    else:  # too few tracks to fit: the floor below sets σ (NaN shows it in the summary)
-        fit = NoiseFit(float("nan"), float("nan"), int(tri.shape[0]), 0)
-    dt_all, dt_track = _track_intervals(ts, first)
-    dt50, dt95 = (
-        (float(np.quantile(dt_track, 0.5)), float(np.quantile(dt_track, 0.95)))
-        if dt_track.size
-        else (60.0, 60.0)
-    )
-    dt10 = float(np.quantile(dt_all, 0.1)) if dt_all.size else 0.0
-    # the coast spans the long gaps of a track, not only its typical interval (step 1)
-    gap99 = float(np.quantile(dt_all, 0.99)) if dt_all.size else dt95
-    source = "reported"
-    if speed is None:
-        conf = first.track_confirmed
-        speed, source = np.hypot(first.track_x[conf, 1], first.track_x[conf, 3]), "tracks"
-    v50, v99 = (
-        (float(np.quantile(speed, 0.5)), float(np.quantile(speed, 0.99)))
-        if speed.size
-        else (10.0, BOOT_SPEED_MPS)
-    )
-    still = float(np.mean(speed < STATIONARY_MPS)) if speed.size else 0.0
-    family: Literal["cv", "imm"]
-    if v50 > AIRCRAFT_MPS:
-        q, imm_q, family = AIRCRAFT_Q, None, "cv"
-    elif min(still, 1 - still) >= IMM_MIN_SHARE:
-        q, imm_q, family = SHIP_IMM_Q[0], SHIP_IMM_Q, "imm"
-    else:
-        q, imm_q, family = SHIP_IMM_Q[1], None, "cv"
+    V = None if velocity is None else np.asarray(velocity, dtype=float)
+    first = _first_pass(t, Z, V, sample_detections)
+    fit = (
+        fit_noise(first.triplets)
+        if first.triplets.shape[0] >= MIN_TRIPLETS
+        else NoiseFit(float("nan"), float("nan"), int(first.triplets.shape[0]), 0)
+    )  # too few tracks to fit: the floor sets σ (NaN shows it in the summary)
+    st = _first_pass_statistics(first)
+    dt50, dt95, dt10, gap99 = st.dt50, st.dt95, st.dt10, st.gap99
+    v50, v99, still = st.v50, st.v99, st.still
+    q, imm_q, family = _motion_family(v50, still)
     sigma = SIGMA_FLOOR_M if not fit.sigma_m > SIGMA_FLOOR_M else fit.sigma_m
     pd, pg = 0.9, 0.9999
     coast = COAST_INTERVALS * max(dt95, gap99)
@@ -545,11 +441,111 @@ def auto_config(
         scan_window_s=min(dt10, 10.0),
     )
     kq = min(t.size, TRIAL_DETECTIONS)
-    vq = None if velocity is None else np.asarray(velocity, dtype=float)[:kq]
+    vq = None if V is None else V[:kq]
     gnn = replace(cfg, associator="gnn")  # the trials, like the first pass, use GNN
     q_fit, trials = fit_q(t[:kq], Z[:kq], vq, gnn, q if imm_q is None else imm_q[1])
     cfg = replace(_with_q(cfg, q_fit), gnn_density_at_gate=imm_q is None)
     if associator == "jpda":  # module notes, step 5
         s_bar = steady_innovation_variance(q_fit if imm_q is None else imm_q[0], sigma, dt50)
         cfg = replace(cfg, clutter_density=gate_edge_density(pd, pg, s_bar))
-    return AutoTune(cfg, family, fit, dt50, dt95, v50, v99, still, source, k, trials)
+    return AutoTune(cfg, family, fit, dt50, dt95, v50, v99, still, st.source, first.k, trials)
+
+
+@dataclass(frozen=True, slots=True)
+class _Statistics:
+    """Report intervals (s) and speeds (m/s) of the first pass (module notes, steps 1-2)."""
+
+    dt50: float
+    dt95: float
+    dt10: float
+    gap99: float
+    v50: float
+    v99: float
+    still: float
+    source: str
+
+
+def _first_pass_statistics(first: _FirstPass) -> _Statistics:
+    """Median and 95 % point of the tracks' median report intervals, 10 % and 99 % points of
+    all their intervals; median and 99 % point of the speeds (reported, else the confirmed
+    tracks'), and the share below ``STATIONARY_MPS``."""
+    dt_all, dt_track = _track_intervals(first.t_s, first.result)
+    dt50, dt95 = (
+        (float(np.quantile(dt_track, 0.5)), float(np.quantile(dt_track, 0.95)))
+        if dt_track.size
+        else (60.0, 60.0)
+    )
+    dt10 = float(np.quantile(dt_all, 0.1)) if dt_all.size else 0.0
+    # the coast spans the long gaps of a track, not only its typical interval (step 1)
+    gap99 = float(np.quantile(dt_all, 0.99)) if dt_all.size else dt95
+    speed, source = first.speed, "reported"
+    if speed is None:
+        conf = first.result.track_confirmed
+        speed, source = (
+            np.hypot(first.result.track_x[conf, 1], first.result.track_x[conf, 3]),
+            "tracks",
+        )
+    v50, v99 = (
+        (float(np.quantile(speed, 0.5)), float(np.quantile(speed, 0.99)))
+        if speed.size
+        else (10.0, BOOT_SPEED_MPS)
+    )
+    still = float(np.mean(speed < STATIONARY_MPS)) if speed.size else 0.0
+    return _Statistics(dt50, dt95, dt10, gap99, v50, v99, still, source)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _FirstPass:
+    """The generic first pass of :func:`auto_config` on the first ``k`` detections."""
+
+    k: int
+    t_s: FloatArray
+    result: TrackerResult
+    triplets: FloatArray
+    speed: FloatArray | None  # finite reported speeds of the sample (None: too few)
+
+
+def _first_pass(
+    t: FloatArray, Z: FloatArray, V: FloatArray | None, sample_detections: int
+) -> _FirstPass:
+    """Run the first-pass IMM (module notes) on the sample; a short file: the whole of it."""
+    span_end = t[0] + SAMPLE_SPAN * (t[-1] - t[0])
+    k = min(int(np.searchsorted(t, span_end, "right")), sample_detections)
+    vs = None if V is None else V[:k]
+    speed = None if vs is None else np.hypot(vs[:, 0], vs[:, 1])
+    speed = None if speed is None or np.isfinite(speed).sum() < 20 else speed[np.isfinite(speed)]
+    v_boot = BOOT_SPEED_MPS if speed is None else float(1.5 * np.quantile(speed, 0.99))
+    q_top = float(np.clip(BOOT_Q[2] * (v_boot / BOOT_SPEED_MPS) ** 2, BOOT_Q_MIN_TOP, BOOT_Q[2]))
+    boot = TrackerConfig(
+        motion=constant_velocity(2, BOOT_Q[0], "continuous"),
+        sigma_m=BOOT_SIGMA_M,
+        imm_q=(BOOT_Q[0], BOOT_Q[1], q_top),
+        clutter_density=1e-9,
+        init_max_speed_mps=max(v_boot, 1.0),
+        init_max_dt_s=400.0,
+        confirm_window_s=900.0,
+        max_coast_s=600.0,
+        max_position_std_m=1e6,  # tracks end by coasting only (the q = 100 model of a moored
+        init_from="unassociated",  # ship's track grows km wide between its reports)
+        scan_window_s=1.0,
+    )
+    first = run_tracker(t[:k], Z[:k], boot, velocity=vs)
+    tri = track_triplets(t[:k], Z[:k], first)
+    if tri.shape[0] < MIN_TRIPLETS and k < min(t.size, sample_detections):
+        k = min(t.size, sample_detections)  # a short file: the whole of it (capped)
+        vs = None if V is None else V[:k]
+        first = run_tracker(t[:k], Z[:k], boot, velocity=vs)
+        tri = track_triplets(t[:k], Z[:k], first)
+    return _FirstPass(k, t[:k], first, tri, speed)
+
+
+def _motion_family(
+    v50: float, still: float
+) -> tuple[float, tuple[float, float] | None, Literal["cv", "imm"]]:
+    """Starting q, IMM levels (None: one CV model) and family from the median speed and the
+    stationary share (module notes, step 2)."""
+    if v50 > AIRCRAFT_MPS:
+        return AIRCRAFT_Q, None, "cv"
+    if min(still, 1 - still) >= IMM_MIN_SHARE:
+        return SHIP_IMM_Q[0], SHIP_IMM_Q, "imm"
+    return SHIP_IMM_Q[1], None, "cv"
