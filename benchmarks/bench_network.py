@@ -27,8 +27,8 @@ import time
 from pathlib import Path
 
 from navtrack.data import sample_path
+from navtrack.experiments import network
 from navtrack.experiments.runner import run_monte_carlo
-from navtrack.gnss import network
 from navtrack.gnss.rinex.obs import read_obs
 from navtrack.gnss.spp import SppConfig
 
@@ -56,7 +56,7 @@ def _copies(root: Path, n: int, full: bool) -> list[Path]:
 
 def _loop(jobs: list[network.StationJob], config: SppConfig, out: Path) -> None:
     out.mkdir()
-    run_monte_carlo(network._solve_station, len(jobs), 0, (tuple(jobs), config, str(out)),
+    run_monte_carlo(network.solve_station, len(jobs), 0, (tuple(jobs), config, str(out)),
                     backend="loop", progress=False)  # fmt: skip
 
 

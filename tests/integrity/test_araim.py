@@ -125,13 +125,14 @@ def test_araim_on_the_sample_bounds_and_excludes_an_injected_fault(tmp_path: Pat
     from navtrack.data import sample_path
     from navtrack.gnss.rinex import read_obs
     from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.spp import SppConfig, solve_spp
+    from navtrack.gnss.spp import SppConfig
     from navtrack.integrity.raim import RaimConfig
+    from navtrack.positioning import solve_positions
 
     obs = read_obs(_faulty_sample(tmp_path))
     nav = read_nav(sample_path("SEPT078M.21P"))
     cfg = SppConfig(systems="GE", iono="ionofree")
-    res = solve_spp(obs, nav, config=cfg, raim=RaimConfig("araim"))
+    res = solve_positions(obs, nav, config=cfg, raim=RaimConfig("araim"))
     integ = res.integrity
     assert integ is not None
     sats = list(res.sats)

@@ -31,6 +31,7 @@ if TYPE_CHECKING:
     from navtrack.gnss.rinex.nav import NavData
     from navtrack.gnss.sp3 import Sp3
     from navtrack.gnss.spp import SppConfig, SppResult
+    from navtrack.positioning import PositionSolution
 
 EXAMPLE_OBS = "SEPT078M_120.21O"
 EXAMPLE_NAV = "SEPT078M.21P"
@@ -191,7 +192,7 @@ def _raim_config(args: argparse.Namespace) -> Any:
         raise SystemExit(f"navtrack pos: --raim {args.raim}: {exc}") from None
 
 
-def _print_raim_summary(result: SppResult, hal_m: float = 40.0, val_m: float = 35.0) -> None:
+def _print_raim_summary(result: PositionSolution, hal_m: float = 40.0, val_m: float = 35.0) -> None:
     """Integrity lines of the summary: epochs per RAIM status, exclusions per satellite,
     median protection levels, availability (HPL <= HAL and VPL <= VAL; HPL <= HAL)."""
     import numpy as np
@@ -216,7 +217,7 @@ def _print_raim_summary(result: SppResult, hal_m: float = 40.0, val_m: float = 3
     )
 
 
-def _print_misleading(result: SppResult, ref: tuple[float, float, float]) -> None:
+def _print_misleading(result: PositionSolution, ref: tuple[float, float, float]) -> None:
     """Summary line: epochs whose status is ``ok`` or ``excluded`` and whose error against the
     reference exceeds the protection level (misleading information)."""
     import numpy as np
@@ -336,10 +337,10 @@ def _input_warnings(
 ) -> list[str]:
     """What the inputs leave out of the model or the solution: a broadcast ionosphere without
     parameters, a system asked for that the file does not hold."""
-    from navtrack.gnss.spp import _klobuchar_params
+    from navtrack.gnss.spp import klobuchar_params
 
     out = []
-    if config.iono == "klobuchar" and not any(_klobuchar_params(n.iono) is not None for n in navs):
+    if config.iono == "klobuchar" and not any(klobuchar_params(n.iono) is not None for n in navs):
         given = "no navigation file" if not navs else "no ionosphere parameters in the navigation"
         out.append(
             f"ionosphere not modelled: {given} (Klobuchar needs them); give a NAV file or "
@@ -366,7 +367,8 @@ def _error_stats(pos_m: FloatArray, ref: tuple[float, float, float]) -> dict[str
 def run_pos(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from navtrack.gnss.spp import STATUS_NAMES, solution_frame
+    from navtrack.gnss.spp import STATUS_NAMES
+    from navtrack.positioning import solution_frame
 
     # first: a greedy --ts/--te may have taken the input files
     window = _time_window(args)
@@ -677,9 +679,10 @@ def _solve(
     progress: bool,
     raim: Any = None,
     ephemeris: Mapping[str, EphemerisTable] | None = None,
-) -> SppResult:
+) -> PositionSolution:
     """Solve all epochs, with a progress bar on files of more than one block."""
-    from navtrack.gnss.spp import CHUNK_EPOCHS, solve_spp
+    from navtrack.gnss.spp import CHUNK_EPOCHS
+    from navtrack.positioning import solve_positions
 
     n = len(obs.t_gps_s)
     with contextlib.ExitStack() as stack:
@@ -694,7 +697,7 @@ def _solve(
             def report(done: int, _total: int) -> None:
                 bar.update(done - bar.n)
 
-        return solve_spp(
+        return solve_positions(
             obs,
             navs,
             sp3=sp3,

@@ -50,7 +50,7 @@ from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.integrity.ism import ErrorModel, Ism, error_model
 
 if TYPE_CHECKING:
-    from navtrack.gnss.spp import Estimate, Measurements
+    from navtrack.gnss.spp import Measurements, PositionEstimate
 
 __all__ = [
     "AraimEpoch",
@@ -455,7 +455,7 @@ class AraimResult:
 
 
 def araim(
-    estimate: Estimate,
+    estimate: PositionEstimate,
     sats: tuple[str, ...],
     model: ErrorModel,
     ism: Ism,
@@ -465,7 +465,7 @@ def araim(
 
     Parameters
     ----------
-    estimate : Estimate
+    estimate : PositionEstimate
         Linearisation point: design matrix, residuals and used satellites.
     sats : tuple of str, length S
     model : ErrorModel
@@ -563,7 +563,7 @@ def araim(
     return AraimResult(**out, in_model=model.covered)
 
 
-def araim_model(meas: Measurements, estimate: Estimate, ism: Ism) -> ErrorModel:
+def araim_model(meas: Measurements, estimate: PositionEstimate, ism: Ism) -> ErrorModel:
     """The error model of an estimate's epochs (geodetic position from its state)."""
     from navtrack.geodesy import ecef_to_geodetic
 

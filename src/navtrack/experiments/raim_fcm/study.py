@@ -23,8 +23,8 @@ import numpy as np
 
 from navtrack.geodesy import ecef_to_enu
 from navtrack.gnss.spp import (
-    Estimate,
     Measurements,
+    PositionEstimate,
     SppConfig,
     SppStatus,
     code_pseudoranges,
@@ -146,7 +146,7 @@ class StationData:
     name: str
     meas: Measurements
     config: SppConfig
-    clean: Estimate
+    clean: PositionEstimate
     variance_factor: float
     ref_xyz_m: np.ndarray
 
@@ -178,7 +178,11 @@ def _raim(params: RaimFcmParams, method: str, s2: float) -> RaimConfig:
 
 
 def _trial_outcomes(
-    data: StationData, est: Estimate, meas: Measurements, fault: np.ndarray, raim: RaimConfig
+    data: StationData,
+    est: PositionEstimate,
+    meas: Measurements,
+    fault: np.ndarray,
+    raim: RaimConfig,
 ) -> dict[str, Any]:
     """Counts and per-trial errors and protection levels of one method on a batch of epochs."""
     final, _, integ = monitor(meas, est, data.config, raim)

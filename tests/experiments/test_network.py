@@ -13,7 +13,7 @@ import pytest
 from navtrack.cli import main
 from navtrack.data import sample_path
 from navtrack.errors import FileFormatError
-from navtrack.gnss.network import file_kind, solve_network, station_jobs
+from navtrack.experiments.network import file_kind, solve_network, station_jobs
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
 from navtrack.gnss.spp import SppConfig, solve_spp
