@@ -22,7 +22,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from navtrack.cli.pos import add_reference_options
+from navtrack.cli._options import add_reference_options, reference
 
 if TYPE_CHECKING:
     from navtrack._typing import FloatArray
@@ -160,9 +160,7 @@ def reference_errors(
         xyz = ref[["x_m", "y_m", "z_m"]].to_numpy()[b]
         err[a] = np.linalg.norm(pos_m[a] - xyz, axis=1)
         return err, f"{args.ref_pos} ({a.size} epochs in common)"
-    from navtrack.cli.pos import _reference
-
-    point = _reference(args)
+    point = reference(args)
     if point is None:
         return None
     return np.linalg.norm(pos_m - np.asarray(point), axis=1), "reference point"
@@ -432,9 +430,7 @@ def run_ppp(args: argparse.Namespace) -> int:
             "accuracy: float ambiguities and unmodelled errors are not in it; compare --ref)"
         )
         print(f"final ZWD      {result.zwd_m[last[-1]]:.3f} m")
-    from navtrack.cli.pos import _reference
-
-    ref = _reference(args) if args.ref_pos is None else None
+    ref = reference(args) if args.ref_pos is None else None
     if ref is not None and last.size:
         print("convergence    time (s)  horizontal  up      3D   (m, error vs ref)")
         for t, h, u, d in convergence(result, np.asarray(ref)):
