@@ -402,8 +402,6 @@ class _AgpsModel:
     def __call__(
         self, x: FloatArray, idx: IntArray
     ) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray]:
-        from navtrack.gnss.corrections import geometric_range
-
         p = self.problem
         rcv = x[:, :3]
         rho, los = geometric_range(p.sat_pos_m[idx], rcv[:, None, :])
