@@ -11,6 +11,7 @@ from scipy.special import chdtrc, chndtr, gammainc, gammaincinv
 from navtrack.estimation.chi2 import (
     chi2_cdf,
     chi2_quantile,
+    chi2_quantile_exact,
     chi2_threshold,
     ncx2_cdf,
     noncentrality_bias,
@@ -70,3 +71,11 @@ def test_noncentrality_bias_misses_with_pmd() -> None:
 def test_quantile_matches_rtklib_table() -> None:
     # RTKLIB 2.4.3 pntpos.c chisqr[] (alpha = 0.001) starts 10.8, 13.8, 16.3
     assert [round(chi2_quantile(0.999, k), 1) for k in (1, 2, 3)] == [10.8, 13.8, 16.3]
+
+
+def test_exact_quantile_inverts_the_cdf_and_agrees_with_the_bisection() -> None:
+    for k in DOFS:
+        for p in (1e-4, 0.5, 0.99, 0.9997):
+            q = chi2_quantile_exact(p, k)
+            assert gammainc(0.5 * k, 0.5 * q) == pytest.approx(p, rel=1e-12)
+            assert chi2_quantile(p, k) == pytest.approx(q, rel=2e-10)
