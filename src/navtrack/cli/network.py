@@ -7,13 +7,13 @@ import argparse
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from navtrack.experiments.network import StationJob
     from navtrack.gnss.spp import SppConfig
+    from navtrack.positioning.stations import StationJob
 
 
 def network_jobs(args: argparse.Namespace) -> list[StationJob] | None:
     """The stations of ``pos``'s files when they hold several observation files, else None."""
-    from navtrack.experiments.network import station_jobs
+    from navtrack.positioning.stations import station_jobs
 
     files = [args.obs, *args.nav]
     if len(files) < 2:

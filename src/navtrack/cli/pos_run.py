@@ -11,7 +11,7 @@ import math
 import sys
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -43,12 +43,13 @@ from navtrack.gnss.spp import (
     observation_codes,
     subset_epochs,
 )
-from navtrack.integrity.ism import read_ism
-from navtrack.integrity.raim import RaimConfig
 from navtrack.io.rtklib_conf import read_conf
 from navtrack.io.solution import FORMATS, write_solution
 from navtrack.positioning import PositionSolution, solution_frame, solve_positions
 from navtrack.timescale import parse_gpst, select_epochs, to_datetime64, week_tow
+
+if TYPE_CHECKING:
+    from navtrack.integrity.raim import RaimConfig
 
 __all__ = ["run_pos"]
 
@@ -149,6 +150,10 @@ def _raim_config(args: argparse.Namespace) -> RaimConfig | None:
     """The RaimConfig of ``--raim/--pfa/--pmd/--ism`` (None for ``off``)."""
     if args.raim == "off":
         return None
+    # integrity monitoring is imported only when asked for: pos's start-up without RAIM
+    from navtrack.integrity.ism import read_ism
+    from navtrack.integrity.raim import RaimConfig
+
     try:
         ism = None if args.ism is None else read_ism(args.ism)
     except NavtrackError as exc:

@@ -18,7 +18,6 @@ from navtrack.gnss.rinex.nav import NavData
 from navtrack.gnss.sp3 import Sp3
 from navtrack.gnss.spp import STATUS_NAMES, SppConfig, SppResult, klobuchar_params
 from navtrack.gnss.velocity import doppler_velocity
-from navtrack.integrity.raim import RaimStatus
 from navtrack.positioning import PositionSolution
 
 __all__ = [
@@ -165,8 +164,7 @@ def print_integrity(
     if ref is None:
         return
     enu = ecef_to_enu(result.pos_m, np.asarray(ref))
-    usable = (integ.status == RaimStatus.OK) | (integ.status == RaimStatus.EXCLUDED)
-    ok = usable & np.isfinite(enu[:, 0])
+    ok = integ.usable & np.isfinite(enu[:, 0])
     with np.errstate(invalid="ignore"):
         mi_h = int(np.sum(ok & (np.hypot(enu[:, 0], enu[:, 1]) > integ.hpl_m)))
         mi_v = int(np.sum(ok & (np.abs(enu[:, 2]) > integ.vpl_m)))

@@ -62,8 +62,6 @@ __all__ = [
     "Monitor",
     "RaimConfig",
     "RaimStatus",
-    "concatenate_integrity",
-    "integrity_columns",
     "monitor",
     "variance_factor",
 ]
@@ -204,46 +202,50 @@ class IntegrityResult:
         counts = np.bincount(self.status.astype(np.int64), minlength=len(RaimStatus))
         return {name: int(counts[i]) for i, name in enumerate(STATUS_NAMES)}
 
+    @classmethod
+    def concatenate(cls, parts: list[IntegrityResult]) -> IntegrityResult:
+        """Join the integrity of consecutive epoch blocks (same satellites and method)."""
+        if not parts:
+            raise ValueError("parts: need at least one result")
+        cat = {
+            name: np.concatenate([getattr(p, name) for p in parts])
+            for name in cls.__dataclass_fields__
+            if name != "method"
+        }
+        return cls(method=parts[0].method, **cat)
+
+    def frame_columns(self, sats: tuple[str, ...]) -> dict[str, np.ndarray]:
+        """Solution-frame columns: ``raim_status`` (name), ``excluded`` (space-separated ids of
+        the satellites ``sats`` of the satellite axis), ``hpl_m``, ``vpl_m``, ``test_stat``,
+        ``threshold``, ``emt_m``."""
+        names = np.array(STATUS_NAMES, dtype=object)[self.status.astype(np.int64)]
+        ids = np.array(sats, dtype=object)
+        excluded = np.array([" ".join(ids[row]) for row in self.excluded], dtype=object)
+        return {
+            "raim_status": names,
+            "excluded": excluded,
+            "hpl_m": self.hpl_m,
+            "vpl_m": self.vpl_m,
+            "test_stat": self.test_stat,
+            "threshold": self.threshold,
+            "emt_m": self.emt_m,
+        }
+
+    @property
+    def usable(self) -> BoolArray:
+        """Epochs whose status is ``ok`` or ``excluded``: a position with protection levels."""
+        return np.asarray((self.status == RaimStatus.OK) | (self.status == RaimStatus.EXCLUDED))
+
     def availability(self, hal_m: float = 40.0, val_m: float = 35.0) -> dict[str, float]:
         """Fractions of all epochs whose integrity supports an operation: ``vertical``
         (status ``ok`` or ``excluded``, ``HPL <= hal_m`` and ``VPL <= val_m``; LPV-200 with
         the defaults) and ``horizontal`` (``HPL <= hal_m`` only)."""
         n = max(self.status.size, 1)
-        usable = (self.status == RaimStatus.OK) | (self.status == RaimStatus.EXCLUDED)
+        usable = self.usable
         with np.errstate(invalid="ignore"):
             h = usable & (self.hpl_m <= hal_m)
             v = h & (self.vpl_m <= val_m)
         return {"vertical": float(v.sum() / n), "horizontal": float(h.sum() / n)}
-
-
-def concatenate_integrity(parts: list[IntegrityResult]) -> IntegrityResult:
-    """Join the integrity of consecutive epoch blocks (same satellites and method)."""
-    if not parts:
-        raise ValueError("parts: need at least one result")
-    cat = {
-        name: np.concatenate([getattr(p, name) for p in parts])
-        for name in IntegrityResult.__dataclass_fields__
-        if name != "method"
-    }
-    return IntegrityResult(method=parts[0].method, **cat)
-
-
-def integrity_columns(integrity: IntegrityResult, sats: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """Solution-frame columns of an integrity result: ``raim_status`` (name), ``excluded``
-    (space-separated satellite ids), ``hpl_m``, ``vpl_m``, ``test_stat``, ``threshold``,
-    ``emt_m``."""
-    names = np.array(STATUS_NAMES, dtype=object)[integrity.status.astype(np.int64)]
-    ids = np.array(sats, dtype=object)
-    excluded = np.array([" ".join(ids[row]) for row in integrity.excluded], dtype=object)
-    return {
-        "raim_status": names,
-        "excluded": excluded,
-        "hpl_m": integrity.hpl_m,
-        "vpl_m": integrity.vpl_m,
-        "test_stat": integrity.test_stat,
-        "threshold": integrity.threshold,
-        "emt_m": integrity.emt_m,
-    }
 
 
 # --------------------------------------------------------------------------- the stage

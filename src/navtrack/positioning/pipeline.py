@@ -12,15 +12,17 @@ experiments call it.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from navtrack._typing import FloatArray
+from navtrack._typing import FloatArray, Int8Array
 from navtrack.gnss.spp import (
     CHUNK_EPOCHS,
+    Measurements,
+    PositionEstimate,
     ProgressFn,
     SppConfig,
     SppResult,
@@ -30,19 +32,13 @@ from navtrack.gnss.spp import (
     validate,
 )
 from navtrack.gnss.spp import solution_frame as spp_solution_frame
-from navtrack.integrity.raim import (
-    IntegrityResult,
-    RaimConfig,
-    concatenate_integrity,
-    integrity_columns,
-    monitor,
-)
 
 if TYPE_CHECKING:
     from navtrack.gnss.ephemeris import EphemerisTable
     from navtrack.gnss.observations import Observations
     from navtrack.gnss.rinex.nav import NavData
     from navtrack.gnss.sp3 import Sp3
+    from navtrack.integrity.raim import IntegrityResult, RaimConfig
 
 __all__ = ["PositionSolution", "solution_frame", "solve_positions"]
 
@@ -65,11 +61,6 @@ class PositionSolution(SppResult):
     def frame_columns(self) -> dict[str, np.ndarray]:
         """The solution frame with the integrity columns (:func:`solution_frame`)."""
         return solution_frame(self)
-
-
-def _with_integrity(result: SppResult, integrity: IntegrityResult | None) -> PositionSolution:
-    fields = {f.name: getattr(result, f.name) for f in dataclasses.fields(SppResult)}
-    return PositionSolution(**fields, integrity=integrity)
 
 
 def solve_positions(
@@ -100,33 +91,49 @@ def solve_positions(
     PositionSolution
     """
     cfg = config or SppConfig()
+    check = _validation(cfg, raim)
     parts: list[SppResult] = []
     integrity: list[IntegrityResult] = []
     for block in estimated_blocks(
         obs, nav, sp3=sp3, config=cfg, x0_m=x0_m, ephemeris=ephemeris, chunk_epochs=chunk_epochs
     ):
-        meas, est = block.measurements, block.estimate
-        if raim is None:
-            parts.append(spp_result(meas, est, validate(est, cfg)))
-        else:
-            est, status, integ = monitor(meas, est, cfg, raim)
-            parts.append(spp_result(meas, est, status))
+        est, status, integ = check(block.measurements, block.estimate)
+        parts.append(spp_result(block.measurements, est, status))
+        if integ is not None:
             integrity.append(integ)
         if progress is not None:
             progress(block.done, block.total)
     result = parts[0] if len(parts) == 1 else concatenate_results(parts)
     joined = None
     if integrity:
-        joined = integrity[0] if len(integrity) == 1 else concatenate_integrity(integrity)
-    return _with_integrity(result, joined)
+        joined = integrity[0] if len(integrity) == 1 else type(integrity[0]).concatenate(integrity)
+    fields = {f.name: getattr(result, f.name) for f in dataclasses.fields(SppResult)}
+    return PositionSolution(**fields, integrity=joined)
+
+
+Validation = Callable[
+    [Measurements, PositionEstimate], tuple[PositionEstimate, Int8Array, "IntegrityResult | None"]
+]
+"""The validation stage of a block: its estimate (re-estimated after exclusion), the
+:class:`~navtrack.gnss.spp.SppStatus` of each epoch and the integrity (None without RAIM)."""
+
+
+def _validation(config: SppConfig, raim: RaimConfig | None) -> Validation:
+    """RTKLIB's validity tests, or integrity monitoring when ``raim`` is given."""
+    if raim is None:
+        return lambda meas, est: (est, validate(est, config), None)
+    # integrity monitoring is imported only when asked for: pos's start-up without RAIM
+    from navtrack.integrity.raim import monitor
+
+    return lambda meas, est: monitor(meas, est, config, raim)
 
 
 def solution_frame(result: SppResult) -> dict[str, np.ndarray]:
     """The solution frame of a result (:func:`navtrack.gnss.spp.solution_frame`) and, for a
     :class:`PositionSolution` with integrity monitoring, its columns ``raim_status`` (name),
     ``excluded``, ``hpl_m``, ``vpl_m``, ``test_stat``, ``threshold`` and ``emt_m``
-    (:func:`navtrack.integrity.raim.integrity_columns`)."""
+    (:meth:`navtrack.integrity.raim.IntegrityResult.frame_columns`)."""
     cols = spp_solution_frame(result)
     if isinstance(result, PositionSolution) and result.integrity is not None:
-        cols.update(integrity_columns(result.integrity, result.sats))
+        cols.update(result.integrity.frame_columns(result.sats))
     return cols
