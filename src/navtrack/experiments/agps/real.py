@@ -25,17 +25,19 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
 from navtrack.experiments.agps.simulation import SOLVER_NAMES
 from navtrack.geodesy import ecef_to_geodetic, enu_rotation
-from navtrack.gnss.agps import AgpsConfig, AgpsStatus
+from navtrack.gnss.agps import AgpsConfig, AgpsStatus, Solver
 from navtrack.gnss.spp import Measurements, SppConfig, solve_spp
 from navtrack.positioning.agps import assisted_pseudoranges, read_gps_measurements, solve_fixes
 
 __all__ = ["REAL_DATA_SETS", "RealDataSet", "fix_pairs", "real_data_study"]
+
+_SOLVERS = cast("tuple[Solver, ...]", SOLVER_NAMES)  # the solvers of the result arrays, in order
 
 
 @dataclass(frozen=True, slots=True)
@@ -281,20 +283,20 @@ def _solve_interval(
     enu = np.stack([dist * np.sin(az), dist * np.cos(az), np.zeros(n)], axis=1)
     cells = ref + enu @ rot
     for hh, dh in enumerate(height_offsets_m):
-        for j, solver in enumerate(SOLVER_NAMES):
+        for j, solver in enumerate(_SOLVERS):
             res = solve_fixes(
                 run.meas, run.y, run.epochs, run.sats, h_ref + dh, cells, solver, config
-            )  # type: ignore[arg-type]
+            )
             d = np.linalg.norm(res.pos_m - ref, axis=1)
             out.err[:n, j, ii, hh] = np.where(res.status == AgpsStatus.OK, d, np.nan)
             out.its[:n, j, ii, hh] = res.iterations
             out.sts[:n, j, ii, hh] = res.status
         if hh != zero_h:
             continue
-        for j, solver in enumerate(SOLVER_NAMES):
+        for j, solver in enumerate(_SOLVERS):
             res = solve_fixes(
                 run.meas, run.y_station, run.epochs, run.sats, h_ref + dh, cells, solver, config
-            )  # type: ignore[arg-type]
+            )
             d = np.linalg.norm(res.pos_m - ref, axis=1)
             out.cc[0][:n, j, ii] = np.where(res.status == AgpsStatus.OK, d, np.nan)
             out.cc[1][:n, j, ii] = res.iterations

@@ -303,6 +303,7 @@ def summary_lines(results: dict[str, Any]) -> list[str]:
 def write_figures(results: dict[str, Any], out_dir: Path) -> list[Path]:
     """Figs. 2 and 3 (mean error vs interval, heights 56/76 and 96/156 m) of the simulation,
     and the same for the real data at offsets +0/+100 m."""
+    # matplotlib: imported only when figures are written
     from navtrack.plots.canvas import new_figure, save_figure
 
     paths = []
