@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from navtrack.cli._options import add_out_option, is_android_log
+from navtrack.cli._options import add_out_option, add_reference_options, is_android_log, reference
 from navtrack.data import REFERENCE_XYZ_M, sample_path
 from navtrack.geodesy import ecef_to_geodetic, enu_rotation, geodetic_to_ecef
 from navtrack.gnss.agps import AgpsConfig, AgpsResult, AgpsStatus
@@ -106,9 +106,7 @@ def register(subparsers: Any) -> None:
         metavar="M",
         help="map: standard deviation of the cell position as prior, m (default 3000)",
     )
-    p.add_argument(
-        "--ref", nargs=3, type=float, metavar=("X", "Y", "Z"), help="reference, ECEF metres"
-    )
+    add_reference_options(p)
     p.set_defaults(func=run_agps)
 
 
@@ -139,7 +137,8 @@ def _example_args(args: argparse.Namespace) -> None:
     args.epochs = args.epochs or list(EXAMPLE[5:7])
     args.height = float(EXAMPLE[8]) if args.height is None else args.height
     args.approx = args.approx or [float(EXAMPLE[10]), float(EXAMPLE[11])]
-    args.ref = args.ref or list(REFERENCE_XYZ_M[EXAMPLE[0]])
+    if args.ref is None and args.ref_llh is None:
+        args.ref = list(REFERENCE_XYZ_M[EXAMPLE[0]])
 
 
 def _gps_time(text: str) -> float:
@@ -162,6 +161,7 @@ def run_agps(args: argparse.Namespace) -> int:
     if args.example:
         _example_args(args)
     sats = _check_args(args)
+    ref = reference(args)
     times = [_gps_time(t) for t in args.epochs]
     cfg = SppConfig(systems="G")
     _, _, meas = read_gps_measurements(args.obs, args.nav, cfg, android=is_android_log(args.obs))
@@ -190,7 +190,7 @@ def run_agps(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise SystemExit(f"navtrack agps: {exc}") from None
     dt = (meas.t_gps_s[epochs[1]] - meas.t_gps_s[epochs[0]]) / 60.0
-    record = _report(args, res, sats, dt, sigma_pr, sigma_from)
+    record = _report(args, res, sats, dt, (sigma_pr, sigma_from), ref)
     if args.out is not None:
         args.out.write_text(json.dumps(record, indent=2) + "\n")
         print(f"wrote       {args.out}")
@@ -269,10 +269,12 @@ def _report(
     res: AgpsResult,
     sats: list[str],
     dt: float,
-    sigma_pr: float,
-    sigma_from: str,
+    sigma: tuple[float, str],
+    ref: tuple[float, float, float] | None,
 ) -> dict[str, Any]:
-    """Print the fix (and its error against ``--ref``); the JSON record of ``--out``."""
+    """Print the fix (and its error against the reference); the JSON record of ``--out``.
+    ``sigma`` is the pseudorange noise (m) and where it comes from."""
+    sigma_pr, sigma_from = sigma
     status = AgpsStatus(int(res.status[0])).name.lower()
     record: dict[str, Any] = {
         "solver": args.solver,
@@ -312,10 +314,10 @@ def _report(
         "clock2_m": float(res.clock_m[0, 1]),
         "residual_m": float(res.residual_m[0]),
     })  # fmt: skip
-    if args.ref is not None:
-        ref = np.asarray(args.ref, dtype=float)
-        rl = ecef_to_geodetic(ref)
-        enu = enu_rotation(rl[0], rl[1]) @ (xyz - ref)
+    if ref is not None:
+        ref_m = np.asarray(ref, dtype=float)
+        rl = ecef_to_geodetic(ref_m)
+        enu = enu_rotation(rl[0], rl[1]) @ (xyz - ref_m)
         print(
             f"error       3-D {np.linalg.norm(enu):.1f} m  horizontal "
             f"{np.hypot(enu[0], enu[1]):.1f} m  (E {enu[0]:.1f}, N {enu[1]:.1f}, "

@@ -173,7 +173,7 @@ class SppConfig:
         epoch: where that first record is a Galileo F/NAV one, its ``BGD(E5b,E1)`` field is 0
         and RTKLIB applies no group delay to the E1 pseudorange (SEPT078M.21P: E03, E08, E15 and
         others).
-        sp3_needs_broadcast : bool
+    sp3_needs_broadcast : bool
         With SP3 orbits, use only satellites that also have a valid broadcast ephemeris (RTKLIB
         2.4.3 removes the satellite clock with the broadcast clock before interpolating SP3 and
         drops satellites without one; navtrack uses the SP3 clock and keeps them by default).
