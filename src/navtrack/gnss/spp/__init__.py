@@ -52,8 +52,7 @@ DOPs); J. Sanz Subirana et al., *GNSS Data Processing* vol. I, ESA TM-23, 2013, 
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 from navtrack._typing import FloatArray
 from navtrack.gnss.spp.config import (
@@ -132,8 +131,7 @@ __all__ = [
 ]
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class EstimatedBlock:
+class EstimatedBlock(NamedTuple):
     """Stages 1-4 of one block of epochs: its measurements, their estimate, and the number of
     epochs done with it (``done`` of ``total``)."""
 

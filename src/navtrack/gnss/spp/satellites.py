@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -189,8 +189,7 @@ def _broadcast(
     )
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class _SignalParameters:
+class _SignalParameters(NamedTuple):
     """Group delays, carrier frequencies, ionosphere scale and system error factors of the
     measured signals (fields as :class:`SatelliteStates`)."""
 
