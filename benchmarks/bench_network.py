@@ -27,10 +27,11 @@ import time
 from pathlib import Path
 
 from navtrack.data import sample_path
+from navtrack.experiments import network
 from navtrack.experiments.runner import run_monte_carlo
-from navtrack.gnss import network
 from navtrack.gnss.rinex.obs import read_obs
 from navtrack.gnss.spp import SppConfig
+from navtrack.positioning.stations import StationJob, station_jobs
 
 _DEFAULT_SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 SHARED = Path(os.environ.get("NAVTRACK_SHARED_DATA", _DEFAULT_SHARED)) / "gnss"
@@ -54,9 +55,9 @@ def _copies(root: Path, n: int, full: bool) -> list[Path]:
     return out
 
 
-def _loop(jobs: list[network.StationJob], config: SppConfig, out: Path) -> None:
+def _loop(jobs: list[StationJob], config: SppConfig, out: Path) -> None:
     out.mkdir()
-    run_monte_carlo(network._solve_station, len(jobs), 0, (tuple(jobs), config, str(out)),
+    run_monte_carlo(network.solve_station, len(jobs), 0, (tuple(jobs), config, str(out)),
                     backend="loop", progress=False)  # fmt: skip
 
 
@@ -77,7 +78,7 @@ def main() -> None:
             if args.shared
             else _copies(root, args.copies, args.full)
         )
-        jobs = network.station_jobs(files)
+        jobs = station_jobs(files)
         rows = []
         for label, run in (
             ("loop", lambda out: _loop(jobs, config, out)),

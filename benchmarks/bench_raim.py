@@ -8,7 +8,7 @@ Printed, all from timings of this run:
   start memberships, same tolerance; also navtrack's whole per-epoch identification (QR parity
   matrix, full design matrix, FCM, the paper's rule: :func:`navtrack.integrity.raim.
   fcm_exclusion`) — ms per epoch and the ratio;
-* a whole file (SEPT, 900 epochs, GPS+Galileo+QZSS, in-process ``solve_spp`` from read
+* a whole file (SEPT, 900 epochs, GPS+Galileo+QZSS, in-process ``solve_positions`` from read
   observations): without RAIM and with ``--raim fcm`` (and ``fde``, ``ss``), s and the ratio to
   no RAIM; ``ss`` runs batched over all epochs of a block;
 * the same file with faults on 2 satellites in every epoch (the worst case of ``fcm``: every
@@ -64,10 +64,12 @@ def main() -> None:
         corrected_measurements,
         estimate_position,
         satellite_states,
-        solve_spp,
     )
+    from navtrack.integrity.exclusion import fcm_exclusion
     from navtrack.integrity.fcm import full_design_matrix, fuzzy_cmeans, parity_matrix
-    from navtrack.integrity.raim import RaimConfig, fcm_exclusion, variance_factor, whitened
+    from navtrack.integrity.raim import RaimConfig, variance_factor
+    from navtrack.integrity.residuals import whitened
+    from navtrack.positioning import solve_positions
 
     obs = read_obs(SHARED / "cssrlib_sept" / "SEPT078M.21O")
     nav = read_nav(SHARED / "cssrlib_sept" / "SEPT078M.21P")
@@ -143,9 +145,9 @@ def main() -> None:
 
     # ---- whole file with and without RAIM
     def solve(raim: RaimConfig | None, o=obs) -> Callable[[], object]:  # type: ignore[no-untyped-def]
-        return lambda: solve_spp(o, [nav], config=cfg, raim=raim)
+        return lambda: solve_positions(o, [nav], config=cfg, raim=raim)
 
-    print(f"whole file: SEPT {obs.t_gps_s.size} epochs, GEJ, solve_spp in-process")
+    print(f"whole file: SEPT {obs.t_gps_s.size} epochs, GEJ, solve_positions in-process")
     for method in ("fcm", "fde", "ss"):
         t0, t1 = _median_pair(solve(None), solve(RaimConfig(method)), args.repeat)
         print(f"  no RAIM {t0:7.3f} s   --raim {method:<4} {t1:7.3f} s   ratio {t1 / t0:6.2f}")

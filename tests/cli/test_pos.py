@@ -244,13 +244,13 @@ def test_summary_median_equals_nanmedian_without_importing_numpy_ma() -> None:
 
     import numpy as np
 
-    from navtrack.cli.pos import _median
+    from navtrack.cli.pos_summary import median_finite
 
     rng = np.random.default_rng(0)
     for n in (1, 2, 5, 6, 101):
         x = np.append(rng.normal(size=n), [np.nan] * 3)
-        assert _median(x) == np.nanmedian(x)
-    assert np.isnan(_median(np.full(3, np.nan)))
+        assert median_finite(x) == np.nanmedian(x)
+    assert np.isnan(median_finite(np.full(3, np.nan)))
     # a run without a reference (error percentiles use np.quantile, which imports numpy.ma)
     code = (
         "import sys; from navtrack.cli import main; from navtrack.data import sample_path; "

@@ -16,12 +16,11 @@ from navtrack.gnss.agps import (
     AgpsConfig,
     AgpsProblem,
     AgpsStatus,
-    assisted_pseudoranges,
     ellipsoid_residual,
     fix_dop,
-    problem_from_measurements,
     solve_agps,
 )
+from navtrack.positioning.agps import assisted_pseudoranges, problem_from_measurements
 
 SITE = (math.radians(39.959103), math.radians(116.352853), 56.23)  # paper IV-B
 
@@ -272,10 +271,10 @@ def test_diverged_fix_is_not_reported(gps_sats) -> None:
 
 
 def _bundled_0759():
-    from navtrack.gnss.agps import gps_measurements
     from navtrack.gnss.rinex.nav import read_nav
     from navtrack.gnss.rinex.obs import read_obs
     from navtrack.gnss.spp import SppConfig
+    from navtrack.positioning.agps import gps_measurements
 
     data = resources.files("navtrack.data")
     cfg = SppConfig(systems="G")

@@ -81,9 +81,9 @@ def test_agps_example_is_the_issue_case_and_writes_json(capsys, tmp_path) -> Non
 
 def _measurements(obs: str, nav: str):  # type: ignore[no-untyped-def]
     """GPS measurements of a bundled file (RINEX or GnssLogger) and their SPP options."""
-    from navtrack.gnss.agps import gps_measurements
     from navtrack.gnss.rinex.nav import read_nav
     from navtrack.gnss.spp import SppConfig
+    from navtrack.positioning.agps import gps_measurements
 
     if obs.endswith(".txt"):
         from navtrack.gnss.android import read_gnsslogger as read
@@ -109,14 +109,13 @@ def test_no_ok_fix_more_than_a_kilometre_off_on_the_bundled_data(obs, nav, ref, 
     (8 m) leaves no fix predicted within 300 m: all are ``weak_geometry``."""
     import numpy as np
 
-    from navtrack.experiments.agps.real import _pairs
+    from navtrack.experiments.agps.real import fix_pairs
     from navtrack.geodesy import ecef_to_geodetic, enu_rotation
-    from navtrack.gnss.agps import (
-        AgpsConfig,
+    from navtrack.gnss.agps import AgpsConfig, solve_agps
+    from navtrack.positioning.agps import (
         assisted_pseudoranges,
         problem_from_measurements,
         pseudorange_sigma_m,
-        solve_agps,
     )
 
     meas, cfg = _measurements(obs, nav)
@@ -128,7 +127,7 @@ def test_no_ok_fix_more_than_a_kilometre_off_on_the_bundled_data(obs, nav, ref, 
         cell = ref_xyz + enu_rotation(lat, lon).T @ np.array([east, north, 0.0])
         y = assisted_pseudoranges(meas, cell, cfg)
         for m in minutes:
-            ep, sv = _pairs(meas.t_gps_s, np.isfinite(y), 60.0 * m)
+            ep, sv = fix_pairs(meas.t_gps_s, np.isfinite(y), 60.0 * m)
             res = solve_agps(problem_from_measurements(meas, y, ep, sv, h, cell), "gn", config)
             err = np.linalg.norm(res.pos_m - ref_xyz, axis=1)
             assert not (res.ok & (err > 1000.0)).any()
@@ -150,13 +149,11 @@ def test_the_issues_41_km_marquardt_fix_is_implausible() -> None:
 
     from navtrack.data import REFERENCE_XYZ_M
     from navtrack.geodesy import geodetic_to_ecef
-    from navtrack.gnss.agps import (
-        AgpsConfig,
-        AgpsStatus,
+    from navtrack.gnss.agps import AgpsConfig, AgpsStatus, solve_agps
+    from navtrack.positioning.agps import (
         assisted_pseudoranges,
         problem_from_measurements,
         pseudorange_sigma_m,
-        solve_agps,
     )
     from navtrack.timescale import gps_seconds
 

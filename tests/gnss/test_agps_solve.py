@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from navtrack.estimation.least_squares import LsqStatus, _singular, gauss_newton
+from navtrack.estimation.least_squares import LsqStatus, gauss_newton, singular_normal_matrices
 
 
 def _eigen_decision(N: np.ndarray, rcond: float) -> np.ndarray:
@@ -26,7 +26,7 @@ def test_singular_prescreen_decides_like_the_eigenvalues() -> None:
         N = np.einsum("bmp,bmq->bpq", A, A)
         # (at rcond near machine epsilon the eigenvalue itself is rounding: not compared)
         for rcond in (1e-12, 1e-9, 1e-6):
-            ours = _singular(N, rcond)
+            ours = singular_normal_matrices(N, rcond)
             ref = _eigen_decision(N, rcond)
             assert ours.any()
             assert (~ours).any()

@@ -24,7 +24,6 @@ from navtrack.gnss.spp import (
     corrected_measurements,
     estimate_position,
     satellite_states,
-    solve_spp,
 )
 from navtrack.integrity.araim import (
     araim,
@@ -41,6 +40,7 @@ from navtrack.integrity.ism import (
     read_ism,
 )
 from navtrack.integrity.raim import RaimConfig
+from navtrack.positioning import solve_positions
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
@@ -156,7 +156,7 @@ def test_araim_on_the_sample_bounds_and_excludes_an_injected_fault() -> None:
     obs = _sample_with_g28_fault()
     nav = read_nav(sample_path("SEPT078M.21P"))
     cfg = SppConfig(systems="GE", iono="ionofree")
-    res = solve_spp(obs, nav, config=cfg, raim=RaimConfig("araim"))
+    res = solve_positions(obs, nav, config=cfg, raim=RaimConfig("araim"))
     integ = res.integrity
     assert integ is not None
     sats = list(res.sats)

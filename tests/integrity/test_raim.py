@@ -9,6 +9,7 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
+from navtrack.estimation.chi2 import ncx2_cdf, noncentrality_bias
 from navtrack.gnss.spp import (
     SppConfig,
     SppStatus,
@@ -16,24 +17,12 @@ from navtrack.gnss.spp import (
     corrected_measurements,
     estimate_position,
     satellite_states,
-    solution_frame,
     solve_spp,
 )
-from navtrack.integrity.raim import (
-    STATUS_NAMES,
-    RaimConfig,
-    RaimStatus,
-    _ncx2_cdf,
-    _p_bias,
-    chi2_test,
-    monitor,
-    normalised_residuals,
-    pair_hypotheses,
-    solution_separation,
-    subset_solutions,
-    variance_factor,
-    wraim_levels,
-)
+from navtrack.integrity.raim import STATUS_NAMES, RaimConfig, RaimStatus, monitor, variance_factor
+from navtrack.integrity.residuals import chi2_test, normalised_residuals, wraim_levels
+from navtrack.integrity.separation import pair_hypotheses, solution_separation, subset_solutions
+from navtrack.positioning import solution_frame, solve_positions
 
 
 def _problem(seed: int, n_b: int = 3, n_s: int = 9, n_p: int = 4):  # type: ignore[no-untyped-def]
@@ -60,9 +49,9 @@ def test_chi2_thresholds_and_non_central_cdf_match_scipy() -> None:
     np.testing.assert_allclose(thr, stats.chi2.ppf(1 - 1e-3, 5), rtol=1e-8)
     np.testing.assert_allclose(stat, np.sum(y**2, axis=1))
     for k, lam, x in [(1, 5.0, 3.0), (7, 40.0, 20.0), (20, 100.0, 60.0), (30, 80.0, 60.0)]:
-        assert abs(_ncx2_cdf(x, k, lam) - stats.ncx2.cdf(x, k, lam)) < 1e-12
+        assert abs(ncx2_cdf(x, k, lam) - stats.ncx2.cdf(x, k, lam)) < 1e-12
     for k in (1, 4, 16):
-        lam = _p_bias(1e-3, 1e-4, k) ** 2
+        lam = noncentrality_bias(1e-3, 1e-4, k) ** 2
         assert abs(stats.ncx2.cdf(stats.chi2.ppf(1 - 1e-3, k), k, lam) - 1e-4) < 1e-9
 
 
@@ -106,7 +95,8 @@ def test_wraim_protection_level_bounds_the_undetectable_bias() -> None:
     r = 1 - np.einsum("sp,pq,sq->s", g[0], q, g[0])
     slope = np.hypot(a[0], a[1]) / np.sqrt(r)
     i = int(np.argmax(slope))
-    bias = _p_bias(1e-3, 1e-3, 4) / np.sqrt(r[i])  # whitened bias giving lambda = p_bias^2
+    # whitened bias giving lambda = p_bias^2
+    bias = noncentrality_bias(1e-3, 1e-3, 4) / np.sqrt(r[i])
     fault = np.zeros(8)
     fault[i] = bias
     dx = a @ fault
@@ -210,9 +200,9 @@ def test_solution_separation_detects_what_chi2_detects_on_a_large_fault() -> Non
     assert sep.vpl_m[0] > 0
 
 
-def test_solve_spp_with_raim_writes_integrity_columns() -> None:
+def test_solve_positions_with_raim_writes_integrity_columns() -> None:
     _, cfg, obs, nav = _sample_measurements()
-    res = solve_spp(obs, [nav], config=cfg, raim=RaimConfig("fde"), chunk_epochs=50)
+    res = solve_positions(obs, [nav], config=cfg, raim=RaimConfig("fde"), chunk_epochs=50)
     assert res.integrity is not None
     assert res.integrity.status.shape == (120,)
     frame = solution_frame(res)

@@ -4,8 +4,8 @@ two-satellite AGPS fix (Li 2010) from real pseudoranges.
 Reads the observations (RINEX 2/3 or Android GnssLogger) and the navigation file, takes the GPS
 L1 pseudoranges of the two satellites at the two epochs, corrects them with the SPP stages
 (satellite clock, group delay) and the broadcast ionosphere and the troposphere at the
-approximate (cell) position (:func:`navtrack.gnss.agps.assisted_pseudoranges`), and solves the
-five equations of :mod:`navtrack.gnss.agps` from the cell position with the chosen solver.
+approximate (cell) position, and solves the five equations of :mod:`navtrack.gnss.agps` from the
+cell position with the chosen solver: the AGPS pipeline of :mod:`navtrack.positioning.agps`.
 Prints the fix, its clock biases, iterations, DOP and status (with the reason of a
 ``weak_geometry`` or ``implausible`` fix), and with ``--ref`` its error; ``--out FILE.json``
 writes the same. Exit code 1 when the fix is not ``ok``. ``--example`` solves a fix of the
@@ -14,7 +14,7 @@ bundled 0759 station file.
 A fix is ``ok`` only when its predicted 3-D error ``dop x sigma_pr`` is at most ``--max-sigma``
 (300 m) and its pseudorange residuals close to three ``sigma_pr``; ``sigma_pr`` is the
 receiver's pseudorange noise estimated from the whole file's single point residuals
-(:func:`navtrack.gnss.agps.pseudorange_sigma_m`), or ``--sigma-pr``. The default solver is
+(:func:`navtrack.positioning.agps.pseudorange_sigma_m`), or ``--sigma-pr``. The default solver is
 Gauss–Newton: on the real data of the reproduction it has the lowest mean error on every
 station at every interval (``docs/agps.md``).
 """
@@ -22,9 +22,25 @@ station at every interval (``docs/agps.md``).
 from __future__ import annotations
 
 import argparse
+import json
 import math
 from pathlib import Path
 from typing import Any
+
+import numpy as np
+
+from navtrack.cli._options import add_out_option, add_reference_options, is_android_log, reference
+from navtrack.data import REFERENCE_XYZ_M, sample_path
+from navtrack.geodesy import ecef_to_geodetic, enu_rotation, geodetic_to_ecef
+from navtrack.gnss.agps import AgpsConfig, AgpsResult, AgpsStatus
+from navtrack.gnss.spp import Measurements, SppConfig
+from navtrack.positioning.agps import (
+    assisted_pseudoranges,
+    pseudorange_sigma_m,
+    read_gps_measurements,
+    solve_fixes,
+)
+from navtrack.timescale import gps_seconds, to_datetime64
 
 ASSUMED_SIGMA_PR_M = 3.0
 """Pseudorange noise assumed when the file cannot tell (no epoch with five satellites): the
@@ -82,7 +98,7 @@ def register(subparsers: Any) -> None:
         metavar="D",
         help="geometry screen: a fix with a larger DOP is weak_geometry (default: off)",
     )
-    p.add_argument("--out", type=Path, metavar="FILE.json", help="write the fix as JSON")
+    add_out_option(p, "write the fix as JSON", metavar="FILE.json")
     p.add_argument(
         "--prior-sigma",
         type=float,
@@ -90,9 +106,7 @@ def register(subparsers: Any) -> None:
         metavar="M",
         help="map: standard deviation of the cell position as prior, m (default 3000)",
     )
-    p.add_argument(
-        "--ref", nargs=3, type=float, metavar=("X", "Y", "Z"), help="reference, ECEF metres"
-    )
+    add_reference_options(p)
     p.set_defaults(func=run_agps)
 
 
@@ -116,8 +130,6 @@ EXAMPLE = (
 
 def _example_args(args: argparse.Namespace) -> None:
     """Fill ``args`` from :data:`EXAMPLE` (explicit options other than the files win)."""
-    from navtrack.data import REFERENCE_XYZ_M, sample_path
-
     if args.obs is not None or args.nav is not None:
         raise SystemExit("navtrack agps: give either OBS NAV or --example, not both")
     args.obs, args.nav = sample_path(EXAMPLE[0]), sample_path(EXAMPLE[1])
@@ -125,7 +137,8 @@ def _example_args(args: argparse.Namespace) -> None:
     args.epochs = args.epochs or list(EXAMPLE[5:7])
     args.height = float(EXAMPLE[8]) if args.height is None else args.height
     args.approx = args.approx or [float(EXAMPLE[10]), float(EXAMPLE[11])]
-    args.ref = args.ref or list(REFERENCE_XYZ_M[EXAMPLE[0]])
+    if args.ref is None and args.ref_llh is None:
+        args.ref = list(REFERENCE_XYZ_M[EXAMPLE[0]])
 
 
 def _gps_time(text: str) -> float:
@@ -134,8 +147,6 @@ def _gps_time(text: str) -> float:
         return float(text)
     except ValueError:
         pass
-    from navtrack.timescale import gps_seconds
-
     try:
         return float(gps_seconds(text))
     except ValueError:
@@ -146,25 +157,48 @@ def _gps_time(text: str) -> float:
 
 
 def run_agps(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from navtrack.cli.pos import _is_android
-    from navtrack.geodesy import ecef_to_geodetic, enu_rotation, geodetic_to_ecef
-    from navtrack.gnss.agps import (
-        AgpsConfig,
-        AgpsStatus,
-        assisted_pseudoranges,
-        gps_measurements,
-        problem_from_measurements,
-        pseudorange_sigma_m,
-        solve_agps,
-    )
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.spp import SppConfig
-    from navtrack.timescale import to_datetime64
-
+    """Run ``navtrack agps``; exit code 1 when the fix is not ``ok``."""
     if args.example:
         _example_args(args)
+    sats = _check_args(args)
+    ref = reference(args)
+    times = [_gps_time(t) for t in args.epochs]
+    cfg = SppConfig(systems="G")
+    _, _, meas = read_gps_measurements(args.obs, args.nav, cfg, android=is_android_log(args.obs))
+    lat, lon = args.approx
+    cell = geodetic_to_ecef([math.radians(lat), math.radians(lon), args.height])
+    y = assisted_pseudoranges(meas, cell, cfg)
+    if args.sigma_pr is not None:
+        sigma_pr, sigma_from = args.sigma_pr, "--sigma-pr"
+    else:
+        sigma_pr, sigma_from = pseudorange_sigma_m(meas, cfg), "single point residuals of the file"
+        if not math.isfinite(sigma_pr):
+            sigma_pr, sigma_from = ASSUMED_SIGMA_PR_M, "assumed: no epoch with five satellites"
+    epochs = [_epoch_index(args, meas, text, t) for text, t in zip(args.epochs, times, strict=True)]
+    if epochs[0] == epochs[1]:
+        raise SystemExit(
+            f"navtrack agps: --epochs {args.epochs[0]} {args.epochs[1]}: same epoch twice"
+        )
+    cols = _satellite_columns(args, meas, y, sats, epochs)
+    try:
+        config = AgpsConfig.for_receiver(
+            sigma_pr, args.max_sigma, prior_sigma_m=args.prior_sigma, max_dop=args.max_dop
+        )
+        res = solve_fixes(
+            meas, y, np.array([epochs]), np.array([cols]), args.height, cell, args.solver, config
+        )
+    except ValueError as exc:
+        raise SystemExit(f"navtrack agps: {exc}") from None
+    dt = (meas.t_gps_s[epochs[1]] - meas.t_gps_s[epochs[0]]) / 60.0
+    record = _report(args, res, sats, dt, (sigma_pr, sigma_from), ref)
+    if args.out is not None:
+        args.out.write_text(json.dumps(record, indent=2) + "\n")
+        print(f"wrote       {args.out}")
+    return 0 if res.status[0] == AgpsStatus.OK else 1
+
+
+def _check_args(args: argparse.Namespace) -> list[str]:
+    """Refuse missing or malformed options; the two satellites."""
     missing = [
         name
         for name, value in (("OBS", args.obs), ("NAV", args.nav), ("--sats", args.sats),
@@ -186,40 +220,31 @@ def run_agps(args: argparse.Namespace) -> int:
         raise SystemExit(
             f"navtrack agps: --approx {lat:g} {lon:g} is not latitude/longitude in deg"
         )
-    times = [_gps_time(t) for t in args.epochs]
-    if _is_android(args.obs):
-        from navtrack.gnss.android import read_gnsslogger
+    return sats
 
-        obs = read_gnsslogger(args.obs)
-    else:
-        from navtrack.gnss.rinex.obs import read_obs
 
-        obs = read_obs(args.obs)
-    cfg = SppConfig(systems="G")
-    meas = gps_measurements(obs, read_nav(args.nav), cfg)
-    cell = geodetic_to_ecef([math.radians(lat), math.radians(lon), args.height])
-    y = assisted_pseudoranges(meas, cell, cfg)
-    if args.sigma_pr is not None:
-        sigma_pr, sigma_from = args.sigma_pr, "--sigma-pr"
-    else:
-        sigma_pr, sigma_from = pseudorange_sigma_m(meas, cfg), "single point residuals of the file"
-        if not math.isfinite(sigma_pr):
-            sigma_pr, sigma_from = ASSUMED_SIGMA_PR_M, "assumed: no epoch with five satellites"
-    epochs = []
-    for text, t in zip(args.epochs, times, strict=True):
-        k = int(np.argmin(np.abs(meas.t_gps_s - t))) if meas.t_gps_s.size else -1
-        if k < 0 or abs(meas.t_gps_s[k] - t) > 0.5:
-            span = (
-                f"{to_datetime64(meas.t_gps_s[0])} .. {to_datetime64(meas.t_gps_s[-1])}"
-                if meas.t_gps_s.size
-                else "no epochs"
-            )
-            raise SystemExit(f"navtrack agps: {args.obs}: no epoch at {text} (file spans {span})")
-        epochs.append(k)
-    if epochs[0] == epochs[1]:
-        raise SystemExit(
-            f"navtrack agps: --epochs {args.epochs[0]} {args.epochs[1]}: same epoch twice"
+def _epoch_index(args: argparse.Namespace, meas: Measurements, text: str, t: float) -> int:
+    """The measurement epoch at ``t`` (within 0.5 s), or ``SystemExit`` naming the file's span."""
+    k = int(np.argmin(np.abs(meas.t_gps_s - t))) if meas.t_gps_s.size else -1
+    if k < 0 or abs(meas.t_gps_s[k] - t) > 0.5:
+        span = (
+            f"{to_datetime64(meas.t_gps_s[0])} .. {to_datetime64(meas.t_gps_s[-1])}"
+            if meas.t_gps_s.size
+            else "no epochs"
         )
+        raise SystemExit(f"navtrack agps: {args.obs}: no epoch at {text} (file spans {span})")
+    return k
+
+
+def _satellite_columns(
+    args: argparse.Namespace,
+    meas: Measurements,
+    y: np.ndarray,
+    sats: list[str],
+    epochs: list[int],
+) -> list[int]:
+    """The satellite axis index of each of the two satellites, each checked to have a corrected
+    pseudorange at both epochs (``SystemExit`` saying why not)."""
     cols = []
     for s in sats:
         if s not in meas.sats:
@@ -236,18 +261,21 @@ def run_agps(args: argparse.Namespace) -> int:
                     else "below the elevation mask seen from the cell"
                 )
                 raise SystemExit(f"navtrack agps: {args.obs}: {s} at {text} is {why}")
-    try:
-        problem = problem_from_measurements(
-            meas, y, np.array([epochs]), np.array([cols]), args.height, cell
-        )
-        config = AgpsConfig.for_receiver(
-            sigma_pr, args.max_sigma, prior_sigma_m=args.prior_sigma, max_dop=args.max_dop
-        )
-    except ValueError as exc:
-        raise SystemExit(f"navtrack agps: {exc}") from None
-    res = solve_agps(problem, args.solver, config)
+    return cols
+
+
+def _report(
+    args: argparse.Namespace,
+    res: AgpsResult,
+    sats: list[str],
+    dt: float,
+    sigma: tuple[float, str],
+    ref: tuple[float, float, float] | None,
+) -> dict[str, Any]:
+    """Print the fix (and its error against the reference); the JSON record of ``--out``.
+    ``sigma`` is the pseudorange noise (m) and where it comes from."""
+    sigma_pr, sigma_from = sigma
     status = AgpsStatus(int(res.status[0])).name.lower()
-    dt = (meas.t_gps_s[epochs[1]] - meas.t_gps_s[epochs[0]]) / 60.0
     record: dict[str, Any] = {
         "solver": args.solver,
         "sats": sats,
@@ -264,41 +292,37 @@ def run_agps(args: argparse.Namespace) -> int:
     print(f"status      {status}   iterations {int(res.iterations[0])}{reason}")
     print(f"accuracy    dop {res.dop[0]:.0f} x sigma_pr {sigma_pr:.2f} m ({sigma_from}) = "
           f"{res.sigma_m[0]:.0f} m predicted 3-D error (1 sigma)")  # fmt: skip
-    if np.isfinite(res.pos_m[0]).all():
-        xyz = res.pos_m[0]
-        llh = ecef_to_geodetic(xyz)
+    if not np.isfinite(res.pos_m[0]).all():
+        return record
+    xyz = res.pos_m[0]
+    llh = ecef_to_geodetic(xyz)
+    print(
+        f"position    lat {math.degrees(llh[0]):.6f} deg  lon {math.degrees(llh[1]):.6f} deg  "
+        f"h {llh[2]:.1f} m"
+    )
+    print(f"ecef        {xyz[0]:.1f} {xyz[1]:.1f} {xyz[2]:.1f} m")
+    print(f"height      {res.height_residual_m[0]:+.1f} m from the assumed height")
+    print(f"clocks      c*dt1 {res.clock_m[0, 0]:.1f} m  c*dt2 {res.clock_m[0, 1]:.1f} m")
+    print(f"residuals   {res.residual_m[0]:.1f} m rms")
+    record.update({
+        "lat_deg": math.degrees(llh[0]),
+        "lon_deg": math.degrees(llh[1]),
+        "height_m": float(llh[2]),
+        "x_m": float(xyz[0]), "y_m": float(xyz[1]), "z_m": float(xyz[2]),
+        "height_residual_m": float(res.height_residual_m[0]),
+        "clock1_m": float(res.clock_m[0, 0]),
+        "clock2_m": float(res.clock_m[0, 1]),
+        "residual_m": float(res.residual_m[0]),
+    })  # fmt: skip
+    if ref is not None:
+        ref_m = np.asarray(ref, dtype=float)
+        rl = ecef_to_geodetic(ref_m)
+        enu = enu_rotation(rl[0], rl[1]) @ (xyz - ref_m)
         print(
-            f"position    lat {math.degrees(llh[0]):.6f} deg  lon {math.degrees(llh[1]):.6f} deg  "
-            f"h {llh[2]:.1f} m"
+            f"error       3-D {np.linalg.norm(enu):.1f} m  horizontal "
+            f"{np.hypot(enu[0], enu[1]):.1f} m  (E {enu[0]:.1f}, N {enu[1]:.1f}, "
+            f"U {enu[2]:.1f} m)"
         )
-        print(f"ecef        {xyz[0]:.1f} {xyz[1]:.1f} {xyz[2]:.1f} m")
-        print(f"height      {res.height_residual_m[0]:+.1f} m from the assumed height")
-        print(f"clocks      c*dt1 {res.clock_m[0, 0]:.1f} m  c*dt2 {res.clock_m[0, 1]:.1f} m")
-        print(f"residuals   {res.residual_m[0]:.1f} m rms")
-        record.update({
-            "lat_deg": math.degrees(llh[0]),
-            "lon_deg": math.degrees(llh[1]),
-            "height_m": float(llh[2]),
-            "x_m": float(xyz[0]), "y_m": float(xyz[1]), "z_m": float(xyz[2]),
-            "height_residual_m": float(res.height_residual_m[0]),
-            "clock1_m": float(res.clock_m[0, 0]),
-            "clock2_m": float(res.clock_m[0, 1]),
-            "residual_m": float(res.residual_m[0]),
-        })  # fmt: skip
-        if args.ref is not None:
-            ref = np.asarray(args.ref, dtype=float)
-            rl = ecef_to_geodetic(ref)
-            enu = enu_rotation(rl[0], rl[1]) @ (xyz - ref)
-            print(
-                f"error       3-D {np.linalg.norm(enu):.1f} m  horizontal "
-                f"{np.hypot(enu[0], enu[1]):.1f} m  (E {enu[0]:.1f}, N {enu[1]:.1f}, "
-                f"U {enu[2]:.1f} m)"
-            )
-            record["error_m"] = float(np.linalg.norm(enu))
-            record["horizontal_error_m"] = float(np.hypot(enu[0], enu[1]))
-    if args.out is not None:
-        import json
-
-        args.out.write_text(json.dumps(record, indent=2) + "\n")
-        print(f"wrote       {args.out}")
-    return 0 if res.status[0] == AgpsStatus.OK else 1
+        record["error_m"] = float(np.linalg.norm(enu))
+        record["horizontal_error_m"] = float(np.hypot(enu[0], enu[1]))
+    return record

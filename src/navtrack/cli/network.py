@@ -1,5 +1,5 @@
 """``navtrack pos FILES... --out DIR``: single point positions of a station network (several
-observation files in one command) on the Dask runner (:mod:`navtrack.gnss.network`)."""
+observation files in one command) on the Dask runner (:mod:`navtrack.experiments.network`)."""
 
 from __future__ import annotations
 
@@ -7,13 +7,13 @@ import argparse
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from navtrack.gnss.network import StationJob
     from navtrack.gnss.spp import SppConfig
+    from navtrack.positioning.stations import StationJob
 
 
 def network_jobs(args: argparse.Namespace) -> list[StationJob] | None:
     """The stations of ``pos``'s files when they hold several observation files, else None."""
-    from navtrack.gnss.network import station_jobs
+    from navtrack.positioning.stations import station_jobs
 
     files = [args.obs, *args.nav]
     if len(files) < 2:
@@ -26,7 +26,7 @@ def run_network(args: argparse.Namespace, jobs: list[StationJob], config: SppCon
     """Solve the network, print one line per station and the throughput."""
     import time
 
-    from navtrack.gnss.network import solve_network
+    from navtrack.experiments.network import solve_network
 
     if args.out is None or args.out.suffix:
         raise SystemExit("navtrack pos: several observation files need --out DIR (a folder)")

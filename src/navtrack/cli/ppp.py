@@ -17,9 +17,15 @@ from typing import Any
 
 import numpy as np
 
+from navtrack.cli._options import (
+    add_elmask_option,
+    add_out_option,
+    add_reference_options,
+    add_systems_option,
+    reference,
+)
 from navtrack.cli.inputs import read_observations
 from navtrack.cli.outputs import check_outputs
-from navtrack.cli.pos import _reference, add_reference_options
 from navtrack.data import REFERENCE_XYZ_M, sample_path
 from navtrack.gnss.antex import read_antex
 from navtrack.gnss.ppp import PppConfig, PppResult, convergence, solution_frame, solve_ppp
@@ -64,12 +70,10 @@ def register(subparsers: Any) -> None:
         help=f"two minutes of the bundled SEPT station ({PPP_EXAMPLE[0]}) with the bundled CODE "
         "orbits and clocks, against the station's reference position",
     )
-    q.add_argument("--systems", default="G", help="systems to use (default G)")
-    q.add_argument("--elmask", type=float, default=15.0, metavar="DEG", help="elevation mask")
+    add_systems_option(q, "G")
+    add_elmask_option(q, 15.0)
     add_reference_options(q, trajectory=True)
-    q.add_argument(
-        "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
-    )
+    add_out_option(q, "write the solution (.csv, .parquet, .nmea, .kml, .gpx)")
     q.add_argument(
         "--plot",
         type=Path,
@@ -140,7 +144,7 @@ def run_ppp(args: argparse.Namespace) -> int:
         print(f"warning        {why}", file=sys.stderr)
     solved = _print_summary(args, config, result)
     code = 0 if solved else 1
-    ref = _reference(args) if args.ref_pos is None else None
+    ref = reference(args) if args.ref_pos is None else None
     if args.plot is not None and solved and ref is not None:
         paths = plot_ppp(result, np.asarray(ref), args.plot)
         print(f"figures        {', '.join(str(p) for p in paths)}")
@@ -177,7 +181,7 @@ def _print_summary(args: argparse.Namespace, config: PppConfig, result: PppResul
         "including correlated code and unmodelled range errors; compare --ref)"
     )
     print(f"final ZWD      {result.zwd_m[last[-1]]:.3f} m")
-    ref = _reference(args) if args.ref_pos is None else None
+    ref = reference(args) if args.ref_pos is None else None
     if ref is not None:
         print("convergence    time (s)  horizontal  up      3D   (m, error vs ref)")
         for t, h, up, d in convergence(result, np.asarray(ref)):

@@ -17,7 +17,13 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from navtrack.cli.pos import add_reference_options
+from navtrack.cli._options import (
+    add_elmask_option,
+    add_out_option,
+    add_reference_options,
+    add_systems_option,
+    reference,
+)
 
 if TYPE_CHECKING:
     from navtrack._typing import FloatArray
@@ -67,19 +73,17 @@ def register(subparsers: Any) -> None:
         default="forward",
         help="filter direction; combined = forward and backward joined (RTKLIB -c)",
     )
-    p.add_argument("--systems", default="GECJ", help="systems to use (default GECJ)")
+    add_systems_option(p, "GECJ")
     p.add_argument(
         "--freq", type=int, choices=(1, 2), default=1, help="frequencies: 1 (L1) or 2 (L1+L2)"
     )
-    p.add_argument("--elmask", type=float, default=15.0, metavar="DEG", help="elevation mask")
+    add_elmask_option(p, 15.0)
     p.add_argument("--ratio", type=float, default=3.0, help="ratio-test threshold (default 3)")
     p.add_argument("--partial", action="store_true", help="partial ambiguity fixing")
     p.add_argument("--float", action="store_true", help="no integer fixing (float solution)")
     p.add_argument("--sp3", type=Path, help="precise orbits/clocks (SP3) instead of broadcast")
     add_reference_options(p, trajectory=True)
-    p.add_argument(
-        "--out", type=Path, help="write the solution (.csv, .parquet, .nmea, .kml, .gpx)"
-    )
+    add_out_option(p, "write the solution (.csv, .parquet, .nmea, .kml, .gpx)")
     p.add_argument("--plot", type=Path, metavar="DIR", help="write figures into this directory")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run_rtk)
@@ -122,9 +126,7 @@ def reference_errors(
         xyz = ref[["x_m", "y_m", "z_m"]].to_numpy()[b]
         err[a] = np.linalg.norm(pos_m[a] - xyz, axis=1)
         return err, f"{args.ref_pos} ({a.size} epochs in common)"
-    from navtrack.cli.pos import _reference
-
-    point = _reference(args)
+    point = reference(args)
     if point is None:
         return None
     return np.linalg.norm(pos_m - np.asarray(point), axis=1), "reference point"

@@ -119,7 +119,7 @@ def _regularise(N: FloatArray, observed: BoolArray) -> FloatArray:
     return N
 
 
-def _singular(N: FloatArray, rcond: float) -> BoolArray:
+def singular_normal_matrices(N: FloatArray, rcond: float) -> BoolArray:
     """Normal matrices whose scaled condition is worse than ``1/rcond``.
 
     The scaled matrix has a unit diagonal, so its largest eigenvalue is at most ``P`` and its
@@ -165,7 +165,7 @@ def _finish(
     N, _, observed = _normal_equations(v, J, w, valid)
     Nr = _regularise(N, observed)
     cov = np.full((B, P, P), np.nan)
-    sing = _singular(Nr, rcond)
+    sing = singular_normal_matrices(Nr, rcond)
     good = ~sing
     if good.any():
         inv = np.linalg.inv(Nr[good])
@@ -248,7 +248,7 @@ def gauss_newton(
         need = observed.sum(axis=1) if min_measurements is None else min_measurements
         few = n_valid < np.maximum(need, 1)
         Nr = _regularise(N, observed)
-        sing = ~few & _singular(Nr, rcond)
+        sing = ~few & singular_normal_matrices(Nr, rcond)
         status[active[few]] = LsqStatus.TOO_FEW_MEASUREMENTS
         status[active[sing]] = LsqStatus.SINGULAR
         go = ~(few | sing)

@@ -46,18 +46,21 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
+from navtrack.estimation.least_squares import (
+    LsqResult,
+    LsqStatus,
+    gauss_newton,
+    marquardt,
+    singular_normal_matrices,
+)
 from navtrack.geodesy import NEAR_SURFACE_NORM_M, WGS84_A_M, WGS84_F, ecef_to_geodetic
-
-if TYPE_CHECKING:
-    from navtrack.gnss.observations import Observations
-    from navtrack.gnss.rinex.nav import NavData
-    from navtrack.gnss.spp import Measurements, SppConfig
+from navtrack.gnss.corrections import geometric_range
 
 __all__ = [
     "HEIGHT_RANGE_M",
@@ -70,12 +73,8 @@ __all__ = [
     "AgpsStatus",
     "F5Units",
     "Solver",
-    "assisted_pseudoranges",
     "ellipsoid_residual",
     "fix_dop",
-    "gps_measurements",
-    "problem_from_measurements",
-    "pseudorange_sigma_m",
     "solve_agps",
 ]
 
@@ -403,8 +402,6 @@ class _AgpsModel:
     def __call__(
         self, x: FloatArray, idx: IntArray
     ) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray]:
-        from navtrack.gnss.corrections import geometric_range
-
         p = self.problem
         rcv = x[:, :3]
         rho, los = geometric_range(p.sat_pos_m[idx], rcv[:, None, :])
@@ -456,9 +453,7 @@ def _singular_start(J: FloatArray, complete: BoolArray) -> BoolArray:
     """Fixes whose five equations are singular at the start — the same satellite twice, a start
     at the earth's centre, two epochs of the same geometry — by the singularity test of the
     Gauss–Newton kernel (``rcond = 1e-12`` on the scaled normal matrix)."""
-    from navtrack.estimation.least_squares import _singular
-
-    return np.asarray(_singular(np.einsum("bmp,bmq->bpq", J, J), 1e-12) & complete)
+    return np.asarray(singular_normal_matrices(np.einsum("bmp,bmq->bpq", J, J), 1e-12) & complete)
 
 
 def fix_dop(problem: AgpsProblem) -> FloatArray:
@@ -528,32 +523,68 @@ def solve_agps(
     lies off the assumed height or its pseudoranges do not close (``max_height_residual_m``,
     ``max_residual_m``), with the reason in :attr:`AgpsResult.reason`.
     """
-    from navtrack.estimation.least_squares import LsqStatus, gauss_newton, marquardt
-
     cfg = config or AgpsConfig()
     if solver not in SOLVERS:
         raise ValueError(f"solver: expected one of {', '.join(SOLVERS)}, got {solver!r}")
     p = problem
-    n = p.size
-    x0 = np.zeros((n, 5))
+    x0 = _start_state(p, cfg)
+    lsq = _iterate(p, solver, cfg, x0)
+    J0, complete = _start_jacobian(p, x0)
+    singular = _singular_start(J0, complete)
+    status = _solver_status(p, solver, lsq, singular)
+    keep = (status == AgpsStatus.OK) | (status == AgpsStatus.NO_CONVERGENCE)
+    x = lsq.x
+    pos = np.where(keep[:, None], x[:, :3], np.nan)  # weak or implausible fixes keep theirs
+    height = np.full(p.size, np.nan)
+    if keep.any():
+        height[keep] = ecef_to_geodetic(pos[keep])[:, 2] - p.height_m[keep]
+    with np.errstate(invalid="ignore"):
+        residual = np.sqrt(np.nanmean(lsq.residuals[:, :4] ** 2, axis=1))
+    residual = np.where(keep, residual, np.nan)
+    dop = _dop(J0, complete & ~singular)
+    sigma = dop * cfg.sigma_pr_m
+    reason = _screen(status, dop, sigma, height, residual, cfg)
+    return AgpsResult(
+        solver=solver,
+        pos_m=pos,
+        clock_m=np.where(keep[:, None], x[:, 3:5], np.nan),
+        iterations=lsq.iterations,
+        accepted=lsq.accepted,
+        status=status,
+        cost=np.where(keep, lsq.cost, np.nan),
+        height_residual_m=height,
+        residual_m=residual,
+        dop=dop,
+        sigma_m=sigma,
+        reason=reason,
+    )
+
+
+def _start_state(p: AgpsProblem, cfg: AgpsConfig) -> FloatArray:
+    """Start of every fix: the cell position, clock biases zero or (``clock_start="cell"``) the
+    mean pseudorange offset at the cell of each epoch."""
+    x0 = np.zeros((p.size, 5))
     x0[:, :3] = p.start_xyz_m
     if cfg.clock_start == "cell":
-        from navtrack.gnss.corrections import geometric_range
-
         rho, _ = geometric_range(p.sat_pos_m, p.start_xyz_m[:, None, :])
         offset = np.where(p.usable, p.y_m - rho, 0.0)
         x0[:, 3] = 0.5 * (offset[:, 0] + offset[:, 1])
         x0[:, 4] = 0.5 * (offset[:, 2] + offset[:, 3])
+    return x0
+
+
+def _iterate(p: AgpsProblem, solver: Solver, cfg: AgpsConfig, x0: FloatArray) -> LsqResult:
+    """The iterations of ``solver`` from ``x0`` (the batched kernels)."""
     metric = (WGS84_A_M + p.height_m) / 2.0  # f5 in metres of height
     if solver == "gn":
         model = _AgpsModel(p, metric, 1.0, 1.0, None)
-        lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=XTOL_M, gtol=cfg.eps)
-    elif solver == "lm":
-        scale = metric if cfg.f5_units == "m" else np.ones(n)
+        return gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=XTOL_M, gtol=cfg.eps)
+    if solver == "lm":
+        scale = metric if cfg.f5_units == "m" else np.ones(p.size)
         model = _AgpsModel(p, scale, 1.0, 1.0, None)
         # The damped matrix is regular; the undamped one of the paper's dimensionless f5 has
         # eigenvalues near 1e-13 of its largest: only rank deficiency to rounding is singular.
-        lsq = marquardt(
+        return marquardt(
             model,
             x0,
             mu0=cfg.mu1 / cfg.beta,
@@ -562,20 +593,23 @@ def solve_agps(
             max_iter=cfg.max_iter,
             rcond=1e-15,
         )
-    else:
-        model = _AgpsModel(
-            p,
-            metric,
-            cfg.sigma_pr_m**-2,
-            cfg.sigma_height_m**-2,
-            cfg.prior_sigma_m**-2,
-        )
-        grad_tol = cfg.eps * cfg.sigma_pr_m**-2  # epsilon in metres of pseudorange
-        lsq = gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=XTOL_M, gtol=grad_tol)
+    model = _AgpsModel(
+        p,
+        metric,
+        cfg.sigma_pr_m**-2,
+        cfg.sigma_height_m**-2,
+        cfg.prior_sigma_m**-2,
+    )
+    grad_tol = cfg.eps * cfg.sigma_pr_m**-2  # epsilon in metres of pseudorange
+    return gauss_newton(model, x0, max_iter=cfg.max_iter, xtol=XTOL_M, gtol=grad_tol)
 
-    J0, complete = _start_jacobian(p, x0)
-    singular = _singular_start(J0, complete)
-    status = np.full(n, AgpsStatus.OK, dtype=np.int8)
+
+def _solver_status(
+    p: AgpsProblem, solver: Solver, lsq: LsqResult, singular: BoolArray
+) -> np.ndarray:
+    """:class:`AgpsStatus` from the iterations: no convergence, singular, diverged (not finite
+    or off the earth's surface), missing measurement; ``ok`` otherwise."""
+    status = np.full(p.size, AgpsStatus.OK, dtype=np.int8)
     status[lsq.status == LsqStatus.NO_CONVERGENCE] = AgpsStatus.NO_CONVERGENCE
     if solver != "lm":  # Marquardt's damped steps exist; its final covariance is not used
         status[lsq.status == LsqStatus.SINGULAR] = AgpsStatus.SINGULAR
@@ -587,17 +621,21 @@ def solve_agps(
     off = ~finite | (norm < lo) | (norm > hi)
     status[off & (status != AgpsStatus.SINGULAR)] = AgpsStatus.DIVERGED
     status[~p.usable.all(axis=1)] = AgpsStatus.MISSING_MEASUREMENT
-    keep = (status == AgpsStatus.OK) | (status == AgpsStatus.NO_CONVERGENCE)
-    pos = np.where(keep[:, None], x[:, :3], np.nan)  # weak or implausible fixes keep theirs
-    height = np.full(n, np.nan)
-    if keep.any():
-        height[keep] = ecef_to_geodetic(pos[keep])[:, 2] - p.height_m[keep]
-    with np.errstate(invalid="ignore"):
-        residual = np.sqrt(np.nanmean(lsq.residuals[:, :4] ** 2, axis=1))
-    residual = np.where(keep, residual, np.nan)
-    dop = _dop(J0, complete & ~singular)
-    reason = np.full(n, "", dtype=object)
-    sigma = dop * cfg.sigma_pr_m
+    return status
+
+
+def _screen(
+    status: np.ndarray,
+    dop: FloatArray,
+    sigma: FloatArray,
+    height: FloatArray,
+    residual: FloatArray,
+    cfg: AgpsConfig,
+) -> np.ndarray:
+    """Turn ``ok`` fixes of weak geometry (DOP or predicted error) or implausible (off the
+    assumed height, residuals that do not close) into those statuses, in place; the reason of
+    each."""
+    reason = np.full(status.size, "", dtype=object)
     weak = (status == AgpsStatus.OK) & ((dop > cfg.max_dop) | (sigma > cfg.max_sigma_m))
     off_height = ~(np.abs(height) <= cfg.max_height_residual_m)
     open_residuals = ~(residual <= cfg.max_residual_m)
@@ -616,191 +654,4 @@ def solve_agps(
         reason[i] = "; ".join(why)
     status[weak] = AgpsStatus.WEAK_GEOMETRY
     status[implausible] = AgpsStatus.IMPLAUSIBLE
-    return AgpsResult(
-        solver=solver,
-        pos_m=pos,
-        clock_m=np.where(keep[:, None], x[:, 3:5], np.nan),
-        iterations=lsq.iterations,
-        accepted=lsq.accepted,
-        status=status,
-        cost=np.where(keep, lsq.cost, np.nan),
-        height_residual_m=height,
-        residual_m=residual,
-        dop=dop,
-        sigma_m=sigma,
-        reason=reason,
-    )
-
-
-def gps_measurements(
-    obs: Observations, nav: NavData, config: SppConfig | None = None
-) -> Measurements:
-    """The GPS L1 C/A pseudoranges and satellite states two-satellite fixes take: stages 1–3 of
-    single point positioning (:func:`navtrack.gnss.spp.code_pseudoranges`,
-    :func:`~navtrack.gnss.spp.satellite_states`, :func:`~navtrack.gnss.spp.corrected_measurements`).
-
-    Parameters
-    ----------
-    obs : Observations
-    nav : NavData
-        Broadcast ephemerides.
-    config : SppConfig, optional
-        Default ``SppConfig(systems="G")``.
-    """
-    from navtrack.gnss.spp import (
-        SppConfig,
-        code_pseudoranges,
-        corrected_measurements,
-        satellite_states,
-    )
-
-    cfg = config or SppConfig(systems="G")
-    pr = code_pseudoranges(obs, cfg)
-    return corrected_measurements(pr, satellite_states(pr, nav, config=cfg), cfg)
-
-
-def assisted_pseudoranges(
-    meas: Measurements, start_xyz_m: ArrayLike, config: SppConfig | None = None
-) -> FloatArray:
-    """Pseudoranges corrected as an AGPS server's assistance allows: satellite clock and group
-    delay (:func:`navtrack.gnss.spp.corrected_measurements`), then the broadcast ionosphere and
-    the troposphere of the SPP model evaluated at the cell position.
-
-    Parameters
-    ----------
-    meas : Measurements
-        Stage 3 of single point positioning.
-    start_xyz_m : array-like, shape (3,)
-        Cell (base-station) position (ECEF, m), where the atmosphere is evaluated.
-    config : SppConfig, optional
-        ``iono`` (``klobuchar``, ``ionofree`` or ``off``), ``tropo`` and ``elmask_deg``.
-
-    Returns
-    -------
-    ndarray, shape (E, S)
-        Corrected pseudoranges (m); NaN where not usable or below the elevation mask seen from
-        the cell.
-
-    Notes
-    -----
-    Evaluating the atmosphere at the cell rather than at each iterate changes it by
-    millimetres over a few kilometres; it keeps the model of the solvers the paper's f1..f4.
-    """
-    from navtrack.geodesy import azimuth_elevation, check_near_surface
-    from navtrack.gnss.corrections import klobuchar_delay_m, saastamoinen_delay_m
-    from navtrack.gnss.spp import SppConfig
-
-    cfg = config or SppConfig()
-    start = check_near_surface(start_xyz_m, "start_xyz_m")
-    lat, lon, h = ecef_to_geodetic(start)
-    sat = np.where(np.isfinite(meas.sat_pos_m), meas.sat_pos_m, 0.0)
-    azel = azimuth_elevation(sat, start)
-    az, el = azel[..., 0], azel[..., 1]
-    if cfg.iono == "klobuchar":
-        t = meas.t_gps_s[:, None]
-        iono = klobuchar_delay_m(t, lat, lon, az, el, meas.klobuchar) * meas.iono_scale
-    else:
-        iono = np.zeros_like(el)
-    trop = saastamoinen_delay_m(lat, h, el) if cfg.tropo == "saastamoinen" else 0.0 * el
-    use = meas.usable & (el >= math.radians(cfg.elmask_deg))
-    return np.where(use, meas.y_m - iono - trop, np.nan)
-
-
-def pseudorange_sigma_m(meas: Measurements, config: SppConfig | None = None) -> float:
-    """A receiver's pseudorange noise from its own file: the root mean square of the single
-    point residuals of every epoch with redundancy, scaled by ``sqrt(n / dof)``.
-
-    Parameters
-    ----------
-    meas : Measurements
-        Stage 3 of single point positioning (all satellites, all epochs).
-    config : SppConfig, optional
-
-    Returns
-    -------
-    float
-        Standard deviation (m); NaN when no epoch has more satellites than unknowns.
-
-    Notes
-    -----
-    A station receiver gives a few decimetres (0759: 0.5 m), a phone metres (the shared
-    GnssLogger log: 6 m). The residuals also carry what the broadcast models leave, which is
-    what a two-satellite fix suffers too.
-    """
-    from navtrack.gnss.spp import SppStatus, estimate_position
-
-    est = estimate_position(meas, config)
-    good = (est.status == SppStatus.OK) & (est.dof > 0)
-    if not good.any():
-        return math.nan
-    r = np.where(est.used[good], est.residuals_m[good], 0.0)
-    return float(np.sqrt(np.sum(r**2) / np.sum(est.dof[good])))
-
-
-def problem_from_measurements(
-    meas: Measurements,
-    y_m: FloatArray,
-    epochs: ArrayLike,
-    sats: ArrayLike,
-    height_m: ArrayLike,
-    start_xyz_m: ArrayLike,
-) -> AgpsProblem:
-    """Gather two-satellite fixes from SPP measurements.
-
-    Parameters
-    ----------
-    meas : Measurements
-        Stage 3 of single point positioning (satellite positions, time tags).
-    y_m : ndarray, shape (E, S)
-        Corrected pseudoranges (:func:`assisted_pseudoranges`).
-    epochs : array-like of int, shape (B, 2)
-        The two epochs of each fix (indices into ``meas.t_gps_s``).
-    sats : array-like of int, shape (B, 2)
-        The two satellites of each fix (indices into ``meas.sats``).
-    height_m : array-like, shape (B,) or scalar
-        Assumed heights (m).
-    start_xyz_m : array-like, shape (3,) or (B, 3)
-        Cell positions (ECEF, m).
-
-    Returns
-    -------
-    AgpsProblem
-        Fixes whose satellites lack a corrected pseudorange at one of the epochs are marked not
-        usable (status ``missing_measurement`` when solved).
-
-    Raises
-    ------
-    ValueError
-        Indices of the wrong shape or outside the arrays, the same epoch or satellite twice in
-        a fix, a bad height (:class:`AgpsProblem`).
-    """
-    ep = np.asarray(epochs)
-    sv = np.asarray(sats)
-    n_e, n_s = y_m.shape
-    for name, arr, size in (("epochs", ep, n_e), ("sats", sv, n_s)):
-        if arr.ndim != 2 or arr.shape[1] != 2 or arr.dtype.kind not in "iu":
-            raise ValueError(f"{name}: expected an integer array of shape (B, 2), got {arr.shape}")
-        if arr.size and (arr.min() < 0 or arr.max() >= size):
-            raise ValueError(f"{name}: indices outside 0..{size - 1}")
-    if ep.shape != sv.shape:
-        raise ValueError(f"sats: expected shape {ep.shape} like epochs, got {sv.shape}")
-    twice = np.flatnonzero(sv[:, 0] == sv[:, 1])
-    if twice.size:
-        raise ValueError(
-            f"sats: fix {twice[0]} uses satellite {meas.sats[sv[twice[0], 0]]} twice; "
-            "two different satellites are needed"
-        )
-    n = ep.shape[0]
-    e4 = np.stack([ep[:, 0], ep[:, 0], ep[:, 1], ep[:, 1]], axis=1)
-    s4 = np.stack([sv[:, 0], sv[:, 1], sv[:, 0], sv[:, 1]], axis=1)
-    y = y_m[e4, s4]
-    pos = meas.sat_pos_m[e4, s4]
-    start = np.broadcast_to(np.asarray(start_xyz_m, dtype=float), (n, 3))
-    return AgpsProblem(
-        t_gps_s=meas.t_gps_s[ep],
-        sat_pos_m=pos,
-        y_m=y,
-        height_m=np.broadcast_to(np.asarray(height_m, dtype=float), (n,)).copy(),
-        start_xyz_m=start.copy(),
-        usable=np.isfinite(y),
-    )
+    return reason

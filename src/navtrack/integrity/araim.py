@@ -56,7 +56,7 @@ from navtrack.geodesy import ecef_to_geodetic
 from navtrack.integrity.ism import ErrorModel, Ism, error_model
 
 if TYPE_CHECKING:
-    from navtrack.gnss.spp import Estimate, Measurements
+    from navtrack.gnss.spp import Measurements, PositionEstimate
 
 __all__ = [
     "AraimEpoch",
@@ -619,7 +619,7 @@ def _chunks(ids: list[int], modes: FaultModes, n_p: int) -> Iterator[list[int]]:
 
 
 def _epoch_jobs(
-    estimate: Estimate, used: BoolArray, letters: np.ndarray, model: ErrorModel
+    estimate: PositionEstimate, used: BoolArray, letters: np.ndarray, model: ErrorModel
 ) -> tuple[dict[int, _Job], dict[int, FloatArray]]:
     """The job of every epoch with more satellites than unknowns, and the map of its clock
     columns back to the estimate's clock + ISBs."""
@@ -649,7 +649,7 @@ def _epoch_jobs(
 
 
 def araim(
-    estimate: Estimate,
+    estimate: PositionEstimate,
     sats: tuple[str, ...],
     model: ErrorModel,
     ism: Ism,
@@ -659,7 +659,7 @@ def araim(
 
     Parameters
     ----------
-    estimate : Estimate
+    estimate : PositionEstimate
         Linearisation point: design matrix, residuals and used satellites.
     sats : tuple of str, length S
     model : ErrorModel
@@ -738,7 +738,7 @@ def _store(
     )
 
 
-def araim_model(meas: Measurements, estimate: Estimate, ism: Ism) -> ErrorModel:
+def araim_model(meas: Measurements, estimate: PositionEstimate, ism: Ism) -> ErrorModel:
     """The error model of an estimate's epochs (geodetic position from its state)."""
     llh = ecef_to_geodetic(estimate.x[:, :3])
     return error_model(ism, meas.sats, estimate.azel_rad, llh[:, :2], meas.ionofree)

@@ -9,15 +9,12 @@ remains is measurement and model error, and averages them per satellite and per 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray, IntArray
-
-if TYPE_CHECKING:
-    from navtrack.gnss.spp import Estimate
+from navtrack.gnss.spp import PositionEstimate, SppStatus
 
 __all__ = ["ResidualBias", "residual_bias"]
 
@@ -61,7 +58,9 @@ class ResidualBias:
         return "\n".join(lines)
 
 
-def residual_bias(estimate: Estimate, sats: tuple[str, ...], ref_xyz_m: ArrayLike) -> ResidualBias:
+def residual_bias(
+    estimate: PositionEstimate, sats: tuple[str, ...], ref_xyz_m: ArrayLike
+) -> ResidualBias:
     """Per-satellite and per-system mean residuals at a reference position.
 
     The residuals ``v`` at the estimate are moved to the reference position with the design
@@ -72,7 +71,7 @@ def residual_bias(estimate: Estimate, sats: tuple[str, ...], ref_xyz_m: ArrayLik
 
     Parameters
     ----------
-    estimate : Estimate
+    estimate : PositionEstimate
         Of the epochs to average (only epochs with ``status == ok`` count).
     sats : tuple of str, length S
         Satellite ids of the satellite axis (``Measurements.sats``).
@@ -83,8 +82,6 @@ def residual_bias(estimate: Estimate, sats: tuple[str, ...], ref_xyz_m: ArrayLik
     -------
     ResidualBias
     """
-    from navtrack.gnss.spp import SppStatus
-
     ref = np.broadcast_to(np.asarray(ref_xyz_m, dtype=float), estimate.x[:, :3].shape)
     ok = estimate.status == SppStatus.OK
     used = estimate.used & ok[:, None] & (estimate.weights > 0)

@@ -248,6 +248,45 @@ def fuzzy_cmeans(
     problem gives alone.
     """
     x = np.asarray(samples, dtype=float)
+    ok, start = _checked_start(x, c, m, valid, init_centres, stop)
+    w = ok.astype(float)
+    x2 = np.sum(x * x, axis=-1)
+    centres = np.take_along_axis(x, start[..., None], axis=-2)
+    u0 = _memberships(x, x2, centres, m, w)
+    u = np.maximum(u0, _EPS) * w[..., None, :]
+    batch = x.shape[:-2]
+    # flatten the batch axes; work on the problems still iterating only
+    n_s, q = x.shape[-2:]
+    xf, x2f, wf = x.reshape(-1, n_s, q), x2.reshape(-1, n_s), w.reshape(-1, n_s)
+    uf = np.array(u.reshape(-1, c, n_s))
+    cf = np.array(centres.reshape(-1, c, q))
+    iterations, act = _iterate(xf, x2f, wf, uf, cf, m, tol, max_iter, stop)
+    converged = np.ones(xf.shape[0], dtype=bool)
+    converged[act] = False
+    u = uf.reshape(u.shape)
+    centres = cf.reshape(centres.shape)
+    active = ~converged.reshape(batch)
+    classes = np.where(ok, np.argmax(u, axis=-2), -1).astype(np.int64)
+    return FcmResult(
+        u=u,
+        u0=u0,
+        centres=centres,
+        classes=classes,
+        iterations=iterations.reshape(batch),
+        converged=~active,
+    )
+
+
+def _checked_start(
+    x: FloatArray,
+    c: int,
+    m: float,
+    valid: ArrayLike | None,
+    init_centres: IntArray | None,
+    stop: str,
+) -> tuple[BoolArray, IntArray]:
+    """The checked arguments of :func:`fuzzy_cmeans`: the valid-sample mask and the samples
+    the centres start at."""
     if x.ndim < 2:
         raise ValueError(f"samples: expected shape (..., N, q), got {x.shape}")
     if not np.all(np.isfinite(x)):
@@ -271,20 +310,24 @@ def fuzzy_cmeans(
     start = np.asarray(init_centres, dtype=np.int64)
     if start.shape != (*x.shape[:-2], c):
         raise ValueError(f"init_centres: expected shape {(*x.shape[:-2], c)}, got {start.shape}")
-    w = ok.astype(float)
-    x2 = np.sum(x * x, axis=-1)
-    centres = np.take_along_axis(x, start[..., None], axis=-2)
-    u0 = _memberships(x, x2, centres, m, w)
-    u = np.maximum(u0, _EPS) * w[..., None, :]
-    batch = x.shape[:-2]
-    # flatten the batch axes; work on the problems still iterating only
-    n_s, q = x.shape[-2:]
-    xf, x2f, wf = x.reshape(-1, n_s, q), x2.reshape(-1, n_s), w.reshape(-1, n_s)
-    uf = np.array(u.reshape(-1, c, n_s))
-    cf = np.array(centres.reshape(-1, c, q))
-    iterations = np.zeros(xf.shape[0], dtype=np.int64)
-    act = np.arange(xf.shape[0])
-    xs, x2s, ws = xf, x2f, wf
+    return ok, start
+
+
+def _iterate(
+    xs: FloatArray,
+    x2s: FloatArray,
+    ws: FloatArray,
+    uf: FloatArray,
+    cf: FloatArray,
+    m: float,
+    tol: float,
+    max_iter: int,
+    stop: str,
+) -> tuple[IntArray, IntArray]:
+    """The FCM iterations of flattened problems, updating memberships ``uf`` and centres
+    ``cf`` in place; the iterations of each problem and those still not converged."""
+    iterations = np.zeros(xs.shape[0], dtype=np.int64)
+    act = np.arange(xs.shape[0])
     for _ in range(max_iter):
         if not act.size:
             break
@@ -300,20 +343,7 @@ def fuzzy_cmeans(
         done = np.sqrt(np.sum(change**2, axis=(-2, -1))) < tol
         if done.any():
             act, xs, x2s, ws = act[~done], xs[~done], x2s[~done], ws[~done]
-    converged = np.ones(xf.shape[0], dtype=bool)
-    converged[act] = False
-    u = uf.reshape(u.shape)
-    centres = cf.reshape(centres.shape)
-    active = ~converged.reshape(batch)
-    classes = np.where(ok, np.argmax(u, axis=-2), -1).astype(np.int64)
-    return FcmResult(
-        u=u,
-        u0=u0,
-        centres=centres,
-        classes=classes,
-        iterations=iterations.reshape(batch),
-        converged=~active,
-    )
+    return iterations, act
 
 
 def gross_error_columns(classes: ArrayLike) -> BoolArray:
@@ -370,6 +400,7 @@ def hierarchical_classes(
     ndarray of int, shape (N,)
         Class labels from 0.
     """
+    # scipy.cluster: only this alternative to FCM needs it
     from scipy.cluster.hierarchy import fcluster, linkage
 
     x = np.asarray(samples, dtype=float)

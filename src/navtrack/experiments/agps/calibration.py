@@ -38,6 +38,7 @@ from navtrack.experiments.agps.simulation import (
     solver_config,
 )
 from navtrack.experiments.agps.summary import PAPER_TABLE_I, error_statistics, height_key
+from navtrack.gnss.agps import AgpsProblem, AgpsStatus, solve_agps
 
 __all__ = [
     "GRID",
@@ -78,7 +79,6 @@ def solver_table(
     iterations : ndarray, shape (runs, heights)
         Linear solves of each fix.
     """
-    from navtrack.gnss.agps import AgpsProblem, AgpsStatus, solve_agps
 
     rng = np.random.default_rng(seed)
     n_h = len(params.heights_m)

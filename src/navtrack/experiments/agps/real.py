@@ -5,7 +5,7 @@ yamatogawa master and the Android GnssLogger phone), the SPP stages of
 :mod:`navtrack.gnss.spp` give corrected GPS L1 C/A pseudoranges and satellite states; the
 assistance corrections (ionosphere, troposphere) are evaluated at a base station (cell) with
 the reference position uniformly over a disc of ``cell_radius_m`` around it
-(:func:`navtrack.gnss.agps.assisted_pseudoranges`).
+(:func:`navtrack.positioning.agps.assisted_pseudoranges`).
 
 Fine-time assistance: an AGPS phone gets GPS time from the network to about a microsecond, so
 its clock biases are known to a few hundred metres before any iteration. Station receivers'
@@ -25,16 +25,19 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, cast
 
 import numpy as np
 
+from navtrack.experiments.agps.simulation import SOLVER_NAMES
 from navtrack.geodesy import ecef_to_geodetic, enu_rotation
+from navtrack.gnss.agps import AgpsConfig, AgpsStatus, Solver
+from navtrack.gnss.spp import Measurements, SppConfig, solve_spp
+from navtrack.positioning.agps import assisted_pseudoranges, read_gps_measurements, solve_fixes
 
-if TYPE_CHECKING:
-    from navtrack.gnss.agps import AgpsConfig
+__all__ = ["REAL_DATA_SETS", "RealDataSet", "fix_pairs", "real_data_study"]
 
-__all__ = ["REAL_DATA_SETS", "RealDataSet", "real_data_study"]
+_SOLVERS = cast("tuple[Solver, ...]", SOLVER_NAMES)  # the solvers of the result arrays, in order
 
 
 @dataclass(frozen=True, slots=True)
@@ -93,22 +96,7 @@ REAL_DATA_SETS: tuple[RealDataSet, ...] = (
 )
 
 
-def _read(gnss_dir: Path, ds: RealDataSet) -> tuple[Any, Any]:
-    from navtrack.gnss.rinex.nav import read_nav
-
-    obs_path = gnss_dir / ds.obs
-    if obs_path.suffix == ".txt":
-        from navtrack.gnss.android import read_gnsslogger
-
-        obs = read_gnsslogger(obs_path)
-    else:
-        from navtrack.gnss.rinex.obs import read_obs
-
-        obs = read_obs(obs_path)
-    return obs, read_nav(gnss_dir / ds.nav)
-
-
-def _pairs(
+def fix_pairs(
     t_gps_s: np.ndarray, usable: np.ndarray, interval_s: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """All (epoch pair, satellite pair) combinations at ``interval_s`` (within 0.5 s)."""
@@ -171,107 +159,169 @@ def real_data_study(
     skipped : list of str
         Data sets not run, with the reason.
     """
-    from navtrack.experiments.agps.simulation import SOLVER_NAMES
-    from navtrack.gnss.agps import (
-        AgpsStatus,
-        assisted_pseudoranges,
-        gps_measurements,
-        problem_from_measurements,
-        solve_agps,
-    )
-    from navtrack.gnss.spp import SppConfig, solve_spp
-
     cfg = SppConfig(systems="G", elmask_deg=elmask_deg)
-    n_s, n_i, n_h = len(SOLVER_NAMES), len(intervals_min), len(height_offsets_m)
-    rows_err, rows_it, rows_st, rows_set = [], [], [], []
-    rows_cc: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    shape = (len(SOLVER_NAMES), len(intervals_min), len(height_offsets_m))
     zero_h = int(np.argmin(np.abs(np.asarray(height_offsets_m))))
+    rows: list[_SetFixes] = []
     counts: dict[str, dict[str, int]] = {}
     skipped: list[str] = []
     for ds in REAL_DATA_SETS:
         if not (gnss_dir / ds.obs).is_file() or not (gnss_dir / ds.nav).is_file():
             skipped.append(f"{ds.name}: {ds.obs} or {ds.nav} not found under {gnss_dir}")
             continue
-        obs, nav = _read(gnss_dir, ds)
-        meas = gps_measurements(obs, nav, cfg)
+        obs, nav, meas = read_gps_measurements(gnss_dir / ds.obs, gnss_dir / ds.nav, cfg)
         network_clock_m = solve_spp(obs, nav, config=cfg).clock_m
         assist_error_m = rng.uniform(-clock_bias_m, clock_bias_m, network_clock_m.shape)
         fine_time = (assist_error_m - network_clock_m)[:, None]  # NaN: no network time
         ref = np.asarray(ds.ref_xyz_m)
-        lat, lon, h_ref = ecef_to_geodetic(ref)
-        rot = enu_rotation(lat, lon)
-        counts[ds.name] = {}
-        per_interval = []
-        for ii, interval in enumerate(intervals_min):
-            # cells are drawn per fix; the atmosphere is evaluated at the data set's first cell
-            az = rng.uniform(0.0, 2.0 * np.pi)
-            dist = cell_radius_m * math.sqrt(rng.uniform())
-            cell = ref + rot.T @ (dist * np.array([math.sin(az), math.cos(az), 0.0]))
-            y_station = assisted_pseudoranges(meas, cell, cfg)
-            y = y_station + fine_time
-            ep, sv = _pairs(meas.t_gps_s, np.isfinite(y), 60.0 * interval)
-            take = rng.permutation(ep.shape[0])[:fixes]
-            ep, sv = ep[take], sv[take]
-            counts[ds.name][f"{interval:g}"] = int(ep.shape[0])
-            per_interval.append((ii, ep, sv, y, y_station))
+        per_interval = _sample_fixes(
+            meas, ref, fine_time, rng, intervals_min, fixes, cell_radius_m, cfg
+        )
+        counts[ds.name] = {
+            f"{iv:g}": int(p[1].shape[0]) for iv, p in zip(intervals_min, per_interval, strict=True)
+        }
         n_max = max((p[1].shape[0] for p in per_interval), default=0)
         if n_max == 0:
             skipped.append(f"{ds.name}: no satellite pair usable at two epochs at any interval")
             continue
-        err = np.full((n_max, n_s, n_i, n_h), np.nan)
-        its = np.zeros((n_max, n_s, n_i, n_h), dtype=np.int64)
-        sts = np.full((n_max, n_s, n_i, n_h), -1, dtype=np.int8)  # -1: padding, no fix
-        cc = (
-            np.full((n_max, n_s, n_i), np.nan),
-            np.zeros((n_max, n_s, n_i), dtype=np.int64),
-            np.full((n_max, n_s, n_i), -1, dtype=np.int8),
-        )
+        fixes_of_set = _SetFixes.empty(ds.name, n_max, shape)
         for ii, ep, sv, y, y_station in per_interval:
-            n = ep.shape[0]
-            if n == 0:
-                continue
-            az = rng.uniform(0.0, 2.0 * np.pi, n)
-            dist = cell_radius_m * np.sqrt(rng.uniform(size=n))
-            enu = np.stack([dist * np.sin(az), dist * np.cos(az), np.zeros(n)], axis=1)
-            cells = ref + enu @ rot
-            for hh, dh in enumerate(height_offsets_m):
-                prob = problem_from_measurements(meas, y, ep, sv, h_ref + dh, cells)
-                for j, solver in enumerate(SOLVER_NAMES):
-                    res = solve_agps(prob, solver, config)  # type: ignore[arg-type]
-                    ok = res.status == AgpsStatus.OK
-                    d = np.linalg.norm(res.pos_m - ref, axis=1)
-                    err[:n, j, ii, hh] = np.where(ok, d, np.nan)
-                    its[:n, j, ii, hh] = res.iterations
-                    sts[:n, j, ii, hh] = res.status
-                if hh != zero_h:
-                    continue
-                station = problem_from_measurements(meas, y_station, ep, sv, h_ref + dh, cells)
-                for j, solver in enumerate(SOLVER_NAMES):
-                    res = solve_agps(station, solver, config)  # type: ignore[arg-type]
-                    d = np.linalg.norm(res.pos_m - ref, axis=1)
-                    cc[0][:n, j, ii] = np.where(res.status == AgpsStatus.OK, d, np.nan)
-                    cc[1][:n, j, ii] = res.iterations
-                    cc[2][:n, j, ii] = res.status
-        rows_cc.append(cc)
-        rows_err.append(err)
-        rows_it.append(its)
-        rows_st.append(sts)
-        rows_set += [ds.name] * n_max
-    if not rows_err:
-        empty = np.zeros((0, n_s, n_i, n_h))
+            if ep.shape[0]:
+                run = _IntervalFixes(meas, ref, ii, ep, sv, y, y_station)
+                _solve_interval(
+                    run, fixes_of_set, rng, height_offsets_m, zero_h, cell_radius_m, config
+                )
+        rows.append(fixes_of_set)
+    return _collect(rows, shape, counts), skipped
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _IntervalFixes:
+    """The sampled fixes of one data set at one interval: epoch and satellite pairs and the
+    pseudoranges with fine-time assistance (``y``) and with the station's clocks."""
+
+    meas: Measurements
+    ref: np.ndarray
+    interval: int
+    epochs: np.ndarray
+    sats: np.ndarray
+    y: np.ndarray
+    y_station: np.ndarray
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _SetFixes:
+    """Error, iterations and status of the fixes of one data set, (n, solvers, intervals,
+    heights), and with the station's clocks, (n, solvers, intervals)."""
+
+    name: str
+    err: np.ndarray
+    its: np.ndarray
+    sts: np.ndarray
+    cc: tuple[np.ndarray, np.ndarray, np.ndarray]
+
+    @classmethod
+    def empty(cls, name: str, n_max: int, shape: tuple[int, int, int]) -> _SetFixes:
+        n_s, n_i, _ = shape
+        return cls(
+            name,
+            np.full((n_max, *shape), np.nan),
+            np.zeros((n_max, *shape), dtype=np.int64),
+            np.full((n_max, *shape), -1, dtype=np.int8),  # -1: padding, no fix
+            (
+                np.full((n_max, n_s, n_i), np.nan),
+                np.zeros((n_max, n_s, n_i), dtype=np.int64),
+                np.full((n_max, n_s, n_i), -1, dtype=np.int8),
+            ),
+        )
+
+
+def _sample_fixes(
+    meas: Measurements,
+    ref: np.ndarray,
+    fine_time: np.ndarray,
+    rng: np.random.Generator,
+    intervals_min: tuple[float, ...],
+    fixes: int,
+    cell_radius_m: float,
+    cfg: SppConfig,
+) -> list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """Per interval: up to ``fixes`` sampled (epoch pair, satellite pair) combinations and the
+    assisted pseudoranges (with fine time, with the station's clocks)."""
+    lat, lon, _ = ecef_to_geodetic(ref)
+    rot = enu_rotation(lat, lon)
+    per_interval = []
+    for ii, interval in enumerate(intervals_min):
+        # cells are drawn per fix; the atmosphere is evaluated at the data set's first cell
+        az = rng.uniform(0.0, 2.0 * np.pi)
+        dist = cell_radius_m * math.sqrt(rng.uniform())
+        cell = ref + rot.T @ (dist * np.array([math.sin(az), math.cos(az), 0.0]))
+        y_station = assisted_pseudoranges(meas, cell, cfg)
+        y = y_station + fine_time
+        ep, sv = fix_pairs(meas.t_gps_s, np.isfinite(y), 60.0 * interval)
+        take = rng.permutation(ep.shape[0])[:fixes]
+        per_interval.append((ii, ep[take], sv[take], y, y_station))
+    return per_interval
+
+
+def _solve_interval(
+    run: _IntervalFixes,
+    out: _SetFixes,
+    rng: np.random.Generator,
+    height_offsets_m: tuple[float, ...],
+    zero_h: int,
+    cell_radius_m: float,
+    config: AgpsConfig,
+) -> None:
+    """Solve the fixes of one interval at every height offset with every solver (and with the
+    station's clocks at the offset nearest 0) into ``out``."""
+    ref, ii, n = run.ref, run.interval, run.epochs.shape[0]
+    lat, lon, h_ref = ecef_to_geodetic(ref)
+    rot = enu_rotation(lat, lon)
+    az = rng.uniform(0.0, 2.0 * np.pi, n)
+    dist = cell_radius_m * np.sqrt(rng.uniform(size=n))
+    enu = np.stack([dist * np.sin(az), dist * np.cos(az), np.zeros(n)], axis=1)
+    cells = ref + enu @ rot
+    for hh, dh in enumerate(height_offsets_m):
+        for j, solver in enumerate(_SOLVERS):
+            res = solve_fixes(
+                run.meas, run.y, run.epochs, run.sats, h_ref + dh, cells, solver, config
+            )
+            d = np.linalg.norm(res.pos_m - ref, axis=1)
+            out.err[:n, j, ii, hh] = np.where(res.status == AgpsStatus.OK, d, np.nan)
+            out.its[:n, j, ii, hh] = res.iterations
+            out.sts[:n, j, ii, hh] = res.status
+        if hh != zero_h:
+            continue
+        for j, solver in enumerate(_SOLVERS):
+            res = solve_fixes(
+                run.meas, run.y_station, run.epochs, run.sats, h_ref + dh, cells, solver, config
+            )
+            d = np.linalg.norm(res.pos_m - ref, axis=1)
+            out.cc[0][:n, j, ii] = np.where(res.status == AgpsStatus.OK, d, np.nan)
+            out.cc[1][:n, j, ii] = res.iterations
+            out.cc[2][:n, j, ii] = res.status
+
+
+def _collect(
+    rows: list[_SetFixes], shape: tuple[int, int, int], counts: dict[str, dict[str, int]]
+) -> dict[str, Any]:
+    """The arrays of all data sets, concatenated (empty ones without any)."""
+    if not rows:
+        empty = np.zeros((0, *shape))
         return {
             "error_m": empty,
             "iterations": empty.astype(np.int64),
             "status": empty.astype(np.int8),
             "set": np.array([], dtype=str),
-            "station_clock": tuple(np.zeros((0, n_s, n_i)) for _ in range(3)),
+            "station_clock": tuple(np.zeros((0, *shape[:2])) for _ in range(3)),
             "n_fixes": counts,
-        }, skipped
+        }
     return {
-        "error_m": np.concatenate(rows_err),
-        "iterations": np.concatenate(rows_it),
-        "status": np.concatenate(rows_st),
-        "set": np.array(rows_set),
-        "station_clock": tuple(np.concatenate([c[k] for c in rows_cc]) for k in range(3)),
+        "error_m": np.concatenate([r.err for r in rows]),
+        "iterations": np.concatenate([r.its for r in rows]),
+        "status": np.concatenate([r.sts for r in rows]),
+        "set": np.array([r.name for r in rows for _ in range(r.err.shape[0])]),
+        "station_clock": tuple(np.concatenate([r.cc[k] for r in rows]) for k in range(3)),
         "n_fixes": counts,
-    }, skipped
+    }

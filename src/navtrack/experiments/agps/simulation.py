@@ -42,20 +42,21 @@ J.-z. Li, ICCET 2010, section IV-B (site 39.959103° N, 116.352853° E, 56.23 m;
 from __future__ import annotations
 
 import dataclasses
+import importlib.resources
 import math
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
 
-from navtrack._typing import FloatArray
+from navtrack._typing import FloatArray, IntArray
 from navtrack.geodesy import C_MPS, azimuth_elevation, enu_rotation, geodetic_to_ecef
-from navtrack.gnss.agps import F5Units
-
-if TYPE_CHECKING:
-    from navtrack.gnss.agps import AgpsConfig, AgpsProblem
+from navtrack.gnss.agps import AgpsConfig, AgpsProblem, AgpsStatus, F5Units, fix_dop, solve_agps
+from navtrack.gnss.corrections import geometric_range
+from navtrack.gnss.ephemeris import broadcast_states, ephemeris_tables
+from navtrack.gnss.rinex.nav import read_nav
 
 __all__ = [
     "PAPER_HEIGHTS_M",
@@ -175,7 +176,6 @@ def solver_config(params: AgpsExperimentParams) -> AgpsConfig:
     model's zenith-level terms, at least 0.1 m). The paper's statistics count every fix: no
     plausibility checks, and no geometry screen (the simulated pairs are screened when drawn,
     the real-data study sets its own)."""
-    from navtrack.gnss.agps import AgpsConfig
 
     sigma = math.hypot(
         params.sigma_noise_m,
@@ -199,16 +199,12 @@ def solver_config(params: AgpsExperimentParams) -> AgpsConfig:
 
 def default_nav_path() -> Path:
     """The bundled full-day GPS navigation file ``hour2350.16n``."""
-    import importlib.resources
-
     return Path(str(importlib.resources.files("navtrack.data") / "hour2350.16n"))
 
 
 @lru_cache(maxsize=4)
 def _gps_tables(path: str) -> tuple[dict[str, Any], tuple[str, ...], float, float]:
     """GPS ephemeris tables of a navigation file, its satellites and its toe span (GPS s)."""
-    from navtrack.gnss.ephemeris import ephemeris_tables
-    from navtrack.gnss.rinex.nav import read_nav
 
     tables = ephemeris_tables(read_nav(path))
     if "G" not in tables:
@@ -231,8 +227,6 @@ def _states(
     tables: dict[str, Any], sats: tuple[str, ...], t_rx: FloatArray, truth: FloatArray
 ) -> tuple[FloatArray, np.ndarray]:
     """Satellite positions at transmission seen from ``truth`` (E, S, 3), and validity (E, S)."""
-    from navtrack.gnss.corrections import geometric_range
-    from navtrack.gnss.ephemeris import broadcast_states
 
     t_tx = np.repeat((t_rx - 0.075)[:, None], len(sats), axis=1)
     for _ in range(2):
@@ -247,7 +241,6 @@ def _pair_dops(
 ) -> tuple[np.ndarray, FloatArray]:
     """All pairs of the satellites ``seen`` and the DOP of their fix over the first interval
     (epochs 0 and 1), solved from ``cell``."""
-    from navtrack.gnss.agps import AgpsProblem, fix_dop
 
     i, j = np.triu_indices(seen.size, k=1)
     pairs = np.stack([seen[i], seen[j]], axis=1)
@@ -287,38 +280,16 @@ def fix_set_problem(
         ``dop`` (the pair's DOP at the first interval), ``noise_m`` (the white noise in
         ``problem.y_m``, same shape, for the noise sensitivity).
     """
-    from navtrack.gnss.agps import AgpsProblem
-    from navtrack.gnss.corrections import geometric_range
 
     nav = params.nav if params.nav is not None else default_nav_path()
-    tables, sats, t_lo, t_hi = _gps_tables(str(nav))
+    sats = _gps_tables(str(nav))[1]
     lat, lon = math.radians(params.site_llh[0]), math.radians(params.site_llh[1])
     truth = geodetic_to_ecef(np.array([lat, lon, params.site_llh[2]]))
     fraction = math.sqrt(rng.uniform())  # uniform over the disc
     az = rng.uniform(0.0, 2.0 * np.pi)
     direction = enu_rotation(lat, lon).T @ np.array([math.sin(az), math.cos(az), 0.0])
     cell = truth + params.cell_radius_m * fraction * direction
-    offsets_s = 60.0 * np.array((0.0, *params.intervals_min))
-    span = offsets_s[-1] if offsets_s.size else 0.0
-    for _attempt in range(100):
-        t1 = float(rng.uniform(t_lo, max(t_lo, t_hi - span)))
-        t_rx = t1 + offsets_s
-        pos, valid = _states(tables, sats, t_rx, truth)
-        el = azimuth_elevation(np.where(valid[..., None], pos, 0.0), truth)[..., 1]
-        seen = np.flatnonzero((valid & (el >= math.radians(params.elmask_deg))).all(axis=0))
-        if seen.size < 2:
-            continue
-        pairs, dop = _pair_dops(pos, seen, t_rx, cell, params.site_llh[2])
-        good = np.flatnonzero(dop <= params.max_dop)
-        if good.size:
-            k = int(rng.choice(good))
-            pair, pair_dop = pairs[k], float(dop[k])
-            break
-    else:
-        raise ValueError(
-            f"nav: no two GPS satellites above {params.elmask_deg:g} deg with a DOP at most "
-            f"{params.max_dop:g} at the site over {span:g} s in 100 draws from {nav}"
-        )
+    t1, t_rx, pos, el, pair, pair_dop = _draw_pair(params, str(nav), truth, cell, rng)
     sat_true = pos[:, pair]  # (E, 2, 3)
     el_pair = el[:, pair]
     orbit = rng.normal(0.0, params.sigma_orbit_m, size=(2, 3))
@@ -357,6 +328,38 @@ def fix_set_problem(
     return problem, truth, meta
 
 
+def _draw_pair(
+    params: AgpsExperimentParams,
+    nav: str,
+    truth: FloatArray,
+    cell: FloatArray,
+    rng: np.random.Generator,
+) -> tuple[float, FloatArray, FloatArray, FloatArray, IntArray, float]:
+    """A first epoch and a satellite pair seen above the mask at every interval with a DOP at
+    most ``max_dop`` (up to 100 draws): the epoch, the epochs' times, the satellite positions
+    and elevations of all satellites, the pair and its DOP."""
+    tables, sats, t_lo, t_hi = _gps_tables(nav)
+    offsets_s = 60.0 * np.array((0.0, *params.intervals_min))
+    span = offsets_s[-1] if offsets_s.size else 0.0
+    for _attempt in range(100):
+        t1 = float(rng.uniform(t_lo, max(t_lo, t_hi - span)))
+        t_rx = t1 + offsets_s
+        pos, valid = _states(tables, sats, t_rx, truth)
+        el = azimuth_elevation(np.where(valid[..., None], pos, 0.0), truth)[..., 1]
+        seen = np.flatnonzero((valid & (el >= math.radians(params.elmask_deg))).all(axis=0))
+        if seen.size < 2:
+            continue
+        pairs, dop = _pair_dops(pos, seen, t_rx, cell, params.site_llh[2])
+        good = np.flatnonzero(dop <= params.max_dop)
+        if good.size:
+            k = int(rng.choice(good))
+            return t1, t_rx, pos, el, pairs[k], float(dop[k])
+    raise ValueError(
+        f"nav: no two GPS satellites above {params.elmask_deg:g} deg with a DOP at most "
+        f"{params.max_dop:g} at the site over {span:g} s in 100 draws from {nav}"
+    )
+
+
 def sensitivity_names(params: AgpsExperimentParams) -> list[str]:
     """Names of the sensitivity variants of :func:`simulate_fix_set`: the other ``f5``
     reading, each cell radius of the sweep, each noise factor."""
@@ -366,6 +369,54 @@ def sensitivity_names(params: AgpsExperimentParams) -> list[str]:
         *(f"cell_{r:g}" for r in params.cell_radius_sweep_m),
         *(f"noise_{k:g}" for k in params.noise_sweep),
     ]
+
+
+def _solve_against(
+    prob: AgpsProblem, solver: str, cfg: AgpsConfig, truth: FloatArray
+) -> tuple[Any, FloatArray]:
+    """Solve the fixes; their ECEF errors against the truth (NaN where not ``ok``)."""
+    res = solve_agps(prob, solver, cfg)  # type: ignore[arg-type]
+    ok = res.status == AgpsStatus.OK
+    return res, np.where(ok[:, None], res.pos_m - truth, np.nan)
+
+
+def _sensitivity_problems(
+    params: AgpsExperimentParams, problem: AgpsProblem, truth: FloatArray, meta: dict[str, Any]
+) -> tuple[AgpsProblem, AgpsProblem]:
+    """The first-interval fixes (``base``) and, stacked into one batch, the same fixes under
+    each cell-radius and noise variant of :func:`sensitivity_names` (the f5 reading changes
+    the solver, not the problem)."""
+    n_h = len(params.heights_m)
+    first = slice(0, n_h)  # the fixes of the first interval
+    base = AgpsProblem(
+        problem.t_gps_s[first],
+        problem.sat_pos_m[first],
+        problem.y_m[first],
+        problem.height_m[first],
+        problem.start_xyz_m[first],
+        problem.usable[first],
+    )
+    names = sensitivity_names(params)
+    starts, ys = [], []
+    for name in names[1:]:
+        kind, value = name.split("_", 1)
+        if kind == "cell":
+            cell = truth + float(value) * meta["cell_fraction"] * meta["cell_direction"]
+            starts.append(np.repeat(cell[None], n_h, 0))
+            ys.append(base.y_m)
+        else:
+            starts.append(base.start_xyz_m)
+            ys.append(base.y_m + (float(value) - 1.0) * meta["noise_m"][first])
+    n_v = len(starts)
+    stacked = AgpsProblem(
+        np.tile(base.t_gps_s, (n_v, 1)),
+        np.tile(base.sat_pos_m, (n_v, 1, 1)),
+        np.concatenate(ys),
+        np.tile(base.height_m, n_v),
+        np.concatenate(starts),
+        np.tile(base.usable, (n_v, 1)),
+    )
+    return base, stacked
 
 
 def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> dict[str, Any]:
@@ -387,18 +438,12 @@ def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> 
         for Gauss–Newton and Marquardt at the first interval (:func:`sensitivity_names`);
         ``sats`` (the pair), ``t_gps_s`` (first epoch), ``dop``, ``cell_distance_m``.
     """
-    from navtrack.gnss.agps import AgpsProblem, AgpsStatus, solve_agps
 
     problem, truth, meta = fix_set_problem(params, rng)
     n_i, n_h = len(params.intervals_min), len(params.heights_m)
     lat, lon = math.radians(params.site_llh[0]), math.radians(params.site_llh[1])
     config = solver_config(params)
     rot = enu_rotation(lat, lon)
-
-    def solve(prob: AgpsProblem, solver: str, cfg: AgpsConfig) -> tuple[Any, FloatArray]:
-        res = solve_agps(prob, solver, cfg)  # type: ignore[arg-type]
-        ok = res.status == AgpsStatus.OK
-        return res, np.where(ok[:, None], res.pos_m - truth, np.nan)
 
     shape = (len(SOLVER_NAMES), n_i, n_h)
     out: dict[str, Any] = {
@@ -412,43 +457,14 @@ def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> 
         "cell_distance_m": params.cell_radius_m * meta["cell_fraction"],
     }
     for j, solver in enumerate(SOLVER_NAMES):
-        res, d = solve(problem, solver, config)
+        res, d = _solve_against(problem, solver, config, truth)
         out["error_m"][j] = np.linalg.norm(d, axis=1).reshape(n_i, n_h)
         out["horizontal_m"][j] = np.linalg.norm((d @ rot.T)[:, :2], axis=1).reshape(n_i, n_h)
         out["iterations"][j] = res.iterations.reshape(n_i, n_h)
         out["status"][j] = res.status.reshape(n_i, n_h)
 
-    first = slice(0, n_h)  # the fixes of the first interval
-    base = AgpsProblem(
-        problem.t_gps_s[first],
-        problem.sat_pos_m[first],
-        problem.y_m[first],
-        problem.height_m[first],
-        problem.start_xyz_m[first],
-        problem.usable[first],
-    )
+    base, stacked = _sensitivity_problems(params, problem, truth, meta)
     names = sensitivity_names(params)
-    # the f5 reading changes the solver; the cell and noise readings only the problem: those
-    # are stacked into one batch per solver
-    starts, ys = [], []
-    for name in names[1:]:
-        kind, value = name.split("_", 1)
-        if kind == "cell":
-            cell = truth + float(value) * meta["cell_fraction"] * meta["cell_direction"]
-            starts.append(np.repeat(cell[None], n_h, 0))
-            ys.append(base.y_m)
-        else:
-            starts.append(base.start_xyz_m)
-            ys.append(base.y_m + (float(value) - 1.0) * meta["noise_m"][first])
-    n_v = len(starts)
-    stacked = AgpsProblem(
-        np.tile(base.t_gps_s, (n_v, 1)),
-        np.tile(base.sat_pos_m, (n_v, 1, 1)),
-        np.concatenate(ys),
-        np.tile(base.height_m, n_v),
-        np.concatenate(starts),
-        np.tile(base.usable, (n_v, 1)),
-    )
     other_f5 = dataclasses.replace(
         config, f5_units="dimensionless" if config.f5_units == "m" else "m"
     )
@@ -458,7 +474,7 @@ def simulate_fix_set(params: AgpsExperimentParams, rng: np.random.Generator) -> 
     out["sens_status"] = np.zeros(sens_shape, dtype=np.int8)
     for j, solver in enumerate(("gn", "lm")):
         for rows, prob, cfg in ((slice(0, 1), base, other_f5), (slice(1, None), stacked, config)):
-            res, d = solve(prob, solver, cfg)
+            res, d = _solve_against(prob, solver, cfg, truth)
             out["sens_error_m"][rows, j] = np.linalg.norm(d, axis=1).reshape(-1, n_h)
             out["sens_iterations"][rows, j] = res.iterations.reshape(-1, n_h)
             out["sens_status"][rows, j] = res.status.reshape(-1, n_h)

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from navtrack._typing import ArrayLike
+from navtrack.gnss.agps import STATUS_NAMES
 
 __all__ = [
     "PAPER_MEAN_ITERATIONS",
@@ -99,7 +100,6 @@ def error_statistics(
         ``mean_m``, ``mean_iterations`` (over the ``ok`` fixes), ``n`` (``ok`` fixes),
         ``n_total`` and ``statuses`` (fixes per status name).
     """
-    from navtrack.gnss.agps import STATUS_NAMES
 
     err = np.asarray(error_m, dtype=float).ravel()
     it = np.asarray(iterations, dtype=float).ravel()

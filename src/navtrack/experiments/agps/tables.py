@@ -137,9 +137,18 @@ def _sensitivity_table(results: dict[str, Any]) -> list[str]:
 def tables_markdown(results: dict[str, Any]) -> str:
     """Tables I, II, III and the data of Figs. 2/3 beside the paper's, the sensitivity to the
     unstated readings, and the real-data study."""
+    first = f"{results['parameters']['intervals_min'][0]:g}"
+    lines = _introduction(results)
+    lines += _simulation_tables(results, first)
+    lines += _real_data_tables(results, first)
+    if results.get("real_skipped"):
+        lines += ["Skipped: " + "; ".join(results["real_skipped"]), ""]
+    return "\n".join(lines)
+
+
+def _introduction(results: dict[str, Any]) -> list[str]:
+    """Title, runs, the calibration on the baseline and the findings."""
     params = results["parameters"]
-    sim = results["simulation"]
-    first = f"{params['intervals_min'][0]:g}"
     cal = results.get("calibration", {})
     lines = [
         "# Two-satellite AGPS positioning (paper 1, Li 2010) — reproduction",
@@ -174,6 +183,13 @@ def tables_markdown(results: dict[str, Any]) -> str:
             *_verdict(results["findings_real_data"]),
             "",
         ]
+    return lines
+
+
+def _simulation_tables(results: dict[str, Any], first: str) -> list[str]:
+    """Tables I, II (and MAP), III, Figs. 2/3 and the sensitivity, simulation."""
+    sim = results["simulation"]
+    lines: list[str] = []
     for title, solver, paper in (
         ("Table I — Gauss–Newton (calibrated), navtrack (paper)", "gn", PAPER_TABLE_I),
         ("Table II — Marquardt (predicted), navtrack (paper)", "lm", PAPER_TABLE_II),
@@ -197,6 +213,12 @@ def tables_markdown(results: dict[str, Any]) -> str:
             *_sensitivity_table(results),
             "",
         ]
+    return lines
+
+
+def _real_data_tables(results: dict[str, Any], first: str) -> list[str]:
+    """The real-data tables (pooled and per data set); nothing without real data."""
+    lines: list[str] = []
     real = results.get("real_data") or {}
     if real.get("gn"):
         lines += [
@@ -221,31 +243,37 @@ def tables_markdown(results: dict[str, Any]) -> str:
         lines += [*_iteration_table(real, first, False), ""]
         lines += ["### Mean error (m) vs interval, real data", ""]
         lines += [*_interval_table(real, ["+0", "+20", "+40", "+100"]), ""]
-        per_set = results.get("real_data_sets", {})
-        if per_set:
-            lines += [
-                "### Per data set, true height (+0), mean error (m) / ok fixes",
-                "",
-                "Fine time: clocks known to ±300 m. Station clock: the receiver's own clock, "
-                "milliseconds off on some stations (an extension beyond an AGPS phone).",
-                "",
-                "| data set | interval | GN | LM | MAP | GN, station clock | LM, station clock "
-                "| MAP, station clock |",
-                "|---|---|---|---|---|---|---|---|",
-            ]
-            for name, by_solver in per_set.items():
-                for interval in by_solver.get("gn", {}):
-                    cells = [by_solver[s][interval] for s in ("gn", "lm", "map")]
-                    cells += [by_solver["station_clock"][s][interval] for s in ("gn", "lm", "map")]
-                    lines.append(
-                        f"| {name} | {interval} min | "
-                        + " | ".join(f"{_f(c['mean_m'], 0)} / {c['n']}" for c in cells)
-                        + " |"
-                    )
-            lines.append("")
-    if results.get("real_skipped"):
-        lines += ["Skipped: " + "; ".join(results["real_skipped"]), ""]
-    return "\n".join(lines)
+        lines += _per_set_table(results)
+    return lines
+
+
+def _per_set_table(results: dict[str, Any]) -> list[str]:
+    """Per data set at the true height: mean error / ok fixes with fine time and with the
+    station clock."""
+    lines: list[str] = []
+    per_set = results.get("real_data_sets", {})
+    if per_set:
+        lines += [
+            "### Per data set, true height (+0), mean error (m) / ok fixes",
+            "",
+            "Fine time: clocks known to ±300 m. Station clock: the receiver's own clock, "
+            "milliseconds off on some stations (an extension beyond an AGPS phone).",
+            "",
+            "| data set | interval | GN | LM | MAP | GN, station clock | LM, station clock "
+            "| MAP, station clock |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
+        for name, by_solver in per_set.items():
+            for interval in by_solver.get("gn", {}):
+                cells = [by_solver[s][interval] for s in ("gn", "lm", "map")]
+                cells += [by_solver["station_clock"][s][interval] for s in ("gn", "lm", "map")]
+                lines.append(
+                    f"| {name} | {interval} min | "
+                    + " | ".join(f"{_f(c['mean_m'], 0)} / {c['n']}" for c in cells)
+                    + " |"
+                )
+        lines.append("")
+    return lines
 
 
 def summary_lines(results: dict[str, Any]) -> list[str]:
@@ -275,6 +303,7 @@ def summary_lines(results: dict[str, Any]) -> list[str]:
 def write_figures(results: dict[str, Any], out_dir: Path) -> list[Path]:
     """Figs. 2 and 3 (mean error vs interval, heights 56/76 and 96/156 m) of the simulation,
     and the same for the real data at offsets +0/+100 m."""
+    # matplotlib: imported only when figures are written
     from navtrack.plots.canvas import new_figure, save_figure
 
     paths = []

@@ -28,8 +28,8 @@ from navtrack.geodesy import ecef_to_enu
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
 from navtrack.gnss.spp import (
-    Estimate,
     Measurements,
+    PositionEstimate,
     SppConfig,
     SppStatus,
     code_pseudoranges,
@@ -158,7 +158,7 @@ class StationData:
     name: str
     meas: Measurements
     config: SppConfig
-    clean: Estimate
+    clean: PositionEstimate
     variance_factor: float
     ref_xyz_m: np.ndarray
 
@@ -196,7 +196,11 @@ def _read_ism(path: str) -> Ism:
 
 
 def _trial_outcomes(
-    data: StationData, est: Estimate, meas: Measurements, fault: np.ndarray, raim: RaimConfig
+    data: StationData,
+    est: PositionEstimate,
+    meas: Measurements,
+    fault: np.ndarray,
+    raim: RaimConfig,
 ) -> dict[str, Any]:
     """Counts and per-trial errors and protection levels of one method on a batch of epochs."""
     final, _, integ = monitor(meas, est, data.config, raim)

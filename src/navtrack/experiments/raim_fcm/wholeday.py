@@ -20,8 +20,9 @@ import numpy as np
 from navtrack.geodesy import ecef_to_enu
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
-from navtrack.gnss.spp import SppConfig, solve_spp
+from navtrack.gnss.spp import SppConfig
 from navtrack.integrity.raim import RaimConfig, RaimStatus
+from navtrack.positioning import solve_positions
 
 __all__ = ["DAY_STATIONS", "DayStation", "whole_day_protection"]
 
@@ -140,7 +141,7 @@ def whole_day_protection(
                 results[key], art[key.replace(" ", "_")] = {}, {}
                 cfg = SppConfig(systems=systems, iono=iono)
                 for m in methods:
-                    r = solve_spp(obs, nav, config=cfg, raim=RaimConfig(m))
+                    r = solve_positions(obs, nav, config=cfg, raim=RaimConfig(m))
                     res, arrays = _outcome(r.integrity, r.pos_m, ref, hal_m, val_m)
                     results[key][m] = res
                     art[key.replace(" ", "_")][m] = arrays

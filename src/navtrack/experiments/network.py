@@ -1,6 +1,7 @@
 """Single point positions of a network of stations: many observation files in one job.
 
-Each station is one run of the Monte Carlo runner (:mod:`navtrack.experiments.runner`):
+Each station is one run of the Monte Carlo runner (:mod:`navtrack.experiments.runner`), solved
+by the positioning pipeline (:func:`navtrack.positioning.solve_positions`):
 in-process by default, on local worker processes (``workers``) or an existing Dask cluster
 (``scheduler``), with a checkpoint per finished station so that an interrupted job resumes where
 it stopped. Every station's solution is written to one Parquet dataset partitioned by station
@@ -22,25 +23,18 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from navtrack.errors import FileFormatError
+from navtrack.errors import MissingDependencyError
+from navtrack.experiments.runner import MonteCarloResult, RunStatus, run_monte_carlo
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.spp import SppConfig, observation_codes
+from navtrack.positioning import solve_positions
+from navtrack.positioning.stations import StationJob
 
 if TYPE_CHECKING:
     import pandas as pd
 
-    from navtrack.experiments.runner import MonteCarloResult
-    from navtrack.gnss.spp import SppConfig
-
-__all__ = ["NetworkResult", "StationJob", "file_kind", "solve_network", "station_jobs"]
-
-
-@dataclass(frozen=True, slots=True)
-class StationJob:
-    """One station of a network job: a name (unique in the job), its observation file and the
-    navigation files it is solved with."""
-
-    name: str
-    obs: Path
-    navs: tuple[Path, ...]
+__all__ = ["NetworkResult", "solve_network", "solve_station"]
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -61,74 +55,14 @@ class NetworkResult:
     runs: MonteCarloResult
 
 
-def file_kind(path: Path) -> str:
-    """``obs``, ``nav`` or ``sp3`` for a RINEX observation, RINEX navigation or SP3 file.
-
-    Raises
-    ------
-    FileFormatError
-        Neither (the reader's message).
-    """
-    from navtrack.gnss.rinex._io import read_bytes, sniff
-
-    with open(path, "rb") as f:
-        head = f.read(81)
-    data = head if b"RINEX VERSION / TYPE" in head or head.startswith(b"#") else read_bytes(path)
-    kind = sniff(path, data)
-    if kind.format == "sp3":
-        return "sp3"
-    return "obs" if kind.file_type == "O" else "nav"
-
-
-def station_jobs(paths: Sequence[Path]) -> list[StationJob]:
-    """The stations of a list of files (observation and, optionally, navigation files).
-
-    Raises
-    ------
-    FileFormatError
-        A file that is neither, or a station without navigation data (none given, none beside
-        it).
-    """
-    kinds = {p: file_kind(p) for p in paths}
-    given = tuple(p for p in paths if kinds[p] == "nav")
-    jobs: list[StationJob] = []
-    names: set[str] = set()
-    for p in (p for p in paths if kinds[p] == "obs"):
-        navs = given
-        if not navs:
-            beside = sorted(q for q in p.parent.iterdir() if q.is_file() and q != p)
-            navs = tuple(q for q in beside if _is_nav(q))
-        if not navs:
-            raise FileFormatError(
-                p, None, "no navigation file given and none beside it: give the NAV files"
-            )
-        name = p.name.split(".")[0]
-        while name in names:  # the same file name in two folders
-            name = f"{name}_{len(names)}"
-        names.add(name)
-        jobs.append(StationJob(name, p, navs))
-    return jobs
-
-
-def _is_nav(path: Path) -> bool:
-    try:
-        return file_kind(path) == "nav"
-    except (FileFormatError, OSError):
-        return False
-
-
-def _solve_station(index: int, rng: np.random.Generator, params: Any) -> dict[str, Any]:
+def solve_station(index: int, rng: np.random.Generator, params: Any) -> dict[str, Any]:
     """Run ``index`` of the runner: one station read, solved and written."""
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.rinex.obs import read_obs
-    from navtrack.gnss.spp import observation_codes, solve_spp
-
     jobs, config, out_dir = params
     job = jobs[index]
     clock = time.perf_counter()
     obs = read_obs(job.obs, systems=config.systems, codes=observation_codes(config))
     navs = [read_nav(p, systems=config.systems) for p in job.navs]
-    result = solve_spp(obs, navs, config=config)
+    result = solve_positions(obs, navs, config=config)
     table = result.to_frame()
     folder = Path(out_dir) / "positions" / f"station={job.name}"
     folder.mkdir(parents=True, exist_ok=True)
@@ -174,10 +108,7 @@ def solve_network(
     MissingDependencyError
         pyarrow (extra ``parquet``) is not installed; checked before any station is solved.
     """
-    import pandas as pd
-
-    from navtrack.errors import MissingDependencyError
-    from navtrack.experiments.runner import RunStatus, run_monte_carlo
+    import pandas as pd  # pandas: only for the summary table of a network run
 
     try:
         import pyarrow  # noqa: F401
@@ -186,7 +117,7 @@ def solve_network(
     out_dir.mkdir(parents=True, exist_ok=True)
     params = (tuple(jobs), config, str(out_dir))
     runs = run_monte_carlo(
-        _solve_station,
+        solve_station,
         len(jobs),
         0,
         params,

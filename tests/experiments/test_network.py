@@ -13,10 +13,11 @@ import pytest
 from navtrack.cli import main
 from navtrack.data import sample_path
 from navtrack.errors import FileFormatError
-from navtrack.gnss.network import file_kind, solve_network, station_jobs
+from navtrack.experiments.network import solve_network
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
 from navtrack.gnss.spp import SppConfig, solve_spp
+from navtrack.positioning.stations import file_kind, station_jobs
 
 pytest.importorskip("pyarrow")
 
