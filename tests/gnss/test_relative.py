@@ -17,11 +17,16 @@ from navtrack.gnss.relative import (
     RelativeInputError,
     RtkConfig,
     RtkStatus,
-    _dd_matrix,
-    _double_differences,
     common_epochs,
     detect_slips,
     solve_relative,
+)
+from navtrack.gnss.rtk_filter import (
+    Baseline,
+    dd_matrix,
+    double_differences,
+    epoch_inputs,
+    run_filter,
 )
 
 YAMA_BASE = np.array([-3749943.5172, 3683398.2394, 3600629.5295])  # master header APPROX
@@ -35,11 +40,11 @@ def test_double_differences_cancel_receiver_and_satellite_clocks() -> None:
     groups = np.array([0, 0, 0, 8, 8, 8])  # two systems
     el = np.array([0.3, 1.2, 0.5, 0.9, 0.2, 0.4])
     ok = np.ones(n_s, dtype=bool)
-    ref, oth = _double_differences(groups, ok, el)
+    ref, oth = double_differences(groups, ok, el)
     # the highest satellite of each group is its reference
     assert set(ref.tolist()) == {1, 3}
     assert sorted(oth.tolist()) == [0, 2, 4, 5]
-    D = _dd_matrix(ref, oth, n_s)
+    D = dd_matrix(ref, oth, n_s)
     rho = rng.uniform(2e7, 2.5e7, n_s)
     sat_clock = rng.normal(scale=1e3, size=n_s)
     rover = rho + 123.4 + sat_clock  # receiver clock 123.4 m
@@ -404,10 +409,20 @@ def test_static_filter_equals_batch_least_squares(gnss_data: Path) -> None:
     ir, ib, age = common_epochs(rs.t_gps_s, bs.t_gps_s)
     js = np.arange(len(rs.sats))
     assert rs.sats == bs.sats
-    ep = rel._epoch_inputs(
-        rs, bs, base_xyz, ir, ib, age, js, js, detect_slips(rs, cfg), detect_slips(bs, cfg), cfg
+    pair = Baseline(
+        rover=rs,
+        base=bs,
+        base_xyz_m=base_xyz,
+        rover_idx=ir,
+        base_idx=ib,
+        age_s=age,
+        rover_cols=js,
+        base_cols=js,
+        slips_rover=detect_slips(rs, cfg),
+        slips_base=detect_slips(bs, cfg),
     )
-    out = rel._run_filter(ep, cfg)
+    ep = epoch_inputs(pair, cfg)
+    out = run_filter(ep, cfg)
 
     # batch: one ambiguity parameter per satellite arc (a new arc where the filter restarts)
     n_amb = ep.lam.size
@@ -434,10 +449,10 @@ def test_static_filter_equals_batch_least_squares(gnss_data: Path) -> None:
         G = ep.G[k]
         z_lin = G @ ep.x_lin[k]
         for ok, ratio, amb in ((phase_ok, 1.0, True), (code_ok, cfg.code_phase_ratio, False)):
-            ref, oth = _double_differences(ep.groups, ok, ep.el[k])
+            ref, oth = double_differences(ep.groups, ok, ep.el[k])
             if ref.size == 0:
                 continue
-            D = _dd_matrix(ref, oth, n_amb)
+            D = dd_matrix(ref, oth, n_amb)
             cols = np.concatenate([np.arange(3), col[phase_ok]]) if amb else np.arange(3)
             H = D @ G
             if amb:
@@ -459,7 +474,7 @@ def test_a_wrong_integer_fix_is_refused_and_stays_float(monkeypatch) -> None:  #
     off on one combination (a wrong fix that passed the ratio test) makes every such fix fail
     the residual or float-position test: no epoch is reported fixed."""
     from navtrack.data import REFERENCE_XYZ_M, sample_path
-    from navtrack.gnss import relative as rel
+    from navtrack.gnss import rtk_filter
     from navtrack.gnss.rinex.nav import read_nav
     from navtrack.gnss.rinex.obs import read_obs
 
@@ -469,8 +484,8 @@ def test_a_wrong_integer_fix_is_refused_and_stays_float(monkeypatch) -> None:  #
     cfg = RtkConfig(mode="static", frequencies=2)
     right = solve_relative(rover, base, nav, base_xyz, cfg)
     assert right.status_counts()["fix"] == 120
-    assert sum(right.rejection_counts().values()) == 0
-    resolve = rel.resolve_ambiguities
+    assert sum(right.rejection_counts().values()) == 0  # no float epoch, for no reason
+    resolve = rtk_filter.resolve_ambiguities
 
     def one_cycle_off(a_hat, Q, config):  # type: ignore[no-untyped-def]
         fix = resolve(a_hat, Q, config)
@@ -480,7 +495,7 @@ def test_a_wrong_integer_fix_is_refused_and_stays_float(monkeypatch) -> None:  #
         z[-1] += 1  # the best-determined combination, one cycle off
         return dataclasses.replace(fix, z=z)
 
-    monkeypatch.setattr(rel, "resolve_ambiguities", one_cycle_off)
+    monkeypatch.setattr(rtk_filter, "resolve_ambiguities", one_cycle_off)
     wrong = solve_relative(rover, base, nav, base_xyz, cfg)
     assert wrong.status_counts()["fix"] == 0
     refused = wrong.rejection_counts()

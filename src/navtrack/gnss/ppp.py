@@ -196,11 +196,11 @@ def solve_ppp(
     reset: np.ndarray = np.asarray(slips.any.any(axis=2))
     # geometry at a fixed linearisation point (the median SPP): the state is linear in the
     # offset from it to well below a millimetre for offsets of metres
-    from navtrack.gnss.relative import _elevation
+    from navtrack.gnss.rtk_filter import satellite_geometry
 
     x_lin = np.nanmedian(sig.spp_pos_m[ok_spp], axis=0)
     n_e, n_s = code.shape
-    rho, los, el = _elevation(sig.sat_pos_m, np.broadcast_to(x_lin, (n_e, 3)))
+    rho, los, el = satellite_geometry(sig.sat_pos_m, np.broadcast_to(x_lin, (n_e, 3)))
     llh = ecef_to_geodetic(x_lin)
     dry, m_w = _wet_mapping(np.full_like(el, llh[0]), np.full_like(el, llh[2]), el)
     y_code = code - rho - dry
