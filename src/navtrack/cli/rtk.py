@@ -72,17 +72,7 @@ def register(subparsers: Any) -> None:
         help="static L1+L2 baseline of the bundled GEONET stations 0759 (rover) and 3040 (base, "
         "3.3 km), against 0759's reference",
     )
-    base = p.add_mutually_exclusive_group()
-    base.add_argument(
-        "--base-pos", nargs=3, type=float, metavar=("X", "Y", "Z"), help="base ECEF metres"
-    )
-    base.add_argument(
-        "--base-llh",
-        nargs=3,
-        type=float,
-        metavar=("LAT", "LON", "H"),
-        help="base position, degrees and ellipsoidal metres",
-    )
+    _add_base_options(p)
     p.add_argument("--static", action="store_true", help="static rover (default kinematic)")
     p.add_argument(
         "--direction",
@@ -133,6 +123,21 @@ def register(subparsers: Any) -> None:
 
 
 _DEFAULTS = RtkConfig()
+
+
+def _add_base_options(p: argparse.ArgumentParser) -> None:
+    """The base position (default: the base file's header position)."""
+    base = p.add_mutually_exclusive_group()
+    base.add_argument(
+        "--base-pos", nargs=3, type=float, metavar=("X", "Y", "Z"), help="base ECEF metres"
+    )
+    base.add_argument(
+        "--base-llh",
+        nargs=3,
+        type=float,
+        metavar=("LAT", "LON", "H"),
+        help="base position, degrees and ellipsoidal metres",
+    )
 
 
 def _add_fix_options(p: argparse.ArgumentParser) -> None:

@@ -228,7 +228,30 @@ def solve_relative(
     tables = navigation_tables(nav)
     rover = receiver_signals(rover_obs, nav, cfg, sp3=sp3, ephemeris=tables)
     base = receiver_signals(base_obs, nav, cfg, sp3=sp3, ephemeris=tables)
-    names = f"rover {rover_obs.path!r} and base {base_obs.path!r}"
+    pair = _pair(rover, base, base_xyz, cfg)
+    warnings = _input_warnings(pair, cfg)
+    dist = float(np.linalg.norm(np.nanmedian(base.spp_pos_m, axis=0) - base_xyz))
+    if dist > base_warn_m:
+        warnings.insert(
+            0,
+            f"base position is {dist:.1f} m from the single point solution of the base "
+            f"observations {base_obs.path!r}: check --base-pos",
+        )
+    ep = epoch_inputs(pair, cfg)
+    if cfg.direction == "forward":
+        out = run_filter(ep, cfg, progress)
+    else:
+        out = reverse_output(run_filter(reverse_epochs(ep), cfg, progress))
+        if cfg.direction == "combined":
+            out = combine_directions(run_filter(ep, cfg, progress), out)
+    return _result(pair, out, warnings, dist)
+
+
+def _pair(
+    rover: ReceiverSignals, base: ReceiverSignals, base_xyz: FloatArray, cfg: RtkConfig
+) -> Baseline:
+    """The common epochs and satellites of rover and base, and their slips."""
+    names = f"rover {rover.path!r} and base {base.path!r}"
     ir, ib, age = common_epochs(
         rover.t_gps_s, base.t_gps_s, sync_s=cfg.sync_s, max_age_s=cfg.max_age_s
     )
@@ -252,22 +275,7 @@ def solve_relative(
         slips_rover=detect_slips(rover, cfg),
         slips_base=detect_slips(base, cfg),
     )
-    warnings = _input_warnings(pair, cfg)
-    dist = float(np.linalg.norm(np.nanmedian(base.spp_pos_m, axis=0) - base_xyz))
-    if dist > base_warn_m:
-        warnings.insert(
-            0,
-            f"base position is {dist:.1f} m from the single point solution of the base "
-            f"observations {base_obs.path!r}: check --base-pos",
-        )
-    ep = epoch_inputs(pair, cfg)
-    if cfg.direction == "forward":
-        out = run_filter(ep, cfg, progress)
-    else:
-        out = reverse_output(run_filter(reverse_epochs(ep), cfg, progress))
-        if cfg.direction == "combined":
-            out = combine_directions(run_filter(ep, cfg, progress), out)
-    return _result(pair, out, warnings, dist)
+    return pair
 
 
 def _input_warnings(pair: Baseline, cfg: RtkConfig) -> list[str]:
