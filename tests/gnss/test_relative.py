@@ -500,3 +500,72 @@ def test_a_wrong_integer_fix_is_refused_and_stays_float(monkeypatch) -> None:  #
     assert wrong.status_counts()["fix"] == 0
     refused = wrong.rejection_counts()
     assert refused["residuals"] + refused["float_position"] == 120
+
+
+# ----------------------------------------------------------------------- fix validation
+@pytest.fixture(scope="module")
+def geonet():  # type: ignore[no-untyped-def]
+    from navtrack.data import REFERENCE_XYZ_M, sample_path
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+
+    return (
+        read_obs(sample_path("07590920.05o")),
+        read_obs(sample_path("30400920.05o")),
+        read_nav(sample_path("07590920.05n")),
+        np.array(REFERENCE_XYZ_M["30400920.05o"]),
+    )
+
+
+def test_too_few_satellites_for_a_fix_is_a_counted_reason(geonet) -> None:  # type: ignore[no-untyped-def]
+    """0759 tracks 7-9 satellites: asking for 10 with fixable ambiguities, or an elevation
+    mask of 80 deg for ambiguity resolution, leaves every epoch float for that reason."""
+    rover, base, nav, base_xyz = geonet
+    for cfg in (
+        RtkConfig(mode="static", frequencies=2, min_fix_sats=10),
+        RtkConfig(mode="static", frequencies=2, elmask_ar_deg=80.0),
+    ):
+        res = solve_relative(rover, base, nav, base_xyz, cfg)
+        assert res.status_counts()["float"] == 120
+        assert res.rejection_counts()["too_few_satellites"] == 120
+
+
+def test_kinematic_fixes_with_and_without_hold_are_right(geonet) -> None:  # type: ignore[no-untyped-def]
+    """The static GEONET pair solved kinematically (every epoch's position on its own): with
+    fix-and-hold as without it, every fixed position is within 11 cm of the station (the
+    5-satellite epochs near the end have a formal up sigma of 14 cm), and holding the fixed
+    integers in the filter keeps every epoch fixed."""
+    rover, base, nav, base_xyz = geonet
+    for hold in (False, True):
+        res = solve_relative(rover, base, nav, base_xyz, RtkConfig(frequencies=2, hold=hold))
+        fixed = res.status == RtkStatus.FIX
+        assert fixed.sum() == 120
+        err = np.linalg.norm(res.pos_m[fixed] - GSI0759_REF, axis=1)
+        assert np.median(err) < 0.02
+        assert err.max() < 0.11
+
+
+def test_an_old_base_is_not_used_for_fixing(geonet) -> None:  # type: ignore[no-untyped-def]
+    """3040 thinned to 60 s serves the 30 s rover epochs in between 30 s old: those stay float
+    (reason ``base_age``), the others fix, all within 11 cm of the station."""
+    from navtrack.gnss.spp import subset_epochs
+
+    rover, base, nav, base_xyz = geonet
+    every60 = np.flatnonzero(np.round(base.t_gps_s) % 60 < 1)
+    thin = subset_epochs(base, every60)
+    res = solve_relative(rover, thin, nav, base_xyz, RtkConfig(frequencies=2, max_age_s=60.0))
+    old = res.age_s > 10.0
+    assert old.sum() >= 55
+    assert not (res.status[old] == RtkStatus.FIX).any()
+    assert res.rejection_counts()["base_age"] == old.sum()
+    fixed = res.status == RtkStatus.FIX
+    assert fixed.sum() >= 55
+    assert np.linalg.norm(res.pos_m[fixed] - GSI0759_REF, axis=1).max() < 0.11
+
+
+def test_systems_option_accepts_glonass_and_refuses_unknown_letters() -> None:
+    assert RtkConfig(systems="GR").systems == "GR"
+    with pytest.raises(ValueError, match="systems"):
+        RtkConfig(systems="GX")
+    with pytest.raises(ValueError, match="min_fix_sats"):
+        RtkConfig(min_fix_sats=1)

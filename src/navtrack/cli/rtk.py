@@ -160,6 +160,20 @@ def _add_fix_options(p: argparse.ArgumentParser) -> None:
         help="fewest satellites with fixable ambiguities for a fix",
     )
     p.add_argument(
+        "--max-age-ar",
+        type=float,
+        default=_DEFAULTS.max_age_ar_s,
+        metavar="S",
+        help="resolve ambiguities only with base observations up to this old (s)",
+    )
+    p.add_argument(
+        "--min-success-rate",
+        type=float,
+        default=_DEFAULTS.min_success_rate,
+        metavar="P",
+        help="fewest bootstrapped success rate of a full fix (0: no such test)",
+    )
+    p.add_argument(
         "--hold", action="store_true", help="fix-and-hold: feed validated fixes to the filter"
     )
     p.add_argument(
@@ -239,6 +253,8 @@ def _rtk_config(args: argparse.Namespace) -> RtkConfig:
             elmask_deg=args.elmask,
             elmask_ar_deg=args.elmask_ar,
             min_fix_sats=args.min_fix_sats,
+            max_age_ar_s=args.max_age_ar,
+            min_success_rate=args.min_success_rate,
             hold=args.hold,
             max_age_s=args.max_age,
             ambiguity=AmbiguityConfig(ratio_threshold=args.ratio, partial=args.partial),

@@ -14,6 +14,8 @@ from navtrack.gnss.ambiguity import AmbiguityConfig
 
 __all__ = [
     "AFTER_RATIO_TEST",
+    "MAX_AGE_AR_S",
+    "MIN_SUCCESS_RATE",
     "QUALITY",
     "REJECTION_NAMES",
     "STATUS_NAMES",
@@ -23,6 +25,18 @@ __all__ = [
     "RtkConfig",
     "RtkStatus",
 ]
+
+MAX_AGE_AR_S = 10.0
+"""Default :attr:`RtkConfig.max_age_ar_s` (s): oldest base observations ambiguity resolution
+uses. Chosen on the 1 Hz yamatogawa master and SEPT stations (the change of a satellite's
+phase-minus-range over the age, 11-12 mm after 10 s), judged on the GEONET 0759 rover against
+3040 thinned to 60 s and the yamatogawa rover against its master thinned to 30 s
+(``docs/rtk.md``, "Base age")."""
+
+MIN_SUCCESS_RATE = 0.0
+"""Default :attr:`RtkConfig.min_success_rate`: no such test. At 0.99 it refused the suspect
+fixes of the yamatogawa rover against its master thinned to 30 s, and also every one of the 23
+right fixes against the 1 s master (``docs/rtk.md``, "Fix validation")."""
 
 SYSTEMS = "GRECJ"
 """Systems :func:`~navtrack.gnss.relative.solve_relative` differences (GLONASS float only)."""
@@ -48,8 +62,11 @@ class FixRejection(IntEnum):
 
     Before the integer search: ``too_few_satellites``: fewer than ``min_fix_sats`` satellites
     (reference included) with fixable ambiguities above the elevation mask for ambiguity
-    resolution. After it: ``ratio_test``: the best candidate fails the ratio test (full and,
-    with partial fixing, partial set). After the ratio test accepted a fix:
+    resolution; ``base_age``: the base observations are older than ``max_age_ar_s``. After it:
+    ``ratio_test``: the best candidate fails the ratio test (full and, with partial fixing,
+    partial set); ``success_rate``: a full fix whose bootstrapped success rate (Teunissen 1998,
+    from the float covariance alone) is below ``min_success_rate``. After the ratio test
+    accepted a fix:
     ``residuals``: the phase double differences at the fixed state fail the chi-square test;
     ``float_position``: the fixed position lies outside the float position's confidence region;
     ``directions_disagree``: ``combined`` forward and backward fixes farther apart than 4
@@ -62,6 +79,8 @@ class FixRejection(IntEnum):
     DIRECTIONS_DISAGREE = 3
     RATIO_TEST = 4
     TOO_FEW_SATELLITES = 5
+    BASE_AGE = 6
+    SUCCESS_RATE = 7
 
 
 AFTER_RATIO_TEST = frozenset(
@@ -150,6 +169,16 @@ class RtkConfig:
     min_fix_sats : int
         Fewest satellites (reference included) with fixable ambiguities for an integer search
         (RTKLIB demo5 ``minfixsats`` 4); fewer: ``too_few_satellites``.
+    min_success_rate : float
+        Fewest bootstrapped success rate of a full fix (:data:`MIN_SUCCESS_RATE`): a float
+        covariance too wide for the integers to be determined refuses the fix whatever the
+        ratio (a partial fix already holds its subset to ``ambiguity.min_success_rate``).
+    max_age_ar_s : float
+        Ambiguity resolution only at epochs whose base observations are at most this old (s;
+        older ones stay float, ``base_age``): the error of a base observation used late grows
+        by about 1 mm per second of age and satellite (ionosphere, broadcast clock and orbit
+        drift), so a fixed position from a 30 s old base can be 10 cm off with the right
+        integers (:data:`MAX_AGE_AR_S`; ``docs/rtk.md``, "Base age").
     hold : bool
         Fix-and-hold (RTKLIB ``fix-and-hold``): after a validated fix the float state is updated
         with the fixed double-differenced ambiguities as measurements of variance
@@ -190,6 +219,8 @@ class RtkConfig:
     clock_stability: float = 5e-12
     elmask_ar_deg: float = 0.0
     min_fix_sats: int = 4
+    max_age_ar_s: float = MAX_AGE_AR_S
+    min_success_rate: float = MIN_SUCCESS_RATE
     hold: bool = False
     hold_var_cyc2: float = 0.001
     fix_test_p: float = 1e-3
@@ -211,11 +242,20 @@ class RtkConfig:
             )
         if self.max_outage < 0:
             raise ValueError(f"max_outage: expected >= 0, got {self.max_outage}")
+        if not 0.0 <= self.min_success_rate < 1.0:
+            raise ValueError(f"min_success_rate: expected in [0, 1), got {self.min_success_rate}")
         if not 0.0 < self.fix_test_p < 1.0:
             raise ValueError(f"fix_test_p: expected in (0, 1), got {self.fix_test_p}")
         if self.min_fix_sats < 2:
             raise ValueError(f"min_fix_sats: expected >= 2, got {self.min_fix_sats}")
-        for name in ("max_age_s", "sync_s", "clock_stability", "elmask_ar_deg", "hold_var_cyc2"):
+        for name in (
+            "max_age_s",
+            "sync_s",
+            "clock_stability",
+            "elmask_ar_deg",
+            "hold_var_cyc2",
+            "max_age_ar_s",
+        ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"{name}: expected a finite number >= 0, got {value}")

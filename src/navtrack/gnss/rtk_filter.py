@@ -23,7 +23,13 @@ from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.estimation.covariance import restart_states
 from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
-from navtrack.gnss.ambiguity import condition_on_fix, resolve_ambiguities
+from navtrack.gnss.ambiguity import (
+    FixStatus,
+    bootstrap_success_rate,
+    condition_on_fix,
+    decorrelate,
+    resolve_ambiguities,
+)
 from navtrack.gnss.corrections import geometric_range, saastamoinen_delay_m
 from navtrack.gnss.rtk_config import SYSTEMS, FixRejection, RtkConfig, RtkStatus
 from navtrack.gnss.rtk_signals import ReceiverSignals, Slips
@@ -157,6 +163,7 @@ class EpochInputs:
     Attributes
     ----------
     t : (K,) rover time tags (s)
+    age : (K,) age of the base observations (s)
     sd_phase, sd_code : (K, N) single differences minus the computed ranges at ``x_lin`` and
         at the base (m)
     x_lin : (K, 3) linearisation point of the rover (its SPP, forward filled)
@@ -173,6 +180,7 @@ class EpochInputs:
     """
 
     t: FloatArray
+    age: FloatArray
     sd_phase: FloatArray
     sd_code: FloatArray
     x_lin: FloatArray
@@ -219,11 +227,15 @@ def epoch_inputs(pair: Baseline, cfg: RtkConfig) -> EpochInputs:
     letters = [rover.sats[j][0] for j in js_r]
     sys_id = np.array([SYSTEMS.index(s) for s in letters], dtype=np.int64)
     groups = (sys_id[:, None] * 4 + np.arange(n_f)[None, :]).reshape(-1)
-    drift = (C_MPS * cfg.clock_stability * pair.age_s) ** 2  # the base's satellite clocks, aged
+    # an aged base observation's error (satellite clocks, orbits, ionosphere at the base) is
+    # the same for every rover epoch that uses it: its variance counts once per base epoch
+    _, first, n_share = np.unique(ib, return_inverse=True, return_counts=True)
+    drift = (C_MPS * cfg.clock_stability * pair.age_s) ** 2 * n_share[first]
     var_sd = _variance(el_b, cfg) + _variance(el_r, cfg) + drift[:, None]
     G = -los_r + dtrop_dh[..., None] * up[:, None, :]
     return EpochInputs(
         t=rover.t_gps_s[ir],
+        age=pair.age_s,
         sd_phase=ph.reshape(k, -1),
         sd_code=co.reshape(k, -1),
         x_lin=x_lin,
@@ -368,6 +380,9 @@ class _Filter:
         """Integer fixing of the phase DDs, validated; the fix replaces the float solution of
         the epoch, the reason is recorded when there is none."""
         ep, cfg, x, P, out = self.ep, self.cfg, self.x, self.P, self.out
+        if ep.age[k] > cfg.max_age_ar_s:
+            out.rejected[k] = FixRejection.BASE_AGE
+            return
         fixable = (
             ~ep.half[k, dd.oth_p]
             & ~ep.half[k, dd.ref_p]
@@ -381,10 +396,18 @@ class _Filter:
             return
         A = np.zeros((int(fixable.sum()), x.size))
         A[:, 3:] = dd.Dp[fixable]
-        fix = resolve_ambiguities(A @ x, A @ P @ A.T, cfg.ambiguity)
+        Q = A @ P @ A.T
+        fix = resolve_ambiguities(A @ x, Q, cfg.ambiguity)
         out.ratio[k] = fix.ratio
         if not fix.accepted:
             out.rejected[k] = FixRejection.RATIO_TEST
+            return
+        if (
+            fix.status == FixStatus.FIXED
+            and cfg.min_success_rate > 0.0
+            and bootstrap_success_rate(decorrelate(Q)[2]) < cfg.min_success_rate
+        ):
+            out.rejected[k] = FixRejection.SUCCESS_RATE
             return
         xf, Pf = condition_on_fix(x, P, A, fix)
         reason = self._validate(k, dd, xf)
@@ -448,7 +471,7 @@ def reverse_epochs(ep: EpochInputs) -> EpochInputs:
     reset[:-1] = ep.reset[1:]
     fields = {
         name: getattr(ep, name)[::-1].copy()
-        for name in ("t", "sd_phase", "sd_code", "x_lin", "G", "el", "var_sd", "half", "spp")
+        for name in ("t", "age", "sd_phase", "sd_code", "x_lin", "G", "el", "var_sd", "half", "spp")
     }
     return EpochInputs(
         **fields,
