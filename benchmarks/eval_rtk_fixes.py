@@ -16,9 +16,12 @@ Cases (all in ``shared/data/gnss``):
 A wrong fix is a fixed epoch more than ``--wrong-m`` (0.10 m) from the reference. Time to first
 fix is the time from the first common epoch to the first fixed one (forward runs).
 
+``--evidence``: the yamatogawa combined fix at 05:59:54 GPST (RTKLIB float there) shown right
+by its integers (:func:`evidence_055954`).
+
 Usage::
 
-    PYTHONPATH=src python benchmarks/eval_rtk_fixes.py [--set min_fix_sats=3 ...]
+    PYTHONPATH=src python benchmarks/eval_rtk_fixes.py [--set min_fix_sats=3 ...] [--evidence]
 """
 
 from __future__ import annotations
@@ -153,9 +156,71 @@ def _case(
     print(f"{'':<34} RTKLIB   {_stats(tr, fixed_r, err_r, q_r, wrong_m)}")
 
 
+def evidence_055954() -> None:
+    """The yamatogawa combined fix at 05:59:54 GPST that RTKLIB leaves float: its double-
+    differenced integers beside those of the backward fixes at 05:59:50-53 (which agree with
+    RTKLIB's fixed solution), the slips flagged on those satellites at :54, and the position
+    against the walk extrapolated from RTKLIB's fixes at :52 and :53."""
+    from navtrack.gnss import rtk_filter
+    from navtrack.gnss.relative import detect_slips, receiver_signals
+
+    calls: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    condition = rtk_filter.condition_on_fix
+
+    def recording(x: Any, P: Any, A: Any, fix: Any) -> Any:
+        calls.append((x[:3].copy(), A[:, 3:].copy(), fix.a_fixed.copy()))
+        return condition(x, P, A, fix)
+
+    rover, master = (
+        read_obs(YAMA / "yamatogawa_rover.obs"),
+        read_obs(YAMA / "yamatogawa_master.obs"),
+    )
+    nav = [read_nav(YAMA / "brdc0060.10n")]
+    cfg = RtkConfig(systems="G", direction="backward")
+    rtk_filter.condition_on_fix = recording
+    try:
+        res = solve_relative(rover, master, nav, np.asarray(YAMA_BASE), cfg)
+    finally:
+        rtk_filter.condition_on_fix = condition
+    sod = np.round(res.t_gps_s % 86400).astype(int)
+    used: set[str] = set()
+    for x, A, a_fixed in calls:
+        k = np.flatnonzero(np.all(np.abs(res.float_pos_m - x) < 1e-6, axis=1))
+        if k.size == 0 or not 21590 <= sod[k[0]] <= 21594 or res.status[k[0]] != RtkStatus.FIX:
+            continue
+        pairs = {}
+        for row, n in zip(A, a_fixed, strict=True):
+            other, ref = res.sats[int(np.argmax(row))], res.sats[int(np.argmin(row))]
+            pairs[f"{other}-{ref}"] = int(n)
+            used |= {other, ref}
+        print(f"backward fix at {sod[k[0]]} s of day: DD integers {pairs}")
+    for who, obs in (("rover", rover), ("master", master)):
+        sig = receiver_signals(obs, nav, cfg)
+        slips = detect_slips(sig, cfg).any[:, :, 0]
+        row = int(np.flatnonzero(np.round(sig.t_gps_s % 86400) == 21594)[0])
+        hit = [s for j, s in enumerate(sig.sats) if slips[row, j] and s in used]
+        print(f"{who}: slips flagged at 21594 s on the fixed satellites: {hit or 'none'}")
+    rtklib = read_pos(YAMA / "yamatogawa_rover_ref_rtklib_rtk_combined.pos")
+    xyz = rtklib[["x_m", "y_m", "z_m"]].to_numpy()
+    r_sod = np.round(rtklib["t_gps_s"].to_numpy() % 86400).astype(int)
+    at = {s: xyz[np.flatnonzero(r_sod == s)[0]] for s in (21592, 21593, 21594)}
+    walk = 2 * at[21593] - at[21592]
+    comb = solve_relative(
+        rover, master, nav, np.asarray(YAMA_BASE), RtkConfig(systems="G", direction="combined")
+    )
+    fix = comb.pos_m[np.flatnonzero(np.round(comb.t_gps_s % 86400) == 21594)[0]]
+    print(
+        f"at 21594 s: navtrack's fix {np.linalg.norm(fix - walk):.2f} m and RTKLIB's float "
+        f"{np.linalg.norm(at[21594] - walk):.2f} m from the walk extrapolated from RTKLIB's "
+        f"fixes at 21592 and 21593 s (steps of 0.5-1.0 m/s); fix to RTKLIB float "
+        f"{np.linalg.norm(fix - at[21594]):.2f} m"
+    )
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--wrong-m", type=float, default=0.10)
+    ap.add_argument("--evidence", action="store_true", help="only the evidence on the 05:59:54 fix")
     ap.add_argument(
         "--set", action="append", default=[], metavar="K=V", help="RtkConfig field (number)"
     )
@@ -163,6 +228,9 @@ def main(argv: list[str] | None = None) -> int:
     if shutil.which("rnx2rtkp") is None or not YAMA.is_dir():
         print("rnx2rtkp or the shared data missing: nothing to compare", file=sys.stderr)
         return 1
+    if args.evidence:
+        evidence_055954()
+        return 0
     over = {k: type(getattr(RtkConfig(), k))(v) for k, v in (s.split("=") for s in args.set)}
     base_cfg = dataclasses.replace(RtkConfig(systems="G"), **over)
     ref = read_pos(YAMA / "yamatogawa_rover_ref_rtklib_rtk_combined.pos")
