@@ -569,3 +569,28 @@ def test_systems_option_accepts_glonass_and_refuses_unknown_letters() -> None:
         RtkConfig(systems="GX")
     with pytest.raises(ValueError, match="min_fix_sats"):
         RtkConfig(min_fix_sats=1)
+
+
+def test_second_frequency_is_the_band_both_receivers_track() -> None:
+    """The X20P walk log tracks Galileo E1 and E5a (no E5b): with two frequencies its Galileo
+    double differences use E5a, so a zero baseline of the log against itself fixes twice as
+    many ambiguities as with one; against convbin's single-band Galileo RINEX of the same log
+    the second frequency is reported missing and E1 alone is used."""
+    from navtrack.data import sample_path
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.ubx import read_ubx
+
+    log = read_ubx(sample_path("gnss_imu_walk_cut.ubx"))
+    base_xyz = np.array([-1276964.2, -4717226.1, 4087226.7])
+    one = solve_relative(log.obs, log.obs, [log.nav], base_xyz, RtkConfig(systems="E"))
+    two = solve_relative(
+        log.obs, log.obs, [log.nav], base_xyz, RtkConfig(systems="E", frequencies=2)
+    )
+    assert (two.status == RtkStatus.FIX).sum() == 60 > (one.status == RtkStatus.FIX).sum()
+    assert (two.n_fixed == 2 * one.n_fixed).sum() >= 50  # E1 and E5a of 5 or 6 satellites
+    convbin = read_obs(Path(__file__).parents[1] / "data" / "ubx" / "gnss_imu_walk_cut_convbin.obs")
+    res = solve_relative(
+        log.obs, convbin, [log.nav], base_xyz, RtkConfig(systems="E", frequencies=2)
+    )
+    assert any("no second-frequency carrier" in w for w in res.warnings)
+    assert np.nanmax(res.n_fixed) == np.nanmax(one.n_fixed)

@@ -67,8 +67,10 @@ from navtrack.gnss.rtk_filter import (
     run_filter,
 )
 from navtrack.gnss.rtk_signals import (
+    SECOND_BANDS,
     ReceiverSignals,
     Slips,
+    carrier_bands,
     common_epochs,
     detect_slips,
     receiver_signals,
@@ -226,8 +228,9 @@ def solve_relative(
     cfg = config or RtkConfig()
     base_xyz = check_near_surface(base_xyz_m, "base_xyz_m")
     tables = navigation_tables(nav)
-    rover = receiver_signals(rover_obs, nav, cfg, sp3=sp3, ephemeris=tables)
-    base = receiver_signals(base_obs, nav, cfg, sp3=sp3, ephemeris=tables)
+    second = _second_bands(rover_obs, base_obs)
+    rover = receiver_signals(rover_obs, nav, cfg, sp3=sp3, ephemeris=tables, second_bands=second)
+    base = receiver_signals(base_obs, nav, cfg, sp3=sp3, ephemeris=tables, second_bands=second)
     pair = _pair(rover, base, base_xyz, cfg)
     warnings = _input_warnings(pair, cfg)
     dist = float(np.linalg.norm(np.nanmedian(base.spp_pos_m, axis=0) - base_xyz))
@@ -245,6 +248,18 @@ def solve_relative(
         if cfg.direction == "combined":
             out = combine_directions(run_filter(ep, cfg, progress), out)
     return _result(pair, out, warnings, dist)
+
+
+def _second_bands(rover: Observations, base: Observations) -> dict[str, str]:
+    """The second frequency of each system: the first band of :data:`SECOND_BANDS` in which
+    both receivers hold carrier phase."""
+    out = {}
+    for system, bands in SECOND_BANDS.items():
+        at_base = carrier_bands(base, system, bands)
+        both = [b for b in carrier_bands(rover, system, bands) if b in at_base]
+        if both:
+            out[system] = both[0]
+    return out
 
 
 def _pair(

@@ -173,7 +173,7 @@ class EpochInputs:
     reset : (K, N) slip: restart the ambiguity
     half : (K, N) half-cycle unresolved: not fixed
     spp : (K, 3) rover SPP
-    lam : (N,) wavelength (m)
+    lam : (N,) wavelength (m; 0 where the satellite's system has no such band)
     groups : (N,) system x frequency group of each ambiguity
     integer : (N,) ambiguity whose double differences are integers (not GLONASS)
     n_f : frequencies per satellite
@@ -245,7 +245,8 @@ def epoch_inputs(pair: Baseline, cfg: RtkConfig) -> EpochInputs:
         reset=reset.reshape(k, -1),
         half=half.reshape(k, -1),
         spp=spp,
-        lam=rover.wavelength_m[js_r].reshape(-1),
+        # 0 where the band is not observed (its ambiguity never enters a double difference)
+        lam=np.nan_to_num(rover.wavelength_m[js_r].reshape(-1), nan=0.0),
         groups=groups,
         integer=np.repeat(np.array([s != "R" for s in letters], dtype=bool), n_f),
         n_f=n_f,

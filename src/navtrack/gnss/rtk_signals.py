@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -23,7 +24,45 @@ if TYPE_CHECKING:
     from navtrack.gnss.rinex.nav import NavData
     from navtrack.gnss.sp3 import Sp3
 
-__all__ = ["ReceiverSignals", "Slips", "common_epochs", "detect_slips", "receiver_signals"]
+__all__ = [
+    "SECOND_BANDS",
+    "ReceiverSignals",
+    "Slips",
+    "carrier_bands",
+    "common_epochs",
+    "detect_slips",
+    "receiver_signals",
+]
+
+SECOND_BANDS: Mapping[str, tuple[str, ...]] = MappingProxyType(
+    {
+        "G": ("2", "5"),
+        "J": ("2", "5"),
+        "E": ("7", "5"),
+        "C": ("7", "6", "5"),
+        "R": ("2",),
+    }
+)
+"""RINEX band digits of a system's second frequency in relative positioning, in order of
+preference (L2 before L5, E5b before E5a, B2I before B3I and B2a): the first that both
+receivers track is used (:func:`carrier_bands`)."""
+
+
+def carrier_bands(obs: Observations, system: str, bands: Sequence[str]) -> list[str]:
+    """The bands among ``bands`` in which ``obs`` holds carrier phase of ``system`` (a code of
+    :data:`navtrack.gnss.spp.CODE_PRIORITY` whose ``L`` code has a value)."""
+    cols = [i for i, sat in enumerate(obs.sats) if sat[0] == system]
+    out = []
+    for band in bands:
+        for code in spp.CODE_PRIORITY.get(system, {}).get(band, ()):
+            phase = "L" + code[1:]
+            if (
+                phase in obs.codes
+                and np.isfinite(obs.values[:, cols, obs.codes.index(phase)]).any()
+            ):
+                out.append(band)
+                break
+    return out
 
 
 # --------------------------------------------------------------------------- stage 1: signals
@@ -76,6 +115,7 @@ def receiver_signals(
     *,
     sp3: Sp3 | None = None,
     ephemeris: Mapping[str, EphemerisTable] | None = None,
+    second_bands: Mapping[str, str] | None = None,
 ) -> ReceiverSignals:
     """Signals of one receiver through the SPP stages (stage 1 of
     :func:`~navtrack.gnss.relative.solve_relative`).
@@ -89,6 +129,9 @@ def receiver_signals(
         Precise orbits and clocks instead of the broadcast ones.
     ephemeris : mapping of str to EphemerisTable, optional
         Pre-built broadcast tables (:func:`navtrack.gnss.spp.navigation_tables`).
+    second_bands : mapping of str to str, optional
+        Band of each system's second frequency (default: the second band of
+        :data:`navtrack.gnss.spp.IONOFREE_BANDS`).
 
     Returns
     -------
@@ -115,13 +158,14 @@ def receiver_signals(
     n_e, n_s, n_f = pr.t_gps_s.size, len(sats), cfg.frequencies
     sat_corr = np.where(meas.usable, meas.y_m - pr.pr_m, np.nan)  # c (dt_sat - tgd), m
     code = np.full((n_e, n_s, n_f), np.nan)
-    carrier = _Carrier(n_e, n_s, n_f)
-    lam = np.full((n_s, n_f), np.nan)
+    carrier, lam = _Carrier(n_e, n_s, n_f), np.full((n_s, n_f), np.nan)
+    if second_bands is None:
+        second_bands = {s: b[1] for s, b in spp.IONOFREE_BANDS.items()}
     for f in range(n_f):
         bands = {
-            s: (spp.PRIMARY_BAND[s] if f == 0 else spp.IONOFREE_BANDS[s][1])
+            s: (spp.PRIMARY_BAND[s] if f == 0 else second_bands[s])
             for s in pr.systems
-            if f == 0 or s in spp.IONOFREE_BANDS
+            if f == 0 or s in second_bands
         }
         p, _, used = spp.select_pseudoranges(obs, sats, bands)
         code[:, :, f] = p + sat_corr
