@@ -28,6 +28,7 @@ from tqdm import tqdm
 from navtrack.cli.inputs import is_raw_log, read_observations
 from navtrack.cli.outputs import check_outputs
 from navtrack.cli.pos import _reference, add_reference_options
+from navtrack.data import REFERENCE_XYZ_M, sample_path
 from navtrack.geodesy import geodetic_to_ecef
 from navtrack.gnss.ambiguity import AmbiguityConfig
 from navtrack.gnss.relative import (
@@ -233,8 +234,6 @@ def _example_inputs(args: argparse.Namespace) -> None:
     """``--example``: the bundled GEONET baseline, static, L1+L2, with its reference."""
     if args.rover is not None:
         raise SystemExit("navtrack rtk: give either ROVER BASE NAV... or --example, not both")
-    from navtrack.data import REFERENCE_XYZ_M, sample_path
-
     args.rover, args.base, nav = (sample_path(name) for name in RTK_EXAMPLE)
     args.nav = [nav]
     args.static, args.freq = True, 2

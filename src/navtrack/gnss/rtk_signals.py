@@ -141,11 +141,9 @@ def receiver_signals(
     -----
     The carrier of a band is the ``L`` code of the pseudorange code chosen for it (``C1C`` ->
     ``L1C``, RINEX 2 ``C1``/``P1`` -> ``L1``, ``P2`` -> ``L2``), its Doppler the ``D`` code.
-    With SP3 the broadcast group delays are not applied (precise clocks refer to the
-    ionosphere-free combination of their analysis centre).
+    With SP3 no broadcast group delay is applied (precise clocks are ionosphere-free ones).
     """
     cfg = config or RtkConfig()
-    # precise clocks refer to the ionosphere-free combination: no broadcast group delay on them
     tgd = "" if sp3 is not None else spp.SppConfig().tgd_systems
     scfg = spp.SppConfig(systems=cfg.systems, elmask_deg=cfg.elmask_deg, tgd_systems=tgd)
     tables = spp.navigation_tables(nav, ephemeris)
