@@ -17,11 +17,16 @@ from navtrack.gnss.relative import (
     RelativeInputError,
     RtkConfig,
     RtkStatus,
-    _dd_matrix,
-    _double_differences,
     common_epochs,
     detect_slips,
     solve_relative,
+)
+from navtrack.gnss.rtk_filter import (
+    Baseline,
+    dd_matrix,
+    double_differences,
+    epoch_inputs,
+    run_filter,
 )
 
 YAMA_BASE = np.array([-3749943.5172, 3683398.2394, 3600629.5295])  # master header APPROX
@@ -35,11 +40,11 @@ def test_double_differences_cancel_receiver_and_satellite_clocks() -> None:
     groups = np.array([0, 0, 0, 8, 8, 8])  # two systems
     el = np.array([0.3, 1.2, 0.5, 0.9, 0.2, 0.4])
     ok = np.ones(n_s, dtype=bool)
-    ref, oth = _double_differences(groups, ok, el)
+    ref, oth = double_differences(groups, ok, el)
     # the highest satellite of each group is its reference
     assert set(ref.tolist()) == {1, 3}
     assert sorted(oth.tolist()) == [0, 2, 4, 5]
-    D = _dd_matrix(ref, oth, n_s)
+    D = dd_matrix(ref, oth, n_s)
     rho = rng.uniform(2e7, 2.5e7, n_s)
     sat_clock = rng.normal(scale=1e3, size=n_s)
     rover = rho + 123.4 + sat_clock  # receiver clock 123.4 m
@@ -404,10 +409,20 @@ def test_static_filter_equals_batch_least_squares(gnss_data: Path) -> None:
     ir, ib, age = common_epochs(rs.t_gps_s, bs.t_gps_s)
     js = np.arange(len(rs.sats))
     assert rs.sats == bs.sats
-    ep = rel._epoch_inputs(
-        rs, bs, base_xyz, ir, ib, age, js, js, detect_slips(rs, cfg), detect_slips(bs, cfg), cfg
+    pair = Baseline(
+        rover=rs,
+        base=bs,
+        base_xyz_m=base_xyz,
+        rover_idx=ir,
+        base_idx=ib,
+        age_s=age,
+        rover_cols=js,
+        base_cols=js,
+        slips_rover=detect_slips(rs, cfg),
+        slips_base=detect_slips(bs, cfg),
     )
-    out = rel._run_filter(ep, cfg)
+    ep = epoch_inputs(pair, cfg)
+    out = run_filter(ep, cfg)
 
     # batch: one ambiguity parameter per satellite arc (a new arc where the filter restarts)
     n_amb = ep.lam.size
@@ -434,10 +449,10 @@ def test_static_filter_equals_batch_least_squares(gnss_data: Path) -> None:
         G = ep.G[k]
         z_lin = G @ ep.x_lin[k]
         for ok, ratio, amb in ((phase_ok, 1.0, True), (code_ok, cfg.code_phase_ratio, False)):
-            ref, oth = _double_differences(ep.groups, ok, ep.el[k])
+            ref, oth = double_differences(ep.groups, ok, ep.el[k])
             if ref.size == 0:
                 continue
-            D = _dd_matrix(ref, oth, n_amb)
+            D = dd_matrix(ref, oth, n_amb)
             cols = np.concatenate([np.arange(3), col[phase_ok]]) if amb else np.arange(3)
             H = D @ G
             if amb:
@@ -459,7 +474,7 @@ def test_a_wrong_integer_fix_is_refused_and_stays_float(monkeypatch) -> None:  #
     off on one combination (a wrong fix that passed the ratio test) makes every such fix fail
     the residual or float-position test: no epoch is reported fixed."""
     from navtrack.data import REFERENCE_XYZ_M, sample_path
-    from navtrack.gnss import relative as rel
+    from navtrack.gnss import rtk_filter
     from navtrack.gnss.rinex.nav import read_nav
     from navtrack.gnss.rinex.obs import read_obs
 
@@ -469,8 +484,8 @@ def test_a_wrong_integer_fix_is_refused_and_stays_float(monkeypatch) -> None:  #
     cfg = RtkConfig(mode="static", frequencies=2)
     right = solve_relative(rover, base, nav, base_xyz, cfg)
     assert right.status_counts()["fix"] == 120
-    assert sum(right.rejection_counts().values()) == 0
-    resolve = rel.resolve_ambiguities
+    assert sum(right.rejection_counts().values()) == 0  # no float epoch, for no reason
+    resolve = rtk_filter.resolve_ambiguities
 
     def one_cycle_off(a_hat, Q, config):  # type: ignore[no-untyped-def]
         fix = resolve(a_hat, Q, config)
@@ -480,8 +495,102 @@ def test_a_wrong_integer_fix_is_refused_and_stays_float(monkeypatch) -> None:  #
         z[-1] += 1  # the best-determined combination, one cycle off
         return dataclasses.replace(fix, z=z)
 
-    monkeypatch.setattr(rel, "resolve_ambiguities", one_cycle_off)
+    monkeypatch.setattr(rtk_filter, "resolve_ambiguities", one_cycle_off)
     wrong = solve_relative(rover, base, nav, base_xyz, cfg)
     assert wrong.status_counts()["fix"] == 0
     refused = wrong.rejection_counts()
     assert refused["residuals"] + refused["float_position"] == 120
+
+
+# ----------------------------------------------------------------------- fix validation
+@pytest.fixture(scope="module")
+def geonet():  # type: ignore[no-untyped-def]
+    from navtrack.data import REFERENCE_XYZ_M, sample_path
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+
+    return (
+        read_obs(sample_path("07590920.05o")),
+        read_obs(sample_path("30400920.05o")),
+        read_nav(sample_path("07590920.05n")),
+        np.array(REFERENCE_XYZ_M["30400920.05o"]),
+    )
+
+
+def test_too_few_satellites_for_a_fix_is_a_counted_reason(geonet) -> None:  # type: ignore[no-untyped-def]
+    """0759 tracks 7-9 satellites: asking for 10 with fixable ambiguities, or an elevation
+    mask of 80 deg for ambiguity resolution, leaves every epoch float for that reason."""
+    rover, base, nav, base_xyz = geonet
+    for cfg in (
+        RtkConfig(mode="static", frequencies=2, min_fix_sats=10),
+        RtkConfig(mode="static", frequencies=2, elmask_ar_deg=80.0),
+    ):
+        res = solve_relative(rover, base, nav, base_xyz, cfg)
+        assert res.status_counts()["float"] == 120
+        assert res.rejection_counts()["too_few_satellites"] == 120
+
+
+def test_kinematic_fixes_with_and_without_hold_are_right(geonet) -> None:  # type: ignore[no-untyped-def]
+    """The static GEONET pair solved kinematically (every epoch's position on its own): with
+    fix-and-hold as without it, every fixed position is within 11 cm of the station (the
+    5-satellite epochs near the end have a formal up sigma of 14 cm), and holding the fixed
+    integers in the filter keeps every epoch fixed."""
+    rover, base, nav, base_xyz = geonet
+    for hold in (False, True):
+        res = solve_relative(rover, base, nav, base_xyz, RtkConfig(frequencies=2, hold=hold))
+        fixed = res.status == RtkStatus.FIX
+        assert fixed.sum() == 120
+        err = np.linalg.norm(res.pos_m[fixed] - GSI0759_REF, axis=1)
+        assert np.median(err) < 0.02
+        assert err.max() < 0.11
+
+
+def test_an_old_base_is_not_used_for_fixing(geonet) -> None:  # type: ignore[no-untyped-def]
+    """3040 thinned to 60 s serves the 30 s rover epochs in between 30 s old: those stay float
+    (reason ``base_age``), the others fix, all within 11 cm of the station."""
+    from navtrack.gnss.spp import subset_epochs
+
+    rover, base, nav, base_xyz = geonet
+    every60 = np.flatnonzero(np.round(base.t_gps_s) % 60 < 1)
+    thin = subset_epochs(base, every60)
+    res = solve_relative(rover, thin, nav, base_xyz, RtkConfig(frequencies=2, max_age_s=60.0))
+    old = res.age_s > 10.0
+    assert old.sum() >= 55
+    assert not (res.status[old] == RtkStatus.FIX).any()
+    assert res.rejection_counts()["base_age"] == old.sum()
+    fixed = res.status == RtkStatus.FIX
+    assert fixed.sum() >= 55
+    assert np.linalg.norm(res.pos_m[fixed] - GSI0759_REF, axis=1).max() < 0.11
+
+
+def test_systems_option_accepts_glonass_and_refuses_unknown_letters() -> None:
+    assert RtkConfig(systems="GR").systems == "GR"
+    with pytest.raises(ValueError, match="systems"):
+        RtkConfig(systems="GX")
+    with pytest.raises(ValueError, match="min_fix_sats"):
+        RtkConfig(min_fix_sats=1)
+
+
+def test_second_frequency_is_the_band_both_receivers_track() -> None:
+    """The X20P walk log tracks Galileo E1 and E5a (no E5b): with two frequencies its Galileo
+    double differences use E5a, so a zero baseline of the log against itself fixes twice as
+    many ambiguities as with one; against convbin's single-band Galileo RINEX of the same log
+    the second frequency is reported missing and E1 alone is used."""
+    from navtrack.data import sample_path
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.ubx import read_ubx
+
+    log = read_ubx(sample_path("gnss_imu_walk_cut.ubx"))
+    base_xyz = np.array([-1276964.2, -4717226.1, 4087226.7])
+    one = solve_relative(log.obs, log.obs, [log.nav], base_xyz, RtkConfig(systems="E"))
+    two = solve_relative(
+        log.obs, log.obs, [log.nav], base_xyz, RtkConfig(systems="E", frequencies=2)
+    )
+    assert (two.status == RtkStatus.FIX).sum() == 60 > (one.status == RtkStatus.FIX).sum()
+    assert (two.n_fixed == 2 * one.n_fixed).sum() >= 50  # E1 and E5a of 5 or 6 satellites
+    convbin = read_obs(Path(__file__).parents[1] / "data" / "ubx" / "gnss_imu_walk_cut_convbin.obs")
+    res = solve_relative(
+        log.obs, convbin, [log.nav], base_xyz, RtkConfig(systems="E", frequencies=2)
+    )
+    assert any("no second-frequency carrier" in w for w in res.warnings)
+    assert np.nanmax(res.n_fixed) == np.nanmax(one.n_fixed)

@@ -127,14 +127,14 @@ def test_checksum_as_pyubx2() -> None:
 
     from pyubx2 import UBXReader, calc_checksum
 
-    from navtrack.gnss.ubx import _checksum_ok
+    from navtrack.gnss.ubx import checksum_ok
 
     data = WALK.read_bytes()
     n = 0
     for raw, _ in UBXReader(io.BytesIO(data), protfilter=2, parsing=False):
-        assert _checksum_ok(raw) == (calc_checksum(raw[2:-2]) == raw[-2:])
+        assert checksum_ok(raw) == (calc_checksum(raw[2:-2]) == raw[-2:])
         broken = raw[:-1] + bytes([raw[-1] ^ 1])
-        assert not _checksum_ok(broken)
+        assert not checksum_ok(broken)
         n += 1
     assert n == 684
 

@@ -17,6 +17,9 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+from tqdm import tqdm
+
 from navtrack.cli._options import (
     add_elmask_option,
     add_out_option,
@@ -24,10 +27,26 @@ from navtrack.cli._options import (
     add_systems_option,
     reference,
 )
+from navtrack.cli.inputs import is_raw_log, read_observations
+from navtrack.cli.outputs import check_outputs
+from navtrack.data import REFERENCE_XYZ_M, sample_path
+from navtrack.geodesy import geodetic_to_ecef
+from navtrack.gnss.ambiguity import AmbiguityConfig
+from navtrack.gnss.relative import (
+    AFTER_RATIO_TEST,
+    STATUS_NAMES,
+    RtkConfig,
+    RtkResult,
+    solution_frame,
+    solve_relative,
+)
+from navtrack.gnss.rinex.nav import NavData, read_nav
+from navtrack.gnss.sp3 import Sp3, read_sp3
+from navtrack.io.solution import FORMATS, write_solution
 
 if TYPE_CHECKING:
     from navtrack._typing import FloatArray
-    from navtrack.gnss.relative import RtkResult
+    from navtrack.gnss.observations import Observations
 
 
 def register(subparsers: Any) -> None:
@@ -55,17 +74,7 @@ def register(subparsers: Any) -> None:
         help="static L1+L2 baseline of the bundled GEONET stations 0759 (rover) and 3040 (base, "
         "3.3 km), against 0759's reference",
     )
-    base = p.add_mutually_exclusive_group()
-    base.add_argument(
-        "--base-pos", nargs=3, type=float, metavar=("X", "Y", "Z"), help="base ECEF metres"
-    )
-    base.add_argument(
-        "--base-llh",
-        nargs=3,
-        type=float,
-        metavar=("LAT", "LON", "H"),
-        help="base position, degrees and ellipsoidal metres",
-    )
+    _add_base_options(p)
     p.add_argument("--static", action="store_true", help="static rover (default kinematic)")
     p.add_argument(
         "--direction",
@@ -78,9 +87,7 @@ def register(subparsers: Any) -> None:
         "--freq", type=int, choices=(1, 2), default=1, help="frequencies: 1 (L1) or 2 (L1+L2)"
     )
     add_elmask_option(p, 15.0)
-    p.add_argument("--ratio", type=float, default=3.0, help="ratio-test threshold (default 3)")
-    p.add_argument("--partial", action="store_true", help="partial ambiguity fixing")
-    p.add_argument("--float", action="store_true", help="no integer fixing (float solution)")
+    _add_fix_options(p)
     p.add_argument("--sp3", type=Path, help="precise orbits/clocks (SP3) instead of broadcast")
     add_reference_options(p, trajectory=True)
     add_out_option(p, "write the solution (.csv, .parquet, .nmea, .kml, .gpx)")
@@ -89,15 +96,74 @@ def register(subparsers: Any) -> None:
     p.set_defaults(func=run_rtk)
 
 
+_DEFAULTS = RtkConfig()
+
+
+def _add_base_options(p: argparse.ArgumentParser) -> None:
+    """The base position (default: the base file's header position)."""
+    base = p.add_mutually_exclusive_group()
+    base.add_argument(
+        "--base-pos", nargs=3, type=float, metavar=("X", "Y", "Z"), help="base ECEF metres"
+    )
+    base.add_argument(
+        "--base-llh",
+        nargs=3,
+        type=float,
+        metavar=("LAT", "LON", "H"),
+        help="base position, degrees and ellipsoidal metres",
+    )
+
+
+def _add_fix_options(p: argparse.ArgumentParser) -> None:
+    """Ambiguity resolution, its validation and the base age."""
+    p.add_argument("--ratio", type=float, default=3.0, help="ratio-test threshold (default 3)")
+    p.add_argument("--partial", action="store_true", help="partial ambiguity fixing")
+    p.add_argument("--float", action="store_true", help="no integer fixing (float solution)")
+    p.add_argument(
+        "--elmask-ar",
+        type=float,
+        default=0.0,
+        metavar="DEG",
+        help="elevation mask of ambiguity resolution (the larger of it and --elmask applies)",
+    )
+    p.add_argument(
+        "--min-fix-sats",
+        type=int,
+        default=_DEFAULTS.min_fix_sats,
+        metavar="N",
+        help="fewest satellites with fixable ambiguities for a fix",
+    )
+    p.add_argument(
+        "--max-age-ar",
+        type=float,
+        default=_DEFAULTS.max_age_ar_s,
+        metavar="S",
+        help="resolve ambiguities only with base observations up to this old (s)",
+    )
+    p.add_argument(
+        "--min-success-rate",
+        type=float,
+        default=_DEFAULTS.min_success_rate,
+        metavar="P",
+        help="fewest bootstrapped success rate of a full fix (0: no such test)",
+    )
+    p.add_argument(
+        "--hold", action="store_true", help="fix-and-hold: feed validated fixes to the filter"
+    )
+    p.add_argument(
+        "--max-age",
+        type=float,
+        default=_DEFAULTS.max_age_s,
+        metavar="S",
+        help="use base observations up to this old (s)",
+    )
+
+
 RTK_EXAMPLE = ("07590920.05o", "30400920.05o", "07590920.05n")
 """The bundled files of ``rtk --example`` (``navtrack/data/README.md``)."""
 
 
 def _base_position(args: argparse.Namespace) -> tuple[FloatArray, str]:
-    import numpy as np
-
-    from navtrack.geodesy import geodetic_to_ecef
-
     if args.base_pos is not None:
         return np.asarray(args.base_pos, dtype=float), "--base-pos"
     if args.base_llh is not None:
@@ -113,10 +179,8 @@ def reference_errors(
 ) -> tuple[FloatArray, str] | None:
     """Per-epoch 3-D error (m, NaN where not compared) against ``--ref``/``--ref-llh`` or the
     epochs of ``--ref-pos`` (same time tags to 1 ms), and a label; None without a reference."""
-    import numpy as np
-
     if args.ref_pos is not None:
-        from navtrack.io.rtklib import read_pos
+        from navtrack.io.rtklib import read_pos  # pandas: only with --ref-pos
 
         ref = read_pos(args.ref_pos)
         kr = np.round(ref["t_gps_s"].to_numpy() * 1e3).astype(np.int64)
@@ -132,50 +196,44 @@ def reference_errors(
     return np.linalg.norm(pos_m - np.asarray(point), axis=1), "reference point"
 
 
-def run_rtk(args: argparse.Namespace) -> int:
-    import numpy as np
+def _example_inputs(args: argparse.Namespace) -> None:
+    """``--example``: the bundled GEONET baseline, static, L1+L2, with its reference."""
+    if args.rover is not None:
+        raise SystemExit("navtrack rtk: give either ROVER BASE NAV... or --example, not both")
+    args.rover, args.base, nav = (sample_path(name) for name in RTK_EXAMPLE)
+    args.nav = [nav]
+    args.static, args.freq = True, 2
+    if args.base_pos is None and args.base_llh is None:
+        args.base_pos = list(REFERENCE_XYZ_M[RTK_EXAMPLE[1]])
+    if args.ref is None and args.ref_llh is None and args.ref_pos is None:
+        args.ref = list(REFERENCE_XYZ_M[RTK_EXAMPLE[0]])
 
-    from navtrack.gnss.ambiguity import AmbiguityConfig
-    from navtrack.gnss.relative import STATUS_NAMES, RtkConfig, solution_frame, solve_relative
-    from navtrack.gnss.rinex.nav import read_nav
 
-    if args.example:
-        if args.rover is not None:
-            raise SystemExit("navtrack rtk: give either ROVER BASE NAV... or --example, not both")
-        from navtrack.data import REFERENCE_XYZ_M, sample_path
-
-        args.rover, args.base, nav = (sample_path(name) for name in RTK_EXAMPLE)
-        args.nav = [nav]
-        args.static, args.freq = True, 2
-        if args.base_pos is None and args.base_llh is None:
-            args.base_pos = list(REFERENCE_XYZ_M[RTK_EXAMPLE[1]])
-        if args.ref is None and args.ref_llh is None and args.ref_pos is None:
-            args.ref = list(REFERENCE_XYZ_M[RTK_EXAMPLE[0]])
-    if args.rover is None or args.base is None:
-        raise SystemExit("navtrack rtk: give ROVER BASE NAV..., or --example")
-    from navtrack.cli.inputs import is_raw_log, read_observations
-
-    if not args.nav and not (is_raw_log(args.rover) or is_raw_log(args.base)):
-        raise SystemExit("navtrack rtk: give ROVER BASE NAV... (NAV optional for UBX logs)")
-    for path in [args.rover, args.base, *args.nav, *([args.sp3] if args.sp3 else [])]:
-        if not path.is_file():
-            raise SystemExit(f"navtrack rtk: file {str(path)!r} not found")
-    from navtrack.cli.outputs import check_outputs
-    from navtrack.io.solution import FORMATS
-
-    check_outputs("navtrack rtk", args.out, FORMATS, args.plot)
+def _rtk_config(args: argparse.Namespace) -> RtkConfig:
     try:
-        config = RtkConfig(
+        return RtkConfig(
             mode="static" if args.static else "kinematic",
             systems="".join(dict.fromkeys(args.systems.upper())),
             frequencies=args.freq,
             elmask_deg=args.elmask,
+            elmask_ar_deg=args.elmask_ar,
+            min_fix_sats=args.min_fix_sats,
+            max_age_ar_s=args.max_age_ar,
+            min_success_rate=args.min_success_rate,
+            hold=args.hold,
+            max_age_s=args.max_age,
             ambiguity=AmbiguityConfig(ratio_threshold=args.ratio, partial=args.partial),
             fix=not args.float,
             direction=args.direction,
         )
     except ValueError as exc:
         raise SystemExit(f"navtrack rtk: {exc}") from None
+
+
+def _read_inputs(
+    args: argparse.Namespace,
+) -> tuple[Observations, Observations, list[NavData], Sp3 | None, FloatArray, str]:
+    """Rover, base, navigation data, SP3 and the base position with its source."""
     base_xyz, base_src = _base_position(args)
     rover, rover_nav = read_observations(args.rover)
     base, base_nav = read_observations(args.base)
@@ -192,13 +250,19 @@ def run_rtk(args: argparse.Namespace) -> int:
         raise SystemExit("navtrack rtk: no ephemerides: give a RINEX navigation file")
     sp3 = None
     if args.sp3 is not None:
-        from navtrack.gnss.sp3 import read_sp3
-
         sp3 = read_sp3(args.sp3)
         for why in sp3.warnings:
             print(f"warning        {args.sp3}: {why}", file=sys.stderr)
-    from tqdm import tqdm
+    return rover, base, navs, sp3, base_xyz, base_src
 
+
+def _solve(
+    args: argparse.Namespace,
+    config: RtkConfig,
+    inputs: tuple[Observations, Observations, list[NavData], Sp3 | None, FloatArray, str],
+) -> RtkResult:
+    """:func:`solve_relative` under a progress bar over both filter passes."""
+    rover, base, navs, sp3, base_xyz, _ = inputs
     n_common = min(len(rover.t_gps_s), len(base.t_gps_s))
     n_total = (2 if args.direction == "combined" else 1) * n_common
     disable = True if args.no_progress else None  # None: only on a terminal
@@ -220,14 +284,30 @@ def run_rtk(args: argparse.Namespace) -> int:
             raise SystemExit(f"navtrack rtk: {exc}") from None
         bar.n = n_total
         bar.refresh()
-    _print_summary(args, result, config, base_xyz, base_src, STATUS_NAMES)
+    return result
+
+
+def run_rtk(args: argparse.Namespace) -> int:
+    if args.example:
+        _example_inputs(args)
+    if args.rover is None or args.base is None:
+        raise SystemExit("navtrack rtk: give ROVER BASE NAV..., or --example")
+    if not args.nav and not (is_raw_log(args.rover) or is_raw_log(args.base)):
+        raise SystemExit("navtrack rtk: give ROVER BASE NAV... (NAV optional for UBX logs)")
+    for path in [args.rover, args.base, *args.nav, *([args.sp3] if args.sp3 else [])]:
+        if not path.is_file():
+            raise SystemExit(f"navtrack rtk: file {str(path)!r} not found")
+    check_outputs("navtrack rtk", args.out, FORMATS, args.plot)
+    config = _rtk_config(args)
+    inputs = _read_inputs(args)
+    result = _solve(args, config, inputs)
+    _print_summary(args, result, config, inputs[4], inputs[5])
     counts = result.status_counts()
-    relative = counts["fix"] + counts["float"] + counts["dgnss"]
-    code = 0 if relative else 1
-    if not relative:
+    code = 0 if counts["fix"] + counts["float"] + counts["dgnss"] else 1
+    if code:
         print("navtrack rtk: no epoch has a relative solution", file=sys.stderr)
     if args.plot is not None:
-        from navtrack.plots.rtk import plot_rtk
+        from navtrack.plots.rtk import plot_rtk  # matplotlib: only with --plot
 
         errs = reference_errors(result.t_gps_s, result.pos_m, args)
         paths = plot_rtk(
@@ -238,8 +318,6 @@ def run_rtk(args: argparse.Namespace) -> int:
         )
         print(f"figures        {', '.join(str(p) for p in paths)}")
     if args.out is not None:
-        from navtrack.io.solution import write_solution
-
         try:
             path = write_solution(
                 solution_frame(result),
@@ -256,13 +334,10 @@ def run_rtk(args: argparse.Namespace) -> int:
 def _print_summary(
     args: argparse.Namespace,
     result: RtkResult,
-    config: Any,
+    config: RtkConfig,
     base_xyz: FloatArray,
     base_src: str,
-    status_names: tuple[str, ...],
 ) -> None:
-    import numpy as np
-
     counts = result.status_counts()
     print(f"rover          {args.rover}")
     print(f"base           {args.base}")
@@ -278,6 +353,7 @@ def _print_summary(
         f"mode           {config.mode}, {config.direction}, {bands}, "
         f"systems {systems or '-'}, elevation mask {config.elmask_deg:g} deg, ratio "
         f"{config.ambiguity.ratio_threshold:g}{', partial' if config.ambiguity.partial else ''}"
+        + (", fix-and-hold" if config.hold else "")
     )
     print(
         f"epochs         rover {result.n_rover_epochs}, base {result.n_base_epochs}, "
@@ -289,18 +365,12 @@ def _print_summary(
             f"base age       median {np.median(age):.3f} s, max {age.max():.3f} s "
             f"(up to {config.max_age_s:g} s used)"
         )
-    for name in status_names:
+    for name in STATUS_NAMES:
         if counts[name]:
             print(f"  {name:<12} {counts[name]}")
     n_c = max(result.n_common_epochs, 1)
     print(f"fix rate       {100.0 * counts['fix'] / n_c:.1f} % of the common epochs")
-    refused = {k: v for k, v in result.rejection_counts().items() if v}
-    if refused:
-        print(
-            "fixes refused  "
-            + ", ".join(f"{k} {v}" for k, v in refused.items())
-            + " (ratio test passed; kept float)"
-        )
+    _print_fix_outcomes(result)
     s = result.slips
     print(
         f"slips          lli {s['lli']}, doppler {s['doppler']}, geometry-free "
@@ -315,15 +385,36 @@ def _print_summary(
     print(f"base vs SPP    {result.base_spp_distance_m:.2f} m (base position minus its own SPP)")
     for w in result.warnings:
         print(f"warning        {w}", file=sys.stderr)
+    _print_errors(args, result)
+
+
+def _print_fix_outcomes(result: RtkResult) -> None:
+    """Float epochs by reason: before or at the ratio test, and fixes refused after it."""
+    counts = {k: v for k, v in result.rejection_counts().items() if v}
+    after = {r.name.lower() for r in AFTER_RATIO_TEST}
+    not_fixed = {k: v for k, v in counts.items() if k not in after}
+    refused = {k: v for k, v in counts.items() if k in after}
+    if not_fixed:
+        print("not fixed      " + ", ".join(f"{k} {v}" for k, v in not_fixed.items()))
+    if refused:
+        print(
+            "fixes refused  "
+            + ", ".join(f"{k} {v}" for k, v in refused.items())
+            + " (ratio test passed; kept float)"
+        )
+
+
+def _print_errors(args: argparse.Namespace, result: RtkResult) -> None:
     errs = reference_errors(result.t_gps_s, result.pos_m, args)
-    if errs is not None:
-        err, label = errs
-        print(f"error vs ref   {label}: median / 95 % / max 3-D (m)")
-        for name in ("fix", "float", "dgnss", "single"):
-            sel = (result.status == status_names.index(name)) & np.isfinite(err)
-            if sel.any():
-                e = err[sel]
-                print(
-                    f"  {name:<12} {np.median(e):8.3f}  {np.percentile(e, 95):8.3f}  "
-                    f"{e.max():8.3f}  ({sel.sum()} epochs)"
-                )
+    if errs is None:
+        return
+    err, label = errs
+    print(f"error vs ref   {label}: median / 95 % / max 3-D (m)")
+    for name in ("fix", "float", "dgnss", "single"):
+        sel = (result.status == STATUS_NAMES.index(name)) & np.isfinite(err)
+        if sel.any():
+            e = err[sel]
+            print(
+                f"  {name:<12} {np.median(e):8.3f}  {np.percentile(e, 95):8.3f}  "
+                f"{e.max():8.3f}  ({sel.sum()} epochs)"
+            )

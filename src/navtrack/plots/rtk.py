@@ -13,7 +13,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from navtrack._typing import FloatArray, StrPath
+from navtrack.gnss.rtk_config import STATUS_NAMES
 from navtrack.plots.canvas import figure_dir, new_figure, save_figure
+from navtrack.timescale import to_datetime64
 
 if TYPE_CHECKING:
     from navtrack.gnss.relative import RtkResult
@@ -31,8 +33,6 @@ _COLOURS = {
 
 def _title(t_gps_s: FloatArray) -> str:
     """``RTK solution, 2010-01-06 09:00:00 - 09:59:59 GPST, 3600 epochs``."""
-    from navtrack.timescale import to_datetime64
-
     if t_gps_s.size == 0:
         return "RTK solution, no epochs"
     first, last = (str(to_datetime64(v))[:19].replace("T", " ") for v in (t_gps_s[0], t_gps_s[-1]))
@@ -66,8 +66,6 @@ def plot_rtk(
     -------
     list of Path
     """
-    from navtrack.gnss.relative import STATUS_NAMES
-
     d = figure_dir(out_dir)
     t = result.t_gps_s - result.t_gps_s[0]
     names = np.array(STATUS_NAMES, dtype=object)[result.status.astype(np.int64)]

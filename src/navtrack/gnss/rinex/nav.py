@@ -722,3 +722,7 @@ def _tables(groups: dict[str, tuple[_Group, FloatArray]]) -> dict[str, dict[str,
         data["line"] = line[order]
         tables[sys_letter] = data
     return tables
+
+
+toe_gps_s = _toe_gps_s
+"""Public name of :func:`_toe_gps_s` (full GPS seconds of toe), shared with the UBX decoder."""

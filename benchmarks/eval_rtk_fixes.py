@@ -1,0 +1,298 @@
+"""Fix rate, wrong fixes and time to first fix of ``navtrack rtk`` beside RTKLIB 2.4.3's
+``rnx2rtkp`` on the same baselines, run live.
+
+Cases (all in ``shared/data/gnss``):
+
+* ``yamatogawa``: the walking u-blox rover against its 1 Hz master, L1 GPS, kinematic,
+  forward and combined; also with the master thinned to 5 s and 30 s (a CORS-rate base:
+  the rover's 1 Hz epochs use base observations up to 30 s old). Reference: RTKLIB's
+  combined fixed solution with the 1 Hz master (stored with the data); epochs RTKLIB left
+  float are compared with its float position and listed.
+* ``gsi0759``: GEONET 0759 against 3040 (3.3 km, 30 s, L1+L2, geodetic receivers) solved
+  kinematically (every epoch on its own) and statically; kinematic also against 3040 thinned
+  to 60 s with base observations used up to 60 s old (both programs), L1 and L1+L2.
+  Reference: the station coordinate of the data README.
+
+A wrong fix is a fixed epoch more than ``--wrong-m`` (0.10 m) from the reference. Time to first
+fix is the time from the first common epoch to the first fixed one (forward runs).
+
+``--evidence``: the yamatogawa combined fix at 05:59:54 GPST (RTKLIB float there) shown right
+by its integers (:func:`evidence_055954`).
+
+Usage::
+
+    PYTHONPATH=src python benchmarks/eval_rtk_fixes.py [--set min_fix_sats=3 ...] [--evidence]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from navtrack.gnss.relative import RtkConfig, RtkStatus, solve_relative
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.rinex.obs import read_obs
+from navtrack.io.rtklib import read_pos
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED = Path(os.environ.get("NAVTRACK_SHARED_DATA", REPO.parent / "shared" / "data")) / "gnss"
+YAMA = SHARED / "gogps_yamatogawa"
+GSI = SHARED / "rtklib_gsi0759"
+YAMA_BASE = (-3749943.5172, 3683398.2394, 3600629.5295)
+GSI_BASE = (-3978241.958, 3382840.234, 3649900.853)  # 3040, as RTKLIB's own tests hold it
+GSI_REF = (-3976219.188, 3382371.606, 3652511.143)  # 0759, shared data README
+
+
+def thin_rinex2(src: Path, dst: Path, step_s: int) -> Path:
+    """A RINEX 2 observation file keeping the epochs whose time of day is a multiple of
+    ``step_s`` (to the second), records copied unchanged."""
+    lines = src.read_text().splitlines(keepends=True)
+    end = next(i for i, ln in enumerate(lines) if "END OF HEADER" in ln) + 1
+    n_types = next(int(ln[:6]) for ln in lines[:end] if "# / TYPES OF OBSERV" in ln)
+    out = lines[:end]
+    i = end
+    while i < len(lines):
+        head = lines[i]
+        flag, n = int(head[28]), int(head[29:32])
+        n_list = (n - 1) // 12 if flag <= 1 else 0
+        n_rec = n * ((n_types + 4) // 5) if flag <= 1 else n
+        block = lines[i : i + 1 + n_list + n_rec]
+        i += 1 + n_list + n_rec
+        if flag > 1:  # event records (their time fields may be blank)
+            out.extend(block)
+            continue
+        sod = int(head[10:12]) * 3600 + int(head[13:15]) * 60 + round(float(head[15:26]))
+        if sod % step_s == 0:
+            out.extend(block)
+    dst.write_text("".join(out))
+    return dst
+
+
+def _rtklib(rover: Path, base: Path, nav: Path, base_xyz: tuple, opts: list[str], out: Path):  # type: ignore[no-untyped-def]
+    conf = out.with_suffix(".conf")  # the base age limit has no command-line option
+    age = next((o.split("=")[1] for o in opts if o.startswith("maxage=")), "30")
+    conf.write_text(f"pos2-maxage        ={age}\n")
+    cmd = ["rnx2rtkp", "-k", str(conf), *(o for o in opts if not o.startswith("maxage="))]
+    cmd += ["-m", "15", "-e"]
+    cmd += ["-r", *(f"{v:.4f}" for v in base_xyz)]
+    cmd += [str(rover), str(nav), str(base), "-o", str(out)]
+    subprocess.run(cmd, check=True, capture_output=True)
+    return read_pos(out)
+
+
+def _stats(
+    t: np.ndarray, fixed: np.ndarray, err: np.ndarray, q_ref: np.ndarray, wrong_m: float
+) -> str:
+    """Fix rate, wrong fixes (checked against a fixed reference), fixes the reference cannot
+    check (it is float there), time to first fix."""
+    n = t.size
+    ttff = f"{t[fixed][0] - t[0]:.0f} s" if fixed.any() else "never"
+    checked = fixed & (q_ref == 1) & np.isfinite(err)
+    e = err[checked]
+    return (
+        f"fixed {int(fixed.sum()):4d}/{n} ({100 * fixed.sum() / max(n, 1):5.1f} %), wrong "
+        f"{int((e > wrong_m).sum())} of {int(checked.sum())} checked (max "
+        f"{e.max() if e.size else float('nan'):.3f} m), unchecked {int((fixed & ~checked).sum())}"
+        f", TTFF {ttff}"
+    )
+
+
+def _ref_errors(t: np.ndarray, pos: np.ndarray, ref) -> tuple[np.ndarray, np.ndarray]:  # type: ignore[no-untyped-def]
+    """3-D distance to a reference solution at the same tags (NaN elsewhere), and its Q."""
+    if isinstance(ref, tuple):
+        return np.linalg.norm(pos - np.asarray(ref), axis=1), np.ones(t.size, dtype=int)
+    kr = np.round(ref["t_gps_s"].to_numpy() * 1e3).astype(np.int64)
+    kn = np.round(t * 1e3).astype(np.int64)
+    _, a, b = np.intersect1d(kn, kr, return_indices=True)
+    err = np.full(t.size, np.nan)
+    q = np.zeros(t.size, dtype=int)
+    err[a] = np.linalg.norm(pos[a] - ref[["x_m", "y_m", "z_m"]].to_numpy()[b], axis=1)
+    q[a] = ref["q"].to_numpy()[b]
+    return err, q
+
+
+def _case(
+    name: str,
+    files: tuple[Path, Path, Path, tuple[float, float, float]],
+    cfg: RtkConfig,
+    rtk_opts: list[str],
+    ref: Any,
+    wrong_m: float,
+    tmp: Path,
+) -> None:
+    """One baseline through both programs: ``files`` are rover, base, navigation and the base
+    position; ``ref`` a reference point or RTKLIB solution."""
+    rover, base, nav, base_xyz = files
+    res = solve_relative(
+        read_obs(rover), read_obs(base), [read_nav(nav)], np.asarray(base_xyz), cfg
+    )
+    common = np.isfinite(res.age_s)
+    t = res.t_gps_s[common]
+    err, q_ref = _ref_errors(res.t_gps_s, res.pos_m, ref)
+    fixed = res.status == RtkStatus.FIX
+    print(f"{name:<34} navtrack {_stats(t, fixed[common], err[common], q_ref[common], wrong_m)}")
+    refused = {k: v for k, v in res.rejection_counts().items() if v}
+    print(f"{'':<34}   not fixed, by reason: {refused}")
+    if not isinstance(ref, tuple):
+        vs_float = fixed & (q_ref == 2)
+        for k in np.flatnonzero(vs_float):
+            print(
+                f"{'':<34}   unchecked fix at {res.t_gps_s[k] % 86400:.0f} s of day: "
+                f"{err[k]:.3f} m from the reference's float"
+            )
+    pos = _rtklib(rover, base, nav, base_xyz, rtk_opts, tmp / f"{name}.pos")
+    tr = pos["t_gps_s"].to_numpy()
+    err_r, q_r = _ref_errors(tr, pos[["x_m", "y_m", "z_m"]].to_numpy(), ref)
+    fixed_r = pos["q"].to_numpy() == 1
+    print(f"{'':<34} RTKLIB   {_stats(tr, fixed_r, err_r, q_r, wrong_m)}")
+
+
+def evidence_055954() -> None:
+    """The yamatogawa combined fix at 05:59:54 GPST that RTKLIB leaves float: its double-
+    differenced integers beside those of the backward fixes at 05:59:50-53 (which agree with
+    RTKLIB's fixed solution), the slips flagged on those satellites at :54, and the position
+    against the walk extrapolated from RTKLIB's fixes at :52 and :53."""
+    from navtrack.gnss import rtk_filter
+    from navtrack.gnss.relative import detect_slips, receiver_signals
+
+    calls: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    condition = rtk_filter.condition_on_fix
+
+    def recording(x: Any, P: Any, A: Any, fix: Any) -> Any:
+        calls.append((x[:3].copy(), A[:, 3:].copy(), fix.a_fixed.copy()))
+        return condition(x, P, A, fix)
+
+    rover, master = (
+        read_obs(YAMA / "yamatogawa_rover.obs"),
+        read_obs(YAMA / "yamatogawa_master.obs"),
+    )
+    nav = [read_nav(YAMA / "brdc0060.10n")]
+    cfg = RtkConfig(systems="G", direction="backward")
+    rtk_filter.condition_on_fix = recording
+    try:
+        res = solve_relative(rover, master, nav, np.asarray(YAMA_BASE), cfg)
+    finally:
+        rtk_filter.condition_on_fix = condition
+    sod = np.round(res.t_gps_s % 86400).astype(int)
+    used: set[str] = set()
+    for x, A, a_fixed in calls:
+        k = np.flatnonzero(np.all(np.abs(res.float_pos_m - x) < 1e-6, axis=1))
+        if k.size == 0 or not 21590 <= sod[k[0]] <= 21594 or res.status[k[0]] != RtkStatus.FIX:
+            continue
+        pairs = {}
+        for row, n in zip(A, a_fixed, strict=True):
+            other, ref = res.sats[int(np.argmax(row))], res.sats[int(np.argmin(row))]
+            pairs[f"{other}-{ref}"] = int(n)
+            used |= {other, ref}
+        print(f"backward fix at {sod[k[0]]} s of day: DD integers {pairs}")
+    for who, obs in (("rover", rover), ("master", master)):
+        sig = receiver_signals(obs, nav, cfg)
+        slips = detect_slips(sig, cfg).any[:, :, 0]
+        row = int(np.flatnonzero(np.round(sig.t_gps_s % 86400) == 21594)[0])
+        hit = [s for j, s in enumerate(sig.sats) if slips[row, j] and s in used]
+        print(f"{who}: slips flagged at 21594 s on the fixed satellites: {hit or 'none'}")
+    rtklib = read_pos(YAMA / "yamatogawa_rover_ref_rtklib_rtk_combined.pos")
+    xyz = rtklib[["x_m", "y_m", "z_m"]].to_numpy()
+    r_sod = np.round(rtklib["t_gps_s"].to_numpy() % 86400).astype(int)
+    at = {s: xyz[np.flatnonzero(r_sod == s)[0]] for s in (21592, 21593, 21594)}
+    walk = 2 * at[21593] - at[21592]
+    comb = solve_relative(
+        rover, master, nav, np.asarray(YAMA_BASE), RtkConfig(systems="G", direction="combined")
+    )
+    fix = comb.pos_m[np.flatnonzero(np.round(comb.t_gps_s % 86400) == 21594)[0]]
+    print(
+        f"at 21594 s: navtrack's fix {np.linalg.norm(fix - walk):.2f} m and RTKLIB's float "
+        f"{np.linalg.norm(at[21594] - walk):.2f} m from the walk extrapolated from RTKLIB's "
+        f"fixes at 21592 and 21593 s (steps of 0.5-1.0 m/s); fix to RTKLIB float "
+        f"{np.linalg.norm(fix - at[21594]):.2f} m"
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--wrong-m", type=float, default=0.10)
+    ap.add_argument("--evidence", action="store_true", help="only the evidence on the 05:59:54 fix")
+    ap.add_argument(
+        "--set", action="append", default=[], metavar="K=V", help="RtkConfig field (number)"
+    )
+    args = ap.parse_args(argv)
+    if shutil.which("rnx2rtkp") is None or not YAMA.is_dir():
+        print("rnx2rtkp or the shared data missing: nothing to compare", file=sys.stderr)
+        return 1
+    if args.evidence:
+        evidence_055954()
+        return 0
+    over = {k: type(getattr(RtkConfig(), k))(v) for k, v in (s.split("=") for s in args.set)}
+    base_cfg = dataclasses.replace(RtkConfig(systems="G"), **over)
+    ref = read_pos(YAMA / "yamatogawa_rover_ref_rtklib_rtk_combined.pos")
+    with tempfile.TemporaryDirectory() as d:
+        tmp = Path(d)
+        rover, master, nav = (
+            YAMA / "yamatogawa_rover.obs",
+            YAMA / "yamatogawa_master.obs",
+            YAMA / "brdc0060.10n",
+        )
+        kin = ["-p", "2", "-f", "1", "-t"]
+        for direction, opt in (("forward", []), ("combined", ["-c"])):
+            cfg = dataclasses.replace(base_cfg, direction=direction)
+            _case(
+                f"yamatogawa 1 s base {direction}",
+                (rover, master, nav, YAMA_BASE),
+                cfg,
+                kin + opt,
+                ref,
+                args.wrong_m,
+                tmp,
+            )
+        for step in (5, 30):
+            thin = thin_rinex2(master, tmp / f"master_{step}s.obs", step)
+            for direction, opt in (("forward", []), ("combined", ["-c"])):
+                cfg = dataclasses.replace(base_cfg, direction=direction)
+                _case(
+                    f"yamatogawa {step} s base {direction}",
+                    (rover, thin, nav, YAMA_BASE),
+                    cfg,
+                    kin + opt,
+                    ref,
+                    args.wrong_m,
+                    tmp,
+                )
+        g_rover, g_nav = GSI / "07590920.05o", GSI / "07590920.05n"
+        g_base = REPO / "src/navtrack/data/30400920.05o"
+        for mode, p_opt in (("kinematic", "2"), ("static", "3")):
+            cfg = dataclasses.replace(base_cfg, mode=mode, frequencies=2)
+            _case(
+                f"gsi0759 L1+L2 {mode}",
+                (g_rover, g_base, g_nav, GSI_BASE),
+                cfg,
+                ["-p", p_opt, "-f", "2"],
+                GSI_REF,
+                args.wrong_m,
+                tmp,
+            )
+        thin = thin_rinex2(g_base, tmp / "3040_60s.obs", 60)
+        for freq in (1, 2):
+            cfg = dataclasses.replace(base_cfg, frequencies=freq, max_age_s=60.0)
+            _case(
+                f"gsi0759 L{'1+L2' if freq == 2 else '1'} kinematic 60 s base",
+                (g_rover, thin, g_nav, GSI_BASE),
+                cfg,
+                ["-p", "2", "-f", str(freq), "maxage=60"],
+                GSI_REF,
+                args.wrong_m,
+                tmp,
+            )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
