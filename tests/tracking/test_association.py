@@ -161,7 +161,7 @@ def test_exact_is_fast_structure_for_twelve_mutual_targets() -> None:
 
 
 def test_pda_update_equals_moment_matched_mixture() -> None:
-    from navtrack.tracking.kalman import kf_update
+    from navtrack.estimation.kalman import kf_update
     from navtrack.tracking.models import linear_position
 
     rng = np.random.default_rng(4)

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from navtrack.tracking.kalman import (
+from navtrack.estimation.kalman import (
     ekf_predict,
     ekf_update,
     kalman_gain,

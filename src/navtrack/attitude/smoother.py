@@ -36,7 +36,7 @@ from scipy.spatial.transform import Rotation
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray, IntArray
 from navtrack.attitude.quaternion import Propagation, interpolate_attitude
-from navtrack.tracking.kalman import kalman_gain, kf_predict, kf_update
+from navtrack.estimation.kalman import kalman_gain, kf_predict, kf_update
 
 __all__ = ["SmootherConfig", "SmootherResult", "smooth_attitude"]
 

@@ -176,9 +176,9 @@ def solve_ppp(
     ValueError
         No epoch with a single point solution, or no second-frequency carrier.
     """
+    from navtrack.estimation.kalman import gain_update, innovation_gain
     from navtrack.gnss.corrections import ionofree
     from navtrack.gnss.relative import RtkConfig, detect_slips, receiver_signals
-    from navtrack.tracking.kalman import gain_update, innovation_gain
 
     cfg = config or PppConfig()
     rcfg = RtkConfig(systems=cfg.systems, frequencies=2, elmask_deg=cfg.elmask_deg)

@@ -735,7 +735,7 @@ class _FilterOut:
 def _run_filter(ep: _Epochs, cfg: RtkConfig, progress: ProgressFn | None = None) -> _FilterOut:
     """The Kalman filter over the common epochs: predict, restart slipped ambiguities, update
     with double differences, fix by LAMBDA."""
-    from navtrack.tracking.kalman import gain_update, innovation_gain
+    from navtrack.estimation.kalman import gain_update, innovation_gain
 
     k_n, n_amb = ep.sd_phase.shape
     n_s = n_amb // ep.n_f

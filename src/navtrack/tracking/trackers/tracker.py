@@ -541,8 +541,8 @@ def predict(store: TrackStore, dt: float, model: TrackerModel) -> None:
     of every model (:func:`~navtrack.tracking.kalman.kf_predict`), and ``mu`` becomes the
     predicted model probabilities. Nothing happens for ``dt <= 0`` or an empty store.
     """
+    from navtrack.estimation.kalman import kf_predict
     from navtrack.tracking.imm import imm_mix, markov_matrix
-    from navtrack.tracking.kalman import kf_predict
 
     if not (dt > 0 and store.size):
         return
@@ -617,8 +617,8 @@ def gate_scan(
     ``K`` stay those of the prediction time. The neglected terms, ``dt² P_vv`` and the process
     noise over ``dt``, are small beside ``R`` for windows a fraction of the report interval.
     """
+    from navtrack.estimation.kalman import innovation_gain
     from navtrack.tracking.gating import gate, kdtree_pregate
-    from navtrack.tracking.kalman import innovation_gain
 
     meas = model.measurement
     T, r, n = store.x.shape
@@ -809,9 +809,9 @@ def update(store: TrackStore, gated: ScanGate, assoc: ScanAssociation) -> None:
     follow (IMM; for JPDA the model likelihood is the missed term plus each detection's
     likelihood ratio against the mixture, Blom & Bloem 2000).
     """
+    from navtrack.estimation.kalman import gain_update
     from navtrack.tracking.imm import imm_model_probabilities
     from navtrack.tracking.jpda import pda_update
-    from navtrack.tracking.kalman import gain_update
 
     beta = assoc.beta
     r = store.n_models
