@@ -36,6 +36,7 @@ from navtrack.tracking.assignment.relaxation import (
     pair_costs,
     recover,
     reduced_costs,
+    relaxation_solution,
     relaxed_dual,
 )
 from navtrack.tracking.assignment.tables import list_splits, lookup, relaxation_tables
@@ -55,15 +56,7 @@ def _options(max_exact_tuples: int) -> CellOptions:
 
 def _relaxed(problem: SdProblem, selected: np.ndarray, iterations: int, message: str) -> SdSolution:
     """A relaxed solution without a bound (status GAP)."""
-    return SdSolution.from_selection(
-        problem,
-        selected,
-        lower_bound=-np.inf,
-        iterations=iterations,
-        method=SdMethod.LAGRANGIAN,
-        status=SdStatus.GAP,
-        message=message,
-    )
+    return relaxation_solution(problem, selected, -np.inf, iterations, SdStatus.GAP, message)
 
 
 def brute_force(problem: SdProblem) -> list[float]:
