@@ -501,7 +501,7 @@ def pda_update(
 
     ``x⁺ = x + K ν̄`` with ``ν̄ = Σ_j β_j ν_j``;
     ``P⁺ = β_0 P + (1 - β_0)(P - K S Kᵀ) + K (Σ_j β_j ν_j ν_jᵀ - ν̄ ν̄ᵀ) Kᵀ``; the Kalman terms
-    ``x + K ν̄`` and ``P - K S Kᵀ`` come from :func:`navtrack.tracking.kalman.gain_update`.
+    ``x + K ν̄`` and ``P - K S Kᵀ`` come from :func:`navtrack.estimation.kalman.gain_update`.
     Equals the moment-matched mixture of the per-hypothesis Kalman posteriors (all sharing one
     gain).
 
@@ -597,7 +597,7 @@ def _jpda_pipeline(
 ) -> JpdaStep:
     """The JPDA filter step over any leading batch axes of ``x (..., T, n)``, ``z (..., M, m)``.
 
-    Kalman prediction, EKF innovation covariance and gain (:mod:`navtrack.tracking.kalman`),
+    Kalman prediction, EKF innovation covariance and gain (:mod:`navtrack.estimation.kalman`),
     chi-square gate, :func:`association_weights` (pairs with ``valid`` False get weight 0),
     ``marginals(W) -> (beta, JpdaMarginals)``, :func:`pda_update`.
     """
