@@ -41,6 +41,7 @@ DEFAULT_ALGORITHMS = "sequential,parallel,sdcmsjpda,sd_gnn,sdcmsjpda_fused"
 
 def make_scans(path: Path, runs: int, clutter: str, seed: int) -> None:
     """Simulate the scan sets and their initial estimates into ``path`` (npz)."""
+    # navtrack is imported here and in worker(): the tree it comes from is chosen per process
     from navtrack.experiments.sdcmsjpda.scenario import (
         SdCmsjpdaParams,
         clutter_density,
@@ -71,6 +72,7 @@ def worker(scans: Path) -> None:
     """Serve timing requests on stdin with the ``navtrack`` on ``sys.path``: ``ALG I`` runs
     tracker ALG on scan set I and prints its ms per step (keeping the posterior), ``save PATH``
     writes the posteriors kept so far."""
+    # this process's tree (PYTHONPATH), not the one the script was started from
     from navtrack.experiments.sdcmsjpda.scenario import SdCmsjpdaParams, sensors
     from navtrack.tracking.models import constant_velocity
     from navtrack.tracking.trackers.multisensor import FusionConfig, MultiScans, run_fusion

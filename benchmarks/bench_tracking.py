@@ -31,8 +31,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "tracking"))
 
+from navtrack.estimation.kalman import kf_update
 from navtrack.tracking.jpda import JpdaConfig, jpda_marginals, jpda_step
-from navtrack.tracking.kalman import kf_update
 from navtrack.tracking.models import (
     RangeBearing,
     constant_velocity,

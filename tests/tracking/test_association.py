@@ -9,9 +9,21 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from navtrack.estimation.kalman import kf_update
 from navtrack.tracking.assignment import assign2d, murty
 from navtrack.tracking.gating import chi2_threshold, gate, kdtree_pregate
-from navtrack.tracking.jpda import JpdaConfig, JpdaMethod, clusters, jpda_marginals, pda_update
+from navtrack.tracking.jpda import (
+    JpdaConfig,
+    JpdaMethod,
+    clusters,
+    joint_events,
+    jpda_marginals,
+    jpda_marginals_batch,
+    jpda_step,
+    jpda_step_batch,
+    pda_update,
+)
+from navtrack.tracking.models import RangeBearing, constant_velocity, linear_position
 
 
 def _events(T: int, M: int, allowed: np.ndarray) -> list[tuple[int, ...]]:
@@ -161,9 +173,6 @@ def test_exact_is_fast_structure_for_twelve_mutual_targets() -> None:
 
 
 def test_pda_update_equals_moment_matched_mixture() -> None:
-    from navtrack.tracking.kalman import kf_update
-    from navtrack.tracking.models import linear_position
-
     rng = np.random.default_rng(4)
     meas = linear_position(4, (0, 2), 2.0)
     x = rng.normal(size=(3, 4))
@@ -239,8 +248,6 @@ def test_bad_inputs() -> None:
 def test_batched_enumeration_equals_per_problem_marginals() -> None:
     from math import comb, perm
 
-    from navtrack.tracking.jpda import joint_events, jpda_marginals_batch
-
     for T, M in [(1, 0), (2, 3), (3, 4), (2, 6)]:
         E = joint_events(T, M)
         assert len(E) == sum(comb(T, k) * perm(M, k) for k in range(min(T, M) + 1))
@@ -284,9 +291,6 @@ def test_chi2_threshold_against_scipy_stats() -> None:
 def test_jpda_step_batch_equals_per_problem_step(max_events: int, bearing: bool) -> None:
     # Conformance: the batched step over R problems (padded measurements, valid mask) must
     # give what jpda_step gives for each problem alone with its valid measurements.
-    from navtrack.tracking.jpda import jpda_step, jpda_step_batch
-    from navtrack.tracking.models import RangeBearing, constant_velocity, linear_position
-
     rng = np.random.default_rng(5)
     R_, T, M = 6, 3, 5
     mot = constant_velocity(2, 1.0)

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from navtrack.tracking.jpda import JpdaConfig, jpda_step
+from navtrack.tracking.jpda import JpdaConfig, jpda_step, jpda_step_batch
 from navtrack.tracking.models import RangeBearing, constant_velocity
 from navtrack.tracking.simulate import paper3_scenario, simulate_detections, simulate_truth
 
@@ -87,8 +87,6 @@ def test_jpda_tracks_both_crossing_targets() -> None:
 
 @pytest.mark.parametrize("max_events", [20_000, 1])
 def test_batched_runs_equal_single_runs(max_events: int) -> None:
-    from navtrack.tracking.jpda import jpda_step_batch
-
     runs = [_scenario(40, s) for s in (11, 12, 13)]
     sc, mot, rb, _, lam = runs[0]
     cfg = JpdaConfig(pd=0.97, clutter_density=lam, gate_probability=0.99)

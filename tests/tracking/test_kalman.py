@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from navtrack.tracking.kalman import (
+from navtrack.estimation.kalman import (
     ekf_predict,
     ekf_update,
     kalman_gain,
@@ -18,6 +18,8 @@ from navtrack.tracking.kalman import (
     ukf_update,
 )
 from navtrack.tracking.models import (
+    CoordinatedTurn,
+    FunctionMeasurement,
     LinearMeasurement,
     RangeBearing,
     constant_acceleration,
@@ -143,8 +145,6 @@ def test_range_bearing_jacobian_matches_finite_differences() -> None:
 
 
 def test_coordinated_turn_jacobian_and_limit() -> None:
-    from navtrack.tracking.models import CoordinatedTurn
-
     ct = CoordinatedTurn(q=1.0, q_omega=1e-4)
     rng = np.random.default_rng(9)
     x = rng.normal(size=(5, 5)) * np.array([100, 10, 100, 10, 0.05])
@@ -203,8 +203,6 @@ def test_bad_covariance_rejected() -> None:
 
 def test_function_measurement_hook_foveal_sensor() -> None:
     # paper 4 (Xi & Morrell 2005): z = arctan(c (X - d)) + v, R = 0.05, 1-D CV, P0 = diag(1, 0.1)
-    from navtrack.tracking.models import FunctionMeasurement
-
     c, d = 2.0, 0.3
 
     def h(x: np.ndarray) -> np.ndarray:

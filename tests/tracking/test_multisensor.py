@@ -7,24 +7,30 @@ import itertools
 import numpy as np
 import pytest
 
+from navtrack.estimation.kalman import ekf_update, gain_update, innovation_gain, kf_predict
+from navtrack.estimation.models import wrap_angle
 from navtrack.tracking.assignment import assign2d
+from navtrack.tracking.gating import chi2_threshold, gate
 from navtrack.tracking.jpda import association_weights, jpda_marginals
-from navtrack.tracking.kalman import ekf_update, gain_update, innovation_gain, kf_predict
 from navtrack.tracking.models import (
     FunctionMeasurement,
     RangeBearing,
     constant_velocity,
     linear_position,
     measure,
-    wrap_angle,
 )
+from navtrack.tracking.trackers import equivalent
+from navtrack.tracking.trackers.equivalent import equivalent_measurement
 from navtrack.tracking.trackers.multisensor import (
     ALGORITHMS,
     FusionConfig,
     MultiScans,
-    _sd_gnn_tuples,
-    _sensor_terms,
+    fusion_step,
+    joint_tuple_marginals,
+    nonparametric_b,
     run_fusion,
+    sd_gnn_tuples,
+    sensor_terms,
     tuple_marginals,
 )
 
@@ -42,11 +48,9 @@ P0 = np.diag([300.0**2, 30.0**2, 300.0**2, 30.0**2])[None]
 def gauss_newton(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
     """Run a test through each path of the equivalent measurement's Gauss-Newton loop: the
     NumPy loop, and the compiled range-bearing loop (skipped without numba)."""
-    import navtrack.tracking.trackers.multisensor as ms
-
     if request.param == "numpy":
-        monkeypatch.setattr(ms, "_compiled_gauss_newton", lambda: None)
-    elif ms._compiled_gauss_newton() is None:
+        monkeypatch.setattr(equivalent, "compiled_gauss_newton", lambda: None)
+    elif equivalent.compiled_gauss_newton() is None:
         pytest.skip("numba is not installed")
     return str(request.param)
 
@@ -132,8 +136,6 @@ def test_literal_sdcmsjpda_two_sensors_two_measurements_by_hand() -> None:
     ``b = 2 m (1 - P_D P_G) / (γ P_D)`` (n_z = 2: ``(2π/γ) / π``), eq. 25's weights, eq.
     24's tuple estimates, and the covariance (31-32) as the moments of the mixture of the
     prediction (weight ``β(L) β₀(L)``) and the single-sensor updates (``β(L) w_s(L)``)."""
-    from navtrack.tracking.trackers.multisensor import fusion_step, nonparametric_b
-
     sens = [linear_position(4, (0, 2), 50.0), linear_position(4, (0, 2), 100.0)]
     motion = constant_velocity(2, 1.0)
     x = np.array([0.0, 10.0, 0.0, -5.0])
@@ -229,8 +231,6 @@ def test_equivalent_measurement_is_the_ml_fusion_of_the_tuple(gauss_newton: str)
     (``scipy.optimize.least_squares``) on the whitened residuals."""
     from scipy.optimize import least_squares
 
-    from navtrack.tracking.trackers.multisensor import equivalent_measurement
-
     rng = np.random.default_rng(4)
     pos = np.array([[-20000.0, 30000.0], [15000.0, 25000.0], [-3000.0, 40000.0]])
     x_true = np.zeros((3, 4))
@@ -289,7 +289,7 @@ def _two_target_terms(seed: int):
 def test_tuple_marginals_equal_enumeration_of_eq21(seed: int) -> None:
     """β_t(L) from per-sensor JPDA marginals equals the explicit sum over S-D joint events."""
     xp, Pp, z, cfg = _two_target_terms(seed)
-    terms = _sensor_terms(xp, Pp, z, SENSORS, cfg)
+    terms = sensor_terms(xp, Pp, z, SENSORS, cfg)
     w = np.exp(terms.log_w)  # eq. 21 factors (S, T, M+1)
     target, L, beta = tuple_marginals(terms.beta)
     assert np.all(np.diff(target) >= 0)
@@ -304,8 +304,6 @@ def test_tuple_marginals_equal_enumeration_of_eq21(seed: int) -> None:
     np.testing.assert_allclose(b0, joint.sum(axis=1), atol=1e-12)
     np.testing.assert_allclose(b1, joint.sum(axis=0), atol=1e-12)
     # the per-sensor marginals themselves: jpda_marginals on association_weights
-    from navtrack.tracking.gating import chi2_threshold, gate
-
     m = SENSORS[0]
     S, _ = innovation_gain(Pp, m.jacobian(xp), m.R)
     g = gate(m.h(xp), S, z[0], chi2_threshold(0.99, 2), angle_mask=m.angle_mask)
@@ -335,10 +333,8 @@ def test_two_target_parallel_step_is_the_mixture_over_enumerated_events(seed: in
     mixture, over its tuples, of the stacked EKF oracle weighted by the enumerated eq. 21."""
     xp, Pp, z, cfg = _two_target_terms(seed)
     x, P = xp.copy(), Pp.copy()  # zero time step: the prediction is the prior
-    from navtrack.tracking.trackers.multisensor import fusion_step
-
     xn, Pn, _ = fusion_step("parallel", x, P, z, [0.0] * 3, SENSORS, MOTION, cfg)
-    terms = _sensor_terms(xp, Pp, z, SENSORS, cfg)
+    terms = sensor_terms(xp, Pp, z, SENSORS, cfg)
     target, L, beta = tuple_marginals(terms.beta)
     for t in range(2):
         comps = []
@@ -355,8 +351,6 @@ def test_equivalent_measurement_not_converged_keeps_the_linearised_step(gauss_ne
     """A target passing over sensor 1 (true range 150 m, measured range below zero): the
     Gauss-Newton fit of that single detection does not settle; the tuple keeps its first,
     prediction-linearised step."""
-    from navtrack.tracking.trackers.multisensor import equivalent_measurement
-
     x_ref = np.array([-450.0, 300.0, -360.0, -400.0])
     z = np.array([[[-250.0, 1.2], [0.0, 0.0], [0.0, 0.0]]])
     hit = np.array([[True, False, False]])
@@ -374,12 +368,10 @@ def test_joint_tuple_likelihood_marginals_equal_enumeration(seed: int) -> None:
     prediction covariance (no shared prediction error) the factorised marginals of eq. 15."""
     from scipy.stats import multivariate_normal
 
-    from navtrack.tracking.trackers.multisensor import _joint_tuple_marginals
-
     xp, Pp, z, cfg = _two_target_terms(seed)
-    terms = _sensor_terms(xp, Pp, z, SENSORS, cfg)
+    terms = sensor_terms(xp, Pp, z, SENSORS, cfg)
     target, L, _ = tuple_marginals(terms.beta)
-    beta = _joint_tuple_marginals(Pp, target, L, terms, SENSORS, cfg)
+    beta = joint_tuple_marginals(Pp, target, L, terms, SENSORS, cfg)
     pd, lam = np.array(cfg.pd), np.array(cfg.clutter_density)
 
     def weight(t: int, Lt: np.ndarray) -> float:
@@ -407,10 +399,10 @@ def test_joint_tuple_likelihood_marginals_equal_enumeration(seed: int) -> None:
     np.testing.assert_allclose(beta[target == 1], joint.sum(axis=0), rtol=1e-6, atol=1e-12)
     # no common prediction error: the joint likelihood is eq. 15's product
     tiny = Pp * 1e-8
-    terms_t = _sensor_terms(xp, tiny, z, SENSORS, FusionConfig(cfg.pd, cfg.clutter_density, 1.0))
+    terms_t = sensor_terms(xp, tiny, z, SENSORS, FusionConfig(cfg.pd, cfg.clutter_density, 1.0))
     tt, Lt, bt = tuple_marginals(terms_t.beta)
     cfg1 = FusionConfig(cfg.pd, cfg.clutter_density, 1.0)
-    np.testing.assert_allclose(_joint_tuple_marginals(tiny, tt, Lt, terms_t, SENSORS, cfg1), bt,
+    np.testing.assert_allclose(joint_tuple_marginals(tiny, tt, Lt, terms_t, SENSORS, cfg1), bt,
                                rtol=1e-6, atol=1e-12)  # fmt: skip
 
 
@@ -418,8 +410,8 @@ def test_joint_tuple_likelihood_marginals_equal_enumeration(seed: int) -> None:
 def test_sd_gnn_equals_per_sensor_2d_assignment(seed: int) -> None:
     """Additive tuple costs: the (S+1)-D optimum is the per-sensor 2-D optimum."""
     xp, Pp, z, cfg = _two_target_terms(seed)
-    terms = _sensor_terms(xp, Pp, z, SENSORS, cfg)
-    L, _ = _sd_gnn_tuples(terms, 10_000)
+    terms = sensor_terms(xp, Pp, z, SENSORS, cfg)
+    L, _ = sd_gnn_tuples(terms, 10_000)
     for s in range(3):
         lw = terms.log_w[s, :, : len(z[s]) + 1]
         ref = assign2d(-lw[:, 1:], -lw[:, 0])
@@ -494,8 +486,6 @@ def test_measure_stacks_the_sensors_models() -> None:
 def test_equivalent_measurement_of_linear_sensors_is_the_information_mean() -> None:
     """Three observed components (the general solve, not the 2 x 2 closed form): linear
     position sensors fuse to the information-weighted mean in one step."""
-    from navtrack.tracking.trackers.multisensor import equivalent_measurement
-
     rng = np.random.default_rng(6)
     sig = [10.0, 20.0, 40.0]
     sensors = [linear_position(6, (0, 2, 4), s_) for s_ in sig]
@@ -532,9 +522,7 @@ def test_compiled_gauss_newton_equals_the_numpy_loop(
     """The compiled range-bearing loop and the NumPy loop of ``equivalent_measurement`` give
     the same equivalent measurements (rounding only) on noisy tuples of 1-3 detections, also
     with the position components in reverse order and bearings from north."""
-    import navtrack.tracking.trackers.multisensor as ms
-
-    if ms._compiled_gauss_newton() is None:
+    if equivalent.compiled_gauss_newton() is None:
         pytest.skip("numba is not installed")
     sensors = [RangeBearing(m.R, m.sensor_xy, position_index, 4, from_north) for m in SENSORS]
     rng = np.random.default_rng(11)
@@ -544,9 +532,9 @@ def test_compiled_gauss_newton_equals_the_numpy_loop(
     hit = rng.random((200, 3)) < 0.7
     hit[~hit.any(axis=1), 1] = True
     x_ref = x + rng.normal(0.0, 400.0, x.shape)
-    compiled = ms.equivalent_measurement(z, hit, sensors, x_ref)
-    monkeypatch.setattr(ms, "_compiled_gauss_newton", lambda: None)
-    plain = ms.equivalent_measurement(z, hit, sensors, x_ref)
+    compiled = equivalent.equivalent_measurement(z, hit, sensors, x_ref)
+    monkeypatch.setattr(equivalent, "compiled_gauss_newton", lambda: None)
+    plain = equivalent.equivalent_measurement(z, hit, sensors, x_ref)
     np.testing.assert_array_equal(compiled[0], plain[0])
     np.testing.assert_allclose(compiled[1], plain[1], rtol=1e-12, atol=1e-9)
     np.testing.assert_allclose(compiled[2], plain[2], rtol=1e-9)

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from navtrack.tracking.kalman import kf_predict
+from navtrack.estimation.kalman import kf_predict
 from navtrack.tracking.models import FovealScan, FovealSensor, constant_velocity
 from navtrack.tracking.trackers.particle import (
     MAX_HYPOTHESES,

@@ -9,15 +9,54 @@ from navtrack.tracking.assignment import (
     SdKBest,
     SdMethod,
     SdProblem,
+    SdSolution,
     SdStatus,
     assign2d,
+    kbest,
+    kernels,
     random_sd_problem,
     sd_assign,
     sd_exact,
     sd_greedy,
     sd_kbest,
     sd_lagrangian,
+    tables,
 )
+from navtrack.tracking.assignment.kbest import (
+    CellOptions,
+    MurtyCell,
+    cell_remainder,
+    murty_children,
+    solve_cell,
+)
+from navtrack.tracking.assignment.local_search import improve, insert_tuples, split_problems, vary
+from navtrack.tracking.assignment.relaxation import (
+    kept_multipliers,
+    list_orders,
+    pair_costs,
+    recover,
+    reduced_costs,
+    relaxation_solution,
+    relaxed_dual,
+)
+from navtrack.tracking.assignment.tables import list_splits, lookup, relaxation_tables
+from navtrack.tracking.assignment.two_d import assignment_potentials, linear_assignment
+
+
+def _options(max_exact_tuples: int) -> CellOptions:
+    """Relaxed cells, 30 multiplier updates, milp up to ``max_exact_tuples`` tuples."""
+    return CellOptions(
+        method="lagrangian",
+        max_exact_tuples=max_exact_tuples,
+        max_iter=30,
+        tol=1e-3,
+        time_limit_s=None,
+    )
+
+
+def _relaxed(problem: SdProblem, selected: np.ndarray, iterations: int, message: str) -> SdSolution:
+    """A relaxed solution without a bound (status GAP)."""
+    return relaxation_solution(problem, selected, -np.inf, iterations, SdStatus.GAP, message)
 
 
 def brute_force(problem: SdProblem) -> list[float]:
@@ -183,15 +222,13 @@ def test_forbidden_singleton_cells(monkeypatch: pytest.MonkeyPatch) -> None:
     """A cell forbidding an element's singleton must cover it by a real tuple: the relaxation
     on the penalised remainder does, and a cell where two such elements need the same third
     one is proven empty by the relaxation's bound (no milp)."""
-    from navtrack.tracking import assignment as sd
-
     # lists (2, 1, 1): a1, a2 | b1 | c1; singletons cost 0, (1,1,1) and (2,1,0) gain
     tup = np.array([[1, 0, 0], [2, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1], [2, 1, 0], [2, 0, 1]])
     p = SdProblem([2, 1, 1], tup, [0.0, 0.0, 0.0, 0.0, -3.0, -1.0, 2.0])
-    opt = sd._KBestOptions("lagrangian", 5000, 30, 1e-3, None)
+    opt = _options(max_exact_tuples=5000)
     free = np.ones(len(tup), dtype=bool)
     free[1] = False  # a2 may not stand alone: (2,1,0) or (2,0,1) must cover it
-    sol, bound = sd._solve_cell(p, sd._Cell(np.zeros(0, dtype=np.int64), free, -np.inf), opt)
+    sol, bound = solve_cell(p, MurtyCell(np.zeros(0, dtype=np.int64), free, -np.inf), opt)
     assert sol is not None
     assert p.is_feasible(sol.selected)
     assert 1 not in sol.selected.tolist()
@@ -204,35 +241,34 @@ def test_forbidden_singleton_cells(monkeypatch: pytest.MonkeyPatch) -> None:
     def no_milp(*args: object) -> None:
         raise AssertionError("milp called")
 
-    monkeypatch.setattr(sd, "_milp", no_milp)
-    empty = sd._solve_cell(p, sd._Cell(np.zeros(0, dtype=np.int64), both, -np.inf), opt)
+    monkeypatch.setattr(kbest, "milp_solve", no_milp)
+    empty = solve_cell(p, MurtyCell(np.zeros(0, dtype=np.int64), both, -np.inf), opt)
     assert empty == (None, np.inf)
     no_cover = free.copy()
     no_cover[[5, 6]] = False  # a2: no allowed tuple left
-    assert sd._remainder(p, sd._Cell(np.zeros(0, dtype=np.int64), no_cover, -np.inf)) is None
+    assert cell_remainder(p, MurtyCell(np.zeros(0, dtype=np.int64), no_cover, -np.inf)) is None
 
 
 def test_cells_when_the_relaxation_falls_short(monkeypatch: pytest.MonkeyPatch) -> None:
     """With a relaxation that returns all singletons and no bound: a cell where that keeps a
     penalty is solved by milp when small, else counted as unresolved with its bound kept (so
     no rank is claimed as proven); a cell with a cheaper start from its parent returns it."""
-    from navtrack.tracking import assignment as sd
 
     def singletons_only(R: SdProblem, *args: object, **kw: object) -> object:
         sel = np.flatnonzero((R.tuples > 0).sum(axis=1) == 1)
-        return sd._solution(R, sel, -np.inf, 1, SdMethod.LAGRANGIAN, SdStatus.GAP, "stub")
+        return _relaxed(R, sel, 1, "stub")
 
     tup = np.array([[1, 0, 0], [2, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1], [2, 1, 0], [2, 0, 1]])
     p = SdProblem([2, 1, 1], tup, [0.0, 0.0, 0.0, 0.0, -3.0, -1.0, 2.0])
     free = np.ones(len(tup), dtype=bool)
     free[1] = False
-    cell = sd._Cell(np.zeros(0, dtype=np.int64), free, -np.inf)
-    monkeypatch.setattr(sd, "sd_assign", singletons_only)
-    small = sd._solve_cell(p, cell, sd._KBestOptions("lagrangian", 5000, 30, 1e-3, None))
+    cell = MurtyCell(np.zeros(0, dtype=np.int64), free, -np.inf)
+    monkeypatch.setattr(kbest, "sd_assign", singletons_only)
+    small = solve_cell(p, cell, _options(max_exact_tuples=5000))
     assert small[0] is not None
     assert small[0].method == SdMethod.EXACT
     assert small[0].cost == pytest.approx(-1.0)
-    large = sd._solve_cell(p, cell, sd._KBestOptions("lagrangian", 0, 30, 1e-3, None))
+    large = solve_cell(p, cell, _options(max_exact_tuples=0))
     assert large == (None, -np.inf)
     kb = sd_kbest(p, 3, "lagrangian", max_exact_tuples=0)
     check_kbest(p, kb)
@@ -241,12 +277,12 @@ def test_cells_when_the_relaxation_falls_short(monkeypatch: pytest.MonkeyPatch) 
     # a child forbidding (1,1,1) starts from the parent's solution with (1,1,1) re-covered:
     # by (1,1,0) and c1, cheaper than what the (stub) relaxation finds
     q = SdProblem([2, 1, 1], np.vstack([tup, [1, 1, 0]]), np.r_[p.cost, -2.0])
-    parent = sd._solution(q, np.array([1, 4]), -np.inf, 0, SdMethod.LAGRANGIAN, SdStatus.GAP, "")
-    root = sd._Cell(np.zeros(0, dtype=np.int64), np.ones(len(q.tuples), dtype=bool), -np.inf)
-    child = sd._children(q, root, parent)[0]
+    parent = _relaxed(q, np.array([1, 4]), 0, "")
+    root = MurtyCell(np.zeros(0, dtype=np.int64), np.ones(len(q.tuples), dtype=bool), -np.inf)
+    child = murty_children(q, root, parent)[0]
     assert child.start is not None
     assert sorted(child.start.tolist()) == [1, 3, 7]  # a2, c1, (1,1,0)
-    sol, _ = sd._solve_cell(q, child, sd._KBestOptions("lagrangian", 0, 30, 1e-3, None))
+    sol, _ = solve_cell(q, child, _options(max_exact_tuples=0))
     assert sol is not None
     assert sol.cost == pytest.approx(-2.0)
     assert "parent's solution" in sol.message
@@ -298,38 +334,34 @@ def test_recovery_and_local_search_feasible_and_never_worse(
     """The relaxation's parts on any multipliers: the sequential recovery is feasible, and the
     local search (insertions + dimension-wise variation) keeps feasibility and never raises
     the cost; with the dense key table and with its sorted-key fallback alike."""
-    from navtrack.tracking import assignment as sd
-
     rng = np.random.default_rng(21)
     for _ in range(3):
         p = random_sd_problem(sizes, rng, density)
-        prep = sd._prep(p)
+        prep = relaxation_tables(p)
         u = rng.normal(0.0, 1.5, int((p.sizes[2:] + 1).sum()))
         u[prep.dummies] = 0.0
-        lb, _, chosen = sd._dual(prep, u)
-        rec = sd._recover(prep, chosen, u)
+        lb, _, chosen = relaxed_dual(prep, u)
+        rec = recover(prep, chosen, u)
         assert p.is_feasible(rec)
         assert lb <= sd_exact(p).cost + 1e-9  # any multipliers give a lower bound
         for start in (rec, sd_greedy(p).selected):
-            better = sd._improve(prep, start)
+            better = improve(prep, start)
             assert p.is_feasible(better)
             assert p.cost[better].sum() <= p.cost[start].sum() + 1e-9
         keys = rng.integers(0, int(np.prod(p.sizes + 1)), 50)
-        assert prep.table.size  # small problem: dense table ...
-        i = np.minimum(np.searchsorted(prep.keys, keys), len(prep.keys) - 1)
-        ref = np.where(prep.keys[i] == keys, prep.key_tuple[i], -1)
-        np.testing.assert_array_equal(sd._lookup(prep, keys), ref)
+        assert prep.index.table.size  # small problem: dense table ...
+        i = np.minimum(np.searchsorted(prep.index.keys, keys), len(prep.index.keys) - 1)
+        ref = np.where(prep.index.keys[i] == keys, prep.index.key_tuple[i], -1)
+        np.testing.assert_array_equal(lookup(prep.index, keys), ref)
 
 
 @pytest.fixture(params=["numpy", "compiled"])
 def insertion(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
     """Run a test through each path of the insertions: the NumPy passes, and the compiled
     loop (skipped without numba)."""
-    from navtrack.tracking import assignment as sd
-
     if request.param == "numpy":
-        monkeypatch.setattr(sd, "_compiled_insert", lambda: None)
-    elif sd._compiled_insert() is None:
+        monkeypatch.setattr(kernels, "compiled_insert", lambda: None)
+    elif kernels.compiled_insert() is None:
         pytest.skip("numba is not installed")
     return str(request.param)
 
@@ -337,24 +369,22 @@ def insertion(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -
 def test_compiled_insertions_equal_the_numpy_passes(monkeypatch: pytest.MonkeyPatch) -> None:
     """The compiled insertion loop returns what the NumPy passes return, tuple for tuple and in
     the same order, from greedy and recovered starts of S = 3, 4, 5 problems."""
-    from navtrack.tracking import assignment as sd
-
-    if sd._compiled_insert() is None:
+    if kernels.compiled_insert() is None:
         pytest.skip("numba is not installed")
     rng = np.random.default_rng(17)
     changed = 0
     for sizes, density in [((6, 7, 8), 1.0), ((5, 5, 5, 5), 0.4), ((5, 5, 5, 5, 5), 0.2)]:
         p = random_sd_problem(sizes, rng, density)
-        prep = sd._prep(p)
+        prep = relaxation_tables(p)
         starts = [sd_greedy(p).selected]
         for _ in range(10):
             u = rng.normal(0.0, 1.5, int((p.sizes[2:] + 1).sum()))
             u[prep.dummies] = 0.0
-            starts.append(sd._recover(prep, sd._dual(prep, u)[2], u))
-        compiled = [sd._insert(prep, start) for start in starts]
+            starts.append(recover(prep, relaxed_dual(prep, u)[2], u))
+        compiled = [insert_tuples(prep, start) for start in starts]
         with monkeypatch.context() as m:
-            m.setattr(sd, "_compiled_insert", lambda: None)
-            plain = [sd._insert(prep, start) for start in starts]
+            m.setattr(kernels, "compiled_insert", lambda: None)
+            plain = [insert_tuples(prep, start) for start in starts]
         for start, a, b in zip(starts, compiled, plain, strict=True):
             np.testing.assert_array_equal(a, b)
             assert p.is_feasible(a)
@@ -368,29 +398,27 @@ def test_compiled_split_matrices_equal_the_numpy_ones(
 ) -> None:
     """The compiled variation builds the same 2-D problems as NumPy for every split (dense key
     table and sorted keys alike), so a round of variation gives the same solution."""
-    from navtrack.tracking import assignment as sd
-
-    if sd._compiled_splits() is None:
+    if kernels.compiled_splits() is None:
         pytest.skip("numba is not installed")
     if not table:
-        monkeypatch.setattr(sd, "_TABLE_MAX", 0)
+        monkeypatch.setattr(tables, "DENSE_TABLE_MAX", 0)
     rng = np.random.default_rng(19)
     changed = 0
     for sizes, density in [((6, 7, 8), 1.0), ((5, 5, 5, 5), 0.4), ((5, 5, 5, 5, 5), 0.2)]:
         p = random_sd_problem(sizes, rng, density)
-        prep = sd._prep(p)
-        assert bool(prep.table.size) == table
-        sides = sd._splits(p.n_lists)
+        prep = relaxation_tables(p)
+        assert bool(prep.index.table.size) == table
+        sides = list_splits(p.n_lists)
         for _ in range(8):
             u = rng.normal(0.0, 1.5, int((p.sizes[2:] + 1).sum()))
             u[prep.dummies] = 0.0
-            start = sd._recover(prep, sd._dual(prep, u)[2], u)
-            compiled = list(sd._split_problems(prep, start, sides))
-            varied = sd._vary(prep, start)
+            start = recover(prep, relaxed_dual(prep, u)[2], u)
+            compiled = list(split_problems(prep, start, sides))
+            varied = vary(prep, start)
             with monkeypatch.context() as m:
-                m.setattr(sd, "_compiled_splits", lambda: None)
-                plain = list(sd._split_problems(prep, start, sides))
-                np.testing.assert_array_equal(varied, sd._vary(prep, start))
+                m.setattr(kernels, "compiled_splits", lambda: None)
+                plain = list(split_problems(prep, start, sides))
+                np.testing.assert_array_equal(varied, vary(prep, start))
             assert len(compiled) == len(plain) == len(sides)
             for a, b in zip(compiled, plain, strict=True):
                 assert (a is None) == (b is None)
@@ -418,21 +446,19 @@ def test_relaxation_with_empty_lists(sizes: tuple[int, ...]) -> None:
 def test_compiled_pair_costs_equal_the_numpy_ones(monkeypatch: pytest.MonkeyPatch) -> None:
     """The compiled pass over the tuples gives the same reduced costs, least reduced cost per
     pair and tuple reaching it as the NumPy path, bit for bit, also with ties and for S = 2."""
-    from navtrack.tracking import assignment as sd
-
-    if sd._compiled_pairs() is None:
+    if kernels.compiled_pairs() is None:
         pytest.skip("numba is not installed")
     rng = np.random.default_rng(23)
     for sizes, density in [((4, 5), 1.0), ((6, 7, 8), 1.0), ((5, 5, 5, 5), 0.4), ((4,) * 5, 0.3)]:
         p = random_sd_problem(sizes, rng, density)
-        prep = sd._prep(p)
+        prep = relaxation_tables(p)
         for scale in (0.0, 1.5):  # u = 0: the singletons' equal costs tie
             u = rng.normal(0.0, scale, int((p.sizes[2:] + 1).sum()))
             u[prep.dummies] = 0.0
-            compiled = sd._pair_matrix(prep, u)
+            compiled = pair_costs(prep, u)
             with monkeypatch.context() as m:
-                m.setattr(sd, "_compiled_pairs", lambda: None)
-                plain = sd._pair_matrix(prep, u)
+                m.setattr(kernels, "compiled_pairs", lambda: None)
+                plain = pair_costs(prep, u)
             for x, y in zip(compiled, plain, strict=True):
                 np.testing.assert_array_equal(x, y)
 
@@ -440,15 +466,13 @@ def test_compiled_pair_costs_equal_the_numpy_ones(monkeypatch: pytest.MonkeyPatc
 def test_potentials_certify_the_2d_assignment() -> None:
     """Bellman-Ford potentials of an optimal assignment: dual feasible on every finite entry,
     tight on the assignment, and summing to its cost (LP duality)."""
-    from navtrack.tracking import assignment as sd
-
     rng = np.random.default_rng(5)
     for n in (1, 4, 9, 16):
         A = rng.normal(0.0, 3.0, (n, n))
         A[rng.random((n, n)) < 0.5] = np.inf
         A[np.arange(n), rng.permutation(n)] = rng.normal(0.0, 3.0, n)  # a finite matching
-        r, c = sd._lsa(A)
-        a, b = sd._potentials(A, r, c)
+        r, c = linear_assignment(A)
+        a, b = assignment_potentials(A, r, c)
         finite = np.isfinite(A)
         assert np.all((a[:, None] + b[None, :])[finite] <= A[finite] + 1e-9)
         np.testing.assert_allclose(a[r] + b[c], A[r, c], atol=1e-9)
@@ -459,45 +483,39 @@ def test_kept_multipliers_complete_a_dual_of_the_whole_problem() -> None:
     """Lists 1 and 2 get multipliers that, with any ``u`` of lists 3..S, leave no tuple with a
     real list-1 or list-2 element a negative reduced cost, and reach the relaxed bound: what a
     rotated pass starts from."""
-    from navtrack.tracking import assignment as sd
-
     rng = np.random.default_rng(6)
     for sizes, density in [((5, 6, 7), 1.0), ((5, 6, 5, 6), 0.5), ((4, 4, 4, 4, 4), 0.3)]:
         p = random_sd_problem(sizes, rng, density)
-        prep = sd._prep(p)
+        prep = relaxation_tables(p)
         u = rng.normal(0.0, 1.5, int((p.sizes[2:] + 1).sum()))
         u[prep.dummies] = 0.0
-        v1, v2 = sd._kept_multipliers(prep, u)
+        v1, v2 = kept_multipliers(prep, u)
         assert v1.shape == (p.sizes[0] + 1,)
         assert v2.shape == (p.sizes[1] + 1,)
         assert v1[0] == 0.0
         assert v2[0] == 0.0
         t = p.tuples
-        reduced = sd._reduced(prep, u) - v1[t[:, 0]] - v2[t[:, 1]]
+        reduced = reduced_costs(prep, u) - v1[t[:, 0]] - v2[t[:, 1]]
         paired = (t[:, 0] > 0) | (t[:, 1] > 0)
         assert reduced[paired].min() >= -1e-9
         free = np.minimum(reduced[~paired], 0.0).sum()  # the (0, 0) tuples, free in the relaxation
-        lb = sd._dual(prep, u)[0]
+        lb = relaxed_dual(prep, u)[0]
         assert v1.sum() + v2.sum() + u.sum() + free == pytest.approx(lb)
 
 
 @pytest.mark.parametrize("S", [2, 3, 4, 5])
 def test_variation_cuts_at_every_split_of_the_lists_once(S: int) -> None:
-    from navtrack.tracking import assignment as sd
-
-    rows = {tuple(r) for r in sd._splits(S).tolist()}
-    assert len(rows) == len(sd._splits(S)) == 2 ** (S - 1) - 1
+    rows = {tuple(r) for r in list_splits(S).tolist()}
+    assert len(rows) == len(list_splits(S)) == 2 ** (S - 1) - 1
     assert all(r[0] == 1 and 0 in r for r in rows)  # list 1 on side 1, neither side empty
 
 
 def test_sorted_key_lookup_without_table(monkeypatch: pytest.MonkeyPatch) -> None:
     """Above the table limit the keys are looked up by binary search: same solutions."""
-    from navtrack.tracking import assignment as sd
-
     p = random_sd_problem((4, 4, 4, 4), np.random.default_rng(8), 0.4)
     with_table = sd_lagrangian(p)
-    monkeypatch.setattr(sd, "_TABLE_MAX", 0)
-    assert sd._prep(p).table.size == 0
+    monkeypatch.setattr(tables, "DENSE_TABLE_MAX", 0)
+    assert relaxation_tables(p).index.table.size == 0
     without = sd_lagrangian(p)
     np.testing.assert_array_equal(with_table.selected, without.selected)
     assert without.cost == with_table.cost
@@ -506,8 +524,6 @@ def test_sorted_key_lookup_without_table(monkeypatch: pytest.MonkeyPatch) -> Non
 def test_passes_over_list_orders() -> None:
     """One pass per list order: at most C(S, 2) (three for S = 3, however many restarts); by
     default the S rotations for S = 4 and every pair of lists (ten orders) for S = 5."""
-    from navtrack.tracking import assignment as sd
-
     p = random_sd_problem((5, 5, 5), np.random.default_rng(4), 0.5)
     sol = sd_lagrangian(p, max_iter=7, tol=0.0, restarts=10)
     assert sol.iterations <= 3 * 7
@@ -516,7 +532,7 @@ def test_passes_over_list_orders() -> None:
         p = random_sd_problem(sizes, np.random.default_rng(4), density)
         sol = sd_lagrangian(p, max_iter=7, tol=0.0)
         assert (passes - 1) * 7 < sol.iterations <= passes * 7
-    orders = sd._list_orders(5)
+    orders = list_orders(5)
     kept = {frozenset(o[:2].tolist()) for o in orders}
     assert len(orders) == len(kept) == 10  # every pair of lists kept once
     assert all(sorted(o.tolist()) == list(range(5)) for o in orders)

@@ -8,15 +8,15 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from navtrack.tracking.imm import imm_mix, imm_model_probabilities, markov_matrix
-from navtrack.tracking.jpda import JpdaConfig, JpdaMethod, jpda_step, jpda_step_batch, pda_update
-from navtrack.tracking.kalman import (
+from navtrack.estimation.kalman import (
     gain_update,
     innovation_gain,
     kalman_gain,
     kf_predict,
     kf_update,
 )
+from navtrack.tracking.imm import imm_mix, imm_model_probabilities, markov_matrix
+from navtrack.tracking.jpda import JpdaConfig, JpdaMethod, jpda_step, jpda_step_batch, pda_update
 from navtrack.tracking.models import RangeBearing, constant_velocity, linear_position
 from navtrack.tracking.trackers.management import (
     initiate,
@@ -325,8 +325,8 @@ def test_kalman_gain_kernels() -> None:
 
 
 def test_closed_form_2x2_inverse_and_gate_match_lapack() -> None:
+    from navtrack.estimation.kalman import stacked_inverse
     from navtrack.tracking.gating import gate
-    from navtrack.tracking.kalman import stacked_inverse
 
     rng = np.random.default_rng(5)
     S = np.stack([_spd(rng, 2) * 10.0**k for k in range(-3, 5)])  # 1e-3 .. 1e4 scales

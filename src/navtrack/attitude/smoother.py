@@ -15,8 +15,8 @@ gyro bias ``δb`` (body frame, rad/s), with ``ω_true = ω_c - δb``. Between tw
 ``v ~ N(0, σ_fix² I)``. Nodes are the samples of the fixes plus a grid every
 ``node_interval_s``; between nodes the estimate is carried by the same dynamics
 (``δθ_k = δθ_a - (C_k - C_a) δb_a``). Predict and update are the shared Kalman kernels
-(:func:`navtrack.tracking.kalman.kf_predict`, :func:`~navtrack.tracking.kalman.kf_update`), the
-smoother gain is :func:`~navtrack.tracking.kalman.kalman_gain`.
+(:func:`navtrack.estimation.kalman.kf_predict`, :func:`~navtrack.estimation.kalman.kf_update`), the
+smoother gain is :func:`~navtrack.estimation.kalman.kalman_gain`.
 
 References
 ----------
@@ -36,7 +36,7 @@ from scipy.spatial.transform import Rotation
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray, IntArray
 from navtrack.attitude.quaternion import Propagation, interpolate_attitude
-from navtrack.tracking.kalman import kalman_gain, kf_predict, kf_update
+from navtrack.estimation.kalman import kalman_gain, kf_predict, kf_update
 
 __all__ = ["SmootherConfig", "SmootherResult", "smooth_attitude"]
 

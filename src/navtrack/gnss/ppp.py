@@ -45,6 +45,7 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, IntArray
 from navtrack.estimation.covariance import restart_states
+from navtrack.estimation.kalman import gain_update, innovation_gain
 from navtrack.geodesy import C_MPS, ecef_to_enu, ecef_to_geodetic, enu_rotation
 from navtrack.gnss.antex import AntennaPattern, Antex, receiver_range_m, satellite_offset_m
 from navtrack.gnss.corrections import geometric_range, ionofree, saastamoinen_delay_m
@@ -57,7 +58,6 @@ from navtrack.gnss.relative import (
     receiver_signals,
 )
 from navtrack.gnss.tides import solid_tide_m, sun_moon_ecef_m
-from navtrack.tracking.kalman import gain_update, innovation_gain
 
 if TYPE_CHECKING:
     from navtrack.gnss.observations import Observations

@@ -22,6 +22,7 @@ from scipy.special import chdtri
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.estimation.covariance import restart_states
+from navtrack.estimation.kalman import gain_update, innovation_gain
 from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
 from navtrack.gnss.ambiguity import (
     FixStatus,
@@ -33,7 +34,6 @@ from navtrack.gnss.ambiguity import (
 from navtrack.gnss.corrections import geometric_range, saastamoinen_delay_m
 from navtrack.gnss.rtk_config import SYSTEMS, FixRejection, RtkConfig, RtkStatus
 from navtrack.gnss.rtk_signals import ReceiverSignals, Slips
-from navtrack.tracking.kalman import gain_update, innovation_gain
 
 if TYPE_CHECKING:
     from navtrack.gnss.spp import ProgressFn

@@ -16,7 +16,7 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
 from navtrack.estimation.chi2 import chi2_quantile_exact
-from navtrack.tracking.models import wrap_angle
+from navtrack.estimation.models import wrap_angle
 
 __all__ = ["Gate", "chi2_threshold", "gate", "kdtree_pregate"]
 

@@ -63,8 +63,10 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
-from navtrack.tracking.kalman import gain_update, innovation_gain, kf_predict
-from navtrack.tracking.models import MeasurementModel
+from navtrack.estimation.kalman import gain_update, innovation_gain, kf_predict
+from navtrack.estimation.models import MeasurementModel
+from navtrack.tracking.assignment import murty
+from navtrack.tracking.gating import chi2_threshold, gate
 
 __all__ = [
     "JpdaConfig",
@@ -444,8 +446,8 @@ def _dot(a: FloatArray, b: FloatArray) -> float:
     """Sum of the elementwise product of two equal-shape tensors.
 
     ``np.einsum`` rather than ``np.vdot``: BLAS ``ddot`` goes multithreaded on these long
-    vectors, and on a busy machine OpenBLAS's spinning threads made the n = 12 close-target step
-    25x slower (122 ms vs 4.3 ms median); einsum's own loop is single-threaded and as fast here.
+    vectors, and on a busy machine OpenBLAS's spinning threads slow it down many times over;
+    einsum's own loop is single-threaded and as fast here.
     """
     a2 = a.reshape(-1, a.shape[-1]) if a.ndim else a.reshape(1, 1)
     b2 = b.reshape(-1, b.shape[-1]) if b.ndim else b.reshape(1, 1)
@@ -462,8 +464,6 @@ def _h(A: FloatArray, axis: int, v: int) -> FloatArray:
 
 
 def _kbest(W: FloatArray, k: int) -> tuple[FloatArray, float, int]:
-    from navtrack.tracking.assignment import murty
-
     with np.errstate(divide="ignore"):
         L = -np.log(W)
     T = W.shape[0]
@@ -501,7 +501,7 @@ def pda_update(
 
     ``x⁺ = x + K ν̄`` with ``ν̄ = Σ_j β_j ν_j``;
     ``P⁺ = β_0 P + (1 - β_0)(P - K S Kᵀ) + K (Σ_j β_j ν_j ν_jᵀ - ν̄ ν̄ᵀ) Kᵀ``; the Kalman terms
-    ``x + K ν̄`` and ``P - K S Kᵀ`` come from :func:`navtrack.tracking.kalman.gain_update`.
+    ``x + K ν̄`` and ``P - K S Kᵀ`` come from :func:`navtrack.estimation.kalman.gain_update`.
     Equals the moment-matched mixture of the per-hypothesis Kalman posteriors (all sharing one
     gain).
 
@@ -597,12 +597,10 @@ def _jpda_pipeline(
 ) -> JpdaStep:
     """The JPDA filter step over any leading batch axes of ``x (..., T, n)``, ``z (..., M, m)``.
 
-    Kalman prediction, EKF innovation covariance and gain (:mod:`navtrack.tracking.kalman`),
+    Kalman prediction, EKF innovation covariance and gain (:mod:`navtrack.estimation.kalman`),
     chi-square gate, :func:`association_weights` (pairs with ``valid`` False get weight 0),
     ``marginals(W) -> (beta, JpdaMarginals)``, :func:`pda_update`.
     """
-    from navtrack.tracking.gating import chi2_threshold, gate
-
     xp, Pp = kf_predict(x, P, F, Q)
     S, K = innovation_gain(Pp, model.jacobian(xp), model.R)
     gamma = chi2_threshold(config.gate_probability, model.dim_z)

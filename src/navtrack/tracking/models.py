@@ -4,8 +4,10 @@ State vectors are stacked per spatial axis: a 2-D constant-velocity state is ``[
 (the ordering of Bar-Shalom and of the paper-3 scenario), a 3-D constant-acceleration state is
 ``[x, vx, ax, y, vy, ay, z, vz, az]``. Units are SI (m, m/s, m/s², s, rad).
 
-Every model exposes the same small interface, used by the Kalman kernels in
-:mod:`navtrack.tracking.kalman` and by the particle filters built on them:
+Every model exposes the small interface that the Kalman kernels of
+:mod:`navtrack.estimation.kalman` and the particle filters built on them need, the protocols
+:class:`~navtrack.estimation.models.MotionModel` and
+:class:`~navtrack.estimation.models.MeasurementModel`:
 
 * motion models: ``dim_x``, ``F(dt)``, ``Q(dt)``, ``f(x, dt)`` and ``jacobian(x, dt)``;
 * measurement models: ``dim_x``, ``dim_z``, ``R``, ``angle_mask``, ``linear``, ``h(x)`` and
@@ -23,12 +25,13 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Literal, Protocol
+from typing import Literal
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays, readonly_copy
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
+from navtrack.estimation.models import MeasurementModel, wrap_angle
 
 __all__ = [
     "CoordinatedTurn",
@@ -37,57 +40,13 @@ __all__ = [
     "FunctionMeasurement",
     "LinearMeasurement",
     "LinearMotion",
-    "MeasurementModel",
-    "MotionModel",
     "RangeBearing",
     "constant_acceleration",
     "constant_velocity",
     "linear_position",
     "measure",
     "range_bearing_group",
-    "wrap_angle",
 ]
-
-
-def wrap_angle(a: ArrayLike) -> FloatArray:
-    """Wrap angles to ``[-pi, pi)`` (rad)."""
-    return np.asarray((np.asarray(a, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi, dtype=float)
-
-
-class MotionModel(Protocol):
-    """What the filters need from a motion model."""
-
-    @property
-    def dim_x(self) -> int: ...
-
-    def f(self, x: FloatArray, dt: float) -> FloatArray: ...
-
-    def jacobian(self, x: FloatArray, dt: float) -> FloatArray: ...
-
-    def Q(self, dt: float) -> FloatArray: ...
-
-
-class MeasurementModel(Protocol):
-    """What the filters need from a measurement model."""
-
-    @property
-    def dim_x(self) -> int: ...
-
-    @property
-    def dim_z(self) -> int: ...
-
-    @property
-    def R(self) -> FloatArray: ...
-
-    @property
-    def angle_mask(self) -> BoolArray: ...
-
-    @property
-    def linear(self) -> bool: ...
-
-    def h(self, x: FloatArray) -> FloatArray: ...
-
-    def jacobian(self, x: FloatArray) -> FloatArray: ...
 
 
 # --------------------------------------------------------------------------------------------

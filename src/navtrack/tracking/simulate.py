@@ -12,7 +12,7 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
-from navtrack.tracking.models import MeasurementModel, MotionModel, wrap_angle
+from navtrack.estimation.models import MeasurementModel, MotionModel, wrap_angle
 
 __all__ = ["Scans", "paper3_scenario", "simulate_detections", "simulate_truth"]
 

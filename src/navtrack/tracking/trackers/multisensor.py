@@ -2,11 +2,12 @@
 
 ``S`` sensors report to a fusion centre; ``T`` targets with known initial estimates are tracked
 by an EKF (linearised at the prediction, e.g. :class:`~navtrack.tracking.models.RangeBearing`).
-All four trackers predict with :func:`~navtrack.tracking.kalman.kf_predict`, gate with
+All four trackers predict with :func:`~navtrack.estimation.kalman.kf_predict`, gate with
 :func:`~navtrack.tracking.gating.gate`, weight as
 :func:`~navtrack.tracking.jpda.association_weights` does and update through
-:func:`~navtrack.tracking.kalman.innovation_gain` / :func:`~navtrack.tracking.kalman.gain_update`
-(the one update path). They differ in how the sensors' measurements are combined:
+:func:`~navtrack.estimation.kalman.innovation_gain` /
+:func:`~navtrack.estimation.kalman.gain_update` (the one update path). They differ in how the
+sensors' measurements are combined:
 
 ``sequential`` (Pao & Frei 1995)
     A single-sensor JPDA step (:func:`~navtrack.tracking.jpda.jpda_step`) per sensor in time
@@ -26,8 +27,9 @@ All four trackers predict with :func:`~navtrack.tracking.kalman.kf_predict`, gat
     Notes.
 ``sdcmsjpda_fused``
     The prose's other reading: each tuple becomes ONE equivalent measurement, the
-    maximum-likelihood fusion of its detections (:func:`equivalent_measurement`: Gauss-Newton
-    fit of the position to the tuple's range-bearing measurements, covariance
+    maximum-likelihood fusion of its detections (:func:`~navtrack.tracking.trackers.equivalent.
+    equivalent_measurement`: Gauss-Newton fit of the position to the tuple's range-bearing
+    measurements, covariance
     ``(Σ_s J_sᵀ R_s⁻¹ J_s)⁻¹``), and JPDA runs on the equivalent measurements: the tuple's
     update is the (linear) Kalman update with it; see Notes.
 ``sdcmsjpda_joint``
@@ -59,21 +61,9 @@ Reading of the paper's equations (the extraction lost their layout):
   single-sensor JPDA marginals (:func:`~navtrack.tracking.jpda.jpda_marginals`); the tests
   check this against the explicit enumeration of eq. 21. ``parallel``, ``sdcmsjpda`` and
   ``sdcmsjpda_fused`` share these marginals and differ in the tuple update only.
-* The equivalent measurement (``sdcmsjpda_fused``). The abstract ("all of measurements in each
-  assignment are combined into one equivalent measurement ... the joint association probability
-  of each equivalent measurement is calculated"), section 3.1 ("a equivalent measurement is
-  gained in each combination ... the multisensor joint association probability of each
-  equivalent measurement is calculated according to its joint likelihood value") and eqs. 3-16
-  (events, validation matrix and likelihood are all written over equivalent measurements
-  ``Z_L``; eq. 14's volume uses "the combined innovation covariance of all sensors") say that a
-  tuple is one fused measurement. Its likelihood is eqs. 15-16, the product of the members'
-  ``N(z_s; ẑ_s, S_s)`` at the prediction (the marginals above); its update is the Kalman update
-  with the tuple's ML position ``ζ`` and covariance ``R_eq`` (measurement matrix the rows of the
-  identity at the position). In a linear-Gaussian model this is exactly the stacked update of
-  ``parallel``; with range-bearing sensors the two agree to the linearisation order (the fused
-  update is linearised at the tuple's ML position, the stacked EKF at the prediction; the tests
-  check both facts). A single detection's equivalent measurement is its polar-to-Cartesian
-  conversion with the linearised covariance.
+* The equivalent measurement (``sdcmsjpda_fused``): why the paper's text reads as one fused
+  measurement per tuple, and how its update relates to ``parallel``'s, is in the notes of
+  :mod:`navtrack.tracking.trackers.equivalent`.
 * The literal form (``sdcmsjpda``), eqs. 24-32 as printed. The tuple estimate is
   ``X_L = X̂ + Σ_{s∈L} w_s K_s ν_s`` (eq. 24, ``K_s``, ``ν_s`` the single-sensor gain and
   innovation at the prediction, eqs. 27, 29), ``w_s = e_s / (b + Σ_{i∈L} e_i)`` (eq. 25),
@@ -116,7 +106,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Literal
@@ -124,8 +114,9 @@ from typing import Literal
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
-from navtrack._numba import jit
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
+from navtrack.estimation.kalman import gain_update, innovation_gain, kf_predict
+from navtrack.estimation.models import MeasurementModel
 from navtrack.tracking.assignment import SdProblem, SdStatus, compile_kernels, sd_assign
 from navtrack.tracking.gating import chi2_threshold, gate
 from navtrack.tracking.jpda import (
@@ -135,14 +126,12 @@ from navtrack.tracking.jpda import (
     jpda_step,
     n_joint_events,
 )
-from navtrack.tracking.kalman import gain_update, innovation_gain, kf_predict, stacked_inverse
-from navtrack.tracking.models import (
-    LinearMotion,
-    MeasurementModel,
-    RangeBearing,
-    measure,
-    range_bearing_group,
-    wrap_angle,
+from navtrack.tracking.models import LinearMotion, measure
+from navtrack.tracking.trackers.equivalent import (
+    compiled_gauss_newton,
+    compiled_range_bearing,
+    equivalent_measurement,
+    sensor_constants,
 )
 
 __all__ = [
@@ -151,10 +140,13 @@ __all__ = [
     "FusionConfig",
     "FusionResult",
     "MultiScans",
-    "equivalent_measurement",
+    "SensorTerms",
     "fusion_step",
+    "joint_tuple_marginals",
     "nonparametric_b",
     "run_fusion",
+    "sd_gnn_tuples",
+    "sensor_terms",
     "tuple_marginals",
 ]
 
@@ -294,7 +286,7 @@ class FusionResult:
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class _SensorTerms:
+class SensorTerms:
     """Linearisation, gate and weights of one scan of every sensor (sensor axis first)."""
 
     z: FloatArray  # (S, M, m) the measurements, padded with zeros
@@ -308,13 +300,13 @@ class _SensorTerms:
     n_meas: IntArray  # (S,) measurements of each sensor
 
 
-def _sensor_terms(
+def sensor_terms(
     xp: FloatArray,
     Pp: FloatArray,
     z: Sequence[FloatArray],
     sensors: Sequence[MeasurementModel],
     config: FusionConfig,
-) -> _SensorTerms:
+) -> SensorTerms:
     """EKF terms, gates, weights and marginals of all sensors at once (sensors as batch axis).
 
     The weights are those of :func:`~navtrack.tracking.jpda.association_weights` (each
@@ -333,7 +325,7 @@ def _sensor_terms(
         ok[s, : len(zs)] = True
     zp, H = measure(sensors, xp)  # (T, S, m), (T, S, m, n)
     zp, H = np.swapaxes(zp, 0, 1), np.swapaxes(H, 0, 1)
-    R = _sensor_constants(sensors)[0]
+    R = sensor_constants(sensors)[0]
     Sg, K = innovation_gain(Pp, H, R[:, None])
     pg = config.gate_probability
     g = gate(zp, Sg, Z, chi2_threshold(pg, m), angle_mask=sensors[0].angle_mask)
@@ -362,7 +354,7 @@ def _sensor_terms(
     beta[at] = bc
     n_meas = np.array([len(zs) for zs in z], dtype=np.int64)
     d2 = np.where(valid, g.d2, np.inf)
-    return _SensorTerms(Z, H, Sg, K, g.innovation, d2, log_w, beta, n_meas)
+    return SensorTerms(Z, H, Sg, K, g.innovation, d2, log_w, beta, n_meas)
 
 
 def tuple_marginals(
@@ -415,7 +407,7 @@ def _stacked(
     Pp: FloatArray,
     target: IntArray,
     L: IntArray,
-    terms: _SensorTerms,
+    terms: SensorTerms,
     sensors: Sequence[MeasurementModel],
 ) -> tuple[FloatArray, FloatArray]:
     """Centralised EKF update of ``target[i]`` with tuple ``L[i]`` (``L (n_L, S)``), all
@@ -457,7 +449,7 @@ def _literal_update(
     Pp: FloatArray,
     L: IntArray,
     beta: FloatArray,
-    terms: _SensorTerms,
+    terms: SensorTerms,
     b: float,
     t: int,
 ) -> tuple[FloatArray, FloatArray]:
@@ -486,258 +478,6 @@ def _literal_update(
     return xm[0], Pm[0]
 
 
-def equivalent_measurement(
-    z: FloatArray,
-    hit: BoolArray,
-    sensors: Sequence[MeasurementModel],
-    x_ref: FloatArray,
-    iterations: int = 10,
-    tol: float = 0.02,
-    *,
-    linearised: tuple[FloatArray, FloatArray] | None = None,
-) -> tuple[IntArray, FloatArray, FloatArray]:
-    """Equivalent measurements of S-tuples: ML fit of the observed state components.
-
-    The observed components ``o`` are the state components the sensors' Jacobians depend on
-    at ``x_ref`` (the position for range-bearing). For each tuple, Gauss-Newton from
-    ``x_ref[o]`` minimises ``Σ_{s: hit} |z_s - h_s(x)|²_{R_s⁻¹}`` over ``x[o]`` (the other
-    components held at ``x_ref``); the result ``ζ`` with covariance
-    ``R_eq = (Σ_s J_sᵀ R_s⁻¹ J_s)⁻¹`` (``J_s`` the Jacobian columns ``o`` at the last iterate,
-    within ``tol`` standard deviations of ``ζ``) is the maximum-likelihood fusion of the
-    tuple's measurements, a linear measurement ``ζ = E x + w``, ``w ~ N(0, R_eq)``, ``E`` the
-    rows ``o`` of the identity.
-
-    All tuples are solved in one batch, the tuple axis last: each iteration evaluates the
-    sensors' models once for the tuples still iterating (:func:`~navtrack.tracking.models.
-    measure`: range-bearing sensors in one vectorised call), whitens each sensor's rows with
-    one product (``R_s⁻¹ = C_s C_sᵀ``), zeroes the rows of sensors not in the tuple, sums the
-    normal equations and solves them (Cramer's rule for ``n_o = 2``); a tuple whose step fell
-    below ``tol`` leaves the batch, and the loop ends when none is left. ``R_eq`` is inverted
-    once, at the end. With numba installed (extra ``speed``) and range-bearing sensors that
-    share one ``position_index`` (:func:`~navtrack.tracking.models.range_bearing_group`), the
-    same loop runs compiled, one tuple at a time in scalar arithmetic
-    (:func:`_gauss_newton_range_bearing`; the tests check both paths against each other),
-    sparing the few hundred small NumPy calls that are most of the batched loop's cost
-    (``benchmarks/bench_fusion.py`` times both).
-
-    Parameters
-    ----------
-    z : (n_L, S, m) the tuples' measurements (any finite value where not ``hit``)
-    hit : (n_L, S) bool, sensor ``s`` has a measurement in the tuple; every tuple needs one
-    sensors : S measurement models, each with ``dim_z >= len(o)`` (alone it fixes ``x[o]``)
-    x_ref : (n,) or (n_L, n) linearisation point and start (the prediction)
-    iterations : int, most Gauss-Newton steps; a tuple that has not converged after them
-        (e.g. a single range-bearing detection of a target passing over the sensor, whose
-        measured range may be below the noise) keeps its first step, linearised at ``x_ref``
-        (the EKF's information form)
-    tol : float, a tuple stops when its step is below ``tol`` standard deviations of its
-        equivalent measurement, ``δᵀ R_eq⁻¹ δ < tol²``. On the paper's scenario (59 000
-        tuples of 420 scans) a second step below 0.02 left at most 0.004 standard deviations
-        to the converged point (median error / step 2e-4: nearly quadratic this close); from
-        a prediction a few hundred metres off, the first step (free with ``linearised``) and
-        two model evaluations suffice on 93 % of the scans
-    linearised : optional ``(J (n_L, S, m, n), r (n_L, S, m))``, the Jacobians and wrapped
-        residuals ``z_s - h_s(x_ref)`` at ``x_ref`` when the caller already has them (the
-        tracker's Jacobians and innovations at the prediction): the first iteration of the
-        NumPy loop then evaluates no model (the compiled loop evaluates them itself)
-
-    Returns
-    -------
-    o : (n_o,) int, the observed components
-    zeta : (n_L, n_o) equivalent measurements
-    R_eq : (n_L, n_o, n_o) their covariances
-    """
-    x_ref = np.asarray(x_ref, dtype=float)
-    n = x_ref.shape[-1]
-    group = range_bearing_group(sensors)
-    compiled = _compiled_range_bearing(sensors)
-    if group is not None:  # range-bearing: the position components, in state order
-        o = np.sort(np.array(group[0].position_index))
-    else:
-        J0 = measure(sensors, x_ref)[1] if linearised is None else np.asarray(linearised[0])
-        o = np.flatnonzero((J0 != 0.0).reshape(-1, n).any(axis=0))
-    if any(model.dim_z < o.size for model in sensors):
-        raise ValueError(
-            f"equivalent_measurement: every sensor must observe the {o.size} state "
-            f"components {o.tolist()} alone (dim_z >= {o.size})"
-        )
-    if not hit.any(axis=1).all():
-        raise ValueError("equivalent_measurement: every tuple needs one measurement")
-    n_L, S_, m = z.shape
-    n_o = o.size
-    Ct, angle = _sensor_constants(sensors)[1:]
-    if compiled is not None:
-        kernel, (model, xy) = compiled
-        ij = np.array(model.position_index)
-        p0 = np.broadcast_to(x_ref, (n_L, n))[:, ij]
-        # fresh C arrays: the argument types the kernel was compiled for
-        zc, hc = np.array(z, dtype=float), np.array(hit, dtype=bool)
-        p, info = kernel(zc, hc, p0, xy, Ct, model.from_north, iterations, tol)
-        if ij[0] > ij[1]:  # back to the order of o
-            p, info = p[:, ::-1], info[:, ::-1, ::-1]
-        return o.astype(np.int64), p, stacked_inverse(info)
-    # the tuple axis last (k tuples): residuals (S, m, k), whitened rows (S, m, n_o, k), those
-    # of a sensor missing from a tuple weighted 0, normal equations (n_o, n_o, k)
-    w = hit.T[:, None, None, :]
-    zt = z.transpose(1, 2, 0)
-    x = np.array(np.broadcast_to(x_ref, (n_L, n)), dtype=float)
-    info_last = np.empty((n_o, n_o, n_L))
-    todo = np.arange(n_L)  # the tuples not converged yet
-    for it in range(iterations):
-        if it == 0 and linearised is not None:
-            J = np.asarray(linearised[0])[..., o]
-            r = np.asarray(linearised[1]).transpose(1, 2, 0)
-        else:
-            zp, J = measure(sensors, x[todo])
-            J, r = J[..., o], zt[..., todo] - zp.transpose(1, 2, 0)
-            r[angle] = wrap_angle(r[angle])
-        k = todo.size
-        B = (Ct @ J.transpose(1, 2, 3, 0).reshape(S_, m, n_o * k)).reshape(S_, m, n_o, k)
-        B *= w[..., todo]
-        info = np.einsum("smpk,smqk->pqk", B, B)  # Σ_s J_sᵀ R_s⁻¹ J_s
-        g = np.einsum("smpk,smk->pk", B, Ct @ r)  # Σ_s J_sᵀ R_s⁻¹ r_s
-        step = _solve_last(info, g)
-        info_last[..., todo] = info
-        x[todo[:, None], o] += step.T
-        if it == 0:
-            first = x.copy(), info_last.copy()
-        todo = todo[np.einsum("pk,pk->k", step, g) >= tol * tol]  # δᵀ R_eq⁻¹ δ = δᵀ g
-        if todo.size == 0:
-            break
-    # not converged: the first step, linearised at x_ref
-    x[todo], info_last[..., todo] = first[0][todo], first[1][..., todo]
-    return o.astype(np.int64), x[:, o], stacked_inverse(info_last.transpose(2, 0, 1))
-
-
-def _gauss_newton_range_bearing(
-    z: FloatArray,
-    hit: BoolArray,
-    p0: FloatArray,
-    xy: FloatArray,
-    Ct: FloatArray,
-    from_north: bool,
-    iterations: int,
-    tol: float,
-) -> tuple[FloatArray, FloatArray]:
-    """The Gauss-Newton loop of :func:`equivalent_measurement` for range-bearing sensors, one
-    tuple at a time in scalar arithmetic (compiled by numba: :func:`_compiled_gauss_newton`).
-
-    ``z (n_L, S, 2)``, ``hit (n_L, S)``, start positions ``p0 (n_L, 2)`` (the state's
-    ``position_index`` components), sensor positions ``xy (S, 2)``, whitening ``Ct (S, 2,
-    2)``. The same steps, stopping rule and fallback to the first step as the NumPy loop.
-    Returns the positions ``(n_L, 2)`` and information matrices ``(n_L, 2, 2)``.
-    """
-    n_L, S_ = hit.shape
-    out = np.empty((n_L, 2))
-    info = np.empty((n_L, 2, 2))
-    two_pi = 2.0 * math.pi
-    for k in range(n_L):
-        px, py = p0[k, 0], p0[k, 1]
-        first = (px, py, 0.0, 0.0, 0.0)
-        a00 = a01 = a11 = 0.0
-        converged = False
-        for it in range(iterations):
-            a00 = a01 = a11 = g0 = g1 = 0.0
-            for s in range(S_):
-                if not hit[k, s]:
-                    continue
-                dx, dy = px - xy[s, 0], py - xy[s, 1]
-                r2 = dx * dx + dy * dy
-                r = math.sqrt(r2)
-                if from_north:
-                    bearing, j10, j11 = math.atan2(dx, dy), dy / r2, -dx / r2
-                else:
-                    bearing, j10, j11 = math.atan2(dy, dx), -dy / r2, dx / r2
-                j00, j01 = dx / r, dy / r
-                e0 = z[k, s, 0] - r
-                e1 = (z[k, s, 1] - bearing + math.pi) % two_pi - math.pi
-                c00, c01, c10, c11 = Ct[s, 0, 0], Ct[s, 0, 1], Ct[s, 1, 0], Ct[s, 1, 1]
-                b00, b01 = c00 * j00 + c01 * j10, c00 * j01 + c01 * j11
-                b10, b11 = c10 * j00 + c11 * j10, c10 * j01 + c11 * j11
-                w0, w1 = c00 * e0 + c01 * e1, c10 * e0 + c11 * e1
-                a00 += b00 * b00 + b10 * b10
-                a01 += b00 * b01 + b10 * b11
-                a11 += b01 * b01 + b11 * b11
-                g0 += b00 * w0 + b10 * w1
-                g1 += b01 * w0 + b11 * w1
-            det = a00 * a11 - a01 * a01
-            d0, d1 = (a11 * g0 - a01 * g1) / det, (a00 * g1 - a01 * g0) / det
-            px, py = px + d0, py + d1
-            if it == 0:
-                first = (px, py, a00, a01, a11)
-            if d0 * g0 + d1 * g1 < tol * tol:
-                converged = True
-                break
-        if not converged:  # the first step, linearised at the start
-            px, py, a00, a01, a11 = first
-        out[k, 0], out[k, 1] = px, py
-        info[k, 0, 0], info[k, 0, 1], info[k, 1, 0], info[k, 1, 1] = a00, a01, a01, a11
-    return out, info
-
-
-@lru_cache(maxsize=1)
-def _compiled_gauss_newton() -> Callable[..., tuple[FloatArray, FloatArray]] | None:
-    """:func:`_gauss_newton_range_bearing` compiled by numba, or None without numba
-    (:func:`equivalent_measurement` then runs its NumPy loop).
-
-    Compiled on the first call (about a second; loaded from numba's disk cache afterwards, a
-    tenth of that) for the argument types :func:`equivalent_measurement` passes: writable
-    ``z``, ``hit``, ``p0``, read-only (cached) sensor positions and whitening.
-    """
-    kernel = jit(_gauss_newton_range_bearing)
-    if kernel is None:
-        return None
-    fixed = np.zeros((1, 2)), np.eye(2)[None]
-    for a in fixed:
-        a.setflags(write=False)
-    kernel(np.ones((1, 1, 2)), np.ones((1, 1), dtype=bool), np.ones((1, 2)), *fixed, False, 1, 0.0)
-    return kernel
-
-
-def _compiled_range_bearing(
-    sensors: Sequence[MeasurementModel],
-) -> tuple[Callable[..., tuple[FloatArray, FloatArray]], tuple[RangeBearing, FloatArray]] | None:
-    """The compiled Gauss-Newton loop and the sensors' range-bearing group (first model,
-    positions) when both exist (numba installed, all sensors range-bearing with one
-    ``position_index``), else None."""
-    group = range_bearing_group(sensors)
-    kernel = _compiled_gauss_newton() if group is not None else None
-    return None if kernel is None or group is None else (kernel, group)
-
-
-def _solve_last(A: FloatArray, b: FloatArray) -> FloatArray:
-    """Solutions ``(n, k)`` of ``k`` linear systems stored with the system axis last, ``A (n,
-    n, k)``, ``b (n, k)`` (closed form for ``n = 2``: the adjugate over the determinant)."""
-    if A.shape[0] != 2:
-        return np.asarray(np.linalg.solve(A.transpose(2, 0, 1), b.T[..., None])[..., 0].T)
-    adj = A[::-1, ::-1] * _ADJUGATE_SIGN
-    det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
-    return np.asarray(np.einsum("pqk,qk->pk", adj, b) / det)
-
-
-_ADJUGATE_SIGN = np.array([[1.0, -1.0], [-1.0, 1.0]])[..., None]  # adj(A) = sign * A[::-1, ::-1]
-
-
-def _sensor_constants(sensors: Sequence[MeasurementModel]) -> tuple[FloatArray, ...]:
-    """Noise covariances ``R_s`` (S, m, m), whitening ``C_sᵀ`` with ``R_s⁻¹ = C_s C_sᵀ`` (S, m,
-    m) and angle masks (S, m) of the sensors (read-only; computed once per set of sensors,
-    which are immutable, unless a model cannot be hashed)."""
-    try:
-        return _constants_of(tuple(sensors))
-    except TypeError:
-        return _constants_of.__wrapped__(tuple(sensors))
-
-
-@lru_cache(maxsize=16)
-def _constants_of(sensors: tuple[MeasurementModel, ...]) -> tuple[FloatArray, ...]:
-    R = np.array([model.R for model in sensors])
-    Ct = np.ascontiguousarray(np.swapaxes(np.linalg.cholesky(np.linalg.inv(R)), 1, 2))
-    angle = np.array([model.angle_mask for model in sensors])
-    for a in (R, Ct, angle):
-        a.setflags(write=False)
-    return R, Ct, angle
-
-
 @lru_cache(maxsize=64)
 def _event_logs(config: FusionConfig) -> tuple[FloatArray, FloatArray]:
     """``log(1 - P_D,s P_G)`` and ``log(P_D,s / λ_s)`` of each sensor, ``(S, 1, 1)`` each: the
@@ -757,11 +497,11 @@ def _equivalent_updates(
     Pp: FloatArray,
     target: IntArray,
     L: IntArray,
-    terms: _SensorTerms,
+    terms: SensorTerms,
     sensors: Sequence[MeasurementModel],
 ) -> tuple[FloatArray, FloatArray]:
     """``sdcmsjpda`` tuple updates: for tuple ``L[i]`` of ``target[i]``, the Kalman update
-    with the tuple's equivalent measurement (:func:`equivalent_measurement`, all targets'
+    with the tuple's equivalent measurement (``equivalent_measurement``, all targets'
     tuples in one batch, its first iteration on the sensors' Jacobians and innovations at
     the prediction); the empty tuple keeps the prediction."""
     x, P = xp[target], Pp[target]
@@ -771,7 +511,7 @@ def _equivalent_updates(
         t, j = target[some], np.maximum(L[some] - 1, 0)  # j: any index where not in the tuple
         sidx = np.arange(L.shape[1])
         linearised = None
-        if _compiled_range_bearing(sensors) is None:  # the NumPy loop starts from these
+        if compiled_range_bearing(sensors) is None:  # the NumPy loop starts from these
             J = terms.H[:, t].transpose(1, 0, 2, 3)  # (n, S, m, n_x) at the prediction
             linearised = J, terms.innovation[sidx, t[:, None], j]  # and (n, S, m)
         xt, Pt = xp[t], Pp[t]
@@ -783,11 +523,11 @@ def _equivalent_updates(
     return x, P
 
 
-def _joint_tuple_marginals(
+def joint_tuple_marginals(
     Pp: FloatArray,
     target: IntArray,
     L: IntArray,
-    terms: _SensorTerms,
+    terms: SensorTerms,
     sensors: Sequence[MeasurementModel],
     config: FusionConfig,
 ) -> FloatArray:
@@ -839,7 +579,7 @@ def _joint_tuple_marginals(
     return beta / pair.sum()
 
 
-def _sd_gnn_tuples(terms: _SensorTerms, max_tuples: int) -> tuple[IntArray, bool]:
+def sd_gnn_tuples(terms: SensorTerms, max_tuples: int) -> tuple[IntArray, bool]:
     """The best joint event as an (S+1)-D assignment.
 
     Returns ``(L (T, S), gap)``, ``gap`` True when the relaxation stopped with a duality gap.
@@ -911,10 +651,10 @@ def fusion_step(
     if algorithm not in ALGORITHMS:
         raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {algorithm!r}")
     xp, Pp = kf_predict(x, P, motion.F(dt[0]), motion.Q(dt[0]))
-    terms = _sensor_terms(xp, Pp, z, sensors, config)
+    terms = sensor_terms(xp, Pp, z, sensors, config)
     T = x.shape[0]
     if algorithm == "sd_gnn":
-        Lbest, gap = _sd_gnn_tuples(terms, config.max_tuples)
+        Lbest, gap = sd_gnn_tuples(terms, config.max_tuples)
         xn, Pn = _stacked(xp, Pp, np.arange(T), Lbest, terms, sensors)
         return xn, Pn, gap
     target, L, beta = tuple_marginals(terms.beta)
@@ -934,7 +674,7 @@ def fusion_step(
     else:
         xs, Ps = _equivalent_updates(xp, Pp, target, L, terms, sensors)
     if algorithm == "sdcmsjpda_joint":
-        beta = _joint_tuple_marginals(Pp, target, L, terms, sensors, config)
+        beta = joint_tuple_marginals(Pp, target, L, terms, sensors, config)
     xn, Pn = _mixtures(target, beta, xs, Ps)
     return xn, Pn, False
 
@@ -988,51 +728,67 @@ def run_fusion(
     x = np.array(x0, dtype=float)
     P = np.array(P0, dtype=float)
     t_prev = float(scans.t_s[0].min()) if t0_s is None else float(t0_s)
-    centralised = algorithm != "sequential"
     xs = np.empty((K, *x.shape))
     Ps = np.empty((K, *P.shape))
     gaps = 0
     elapsed = 0.0
-    if algorithm in (
-        "sdcmsjpda_fused",
-        "sdcmsjpda_joint",
-    ):  # a one-off compilation is no part of a step's time
-        _compiled_gauss_newton()
-    elif algorithm == "sd_gnn":
-        compile_kernels()
+    _compile(algorithm)  # a one-off compilation is no part of a step's time
     for k in range(K):
-        ts = scans.t_s[k]
-        if centralised and np.ptp(ts) > config.time_tolerance_s:
-            s = int(np.argmax(np.abs(ts - ts[0])))
-            raise ValueError(
-                f"scan {k}: sensor {s} time stamp {ts[s]:.6f} s differs from sensor 0's "
-                f"{ts[0]:.6f} s; {algorithm} fuses simultaneous scans only (time_tolerance_s = "
-                f"{config.time_tolerance_s}); use 'sequential' for asynchronous sensors"
-            )
-        order = np.argsort(ts, kind="stable") if not centralised else np.arange(S_)
-        times = ts[order]
-        if times[0] < t_prev - config.time_tolerance_s:
-            raise ValueError(f"scan {k}: time stamp {times[0]} s is before {t_prev} s")
-        if centralised:
-            dt = np.r_[ts[0] - t_prev, np.zeros(S_ - 1)]
-        else:
-            dt = np.diff(np.r_[t_prev, times])
+        order, dt = _schedule(algorithm, k, scans.t_s[k], t_prev, config)
         z = [scans.scan(k, int(s)) for s in order]
         sens = [sensors[int(s)] for s in order]
-        cfg = (
-            config
-            if centralised
-            else replace(
-                config,
-                pd=tuple(config.pd[int(s)] for s in order),
-                clutter_density=tuple(config.clutter_density[int(s)] for s in order),
-            )
-        )
+        cfg = _reordered(config, order) if algorithm == "sequential" else config
         c0 = time.thread_time()
         x, P, gap = fusion_step(algorithm, x, P, z, dt.tolist(), sens, motion, cfg)
         elapsed += time.thread_time() - c0
         gaps += int(gap)
         xs[k], Ps[k] = x, P
-        t_prev = float(times[-1])
+        t_prev = float(scans.t_s[k, order[-1]])
     empty, longest = _silence(scans.valid)
-    return FusionResult(xs, Ps, empty, longest, gaps, 1e3 * elapsed / max(K, 1))
+    return FusionResult(
+        x=xs,
+        P=Ps,
+        empty_scans=empty,
+        longest_silence=longest,
+        gap_scans=gaps,
+        ms_per_step=1e3 * elapsed / max(K, 1),
+    )
+
+
+def _compile(algorithm: Algorithm) -> None:
+    """Compile the numba kernels ``algorithm`` uses (nothing to do without numba)."""
+    if algorithm in ("sdcmsjpda_fused", "sdcmsjpda_joint"):
+        compiled_gauss_newton()
+    elif algorithm == "sd_gnn":
+        compile_kernels()
+
+
+def _schedule(
+    algorithm: Algorithm, k: int, ts: FloatArray, t_prev: float, config: FusionConfig
+) -> tuple[IntArray, FloatArray]:
+    """Processing order of the sensors of scan ``k`` (time stamps ``ts``) and the time steps
+    :func:`fusion_step` takes; raises ``ValueError`` for a scan the tracker cannot fuse."""
+    centralised = algorithm != "sequential"
+    if centralised and np.ptp(ts) > config.time_tolerance_s:
+        s = int(np.argmax(np.abs(ts - ts[0])))
+        raise ValueError(
+            f"scan {k}: sensor {s} time stamp {ts[s]:.6f} s differs from sensor 0's "
+            f"{ts[0]:.6f} s; {algorithm} fuses simultaneous scans only (time_tolerance_s = "
+            f"{config.time_tolerance_s}); use 'sequential' for asynchronous sensors"
+        )
+    order = np.argsort(ts, kind="stable") if not centralised else np.arange(ts.size)
+    times = ts[order]
+    if times[0] < t_prev - config.time_tolerance_s:
+        raise ValueError(f"scan {k}: time stamp {times[0]} s is before {t_prev} s")
+    if centralised:
+        return order, np.r_[ts[0] - t_prev, np.zeros(ts.size - 1)]
+    return order, np.diff(np.r_[t_prev, times])
+
+
+def _reordered(config: FusionConfig, order: IntArray) -> FusionConfig:
+    """``config`` with its per-sensor values in the processing ``order``."""
+    return replace(
+        config,
+        pd=tuple(config.pd[int(s)] for s in order),
+        clutter_density=tuple(config.clutter_density[int(s)] for s in order),
+    )

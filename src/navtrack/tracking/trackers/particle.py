@@ -48,7 +48,7 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, IntArray
-from navtrack.tracking.kalman import kf_predict
+from navtrack.estimation.kalman import kf_predict
 from navtrack.tracking.models import FovealScan, FovealSensor, LinearMotion, constant_velocity
 
 __all__ = [
@@ -704,23 +704,14 @@ def jmpd_step(
     config: JmpdConfig,
     rng: np.random.Generator,
 ) -> JmpdStep:
-    """One scan of the joint multitarget particle filter (Table 1 steps 7-12).
+    """One scan of the joint multitarget particle filter (Table 1 steps 7-12): a :class:`JmpdStep`.
 
     Parameters
     ----------
-    state : JmpdState
-        Posterior at ``k - 1``.
-    scan : FovealScan
-        Measurements ``z, valid (B, M)`` taken with gain ``c`` and centre ``d``.
-    c, d : (B,) float
-        Foveal gain (1/m) and centre (m) used for the scan.
-    sensor : FovealSensor
-    config : JmpdConfig
-    rng : numpy.random.Generator
-
-    Returns
-    -------
-    JmpdStep
+    state : JmpdState, the posterior at ``k - 1``
+    scan : FovealScan, measurements ``z, valid (B, M)`` taken with gain ``c`` and centre ``d``
+    c, d : (B,) float, foveal gain (1/m) and centre (m) used for the scan
+    sensor : FovealSensor; config : JmpdConfig; rng : numpy.random.Generator
 
     Notes
     -----
@@ -750,16 +741,7 @@ def jmpd_step(
             log_w = state.log_weights + loglik
             fallback = state.log_weights
         else:
-            if config.proposal == "ip_jpda":
-                log_part = ip_jpda_log_likelihoods(L, sensor)
-            elif config.proposal == "ip_gnn":
-                D2 = measurement_distances(pred, scan, c, d, sensor)
-                log_part = ip_gnn_log_likelihoods(
-                    L, gnn_assignment(D2, scan.valid, config.gnn_gate)
-                )
-            else:
-                _, best, _ = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
-                log_part = ip_gnn_log_likelihoods(L, best)
+            log_part = _partition_log_likelihoods(L, pred, scan, c, d, sensor, config)
             pred, log_bias, idx = resample_partitions(pred, state.log_weights, log_part, rng)
             L = L[_partition_index(idx)]
             loglik, _, n_h = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
@@ -780,8 +762,25 @@ def jmpd_step(
     if np.any(resampled):
         idx = systematic_resample(log_w[resampled], rng)
         particles = particles.copy()
-        particles[resampled] = np.take_along_axis(
-            particles[resampled], idx[:, :, None, None], axis=1
-        )
+        particles[resampled] = np.take_along_axis(particles[resampled], idx[..., None, None], 1)
         log_w = np.where(resampled[:, None], -math.log(N), log_w)
     return JmpdStep(JmpdState(particles, log_w, x, P), status, n_eff, resampled, n_h)
+
+
+def _partition_log_likelihoods(
+    L: FloatArray,
+    pred: FloatArray,
+    scan: FovealScan,
+    c: FloatArray,
+    d: FloatArray,
+    sensor: FovealSensor,
+    config: JmpdConfig,
+) -> FloatArray:
+    """Per-target partition log-likelihoods of the IP proposal ``config.proposal``."""
+    if config.proposal == "ip_jpda":
+        return ip_jpda_log_likelihoods(L, sensor)
+    if config.proposal == "ip_gnn":
+        D2 = measurement_distances(pred, scan, c, d, sensor)
+        return ip_gnn_log_likelihoods(L, gnn_assignment(D2, scan.valid, config.gnn_gate))
+    _, best, _ = joint_log_likelihood(L, scan.valid, sensor.clutter_density)
+    return ip_gnn_log_likelihoods(L, best)

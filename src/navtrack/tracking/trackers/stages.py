@@ -11,6 +11,7 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, IntArray
+from navtrack.estimation.kalman import gain_update, innovation_gain, kf_predict
 from navtrack.tracking.assignment import assign2d
 from navtrack.tracking.gating import gate, kdtree_pregate
 from navtrack.tracking.imm import imm_combine, imm_mix, imm_model_probabilities, markov_matrix
@@ -21,7 +22,6 @@ from navtrack.tracking.jpda import (
     jpda_marginals,
     pda_update,
 )
-from navtrack.tracking.kalman import gain_update, innovation_gain, kf_predict
 from navtrack.tracking.models import LinearMeasurement, LinearMotion
 from navtrack.tracking.trackers.track_config import TrackerModel
 
@@ -204,7 +204,7 @@ def predict(store: TrackStore, dt: float, model: TrackerModel) -> None:
 
     With several motion models the IMM interaction comes first, with the switching probability
     ``1 - exp(-dt / imm_sojourn_s)`` of a continuous-time Markov chain; then the KF prediction
-    of every model (:func:`~navtrack.tracking.kalman.kf_predict`), and ``mu`` becomes the
+    of every model (:func:`~navtrack.estimation.kalman.kf_predict`), and ``mu`` becomes the
     predicted model probabilities. Nothing happens for ``dt <= 0`` or an empty store.
     """
     if not (dt > 0 and store.size):
@@ -235,7 +235,7 @@ class ScanGate:
     ----------
     innovation : (T, r, M, m) ``z_j - h(x_t)``
     S : (T, r, m, m) innovation covariance; K : (T, r, n, m) gain
-        (:func:`~navtrack.tracking.kalman.innovation_gain`)
+        (:func:`~navtrack.estimation.kalman.innovation_gain`)
     valid : (T, M) bool, the pair is inside the gate of some model
     log_likelihood : (T, r, M) ``log N(z_j; h(x_t), S_t)`` per model (``-1e300`` where the
         pre-gate did not compute it)
@@ -459,7 +459,7 @@ def associate(gated: ScanGate, model: TrackerModel) -> ScanAssociation:
 def update(store: TrackStore, gated: ScanGate, assoc: ScanAssociation) -> None:
     """Stage 4: measurement update of the tracks of ``store`` (in place).
 
-    Hard association: the Kalman update :func:`~navtrack.tracking.kalman.gain_update` of each
+    Hard association: the Kalman update :func:`~navtrack.estimation.kalman.gain_update` of each
     assigned track. Soft: the PDA update :func:`~navtrack.tracking.jpda.pda_update` of each
     track with a detection probability > 0. With several models, the model probabilities
     follow (IMM; for JPDA the model likelihood is the missed term plus each detection's

@@ -6,7 +6,7 @@ per scan (detections sharing one time stamp), a chain of named stages over a
 (multisensor fusion, particle filters) can reuse them:
 
 1. :func:`predict` every track to the scan time (IMM mixing, then the batched KF prediction of
-   :mod:`navtrack.tracking.kalman`);
+   :mod:`navtrack.estimation.kalman`);
 2. :func:`gate_scan`: innovation covariance and gain from the Kalman kernels, chi-square gate
    (with a k-d tree pre-gate when there are many pairs), per-model and mixture likelihoods;
 3. :func:`associate`: :func:`associate_gnn` (optimal 2-D assignment with missed-detection costs,

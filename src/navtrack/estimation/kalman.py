@@ -3,7 +3,10 @@
 Shapes: states ``x (..., n)``, covariances ``P (..., n, n)``, measurements ``z (..., m)``; the
 leading axes ``...`` are any batch (tracks, particles, Monte Carlo runs) and broadcast against
 each other and against the model matrices (``F (n, n)`` or ``(..., n, n)``). Inputs are never
-written to.
+written to. The EKF and UKF forms take any model with the methods of the protocols
+:class:`~navtrack.estimation.models.MotionModel` and
+:class:`~navtrack.estimation.models.MeasurementModel` (the tracking models of
+:mod:`navtrack.tracking.models`, for instance).
 
 References
 ----------
@@ -22,7 +25,7 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
-from navtrack.tracking.models import MeasurementModel, MotionModel, wrap_angle
+from navtrack.estimation.models import MeasurementModel, MotionModel, wrap_angle
 
 __all__ = [
     "KalmanUpdate",
