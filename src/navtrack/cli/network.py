@@ -4,17 +4,17 @@ observation files in one command) on the Dask runner (:mod:`navtrack.gnss.networ
 from __future__ import annotations
 
 import argparse
+import time
 from typing import TYPE_CHECKING
 
+from navtrack.gnss.network import StationJob, solve_network, station_jobs
+
 if TYPE_CHECKING:
-    from navtrack.gnss.network import StationJob
     from navtrack.gnss.spp import SppConfig
 
 
 def network_jobs(args: argparse.Namespace) -> list[StationJob] | None:
     """The stations of ``pos``'s files when they hold several observation files, else None."""
-    from navtrack.gnss.network import station_jobs
-
     files = [args.obs, *args.nav]
     if len(files) < 2:
         return None
@@ -24,10 +24,6 @@ def network_jobs(args: argparse.Namespace) -> list[StationJob] | None:
 
 def run_network(args: argparse.Namespace, jobs: list[StationJob], config: SppConfig) -> int:
     """Solve the network, print one line per station and the throughput."""
-    import time
-
-    from navtrack.gnss.network import solve_network
-
     if args.out is None or args.out.suffix:
         raise SystemExit("navtrack pos: several observation files need --out DIR (a folder)")
     for option in ("ref", "ref_llh", "plot", "sp3"):

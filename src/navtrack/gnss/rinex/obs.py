@@ -960,7 +960,9 @@ def _assemble(
     surplus = (~blank & (code < 0)).any(axis=1)
     if n_dec < n_lines:  # a line not decoded: text beyond its system's last field
         n_types = (table >= 0).sum(axis=1)
-        skipped_rows = np.setdiff1d(np.arange(n_lines), decode)
+        not_decoded = np.ones(n_lines, dtype=bool)
+        not_decoded[decode] = False
+        skipped_rows = np.flatnonzero(not_decoded)
         limit = lead + _FIELD * n_types[row[skipped_rows]]
         length = np.fromiter(map(len, map(scan.data.__getitem__, skipped_rows.tolist())), np.int64)
         beyond = length > limit
