@@ -32,7 +32,7 @@ SHARED_NAV = (
 )
 LOCAL_NAV = (
     "BRDC00IGS_R_20230010000_01D_MN_cut.rnx",
-    "zim21380.20g",
+    "ubloxrs_glo_convbin.19g",
     "spare_filled_nav3.rnx",
     "brdc0320_cut.16l",
     "ceda2100_cut.18e",
@@ -334,14 +334,19 @@ def test_all_systems_rinex3() -> None:
 
 
 def test_rinex2_glonass_two_digit_year() -> None:
-    nav = read_nav(TEST_DATA / "zim21380.20g")
+    # RINEX 2.11 GLONASS file written by RTKLIB's convbin, values without a leading zero
+    nav = read_nav(TEST_DATA / "ubloxrs_glo_convbin.19g")
     r = nav.ephemerides["R"]
-    assert list(r["sat"]) == ["R01", "R01", "R02", "R02"]
-    # " 1 20  5 16 23 45  0.0": 2020-05-16 23:45 UTC, 18 leap seconds
-    assert r["toc_gps_s"].iloc[0] == calendar_gps_seconds(2020, 5, 16, 23, 45, 18)
-    assert r["tk_s"].iloc[0] == 86370.0
-    assert r["z_m"].iloc[0] == pytest.approx(0.217709248047e05 * 1000, rel=1e-15)
-    assert nav.leap_seconds == 18
+    assert list(r["sat"]) == ["R02", "R03", "R12"]
+    # line 6, "12 19 11 26 21 45 00.0": 2019-11-26 21:45 UTC; no LEAP SECONDS record, so the
+    # IERS count of that date (18 s) gives GPST
+    assert nav.leap_seconds is None
+    assert r["toc_gps_s"].iloc[2] == calendar_gps_seconds(2019, 11, 26, 21, 45, 18)
+    assert list(r["tk_s"]) == [77910.0] * 3
+    assert r["taun"].iloc[2] == 0.827098265290e-04
+    assert r["z_m"].iloc[2] == pytest.approx(0.168744916992e05 * 1000, rel=1e-15)
+    assert r["vy_mps"].iloc[2] == pytest.approx(0.209329700470e01 * 1000, rel=1e-15)
+    assert list(r["freq_num"]) == [-4, 5, -1]
 
 
 def test_mixed_prn_formats_and_spare_fields() -> None:
