@@ -20,7 +20,8 @@ from hypothesis import strategies as st
 
 from navtrack.data import sample_path
 from navtrack.errors import FileFormatError
-from navtrack.gnss.rinex.obs import _decode, read_obs
+from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.rinex.obs_fields import decode_fields
 from navtrack.timescale import calendar_gps_seconds, gps_seconds
 
 # --------------------------------------------------------------------------- shared files
@@ -599,7 +600,7 @@ def test_nonstandard_field_layouts(tmp_path: Path) -> None:
 def test_decode_equals_python_float(texts: list[str], ind: str) -> None:
     """The vectorised decoder agrees with ``float(text)`` on every field (property)."""
     fields = np.frombuffer("".join(t + ind + ind for t in texts).encode(), dtype=np.uint8)
-    value, lli, _ssi, _blank, bad = _decode(fields.reshape(-1, 16))
+    value, lli, _ssi, _blank, bad = decode_fields(fields.reshape(-1, 16))
     want = [float(t) if t.strip() else np.nan for t in texts]
     np.testing.assert_array_equal(value, want)
     assert not bad.any()
@@ -626,7 +627,7 @@ def test_decode_accepts_exactly_the_numbers(texts: list[str]) -> None:
     """Arbitrary 14-character texts: a number is read as ``float(text)``, blanks as NaN, and
     anything else is flagged bad; the fast path never accepts a text Python rejects."""
     fields = np.frombuffer("".join(t + "  " for t in texts).encode(), dtype=np.uint8)
-    value, _, _, blank, bad = _decode(fields.reshape(-1, 16))
+    value, _, _, blank, bad = decode_fields(fields.reshape(-1, 16))
     for k, text in enumerate(texts):
         if not text.strip():
             assert blank[k]
