@@ -11,6 +11,7 @@ from __future__ import annotations
 import gzip
 import json
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +21,7 @@ from hypothesis import strategies as st
 
 from navtrack.data import sample_path
 from navtrack.errors import FileFormatError
+from navtrack.gnss.observations import Observations
 from navtrack.gnss.rinex.obs import read_obs
 from navtrack.gnss.rinex.obs_fields import decode_fields
 from navtrack.timescale import calendar_gps_seconds, gps_seconds
@@ -105,7 +107,7 @@ SHARED = {
 }
 
 
-def _tracked(obs) -> np.ndarray:
+def _tracked(obs: Observations) -> np.ndarray:
     """Satellites with at least one value, per epoch."""
     return np.isfinite(obs.values).any(axis=2).sum(axis=1)
 
@@ -280,7 +282,7 @@ def test_wrong_time_of_last_obs_is_reported(tmp_path: Path) -> None:
 # --------------------------------------------------------------------- compressed input
 
 
-def _same(a, b) -> None:
+def _same(a: Observations, b: Observations) -> None:
     assert a.sats == b.sats
     assert a.codes == b.codes
     np.testing.assert_array_equal(a.t_gps_s, b.t_gps_s)
@@ -331,7 +333,7 @@ def _field(v: float | None, lli: str = " ", ssi: str = " ") -> str:
     return (" " * 14 if v is None else f"{v:14.3f}") + lli + ssi
 
 
-def _v2_header(codes: list[str], system: str = "G", extra: list[str] = ()) -> list[str]:
+def _v2_header(codes: list[str], system: str = "G", extra: Sequence[str] = ()) -> list[str]:
     rows = [
         _h(f"{'2.11':>9}{'':11}{'OBSERVATION DATA':<20}{system:<20}", "RINEX VERSION / TYPE"),
         _h("CRAFTED", "MARKER NAME"),
@@ -439,7 +441,7 @@ def test_rinex2_time_systems(tmp_path: Path, system: str, time_field: str, shift
 
 
 def _v3_header(
-    types: dict[str, list[str]], time_system: str = "GPS", extra: list[str] = ()
+    types: dict[str, list[str]], time_system: str = "GPS", extra: Sequence[str] = ()
 ) -> list[str]:
     rows = [_h(f"{'3.05':>9}{'':11}{'OBSERVATION DATA':<20}{'M':<20}", "RINEX VERSION / TYPE")]
     for sys, codes in types.items():
