@@ -68,7 +68,7 @@ import numpy as np
 from navtrack._typing import StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import Observations, ObsHeader, SkippedLine
-from navtrack.gnss.rinex.nav import NavData, _toe_gps_s
+from navtrack.gnss.rinex.nav import NavData, toe_gps_s
 from navtrack.timescale import (
     BDS_WEEK_OFFSET,
     BDT_MINUS_GPST_S,
@@ -683,7 +683,7 @@ def _table(letter: str, recs: list[dict[str, Any]]) -> dict[str, np.ndarray]:
         dtype = np.int64 if name in _INT_COLUMNS else float
         cols[name] = np.array([r[name] for r in recs], dtype=dtype)
     if letter != "R":
-        cols["toe_gps_s"] = _toe_gps_s(
+        cols["toe_gps_s"] = toe_gps_s(
             letter, cols["week"].astype(float), cols["toe_sow"], cols["toc_gps_s"]
         )
     order = np.lexsort((cols["line"], cols["toc_gps_s"], sats))

@@ -32,7 +32,7 @@ import numpy as np
 from navtrack import __version__
 from navtrack._typing import StrPath
 from navtrack.gnss.observations import Observations
-from navtrack.gnss.rinex.nav import _FIELDS, _KM, NavData
+from navtrack.gnss.rinex.nav import KM_FIELDS, RECORD_FIELDS, NavData
 from navtrack.timescale import BDT_MINUS_GPST_S, gps_to_utc, to_datetime64
 
 __all__ = ["write_nav", "write_obs"]
@@ -198,12 +198,13 @@ def write_nav(nav: NavData, path: StrPath, *, comments: Iterable[str] = ()) -> N
         dated = table["toc_gps_s"] + BDT_MINUS_GPST_S if s == "C" else table["toc_gps_s"]
         if s == "R":
             dated = gps_to_utc(table["toc_gps_s"])
-        fields = _FIELDS[s][:15] if s == "R" else _FIELDS[s]  # RINEX 3.04: 4 GLONASS lines
+        # RINEX 3.04: 4 GLONASS lines
+        fields = RECORD_FIELDS[s][:15] if s == "R" else RECORD_FIELDS[s]
         for r in range(len(table["sat"])):
             toc = float(table["toc_gps_s"][r])
             y, mo, d, hh, mi, ss = _calendar(float(dated[r]))
             values = [
-                np.nan if f is None else float(table[f][r]) / (1e3 if f in _KM else 1.0)
+                np.nan if f is None else float(table[f][r]) / (1e3 if f in KM_FIELDS else 1.0)
                 for f in fields
             ]
             head = f"{table['sat'][r]} {y:4d} {mo:02d} {d:02d} {hh:02d} {mi:02d} {int(ss):02d}"
