@@ -16,6 +16,7 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, Int8Array
+from navtrack.timescale import GPS_EPOCH, to_datetime64
 
 SYSTEMS = "GRECJSI"
 """RINEX system letters: GPS, GLONASS, Galileo, BeiDou, QZSS, SBAS, NavIC/IRNSS."""
@@ -182,8 +183,6 @@ class Observations:
     @property
     def time(self) -> np.ndarray:
         """Epoch times as GPST calendar ``datetime64[ns]``."""
-        from navtrack.timescale import to_datetime64
-
         return to_datetime64(self.t_gps_s)
 
     @property
@@ -264,7 +263,5 @@ class Observations:
 
 def _iso(t_gps_s: float) -> str:
     """ISO 8601 GPST calendar string of GPS seconds, rounded to the millisecond."""
-    from navtrack.timescale import GPS_EPOCH
-
     ms = np.timedelta64(round(float(t_gps_s) * 1000.0), "ms")
     return str(np.datetime_as_string(GPS_EPOCH.astype("datetime64[ms]") + ms, unit="ms"))

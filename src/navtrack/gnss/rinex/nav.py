@@ -248,7 +248,7 @@ class NavData:
     @property
     def ephemerides(self) -> Mapping[str, pd.DataFrame]:
         """:attr:`tables` as one pandas DataFrame per system letter (built on each access)."""
-        import pandas as pd
+        import pandas as pd  # only here: reading and positioning need no pandas
 
         return MappingProxyType(
             {letter: pd.DataFrame(dict(columns)) for letter, columns in self.tables.items()}
