@@ -30,7 +30,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from os import fspath
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -348,8 +348,7 @@ def read_nav(path: StrPath, *, systems: str | None = None, lenient: bool = False
     )
 
 
-@dataclass(frozen=True, slots=True)
-class _Layout:
+class _Layout(NamedTuple):
     """How the records of a file are read: RINEX 2 or later, the system of a single-system
     file, the systems asked for (None: all), lenient reading."""
 
@@ -445,13 +444,17 @@ def _rinex4_records(
     return kept, origin, not_read
 
 
-@dataclass(slots=True)
 class _Header:
-    end: int = 0  # index of the first line after END OF HEADER
-    iono: dict[str, FloatArray] = field(default_factory=dict)
-    time_corrections: dict[str, tuple[Any, ...]] = field(default_factory=dict)
-    leap_seconds: int | None = None
-    comments: list[str] = field(default_factory=list)
+    """What the header records hold (a plain class, as :class:`_Group`)."""
+
+    __slots__ = ("comments", "end", "iono", "leap_seconds", "time_corrections")
+
+    def __init__(self) -> None:
+        self.end = 0  # index of the first line after END OF HEADER
+        self.iono: dict[str, FloatArray] = {}
+        self.time_corrections: dict[str, tuple[Any, ...]] = {}
+        self.leap_seconds: int | None = None
+        self.comments: list[str] = []
 
 
 def _parse_header(path: StrPath, lines: list[str]) -> _Header:
@@ -517,15 +520,21 @@ def _int(v: float) -> int | None:
     return None if math.isnan(v) else round(v)
 
 
-@dataclass(slots=True)
 class _Group:
-    """Records of one system: header data of each record and the text of its fields."""
+    """Records of one system: header data of each record and the text of its fields.
 
-    sats: list[str] = field(default_factory=list)
-    lines: list[int] = field(default_factory=list)  # 1-based line of the first line
-    n_lines: list[int] = field(default_factory=list)
-    t_cal: list[float] = field(default_factory=list)  # epoch as calendar seconds, as written
-    starts: list[int] = field(default_factory=list)  # 0-based index of the first line
+    A plain class, not a dataclass: a dataclass compiles its methods when the module is
+    imported, a cost every ``navtrack pos`` start would pay.
+    """
+
+    __slots__ = ("lines", "n_lines", "sats", "starts", "t_cal")
+
+    def __init__(self) -> None:
+        self.sats: list[str] = []
+        self.lines: list[int] = []  # 1-based line of the first line
+        self.n_lines: list[int] = []
+        self.t_cal: list[float] = []  # epoch as calendar seconds, as written
+        self.starts: list[int] = []  # 0-based index of the first line
 
 
 def _parse_records(

@@ -8,6 +8,9 @@ of the systems and codes asked for. This module checks the structure of the data
 (satellite ids, types declared, surplus fields, duplicates) and places the values in the
 epoch x satellite x code arrays.
 
+Its intermediate records are named tuples and plain classes: a dataclass compiles its methods
+when its module is imported, a cost every ``navtrack pos`` start would pay.
+
 References
 ----------
 RINEX 2.11 (Gurtner & Estey, IGS/RTCM-SC104, 2007), sections 5, 7 and tables A1-A3;
@@ -18,8 +21,9 @@ RINEX 4.00 (IGS/RTCM-SC104, 2021), observation tables (same data section as 3.05
 from __future__ import annotations
 
 from collections.abc import Collection
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from os import fspath
+from typing import NamedTuple
 
 import numpy as np
 
@@ -129,8 +133,7 @@ def _last_line_cut(
 # ----------------------------------------------------------------------------- assembling
 
 
-@dataclass(frozen=True, slots=True)
-class _Lines:
+class _Lines(NamedTuple):
     """Where each data line belongs: its epoch, observation types (segment), file line, first
     field's position in its system's type list (``offset``; RINEX 2 records span lines of 5
     fields) and line within its satellite record (``part``)."""
@@ -179,8 +182,7 @@ class _Problems:
         return int(self.report_at.get(m, layout.line_no[m]))
 
 
-@dataclass(frozen=True, slots=True)
-class _Satellites:
+class _Satellites(NamedTuple):
     """The satellites of the data lines: ``names`` of the distinct ids written (None where
     malformed), ``inverse`` (id of each RINEX 3 line, of each RINEX 2 record), ``sats`` (sorted
     valid names), column of each line in ``sats`` (-1: malformed) and its system's index."""
@@ -261,8 +263,7 @@ def _code_table(
     return table, scale, declared
 
 
-@dataclass(frozen=True, slots=True)
-class _Request:
+class _Request(NamedTuple):
     """What the caller asked for: output codes (``kept`` maps the file's code index to the
     output's, -1 dropped, with a trailing -1 for "no code") and satellites (``out_col`` maps
     the column in ``sats`` to the output's likewise)."""
@@ -333,8 +334,7 @@ def _duplicates(layout: _Lines, sats: _Satellites) -> IntArray:
     return np.flatnonzero(later)
 
 
-@dataclass(frozen=True, slots=True)
-class _Fields:
+class _Fields(NamedTuple):
     """The decoded fields of the decoded lines (``decode``), shape (lines, fields), with the
     code of each field and the row of its line's (segment, system) in the code table."""
 

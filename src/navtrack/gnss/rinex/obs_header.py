@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import itertools
 import re
-from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -41,8 +41,7 @@ V2_EVENT_NO_TIME = re.compile(rb" {26}  [2-5][ \d]{2}\d")
 """A RINEX 2 event record (flags 2-5) whose time is blank."""
 
 
-@dataclass(slots=True)
-class ObsTypes:
+class ObsTypes(NamedTuple):
     """Observation types in force for a stretch of epochs (header records may change them).
 
     Attributes
@@ -55,25 +54,34 @@ class ObsTypes:
     """
 
     obs_types: dict[str, tuple[str, ...]]
-    scale: dict[tuple[str, str], float] = field(default_factory=dict)
+    scale: dict[tuple[str, str], float]
 
 
-@dataclass(slots=True)
 class _HeaderParse:
-    """What the header records read so far hold."""
+    """What the header records read so far hold.
 
-    v3: bool
-    info: dict[str, object] = field(default_factory=dict)
-    comments: list[str] = field(default_factory=list)
-    types: dict[str, list[str]] = field(default_factory=dict)
-    declared: dict[str, tuple[int, int]] = field(default_factory=dict)  # system: (count, line)
-    scale: dict[tuple[str, str], float] = field(default_factory=dict)
-    glonass_fcn: dict[str, int] = field(default_factory=dict)
-    time_system: str = ""
-    first_obs: tuple[float, int] | None = None
-    last_obs: tuple[float, int] | None = None
-    current: str = ""  # system of the last observation types record
-    scale_current: tuple[str, float] | None = None
+    A plain class, not a dataclass: a dataclass compiles its methods when the module is
+    imported, a cost every ``navtrack pos`` start would pay.
+    """
+
+    __slots__ = (
+        "comments", "current", "declared", "first_obs", "glonass_fcn", "info", "last_obs",
+        "scale", "scale_current", "time_system", "types", "v3",
+    )  # fmt: skip
+
+    def __init__(self, v3: bool) -> None:
+        self.v3 = v3
+        self.info: dict[str, object] = {}
+        self.comments: list[str] = []
+        self.types: dict[str, list[str]] = {}
+        self.declared: dict[str, tuple[int, int]] = {}  # system: (count, line)
+        self.scale: dict[tuple[str, str], float] = {}
+        self.glonass_fcn: dict[str, int] = {}
+        self.time_system = ""
+        self.first_obs: tuple[float, int] | None = None
+        self.last_obs: tuple[float, int] | None = None
+        self.current = ""  # system of the last observation types record
+        self.scale_current: tuple[str, float] | None = None
 
     def record(self, path: StrPath, label: str, text: str, i: int) -> None:
         """Take header record ``label`` of line ``i`` (0-based)."""

@@ -8,8 +8,6 @@ events, and those that redefine the observation types start new :class:`ObsTypes
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 from navtrack._typing import StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import Event, SkippedLine
@@ -28,7 +26,6 @@ _DATA_FLAGS = (0, 1, 6)  # epoch flags whose records hold observations (6: cycle
 _INCOMPLETE = "incomplete record at the end of the file"
 
 
-@dataclass(slots=True)
 class EpochScan:
     """What the epoch walk found: epochs, where their data lines are, events, skipped lines.
 
@@ -36,22 +33,30 @@ class EpochScan:
     ``flag``, ``clock_s``, ``segment`` (index of its :class:`ObsTypes`), ``n_lines`` (data
     lines), ``line_no`` (1-based line of its first data line) and ``epoch_line`` (of its
     record). ``data`` holds all data lines in file order; RINEX 2 also gives the satellite of
-    every satellite record (``rec_sat``) and its line count (``rec_lines``).
+    every satellite record (``rec_sat``) and its line count (``rec_lines``). A plain class, not
+    a dataclass: a dataclass compiles its methods when the module is imported, a cost every
+    ``navtrack pos`` start would pay.
     """
 
-    t_cal_s: list[float] = field(default_factory=list)
-    flag: list[int] = field(default_factory=list)
-    clock_s: list[float] = field(default_factory=list)
-    segment: list[int] = field(default_factory=list)
-    n_lines: list[int] = field(default_factory=list)
-    data: list[bytes] = field(default_factory=list)
-    line_no: list[int] = field(default_factory=list)
-    epoch_line: list[int] = field(default_factory=list)
-    rec_sat: list[bytes] = field(default_factory=list)
-    rec_lines: list[int] = field(default_factory=list)
-    events: list[Event] = field(default_factory=list)
-    event_t_cal_s: list[float] = field(default_factory=list)
-    skipped: list[SkippedLine] = field(default_factory=list)
+    __slots__ = (
+        "clock_s", "data", "epoch_line", "event_t_cal_s", "events", "flag", "line_no",
+        "n_lines", "rec_lines", "rec_sat", "segment", "skipped", "t_cal_s",
+    )  # fmt: skip
+
+    def __init__(self) -> None:
+        self.t_cal_s: list[float] = []
+        self.flag: list[int] = []
+        self.clock_s: list[float] = []
+        self.segment: list[int] = []
+        self.n_lines: list[int] = []
+        self.data: list[bytes] = []
+        self.line_no: list[int] = []
+        self.epoch_line: list[int] = []
+        self.rec_sat: list[bytes] = []
+        self.rec_lines: list[int] = []
+        self.events: list[Event] = []
+        self.event_t_cal_s: list[float] = []
+        self.skipped: list[SkippedLine] = []
 
     def add_epoch(
         self, record: tuple[float, int, float], segment: int, j: int, first: int, data: list[bytes]
@@ -276,20 +281,35 @@ def _v2_clock(path: StrPath, rec: bytes, i: int, scan: EpochScan, lenient: bool)
         return _NAN
 
 
-@dataclass(slots=True)
 class _V2Walk:
-    """The state of a RINEX 2 walk: file, options, observation types in force."""
+    """The state of a RINEX 2 walk: file, options, observation types in force (a plain class,
+    as :class:`EpochScan`)."""
 
-    path: StrPath
-    lines: list[bytes]
-    end: int
-    limit: int  # the true last line: the last record may end in blank lines
-    segments: list[ObsTypes]
-    scan: EpochScan
-    lenient: bool
-    seg: int = 0
-    per_sat: int = 1  # data lines per satellite
-    previous: tuple[int, int, int, int] = (-1, 0, 0, 0)  # record line, count, first/stop line
+    __slots__ = (
+        "end", "lenient", "limit", "lines", "path", "per_sat", "previous", "scan", "seg",
+        "segments",
+    )  # fmt: skip
+
+    def __init__(
+        self,
+        path: StrPath,
+        lines: list[bytes],
+        end: int,
+        segments: list[ObsTypes],
+        scan: EpochScan,
+        lenient: bool,
+    ) -> None:
+        self.path = path
+        self.lines = lines
+        self.end = end
+        self.limit = len(lines) - (lines[-1] == b"")  # the last record may end in blank lines
+        self.segments = segments
+        self.scan = scan
+        self.lenient = lenient
+        self.seg = 0
+        self.per_sat = 1  # data lines per satellite
+        self.previous = (-1, 0, 0, 0)  # last data epoch: record line, count, first/stop line
+        self.use(len(segments) - 1)
 
     def use(self, seg: int) -> None:
         self.seg = seg
@@ -357,8 +377,7 @@ def scan_v2(
 ) -> None:
     """Walk the RINEX 2 epoch records of ``lines[body:end]`` (``end`` excludes trailing blank
     lines; the last record may still end in blank lines, all its observations missing)."""
-    walk = _V2Walk(path, lines, end, len(lines) - (lines[-1] == b""), segments, scan, lenient)
-    walk.use(len(segments) - 1)
+    walk = _V2Walk(path, lines, end, segments, scan, lenient)
     days: dict[bytes, float] = {}
     i = body
     while i < end:
