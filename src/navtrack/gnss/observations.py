@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -22,9 +22,11 @@ SYSTEMS = "GRECJSI"
 """RINEX system letters: GPS, GLONASS, Galileo, BeiDou, QZSS, SBAS, NavIC/IRNSS."""
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class Event:
+class Event(NamedTuple):
     """A special event record of a RINEX observation file (epoch flag 2-5) or a skipped line.
+
+    A named tuple, as :class:`SkippedLine`: every reader imports these, and a dataclass
+    compiles its methods at import, a cost every ``navtrack pos`` start would pay.
 
     Attributes
     ----------
@@ -45,8 +47,7 @@ class Event:
     records: tuple[str, ...]
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class SkippedLine:
+class SkippedLine(NamedTuple):
     """A damaged data line skipped in lenient reading: where and why."""
 
     line: int
