@@ -31,6 +31,13 @@ Usage::
 
 ``--accuracy`` also prints, per run, the epochs solved and 3D RMS against the reference next to
 RTKLIB's, and the median / max per-epoch distance to RTKLIB's own solution (in-process).
+
+``--instructions`` (needs ``valgrind``) counts the instructions each process executes
+(callgrind's ``Ir``): ``python -c "import numpy"``, ``navtrack pos`` on the first epoch of the
+SEPT file (GPS) and ``navtrack --help``. Counts do not depend on what else the machine runs, so
+they measure the fixed cost where timings cannot (a machine shared by many jobs): the fixed
+cost is printed as a fraction of numpy's import and, scaled by numpy's median wall time of this
+run, in ms.
 """
 
 from __future__ import annotations
@@ -272,6 +279,37 @@ def bench_import_floor(env: dict[str, str], repeat: int) -> None:
     print(f'python -c "import navtrack.gnss.spp" {t_spp.wall_s:6.3f}  {t_spp.cpu_s:6.3f}')
 
 
+def _instructions(cmd: Sequence[str], env: dict[str, str]) -> int:
+    """Instructions executed by one whole process (callgrind ``Ir``)."""
+    proc = subprocess.run(
+        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", *cmd],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return int(proc.stderr.rsplit("Collected :", 1)[1].split()[0])
+
+
+def bench_instructions(env: dict[str, str], repeat: int, tmp: Path) -> None:
+    """Fixed cost of ``navtrack pos`` from instruction counts (module notes)."""
+    obs = tmp / "cut_1.21O"
+    cut_rinex3(SEPT_OBS, 1, obs)
+    numpy = [sys.executable, "-c", "import numpy"]
+    pos = CASES[1].navtrack(tmp / "one.csv", obs)
+    helps = [sys.executable, "-m", "navtrack", "--help"]
+    _time_once(numpy, env)
+    t_np = _median([_time_once(numpy, env) for _ in range(repeat)])
+    n_np = _instructions(numpy, env)
+    print("\ninstructions (callgrind Ir)       Ir           over numpy  ~ms over numpy")
+    print(f'python -c "import numpy"       {n_np:13,d}')
+    for label, cmd in (("navtrack pos, 1 epoch", pos), ("navtrack --help", helps)):
+        n = _instructions(cmd, env)
+        extra = (n - n_np) / n_np
+        print(f"{label:<30} {n:13,d}  {extra:+9.1%}  {extra * t_np.wall_s * 1e3:+8.1f}")
+    print(f"(ms: the fraction times numpy's median wall time of this run, {t_np.wall_s:.3f} s)")
+
+
 def accuracy(names: list[str]) -> None:
     import numpy as np
 
@@ -329,6 +367,9 @@ def main() -> None:
     ap.add_argument(
         "--day", nargs=2, type=Path, metavar=("OBS", "NAV"), help="a 24 h RINEX 3 station"
     )
+    ap.add_argument(
+        "--instructions", action="store_true", help="also the fixed cost in instructions"
+    )
     args = ap.parse_args()
     if args.accuracy:
         accuracy(args.only or list(REFERENCE["runs"]))
@@ -368,6 +409,8 @@ def main() -> None:
         if args.cuts and CASES[0].available():
             bench_cuts(CASES[0], args.cuts, env, args.repeat, Path(tmp))
         bench_import_floor(env, args.repeat)
+        if args.instructions and shutil.which("valgrind") and SEPT_OBS.is_file():
+            bench_instructions(env, args.repeat, Path(tmp))
 
 
 if __name__ == "__main__":

@@ -8,8 +8,10 @@ convergence, ...) are never exceptions: they are ``status`` values in results.
 from __future__ import annotations
 
 from os import fspath
+from typing import TYPE_CHECKING
 
-from navtrack._typing import StrPath
+if TYPE_CHECKING:
+    from navtrack._typing import StrPath
 
 
 class NavtrackError(Exception):

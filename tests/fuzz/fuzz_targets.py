@@ -218,7 +218,7 @@ TARGETS: dict[str, Target] = {
         Target("rinex3_nav_mixed", _sample("SEPT078M.21P"), _read_nav, _RINEX),
         Target(
             "rinex3_nav_lenient",
-            _test_file("BRDM00DLR_S_20230730000_01D_MN_cut.rnx"),
+            _test_file("BRDC00IGS_R_20230010000_01D_MN_cut.rnx"),
             _read_nav_lenient,
             _RINEX,
         ),

@@ -31,6 +31,7 @@ from navtrack.data import sample_path
 
 DEEP = settings.get_current_profile_name() == "deep"
 CI_EXAMPLES = 14
+_DEFAULTS = settings.get_profile("default")
 SRC = Path(__file__).resolve().parents[2] / "src"
 
 
@@ -52,10 +53,10 @@ def test_reader_survives_mutants(target: str, runner: Runner, workdir: Path) -> 
     seen: list[tuple[str, str]] = []
 
     @settings(
-        max_examples=settings.default.max_examples if DEEP else CI_EXAMPLES,
+        max_examples=_DEFAULTS.max_examples if DEEP else CI_EXAMPLES,
         derandomize=not DEEP,
         deadline=None,
-        database=None if not DEEP else settings.default.database,
+        database=None if not DEEP else _DEFAULTS.database,
         suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
     )
     @given(operator=st.sampled_from(sorted(OPERATORS)), seed=st.integers(0, 2**32 - 1))

@@ -96,7 +96,7 @@ def test_relativistic_term_formula() -> None:
 def _brdm():  # type: ignore[no-untyped-def]
     from navtrack.gnss.rinex.nav import read_nav
 
-    return read_nav(TEST_DATA / "BRDM00DLR_S_20230730000_01D_MN_cut.rnx")
+    return read_nav(TEST_DATA / "BRDC00IGS_R_20230010000_01D_MN_cut.rnx")
 
 
 def test_beidou_geo_is_geostationary() -> None:

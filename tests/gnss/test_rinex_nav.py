@@ -31,8 +31,8 @@ SHARED_NAV = (
     "google_gnsslogger/hour2350.16n",
 )
 LOCAL_NAV = (
-    "BRDM00DLR_S_20230730000_01D_MN_cut.rnx",
-    "zim21380.20g",
+    "BRDC00IGS_R_20230010000_01D_MN_cut.rnx",
+    "ubloxrs_glo_convbin.19g",
     "spare_filled_nav3.rnx",
     "brdc0320_cut.16l",
     "ceda2100_cut.18e",
@@ -287,49 +287,66 @@ def test_old_galileo_records() -> None:
 
 
 def test_all_systems_rinex3() -> None:
-    nav = read_nav(TEST_DATA / "BRDM00DLR_S_20230730000_01D_MN_cut.rnx")
+    # IGS merged broadcast file of 2023-01-01 (RINEX 3.05); values as printed (cut line numbers)
+    nav = read_nav(TEST_DATA / "BRDC00IGS_R_20230010000_01D_MN_cut.rnx")
     assert nav.systems == "GRECJSI"
-    # BeiDou C01 (GEO), epoch 2023-03-14 00:00:00 BDT = 00:00:14 GPST; BDT week 897 = GPS 2253
+    # BeiDou C01 (GEO), lines 97-104: 2023-01-01 00:00:00 BDT = 00:00:14 GPST; BDT week 887
+    # = GPS 2243; toe 0 s of the BDT week
     c01 = nav.ephemerides["C"].iloc[0]
     assert c01["sat"] == "C01"
-    assert c01["toc_gps_s"] == calendar_gps_seconds(2023, 3, 14, 0, 0, 14)
-    assert c01["week"] == 897
-    assert c01["toe_gps_s"] == (897 + 1356) * 604800 + 172800 + 14
-    assert (c01["tgd1"], c01["tgd2"]) == (-5.4e-9, -9.7e-9)
-    # GLONASS R01: epoch 00:15:00 UTC -> GPST + 18 s (IERS); km -> m; -TauN as written
+    assert c01["toc_gps_s"] == calendar_gps_seconds(2023, 1, 1, 0, 0, 14)
+    assert c01["week"] == 887
+    assert c01["toe_gps_s"] == (887 + 1356) * 604800 + 0.0 + 14
+    assert (c01["tgd1"], c01["tgd2"]) == (-4.699999944790e-09, -1.0e-08)
+    # GLONASS R01, lines 161-165: 2022-12-31 23:45:00 UTC -> GPST + 18 s (IERS); km -> m;
+    # -TauN as written; the RINEX 3.05 fifth line: status blank, delta tau 0.999999999999e9
+    # written without its leading zero, URAI 15
     r01 = nav.ephemerides["R"].iloc[0]
-    assert r01["toc_gps_s"] == calendar_gps_seconds(2023, 3, 14, 0, 15, 18)
-    assert r01["taun"] == 2.470612525940e-05
-    assert r01["x_m"] == pytest.approx(5.763751464844e03 * 1000, rel=1e-15)
-    assert r01["vy_mps"] == pytest.approx(2.693783760071e00 * 1000, rel=1e-15)
-    assert r01["ay_mps2"] == pytest.approx(-9.313225746155e-10 * 1000, rel=1e-15)
+    assert r01["toc_gps_s"] == calendar_gps_seconds(2022, 12, 31, 23, 45, 18)
+    assert r01["taun"] == 2.048257738352e-05
+    assert r01["x_m"] == pytest.approx(1.403724853516e04 * 1000, rel=1e-15)
+    assert r01["vy_mps"] == pytest.approx(7.833652496338e-01 * 1000, rel=1e-15)
+    assert r01["az_mps2"] == pytest.approx(2.793967723846e-09 * 1000, rel=1e-15)
     assert r01["freq_num"] == 1
+    assert (r01["status_flags"], r01["delta_taun_s"], r01["urai"]) == (-1, 0.999999999999e09, 15)
     assert list(nav.ephemerides["R"]["freq_num"]) == [1, -4]
-    # SBAS S22: GPS time, IODN in the last field
+    # SBAS S22/S23, lines 171-178: GPS time, IODN in the last field
     s = nav.ephemerides["S"]
     assert list(s["sat"]) == ["S22", "S23"]
-    assert list(s["iodn"]) == [3, 9]
+    assert s["toc_gps_s"].iloc[0] == calendar_gps_seconds(2023, 1, 1, 0, 1, 4)
+    assert list(s["iodn"]) == [254, 160]
     assert list(s["ura_m"]) == [32767.0, 32767.0]
     assert s["x_m"].iloc[0] == pytest.approx(-3.389392800000e04 * 1000, rel=1e-15)
-    # NavIC I02: blank spare fields between written ones
+    # NavIC I02, lines 137-144: blank spare fields between written ones
     i02 = nav.ephemerides["I"].iloc[0]
-    assert i02["week"] == 2253
+    assert i02["week"] == 2242
     assert i02["sva_m"] == 2.0
-    assert i02["tgd"] == -1.862645149231e-09
-    assert i02["toc_gps_s"] == calendar_gps_seconds(2023, 3, 14, 0, 5, 36)
-    assert nav.time_corrections["BDUT"][:4] == (-9.3132257462e-10, 0.0, 14, 2253)
-    assert set(nav.iono) == {"GPSA", "GPSB", "GAL", "BDSA", "BDSB", "QZSA", "QZSB", "IRNA", "IRNB"}
+    assert i02["tgd"] == -1.862645149230e-09
+    assert i02["toc_gps_s"] == calendar_gps_seconds(2022, 12, 31, 23, 50, 24)
+    # GPS G01, lines 121-136: the second record's last line holds all four fields
+    g = nav.ephemerides["G"]
+    assert list(g["iodc"]) == [79, 81]
+    assert list(g["fit_h"]) == [4.0, 4.0]
+    assert g["tot_sow"].iloc[1] == 6.0
+    assert nav.time_corrections["BDUT"][:4] == (-4.6566128731e-09, 9.769962617e-15, 604745, 886)
+    assert set(nav.iono) == {"GPSA", "GPSB", "GAL", "BDSA", "BDSB", "IRNA", "IRNB"}
+    assert nav.leap_seconds == 18
 
 
 def test_rinex2_glonass_two_digit_year() -> None:
-    nav = read_nav(TEST_DATA / "zim21380.20g")
+    # RINEX 2.11 GLONASS file written by RTKLIB's convbin, values without a leading zero
+    nav = read_nav(TEST_DATA / "ubloxrs_glo_convbin.19g")
     r = nav.ephemerides["R"]
-    assert list(r["sat"]) == ["R01", "R01", "R02", "R02"]
-    # " 1 20  5 16 23 45  0.0": 2020-05-16 23:45 UTC, 18 leap seconds
-    assert r["toc_gps_s"].iloc[0] == calendar_gps_seconds(2020, 5, 16, 23, 45, 18)
-    assert r["tk_s"].iloc[0] == 86370.0
-    assert r["z_m"].iloc[0] == pytest.approx(0.217709248047e05 * 1000, rel=1e-15)
-    assert nav.leap_seconds == 18
+    assert list(r["sat"]) == ["R02", "R03", "R12"]
+    # line 6, "12 19 11 26 21 45 00.0": 2019-11-26 21:45 UTC; no LEAP SECONDS record, so the
+    # IERS count of that date (18 s) gives GPST
+    assert nav.leap_seconds is None
+    assert r["toc_gps_s"].iloc[2] == calendar_gps_seconds(2019, 11, 26, 21, 45, 18)
+    assert list(r["tk_s"]) == [77910.0] * 3
+    assert r["taun"].iloc[2] == 0.827098265290e-04
+    assert r["z_m"].iloc[2] == pytest.approx(0.168744916992e05 * 1000, rel=1e-15)
+    assert r["vy_mps"].iloc[2] == pytest.approx(0.209329700470e01 * 1000, rel=1e-15)
+    assert list(r["freq_num"]) == [-4, 5, -1]
 
 
 def test_mixed_prn_formats_and_spare_fields() -> None:

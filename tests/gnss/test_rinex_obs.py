@@ -11,6 +11,7 @@ from __future__ import annotations
 import gzip
 import json
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +21,9 @@ from hypothesis import strategies as st
 
 from navtrack.data import sample_path
 from navtrack.errors import FileFormatError
-from navtrack.gnss.rinex.obs import _decode, read_obs
+from navtrack.gnss.observations import Observations
+from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.rinex.obs_fields import decode_fields
 from navtrack.timescale import calendar_gps_seconds, gps_seconds
 
 # --------------------------------------------------------------------------- shared files
@@ -104,7 +107,7 @@ SHARED = {
 }
 
 
-def _tracked(obs) -> np.ndarray:
+def _tracked(obs: Observations) -> np.ndarray:
     """Satellites with at least one value, per epoch."""
     return np.isfinite(obs.values).any(axis=2).sum(axis=1)
 
@@ -279,7 +282,7 @@ def test_wrong_time_of_last_obs_is_reported(tmp_path: Path) -> None:
 # --------------------------------------------------------------------- compressed input
 
 
-def _same(a, b) -> None:
+def _same(a: Observations, b: Observations) -> None:
     assert a.sats == b.sats
     assert a.codes == b.codes
     np.testing.assert_array_equal(a.t_gps_s, b.t_gps_s)
@@ -330,7 +333,7 @@ def _field(v: float | None, lli: str = " ", ssi: str = " ") -> str:
     return (" " * 14 if v is None else f"{v:14.3f}") + lli + ssi
 
 
-def _v2_header(codes: list[str], system: str = "G", extra: list[str] = ()) -> list[str]:
+def _v2_header(codes: list[str], system: str = "G", extra: Sequence[str] = ()) -> list[str]:
     rows = [
         _h(f"{'2.11':>9}{'':11}{'OBSERVATION DATA':<20}{system:<20}", "RINEX VERSION / TYPE"),
         _h("CRAFTED", "MARKER NAME"),
@@ -438,7 +441,7 @@ def test_rinex2_time_systems(tmp_path: Path, system: str, time_field: str, shift
 
 
 def _v3_header(
-    types: dict[str, list[str]], time_system: str = "GPS", extra: list[str] = ()
+    types: dict[str, list[str]], time_system: str = "GPS", extra: Sequence[str] = ()
 ) -> list[str]:
     rows = [_h(f"{'3.05':>9}{'':11}{'OBSERVATION DATA':<20}{'M':<20}", "RINEX VERSION / TYPE")]
     for sys, codes in types.items():
@@ -599,7 +602,7 @@ def test_nonstandard_field_layouts(tmp_path: Path) -> None:
 def test_decode_equals_python_float(texts: list[str], ind: str) -> None:
     """The vectorised decoder agrees with ``float(text)`` on every field (property)."""
     fields = np.frombuffer("".join(t + ind + ind for t in texts).encode(), dtype=np.uint8)
-    value, lli, _ssi, _blank, bad = _decode(fields.reshape(-1, 16))
+    value, lli, _ssi, _blank, bad = decode_fields(fields.reshape(-1, 16))
     want = [float(t) if t.strip() else np.nan for t in texts]
     np.testing.assert_array_equal(value, want)
     assert not bad.any()
@@ -626,7 +629,7 @@ def test_decode_accepts_exactly_the_numbers(texts: list[str]) -> None:
     """Arbitrary 14-character texts: a number is read as ``float(text)``, blanks as NaN, and
     anything else is flagged bad; the fast path never accepts a text Python rejects."""
     fields = np.frombuffer("".join(t + "  " for t in texts).encode(), dtype=np.uint8)
-    value, _, _, blank, bad = _decode(fields.reshape(-1, 16))
+    value, _, _, blank, bad = decode_fields(fields.reshape(-1, 16))
     for k, text in enumerate(texts):
         if not text.strip():
             assert blank[k]

@@ -410,7 +410,7 @@ def test_glonass_only_synthetic_recovery() -> None:
     from navtrack.gnss.rinex.nav import read_nav
 
     nav = read_nav(
-        Path(__file__).resolve().parents[1] / "data" / "BRDM00DLR_S_20230730000_01D_MN_cut.rnx"
+        Path(__file__).resolve().parents[1] / "data" / "BRDC00IGS_R_20230010000_01D_MN_cut.rnx"
     )
     src = eph.ephemeris_tables(nav)["R"]
     cols: dict[str, list[float]] = {k: [] for k in src.columns}
@@ -426,7 +426,7 @@ def test_glonass_only_synthetic_recovery() -> None:
             cols[x][-1], cols[y][-1] = c * xv - s * yv, s * xv + c * yv
         sats.append(f"R{k + 1:02d}")
     table = eph.EphemerisTable("R", np.array(sats), {k: np.asarray(v) for k, v in cols.items()})
-    rcv = geodetic_to_ecef([np.radians(50.0), np.radians(10.0), 200.0])
+    rcv = geodetic_to_ecef([np.radians(-50.0), np.radians(10.0), 200.0])  # under R01, R02
     t = table.get("toc_gps_s")[0] + np.arange(0.0, 300.0, 30.0)  # GDOP < 30 in this span
     clock = 3000.0
     pr = np.full((t.size, len(sats)), 2.2e7)

@@ -2,8 +2,9 @@
 
 argparse rather than a decorator framework: it ships with Python, costs nothing at start-up (the
 positioning command is timed as a whole process against RTKLIB), and keeps each command a plain
-function over the library. Every command module registers its sub-parser and imports its heavy
-dependencies only when run.
+function over the library. The command list of ``navtrack --help`` is :data:`COMMANDS` (module
+and one-line summary of each command): only the module of the command that runs is imported,
+and it registers its own sub-parser.
 
 One error path for every command (:func:`main`): a command reports trouble by raising, and
 :func:`main` prints one line ``navtrack CMD: error: FILE:LINE: what`` on stderr and returns the
@@ -34,22 +35,58 @@ import importlib
 import os
 import sys
 from collections.abc import Sequence
-from typing import Any, TextIO
+from typing import Any, NamedTuple, TextIO
 
 from navtrack import __version__
+from navtrack.errors import FileFormatError, NavtrackError
 
-# The module of each command, with ``register(subparsers)``, in the order ``--help`` lists them.
+
+class Command(NamedTuple):
+    """A command of ``navtrack``: the module whose ``register(subparsers)`` adds its sub-parser,
+    and the summary ``navtrack --help`` lists."""
+
+    module: str
+    summary: str
+
+
+# In the order ``--help`` lists them.
 COMMANDS = {
-    "pos": "navtrack.cli.pos",
-    "rinex": "navtrack.cli.rinex",
-    "convert": "navtrack.cli.convert",
-    "track": "navtrack.cli.track",
-    "smooth": "navtrack.cli.smooth",
-    "reproduce": "navtrack.cli.reproduce",
-    "rtk": "navtrack.cli.rtk",
-    "ppp": "navtrack.cli.ppp",
-    "agps": "navtrack.cli.agps",
-    "attitude": "navtrack.cli.attitude",
+    "pos": Command(
+        "navtrack.cli.pos",
+        "single point positioning of a RINEX observation file or an Android raw log",
+    ),
+    "rinex": Command("navtrack.cli.rinex", "inspect RINEX and SP3 files"),
+    "convert": Command(
+        "navtrack.cli.convert",
+        "convert a u-blox UBX raw log to RINEX 3.04 observation and navigation files",
+    ),
+    "track": Command(
+        "navtrack.cli.track",
+        "track real AIS / ADS-B / CSV detections and score against their ids",
+    ),
+    "smooth": Command(
+        "navtrack.cli.smooth",
+        "ARI filtering of time series: sigma_n, sigma_e, sigma_x, r(h), gross errors",
+    ),
+    "reproduce": Command(
+        "navtrack.cli.reproduce",
+        "reproduce a seed paper's experiment (tables, figures, results.json)",
+    ),
+    "rtk": Command(
+        "navtrack.cli.rtk", "carrier-phase relative positioning (RTK) of a rover against a base"
+    ),
+    "ppp": Command(
+        "navtrack.cli.ppp",
+        "static precise point positioning with SP3 orbits and clocks (and clock files)",
+    ),
+    "agps": Command(
+        "navtrack.cli.agps",
+        "two-satellite AGPS fix from two epochs (Marquardt / Gauss-Newton / MAP)",
+    ),
+    "attitude": Command(
+        "navtrack.cli.attitude",
+        "attitude reconstruction from gyro rates and camera fixes (paper 6)",
+    ),
 }
 
 EXIT_OK = 0
@@ -64,14 +101,16 @@ def _command_of(argv: Sequence[str]) -> str | None:
 
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
-    """The top-level parser. With ``argv`` naming a command only that command's module is
-    imported (start-up stays at the cost of what the command uses); otherwise (``--help``,
-    no or an unknown command) every command is registered."""
+    """The top-level parser. With ``argv`` naming a command, that command's module is imported
+    and registers its sub-parser (start-up stays at the cost of what the command uses);
+    otherwise (``--help``, no or an unknown command) every command is listed from
+    :data:`COMMANDS` without importing any."""
     parser = argparse.ArgumentParser(
         prog="navtrack",
         description="Positioning, navigation integrity and multi-target tracking on real data.",
         epilog="Exit codes: 0 solved, 1 ran but nothing could be solved, 2 bad input or "
         "options, 3 internal error (rerun with --debug for the traceback).",
+        formatter_class=_Formatter,
     )
     parser.add_argument("--version", action="version", version=f"navtrack {__version__}")
     parser.add_argument(
@@ -81,13 +120,50 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
         dest="command", metavar="COMMAND", parser_class=_CommandParser
     )
     command = _command_of(argv) if argv is not None else None
-    modules = [COMMANDS[command]] if command in COMMANDS else list(dict.fromkeys(COMMANDS.values()))
-    for name in modules:
-        importlib.import_module(name).register(subparsers)
+    if command in COMMANDS:
+        importlib.import_module(COMMANDS[command].module).register(subparsers)
+    else:
+        for name, entry in COMMANDS.items():
+            subparsers.add_parser(name, help=entry.summary, add_help=False)
     return parser
 
 
-class DefaultsHelpFormatter(argparse.HelpFormatter):
+class _Formatter(argparse.HelpFormatter):
+    """argparse's formatter, sized to the terminal without importing :mod:`shutil`.
+
+    argparse builds a formatter for every option it registers and asks
+    ``shutil.get_terminal_size`` for the width; importing :mod:`shutil` (with :mod:`lzma`,
+    :mod:`bz2`) costs more than registering ``pos``'s options. The width is the same:
+    ``COLUMNS``, else the terminal of standard output, else 80 columns.
+    """
+
+    def __init__(
+        self,
+        prog: str,
+        indent_increment: int = 2,
+        max_help_position: int = 24,
+        width: int | None = None,
+    ) -> None:
+        if width is None:  # as argparse: the terminal's columns less a margin of 2
+            width = _columns() - 2
+        super().__init__(prog, indent_increment, max_help_position, width)
+
+
+def _columns() -> int:
+    """Columns of the terminal as :func:`shutil.get_terminal_size` reports them."""
+    try:
+        columns = int(os.environ["COLUMNS"])
+    except (KeyError, ValueError):
+        columns = 0
+    if columns > 0:
+        return columns
+    try:
+        return os.get_terminal_size(sys.__stdout__.fileno()).columns or 80  # type: ignore[union-attr]
+    except (AttributeError, ValueError, OSError):
+        return 80
+
+
+class DefaultsHelpFormatter(_Formatter):
     """``--help`` that states every default: ``(default: VALUE)`` after each option's help.
 
     Options whose help already says its default (a default that depends on the input, "default:
@@ -131,8 +207,6 @@ def command_name(args: argparse.Namespace) -> str:
 
 def error_message(exc: BaseException) -> str:
     """The ``FILE:LINE: what`` part of an error line (``FILE: what`` without a line)."""
-    from navtrack.errors import FileFormatError
-
     if isinstance(exc, FileFormatError):
         where = exc.path if exc.line is None else f"{exc.path}:{exc.line}"
         return f"{where}: {exc.message}"
@@ -143,8 +217,6 @@ def error_message(exc: BaseException) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the process exit code (module notes)."""
-    from navtrack.errors import NavtrackError
-
     words = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(words)
     args = parser.parse_args(words)
@@ -209,7 +281,7 @@ def _strip_prefix(message: str, name: str) -> str:
 
 def _report(name: str, message: str, exc: BaseException, debug: bool) -> None:
     if debug:
-        import traceback
+        import traceback  # only with --debug: its import (linecache, tokenize) slows every start
 
         traceback.print_exception(exc, file=sys.stderr)
     print(f"{name}: error: {message}", file=sys.stderr)

@@ -12,8 +12,13 @@ skipped (``--lenient``).
 from __future__ import annotations
 
 import argparse
+import tempfile
 from pathlib import Path
 from typing import Any
+
+from navtrack.data import sample_path
+from navtrack.gnss.rinex.write import write_nav, write_obs
+from navtrack.gnss.ubx import is_ubx, read_ubx
 
 EXAMPLE = "gnss_imu_walk_cut.ubx"
 
@@ -60,16 +65,9 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from navtrack.gnss.rinex.write import write_nav, write_obs
-    from navtrack.gnss.ubx import is_ubx, read_ubx
-
     if args.example:
         if args.log is not None:
             raise SystemExit("navtrack convert: give either LOG or --example, not both")
-        import tempfile
-
-        from navtrack.data import sample_path
-
         args.log = sample_path(EXAMPLE)
         if args.out is None:
             args.out = Path(tempfile.mkdtemp(prefix="navtrack-convert-")) / "walk.obs"

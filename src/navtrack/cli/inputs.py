@@ -9,17 +9,15 @@ from __future__ import annotations
 
 from collections.abc import Collection
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    from navtrack.gnss.observations import Observations
-    from navtrack.gnss.rinex.nav import NavData
+from navtrack.gnss.observations import Observations
+from navtrack.gnss.rinex.nav import NavData
+from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.ubx import is_ubx, read_ubx
 
 
 def is_raw_log(path: Path) -> bool:
     """True for a u-blox UBX log (which may stand without a navigation file)."""
-    from navtrack.gnss.ubx import is_ubx
-
     return path.is_file() and is_ubx(path)
 
 
@@ -29,10 +27,6 @@ def read_observations(
     """The observations of a RINEX file or a UBX log, and the log's navigation data (None for
     RINEX and for a log without a complete ephemeris)."""
     if is_raw_log(path):
-        from navtrack.gnss.ubx import read_ubx
-
         log = read_ubx(path)
         return log.obs, (log.nav if log.nav.tables else None)
-    from navtrack.gnss.rinex.obs import read_obs
-
     return read_obs(path, systems=systems, codes=codes), None

@@ -7,6 +7,12 @@ import json
 from pathlib import Path
 from typing import Any
 
+from navtrack.data import sample_path
+from navtrack.gnss.rinex import read_bytes, sniff
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.sp3 import read_sp3
+
 EXAMPLE = "SEPT078M_120.21O"
 
 
@@ -29,9 +35,6 @@ def register(subparsers: Any) -> None:
 
 
 def run_info(args: argparse.Namespace) -> int:
-    from navtrack.data import sample_path
-    from navtrack.gnss.rinex import read_bytes, sniff
-
     if args.example == (args.file is not None):
         raise SystemExit("navtrack rinex info: give exactly one of FILE or --example")
     path = sample_path(EXAMPLE) if args.example else args.file
@@ -39,16 +42,10 @@ def run_info(args: argparse.Namespace) -> int:
     kind = sniff(path, data)
     summary: dict[str, Any]
     if kind.format == "sp3":
-        from navtrack.gnss.sp3 import read_sp3
-
         summary = read_sp3(path).summary()
     elif kind.file_type == "O":
-        from navtrack.gnss.rinex.obs import read_obs
-
         summary = read_obs(path).summary()
     else:
-        from navtrack.gnss.rinex.nav import read_nav
-
         summary = read_nav(path).summary()
     width = max(len(k) for k in summary)
     for key, value in summary.items():

@@ -41,6 +41,7 @@ import math
 import re
 from collections import Counter
 from os import fspath
+from typing import NamedTuple
 
 import numpy as np
 
@@ -163,11 +164,41 @@ def read_gnsslogger(
         and line (and the column of a malformed field).
     """
     text = read_bytes(path).decode("utf-8", "replace")
-    lines = text.splitlines()
-    columns: dict[str, int] | None = None
+    log = _scan_lines(path, text.splitlines(), lenient)
+    n_lines = len(text.splitlines())
+    rows = log.rows
+    cut = rows and rows[-1][0] == n_lines and not text.endswith(("\n", "\r"))
+    if cut and len(rows[-1][1]) < len(log.columns):
+        # the last row, without its end of line, has fewer fields than the header: cut short
+        # by the end of the file, its last field possibly cut too
+        if not lenient:
+            raise FileFormatError(path, n_lines, "Raw row cut short by the end of the file")
+        log.garbage.append(SkippedLine(n_lines, "unreadable row"))
+        rows.pop()
+    obs = _build(path, log, max_sv_time_uncertainty_ns, lenient)
+    if not log.garbage:
+        return obs
+    skipped = tuple(sorted((*obs.skipped, *log.garbage), key=lambda sk: sk.line))
+    return dataclasses.replace(obs, skipped=skipped)
+
+
+@dataclasses.dataclass(slots=True)
+class _Log:
+    """The lines of a log that matter: the ``Raw`` columns (index of each name in a row's
+    fields after the record type), the version line, other comments, the ``Raw`` rows (line,
+    fields) and the lines that are no log record."""
+
+    columns: dict[str, int]
+    version_line: str = ""
+    comments: list[str] = dataclasses.field(default_factory=list)
+    rows: list[tuple[int, list[str]]] = dataclasses.field(default_factory=list)
+    garbage: list[SkippedLine] = dataclasses.field(default_factory=list)
+
+
+def _scan_lines(path: StrPath, lines: list[str], lenient: bool) -> _Log:
+    log: _Log | None = None
     version_line = ""
     comments: list[str] = []
-    rows: list[tuple[int, list[str]]] = []
     garbage: list[SkippedLine] = []
     for i, line in enumerate(lines):
         if line.startswith("#"):
@@ -180,35 +211,26 @@ def read_gnsslogger(
                     raise FileFormatError(
                         path, i + 1, f"Raw header lacks column(s) {', '.join(missing)}"
                     )
+                rows = log.rows if log is not None else []
+                log = _Log(columns, rows=rows)
             elif body.startswith("Version"):
                 version_line = body
             elif body:
                 comments.append(body)
         elif line.startswith("Raw,"):
-            if columns is None:
+            if log is None:
                 raise FileFormatError(path, i + 1, "Raw row before the '# Raw,...' header line")
-            rows.append((i + 1, line.split(",")[1:]))
+            log.rows.append((i + 1, line.split(",")[1:]))
         elif line.strip() and not _RECORD_TYPE.match(line):
             if not lenient:
                 raise FileFormatError(
                     path, i + 1, f"not a GnssLogger record or comment: {line[:40]!r}"
                 )
             garbage.append(SkippedLine(i + 1, "not a log record"))
-    if columns is None:
+    if log is None:
         raise FileFormatError(path, None, "not a GnssLogger log: no '# Raw,...' header line")
-    cut = rows and rows[-1][0] == len(lines) and not text.endswith(("\n", "\r"))
-    if cut and len(rows[-1][1]) < len(columns):
-        # the last row, without its end of line, has fewer fields than the header: cut short
-        # by the end of the file, its last field possibly cut too
-        if not lenient:
-            raise FileFormatError(path, len(lines), "Raw row cut short by the end of the file")
-        garbage.append(SkippedLine(len(lines), "unreadable row"))
-        rows.pop()
-    obs = _build(path, rows, columns, version_line, comments, max_sv_time_uncertainty_ns, lenient)
-    if not garbage:
-        return obs
-    skipped = tuple(sorted((*obs.skipped, *garbage), key=lambda sk: sk.line))
-    return dataclasses.replace(obs, skipped=skipped)
+    log.version_line, log.comments, log.garbage = version_line, comments, garbage
+    return log
 
 
 def skipped_counts(obs: Observations) -> dict[str, int]:
@@ -241,115 +263,145 @@ def _float_field(text: str) -> float:
     return float(text) if text.strip() else math.nan
 
 
-def _build(
-    path: StrPath,
-    rows: list[tuple[int, list[str]]],
-    col: dict[str, int],
-    version_line: str,
-    comments: list[str],
-    max_unc_ns: float,
-    lenient: bool,
-) -> Observations:
-    skipped: list[SkippedLine] = []
+class _RawRow(NamedTuple):
+    """The fields of a ``Raw`` row that navtrack uses (NaN / None where not logged)."""
 
-    def opt(fields: list[str], name: str) -> str:
+    time_nanos: int
+    const: int
+    svid: int
+    state: int
+    rx_sv_ns: int
+    unc_ns: float
+    cn0: float
+    full_bias: int | None
+    bias_ns: float
+    offset_ns: float
+    prr: float
+    freq: float
+    adr: float
+    adr_state: int
+    leap: int | None
+    code_type: str
+
+
+def _parse_row(f: list[str], col: dict[str, int], numeric: list[tuple[int, str]]) -> _RawRow:
+    """The fields of one row; ValueError or IndexError when it cannot be read."""
+    n_cols = max(col.values()) + 1
+    if len(f) < min(n_cols, max(col[c] for c in _REQUIRED) + 1):
+        raise ValueError("too few fields")
+    if len(f) > n_cols:
+        raise ValueError(f"{len(f)} fields, the header has {n_cols}")
+    _check_numbers(f, numeric)
+
+    def opt(name: str) -> str:
         k = col.get(name)
-        return fields[k] if k is not None and k < len(fields) else ""
+        return f[k] if k is not None and k < len(f) else ""
 
-    # (epoch key, sat, code, values...) of every usable row
-    good: list[tuple[int, str, str, float, float, float, float, int]] = []
+    full_bias_txt = f[col["FullBiasNanos"]].strip()
+    adr_state_txt = opt("AccumulatedDeltaRangeState").strip()
+    leap_txt = opt("LeapSecond").strip()
+    bias_ns = _float_field(opt("BiasNanos"))
+    offset_ns = _float_field(opt("TimeOffsetNanos"))
+    return _RawRow(
+        time_nanos=_int_field(f[col["TimeNanos"]]),
+        const=_int_field(f[col["ConstellationType"]]),
+        svid=_int_field(f[col["Svid"]]),
+        state=_int_field(f[col["State"]]),
+        rx_sv_ns=_int_field(f[col["ReceivedSvTimeNanos"]]),
+        unc_ns=_float_field(f[col["ReceivedSvTimeUncertaintyNanos"]]),
+        cn0=_float_field(f[col["Cn0DbHz"]]),
+        full_bias=_int_field(full_bias_txt) if full_bias_txt else None,
+        bias_ns=0.0 if math.isnan(bias_ns) else bias_ns,
+        offset_ns=0.0 if math.isnan(offset_ns) else offset_ns,
+        prr=_float_field(opt("PseudorangeRateMetersPerSecond")),
+        freq=_float_field(opt("CarrierFrequencyHz")),
+        adr=_float_field(opt("AccumulatedDeltaRangeMeters")),
+        adr_state=_int_field(adr_state_txt) if adr_state_txt else 0,
+        leap=_int_field(leap_txt) if leap_txt else None,
+        code_type=opt("CodeType").strip(),
+    )
+
+
+# (epoch key, sat, signal, pseudorange m, phase cycles, Doppler Hz, C/N0 dB-Hz, LLI)
+_Measurement = tuple[int, str, str, float, float, float, float, int]
+
+
+def _measurement(r: _RawRow, max_unc_ns: float) -> _Measurement | str:
+    """The measurement of a row, or the reason it is skipped (:data:`SKIP_REASONS`)."""
+    sys_letter = _CONSTELLATION.get(r.const)
+    if sys_letter is None:
+        return "constellation not supported"
+    assert r.full_bias is not None  # checked by the caller (the epoch needs it)
+    t_rx_int = r.time_nanos - r.full_bias
+    if sys_letter == "R" and not 1 <= r.svid <= 24:
+        return "GLONASS slot unknown (frequency channel only)"
+    if r.state & _MSEC_AMBIGUOUS:
+        return "millisecond ambiguity"
+    period, t_rx_scale = _time_reference(sys_letter, r.state, t_rx_int, r.leap)
+    if period == 0:
+        return "TOW/TOD not decoded"
+    if not r.unc_ns < max_unc_ns:  # NaN uncertainty fails too
+        return "satellite time uncertainty too large"
+    # travel time; the modulo also resolves a week/day rollover between transmission and
+    # reception (Python's % of ints is never negative)
+    tau_ns = ((t_rx_scale - r.rx_sv_ns) % period) + (r.offset_ns - r.bias_ns)
+    pr_m = tau_ns * 1e-9 * C_MPS
+    if not _PR_MIN_M < pr_m < _PR_MAX_M:
+        return "pseudorange out of range"
+    sig = _signal(sys_letter, r.freq, r.code_type)
+    if sig is None:
+        return "unknown carrier frequency"
+    sat = f"{sys_letter}{r.svid - 192 if sys_letter == 'J' else r.svid:02d}"
+    f_hz = r.freq if not math.isnan(r.freq) else _DEFAULT_FREQ.get(sys_letter, math.nan)
+    wavelength = C_MPS / f_hz
+    phase = r.adr / wavelength if r.adr_state & _ADR_VALID else math.nan
+    lli = 1 if r.adr_state & (_ADR_RESET | _ADR_CYCLE_SLIP) else 0
+    if math.isnan(phase):
+        lli = -1
+    return (r.time_nanos, sat, sig, pr_m, phase, -r.prr / wavelength, r.cn0, lli)
+
+
+def _build(path: StrPath, log: _Log, max_unc_ns: float, lenient: bool) -> Observations:
+    skipped: list[SkippedLine] = []
+    good: list[_Measurement] = []
     epoch_time: dict[int, float] = {}
     seen: set[tuple[int, str, str]] = set()
-    n_cols = max(col.values()) + 1
-    numeric = [(k, name) for name, k in col.items() if name not in _TEXT_COLUMNS]
-    for lineno, f in rows:
+    numeric = [(k, name) for name, k in log.columns.items() if name not in _TEXT_COLUMNS]
+    for lineno, f in log.rows:
         try:
-            if len(f) < min(n_cols, max(col[c] for c in _REQUIRED) + 1):
-                raise ValueError("too few fields")
-            if len(f) > n_cols:
-                raise ValueError(f"{len(f)} fields, the header has {n_cols}")
-            _check_numbers(f, numeric)
-            time_nanos = _int_field(f[col["TimeNanos"]])
-            const = _int_field(f[col["ConstellationType"]])
-            svid = _int_field(f[col["Svid"]])
-            state = _int_field(f[col["State"]])
-            rx_sv_ns = _int_field(f[col["ReceivedSvTimeNanos"]])
-            unc_ns = _float_field(f[col["ReceivedSvTimeUncertaintyNanos"]])
-            cn0 = _float_field(f[col["Cn0DbHz"]])
-            full_bias_txt = f[col["FullBiasNanos"]].strip()
-            full_bias = _int_field(full_bias_txt) if full_bias_txt else None
-            bias_ns = _float_field(opt(f, "BiasNanos"))
-            offset_ns = _float_field(opt(f, "TimeOffsetNanos"))
-            prr = _float_field(opt(f, "PseudorangeRateMetersPerSecond"))
-            freq = _float_field(opt(f, "CarrierFrequencyHz"))
-            adr = _float_field(opt(f, "AccumulatedDeltaRangeMeters"))
-            adr_state_txt = opt(f, "AccumulatedDeltaRangeState").strip()
-            adr_state = _int_field(adr_state_txt) if adr_state_txt else 0
-            leap_txt = opt(f, "LeapSecond").strip()
-            leap = _int_field(leap_txt) if leap_txt else None
-            code_type = opt(f, "CodeType").strip()
+            r = _parse_row(f, log.columns, numeric)
         except (ValueError, IndexError) as exc:
             if not lenient:
                 raise FileFormatError(path, lineno, f"unreadable Raw row ({exc})") from None
             skipped.append(SkippedLine(lineno, "unreadable row"))
             continue
-        bias_ns = 0.0 if math.isnan(bias_ns) else bias_ns
-        offset_ns = 0.0 if math.isnan(offset_ns) else offset_ns
+        if r.const in _CONSTELLATION and not r.full_bias:
+            skipped.append(SkippedLine(lineno, "no GNSS time (FullBiasNanos missing)"))
+            continue
+        if r.const in _CONSTELLATION and r.time_nanos not in epoch_time:
+            # receiver GNSS time: integer ns since the GPS epoch plus a sub-ns float part
+            t_rx_int = r.time_nanos - (r.full_bias or 0)
+            t_s = (t_rx_int // 10**9) + ((t_rx_int % 10**9) - r.bias_ns) * 1e-9
+            epoch_time[r.time_nanos] = t_s
+        m = _measurement(r, max_unc_ns)
+        if isinstance(m, tuple) and (m[0], m[1], m[2]) in seen:
+            m = "duplicate signal in epoch"
+        if isinstance(m, str):
+            skipped.append(SkippedLine(lineno, m))
+            continue
+        seen.add((m[0], m[1], m[2]))
+        good.append(m)
+    skipped.sort(key=lambda s: s.line)
+    return _observations(path, log, good, epoch_time, skipped)
 
-        def skip(reason: str, lineno: int = lineno) -> None:
-            skipped.append(SkippedLine(lineno, reason))
 
-        sys_letter = _CONSTELLATION.get(const)
-        if sys_letter is None:
-            skip("constellation not supported")
-            continue
-        if full_bias is None or full_bias == 0:
-            skip("no GNSS time (FullBiasNanos missing)")
-            continue
-        # receiver GNSS time: integer ns since the GPS epoch plus a sub-ns float part
-        t_rx_int = time_nanos - full_bias
-        t_rx_frac = offset_ns - bias_ns
-        if time_nanos not in epoch_time:
-            epoch_time[time_nanos] = (t_rx_int // 10**9) + ((t_rx_int % 10**9) - bias_ns) * 1e-9
-        if sys_letter == "R" and not 1 <= svid <= 24:
-            skip("GLONASS slot unknown (frequency channel only)")
-            continue
-        if state & _MSEC_AMBIGUOUS:
-            skip("millisecond ambiguity")
-            continue
-        period, t_rx_scale = _time_reference(sys_letter, state, t_rx_int, leap)
-        if period == 0:
-            skip("TOW/TOD not decoded")
-            continue
-        if not unc_ns < max_unc_ns:  # NaN uncertainty fails too
-            skip("satellite time uncertainty too large")
-            continue
-        # travel time; the modulo also resolves a week/day rollover between transmission and
-        # reception (Python's % of ints is never negative)
-        tau_ns = ((t_rx_scale - rx_sv_ns) % period) + t_rx_frac
-        pr_m = tau_ns * 1e-9 * C_MPS
-        if not _PR_MIN_M < pr_m < _PR_MAX_M:
-            skip("pseudorange out of range")
-            continue
-        sig = _signal(sys_letter, freq, code_type)
-        if sig is None:
-            skip("unknown carrier frequency")
-            continue
-        sat = f"{sys_letter}{svid - 192 if sys_letter == 'J' else svid:02d}"
-        key = (time_nanos, sat, sig)
-        if key in seen:
-            skip("duplicate signal in epoch")
-            continue
-        seen.add(key)
-        f_hz = freq if not math.isnan(freq) else _DEFAULT_FREQ.get(sys_letter, math.nan)
-        wavelength = C_MPS / f_hz
-        doppler = -prr / wavelength
-        phase = adr / wavelength if adr_state & _ADR_VALID else math.nan
-        lli = 1 if adr_state & (_ADR_RESET | _ADR_CYCLE_SLIP) else 0
-        if math.isnan(phase):
-            lli = -1
-        good.append((time_nanos, sat, sig, pr_m, phase, doppler, cn0, lli))
-
+def _observations(
+    path: StrPath,
+    log: _Log,
+    good: list[_Measurement],
+    epoch_time: dict[int, float],
+    skipped: list[SkippedLine],
+) -> Observations:
     keys = sorted(epoch_time)
     e_index = {k: n for n, k in enumerate(keys)}
     sats = tuple(sorted({g[1] for g in good}, key=lambda s: ("GRECJSI".index(s[0]), s)))
@@ -371,16 +423,16 @@ def _build(
         present = sorted({g[2] for g in good if g[1][0] == sys_letter})
         if present:
             obs_types[sys_letter] = tuple(f"{t}{c}" for c in present for t in "CLDS")
+    version = log.version_line
     header = ObsHeader(
         version=0.0,
         file_type="O",
         system="M",
-        receiver=f"Android GnssLogger ({version_line})" if version_line else "Android GnssLogger",
+        receiver=f"Android GnssLogger ({version})" if version else "Android GnssLogger",
         time_system="GPS",
         obs_types=obs_types,
-        comments=tuple(comments),
+        comments=tuple(log.comments),
     )
-    skipped.sort(key=lambda s: s.line)
     return Observations(
         path=fspath(path),
         header=header,

@@ -593,9 +593,8 @@ def broadcast_states(
     var = np.full((n_e, n_s), np.nan)
     svh = np.full((n_e, n_s), -1, dtype=np.int64)
     index = np.full((n_e, n_s), -1, dtype=np.int64)
-    sats_arr = np.array(sats, dtype=str)
     for sys, table in tables.items():
-        cols = np.flatnonzero(np.char.startswith(sats_arr, sys))
+        cols = np.flatnonzero([sat[0] == sys for sat in sats])
         if cols.size == 0 or sys not in "GJECIR":
             continue
         ages = max_age_s or {}
@@ -627,7 +626,7 @@ def broadcast_states(
             p = {k: table.get(k)[rows] for k in KEPLER_FIELDS}
             geo = None
             if sys == "C":
-                prn = np.array([int(sat[1:]) for sat in sats_arr[cols][s_i]])
+                prn = np.array([int(sats[c][1:]) for c in cols[s_i]])
                 geo = np.isin(prn, list(BDS_GEO_PRN))
             ps, vs, rel = kepler_orbit(p, t, sys, geo=geo)
         ee, ss = e_i, cols[s_i]

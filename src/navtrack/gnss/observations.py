@@ -10,20 +10,23 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import FloatArray, Int8Array
+from navtrack.timescale import GPS_EPOCH, to_datetime64
 
 SYSTEMS = "GRECJSI"
 """RINEX system letters: GPS, GLONASS, Galileo, BeiDou, QZSS, SBAS, NavIC/IRNSS."""
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class Event:
+class Event(NamedTuple):
     """A special event record of a RINEX observation file (epoch flag 2-5) or a skipped line.
+
+    A named tuple, as :class:`SkippedLine`: every reader imports these, and a dataclass
+    compiles its methods at import, a cost every ``navtrack pos`` start would pay.
 
     Attributes
     ----------
@@ -44,8 +47,7 @@ class Event:
     records: tuple[str, ...]
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class SkippedLine:
+class SkippedLine(NamedTuple):
     """A damaged data line skipped in lenient reading: where and why."""
 
     line: int
@@ -182,8 +184,6 @@ class Observations:
     @property
     def time(self) -> np.ndarray:
         """Epoch times as GPST calendar ``datetime64[ns]``."""
-        from navtrack.timescale import to_datetime64
-
         return to_datetime64(self.t_gps_s)
 
     @property
@@ -264,7 +264,5 @@ class Observations:
 
 def _iso(t_gps_s: float) -> str:
     """ISO 8601 GPST calendar string of GPS seconds, rounded to the millisecond."""
-    from navtrack.timescale import GPS_EPOCH
-
     ms = np.timedelta64(round(float(t_gps_s) * 1000.0), "ms")
     return str(np.datetime_as_string(GPS_EPOCH.astype("datetime64[ms]") + ms, unit="ms"))

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import importlib
 import zlib
-from dataclasses import dataclass
 from os import fspath
 from pathlib import Path
+from typing import NamedTuple
 
 from navtrack._typing import StrPath
 from navtrack.errors import FileFormatError, MissingDependencyError
@@ -84,9 +84,9 @@ def _hatanaka_decompress(path: StrPath, raw: bytes) -> bytes:
         raise FileFormatError(path, None, f"cannot decompress ({exc})") from exc
 
 
-@dataclass(frozen=True, slots=True)
-class FileKind:
-    """What a file is, from its first line.
+class FileKind(NamedTuple):
+    """What a file is, from its first line (a named tuple: every reader imports it, and a
+    dataclass compiles its methods at import, a cost every ``navtrack pos`` start would pay).
 
     Attributes
     ----------

@@ -30,7 +30,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from os import fspath
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -50,7 +50,7 @@ from navtrack.timescale import (
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["NavData", "read_nav"]
+__all__ = ["KM_FIELDS", "RECORD_FIELDS", "NavData", "read_nav", "toe_gps_s"]
 
 _NAN = math.nan
 
@@ -99,20 +99,30 @@ _SBAS_FIELDS: tuple[str | None, ...] = (
     "z_m", "vz_mps", "az_mps2", "iodn",
 )  # fmt: skip
 
-_FIELDS = {
-    "G": _GPS_FIELDS,
-    "J": _GPS_FIELDS,
-    "E": _GAL_FIELDS,
-    "C": _BDS_FIELDS,
-    "I": _IRN_FIELDS,
-    "R": _GLO_FIELDS,
-    "S": _SBAS_FIELDS,
-}
+RECORD_FIELDS: Mapping[str, tuple[str | None, ...]] = MappingProxyType(
+    {
+        "G": _GPS_FIELDS,
+        "J": _GPS_FIELDS,
+        "E": _GAL_FIELDS,
+        "C": _BDS_FIELDS,
+        "I": _IRN_FIELDS,
+        "R": _GLO_FIELDS,
+        "S": _SBAS_FIELDS,
+    }
+)
+"""Field names of each system's records, in file order: the three clock fields of the first
+line, then four fields per ``BROADCAST ORBIT`` line; ``None`` marks spare fields. GLONASS and
+SBAS state vectors are in m, m/s, m/s^2 here, in km, km/s, km/s^2 in the file
+(:data:`KM_FIELDS`)."""
+
 # Number of lines of a complete record, and the most a record may have (GLONASS in 3.05).
 _N_LINES = {"G": 8, "J": 8, "E": 8, "C": 8, "I": 8, "R": 4, "S": 4}
 _MAX_LINES = {**_N_LINES, "R": 5}
 _KEPLER = "GJECI"
-_KM = {"x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "ax_mps2", "ay_mps2", "az_mps2"}
+KM_FIELDS = frozenset(
+    {"x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "ax_mps2", "ay_mps2", "az_mps2"}
+)
+"""GLONASS and SBAS fields written in km (km/s, km/s^2) in RINEX and held in m here."""
 _INT_FIELDS = {
     "iode", "iodc", "week", "svh", "codes_l2", "l2p_flag", "data_source", "aodc", "freq_num",
     "age_d", "status_flags", "urai", "health_flags", "iodn",
@@ -238,7 +248,7 @@ class NavData:
     @property
     def ephemerides(self) -> Mapping[str, pd.DataFrame]:
         """:attr:`tables` as one pandas DataFrame per system letter (built on each access)."""
-        import pandas as pd
+        import pandas as pd  # only here: reading and positioning need no pandas
 
         return MappingProxyType(
             {letter: pd.DataFrame(dict(columns)) for letter, columns in self.tables.items()}
@@ -310,43 +320,19 @@ def read_nav(path: StrPath, *, systems: str | None = None, lenient: bool = False
     kind = sniff(path, data)
     if kind.format != "rinex" or kind.file_type not in "NGHE" or not kind.file_type.strip():
         raise FileFormatError(path, 1, f"not a RINEX navigation file (type {kind.file_type!r})")
-    text = data.decode("ascii", "replace")
-    lines = text.splitlines()
+    lines = data.decode("ascii", "replace").splitlines()
     header = _parse_header(path, lines)
     not_read: dict[str, int] = {}
     origin: list[int] | None = None  # RINEX 4: the file line of each kept line
     if kind.version >= 4:
         lines, origin, not_read = _rinex4_records(path, lines, header)
     v2 = kind.version < 3
-    if v2:
-        system = _RINEX2_SYSTEM[kind.file_type]
-    elif kind.file_type == "N":
-        system = kind.system
-    else:  # some RINEX 3.0x writers keep the RINEX 2 type letters
-        system = _RINEX2_SYSTEM[kind.file_type]
+    # RINEX 2 type letters name the system (some RINEX 3.0x writers keep them)
+    system = kind.system if not v2 and kind.file_type == "N" else _RINEX2_SYSTEM[kind.file_type]
     if v2 and system == "E" and "GPSA" in header.iono:  # RINEX 2.12 Galileo: ION ALPHA = ai0-2
         header.iono["GAL"] = header.iono.pop("GPSA")[:3]
-    # 3X (RINEX 2) or 4X (RINEX 3) then D19.12 fields; the satellite/epoch line is on that grid
-    cut = len(lines) > header.end and ends_inside_field(data, 3 if v2 else 4, 19, (0,))
-    if cut:
-        reason = "record line cut in the middle of a field by the end of the file"
-        if not lenient:
-            raise FileFormatError(path, len(lines), reason)
-        lines.pop()
-    try:
-        groups, skipped = _parse_records(path, lines, header.end, v2, system, lenient, systems)
-    except FileFormatError as exc:
-        if origin is None or exc.line is None:
-            raise
-        raise FileFormatError(path, origin[exc.line - 1] + 1, exc.message) from None
-    if cut:
-        skipped.append(SkippedLine(len(lines) + 1, reason))
-    if origin is not None:
-        at = origin
-        for g, _ in groups.values():
-            g.lines = [at[k - 1] + 1 for k in g.lines]
-        skipped = [SkippedLine(at[sk.line - 1] + 1, sk.reason) for sk in skipped]
-    tables = _tables(groups)
+    layout = _Layout(v2, system, systems, lenient)
+    groups, skipped = _records(path, data, lines, header.end, layout, origin)
     return NavData(
         path=fspath(path),
         version=kind.version,
@@ -355,11 +341,55 @@ def read_nav(path: StrPath, *, systems: str | None = None, lenient: bool = False
         iono=header.iono,
         time_corrections=header.time_corrections,
         leap_seconds=header.leap_seconds,
-        tables=tables,
+        tables=_tables(groups),
         skipped=tuple(skipped),
         comments=tuple(header.comments),
         records_not_read=not_read,
     )
+
+
+class _Layout(NamedTuple):
+    """How the records of a file are read: RINEX 2 or later, the system of a single-system
+    file, the systems asked for (None: all), lenient reading."""
+
+    v2: bool
+    system: str
+    systems: str | None
+    lenient: bool
+
+
+def _records(
+    path: StrPath,
+    data: bytes,
+    lines: list[str],
+    body: int,
+    layout: _Layout,
+    origin: list[int] | None,
+) -> tuple[dict[str, tuple[_Group, FloatArray]], list[SkippedLine]]:
+    """The records of ``lines[body:]`` by system, and the lines skipped; with ``origin`` (RINEX
+    4), line numbers are mapped back to the file's."""
+    # 3X (RINEX 2) or 4X (RINEX 3) then D19.12 fields; the satellite/epoch line is on that grid
+    cut = len(lines) > body and ends_inside_field(data, 3 if layout.v2 else 4, 19, (0,))
+    reason = "record line cut in the middle of a field by the end of the file"
+    if cut:
+        if not layout.lenient:
+            raise FileFormatError(path, len(lines), reason)
+        lines.pop()
+    try:
+        groups, skipped = _parse_records(
+            path, lines, body, layout.v2, layout.system, layout.lenient, layout.systems
+        )
+    except FileFormatError as exc:
+        if origin is None or exc.line is None:
+            raise
+        raise FileFormatError(path, origin[exc.line - 1] + 1, exc.message) from None
+    if cut:
+        skipped.append(SkippedLine(len(lines) + 1, reason))
+    if origin is not None:
+        for g, _ in groups.values():
+            g.lines = [origin[k - 1] + 1 for k in g.lines]
+        skipped = [SkippedLine(origin[sk.line - 1] + 1, sk.reason) for sk in skipped]
+    return groups, skipped
 
 
 # RINEX 4 ephemeris messages read (the RINEX 3 record layouts: LNAV of GPS, QZSS and NavIC,
@@ -414,13 +444,17 @@ def _rinex4_records(
     return kept, origin, not_read
 
 
-@dataclass(slots=True)
 class _Header:
-    end: int = 0  # index of the first line after END OF HEADER
-    iono: dict[str, FloatArray] = field(default_factory=dict)
-    time_corrections: dict[str, tuple[Any, ...]] = field(default_factory=dict)
-    leap_seconds: int | None = None
-    comments: list[str] = field(default_factory=list)
+    """What the header records hold (a plain class, as :class:`_Group`)."""
+
+    __slots__ = ("comments", "end", "iono", "leap_seconds", "time_corrections")
+
+    def __init__(self) -> None:
+        self.end = 0  # index of the first line after END OF HEADER
+        self.iono: dict[str, FloatArray] = {}
+        self.time_corrections: dict[str, tuple[Any, ...]] = {}
+        self.leap_seconds: int | None = None
+        self.comments: list[str] = []
 
 
 def _parse_header(path: StrPath, lines: list[str]) -> _Header:
@@ -486,15 +520,21 @@ def _int(v: float) -> int | None:
     return None if math.isnan(v) else round(v)
 
 
-@dataclass(slots=True)
 class _Group:
-    """Records of one system: header data of each record and the text of its fields."""
+    """Records of one system: header data of each record and the text of its fields.
 
-    sats: list[str] = field(default_factory=list)
-    lines: list[int] = field(default_factory=list)  # 1-based line of the first line
-    n_lines: list[int] = field(default_factory=list)
-    t_cal: list[float] = field(default_factory=list)  # epoch as calendar seconds, as written
-    starts: list[int] = field(default_factory=list)  # 0-based index of the first line
+    A plain class, not a dataclass: a dataclass compiles its methods when the module is
+    imported, a cost every ``navtrack pos`` start would pay.
+    """
+
+    __slots__ = ("lines", "n_lines", "sats", "starts", "t_cal")
+
+    def __init__(self) -> None:
+        self.sats: list[str] = []
+        self.lines: list[int] = []  # 1-based line of the first line
+        self.n_lines: list[int] = []
+        self.t_cal: list[float] = []  # epoch as calendar seconds, as written
+        self.starts: list[int] = []  # 0-based index of the first line
 
 
 def _parse_records(
@@ -562,7 +602,7 @@ def _record_head(
     else:
         sys_letter = first[0]
         prn_text, epoch_text, c0 = first[1:3], first[4:23], 23
-    if sys_letter not in _FIELDS:
+    if sys_letter not in RECORD_FIELDS:
         raise FileFormatError(path, lineno, f"unknown satellite system letter {sys_letter!r}")
     n_lines = i1 - i0
     # Blank lines after the last expected one (some writers pad) are ignored.
@@ -636,7 +676,7 @@ def _fields_slow(
 ) -> tuple[_Group, FloatArray]:
     """Field by field, to name the damaged one (strict) or skip its record (lenient)."""
     max_lines = _MAX_LINES[sys_letter]
-    names = _FIELDS[sys_letter]
+    names = RECORD_FIELDS[sys_letter]
     keep = _Group()
     rows: list[list[float]] = []
     for k, (i0, nl) in enumerate(zip(g.starts, g.n_lines, strict=True)):
@@ -665,7 +705,7 @@ def _fields_slow(
     return keep, np.array(rows, dtype=float).reshape(len(rows), 3 + 4 * (max_lines - 1))
 
 
-def _toe_gps_s(
+def toe_gps_s(
     sys_letter: str, week: FloatArray, toe_sow: FloatArray, toc_gps_s: FloatArray
 ) -> FloatArray:
     """Full GPS seconds of toe from the written week, resolved against toc.
@@ -688,7 +728,7 @@ def _tables(groups: dict[str, tuple[_Group, FloatArray]]) -> dict[str, dict[str,
         if sys_letter not in groups:
             continue
         g, values = groups[sys_letter]
-        all_names = _FIELDS[sys_letter]
+        all_names = RECORD_FIELDS[sys_letter]
         cols: dict[str, Any] = {
             name: values[:, k] for k, name in enumerate(all_names) if name is not None
         }
@@ -697,7 +737,7 @@ def _tables(groups: dict[str, tuple[_Group, FloatArray]]) -> dict[str, dict[str,
             names = names[:15]  # no record has the optional RINEX 3.05 fifth line
         if sys_letter in "RS":  # state vector components together, as in the docstring
             names = sorted(names, key=lambda c: _STATE_ORDER.get(c, 0))
-            for name in _KM:
+            for name in KM_FIELDS:
                 cols[name] = cols[name] * 1000.0
         t_cal = np.array(g.t_cal, dtype=float)
         ts = _TIME_SYSTEM[sys_letter]
@@ -710,7 +750,7 @@ def _tables(groups: dict[str, tuple[_Group, FloatArray]]) -> dict[str, dict[str,
         if sys_letter in _KEPLER:
             k = names.index("week") + 1
             names = [*names[:k], "toe_gps_s", *names[k:]]
-            cols["toe_gps_s"] = _toe_gps_s(sys_letter, cols["week"], cols["toe_sow"], toc)
+            cols["toe_gps_s"] = toe_gps_s(sys_letter, cols["week"], cols["toe_sow"], toc)
         for name in _INT_FIELDS.intersection(names):
             v = cols[name]
             cols[name] = np.where(np.isnan(v), -1, np.round(v)).astype(np.int64)
@@ -722,7 +762,3 @@ def _tables(groups: dict[str, tuple[_Group, FloatArray]]) -> dict[str, dict[str,
         data["line"] = line[order]
         tables[sys_letter] = data
     return tables
-
-
-toe_gps_s = _toe_gps_s
-"""Public name of :func:`_toe_gps_s` (full GPS seconds of toe), shared with the UBX decoder."""

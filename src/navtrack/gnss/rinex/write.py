@@ -32,7 +32,7 @@ import numpy as np
 from navtrack import __version__
 from navtrack._typing import StrPath
 from navtrack.gnss.observations import Observations
-from navtrack.gnss.rinex.nav import _FIELDS, _KM, NavData
+from navtrack.gnss.rinex.nav import KM_FIELDS, RECORD_FIELDS, NavData
 from navtrack.timescale import BDT_MINUS_GPST_S, gps_to_utc, to_datetime64
 
 __all__ = ["write_nav", "write_obs"]
@@ -70,9 +70,31 @@ def write_obs(obs: Observations, path: StrPath, *, comments: Iterable[str] = ())
     comments : iterable of str
         ``COMMENT`` lines for the header (each cut to 60 characters).
     """
-    h = obs.header
     present = [s for s in _SYSTEM_ORDER if any(sat[0] == s for sat in obs.sats)]
-    types = {s: tuple(h.obs_types.get(s, obs.codes)) for s in present}
+    types = {s: tuple(obs.header.obs_types.get(s, obs.codes)) for s in present}
+    lines = _obs_header(obs, types, comments)
+    epoch_rows = _data_lines(obs, types)
+    for e, t in enumerate(obs.t_gps_s):
+        rows = epoch_rows.get(e)
+        if not rows:
+            continue
+        y, mo, d, hh, mi, ss = _calendar(float(t))
+        clk = obs.clock_offset_s[e]
+        clock = f"{'':6}{clk:15.12f}" if np.isfinite(clk) else ""
+        flag = int(obs.epoch_flag[e])
+        lines.append(
+            f"> {y:4d} {mo:02d} {d:02d} {hh:02d} {mi:02d}{ss:11.7f}  {flag:1d}{len(rows):3d}{clock}"
+        )
+        lines.extend(rows)
+    with open(path, "w", encoding="ascii", newline="\n") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def _obs_header(
+    obs: Observations, types: dict[str, tuple[str, ...]], comments: Iterable[str]
+) -> list[str]:
+    """The header lines of :func:`write_obs`, ``END OF HEADER`` included."""
+    h = obs.header
     lines = [
         _label(f"{3.04:9.2f}{'':11}{'OBSERVATION DATA':<20}{'M: Mixed':<20}",
                "RINEX VERSION / TYPE"),
@@ -87,8 +109,7 @@ def write_obs(obs: Observations, path: StrPath, *, comments: Iterable[str] = ())
     lines.append(_label("".join(f"{v:14.4f}" for v in xyz), "APPROX POSITION XYZ"))
     hen = h.antenna_delta_hen_m if h.antenna_delta_hen_m is not None else np.zeros(3)
     lines.append(_label("".join(f"{v:14.4f}" for v in hen), "ANTENNA: DELTA H/E/N"))
-    for s in present:
-        codes = types[s]
+    for s, codes in types.items():
         for k in range(0, len(codes), 13):
             head = f"{s}  {len(codes):3d}" if k == 0 else f"{'':6}"
             lines.append(
@@ -99,10 +120,10 @@ def write_obs(obs: Observations, path: StrPath, *, comments: Iterable[str] = ())
         lines.append(
             _label(f"{y:6d}{mo:6d}{d:6d}{hh:6d}{mi:6d}{ss:13.7f}     GPS", "TIME OF FIRST OBS")
         )
-    for s in present:  # phase shift corrections: none applied
+    for s in types:  # phase shift corrections: none applied
         lines.append(_label(s, "SYS / PHASE SHIFT"))
     fcn = sorted(h.glonass_fcn.items())
-    if "R" in present:
+    if "R" in types:
         for k in range(0, max(len(fcn), 1), 8):
             part = "".join(f"{sat} {n:2d} " for sat, n in fcn[k : k + 8])
             head = f"{len(fcn):3d} " if k == 0 else "    "
@@ -111,8 +132,13 @@ def write_obs(obs: Observations, path: StrPath, *, comments: Iterable[str] = ())
             _label(" C1C    0.000 C1P    0.000 C2C    0.000 C2P    0.000", "GLONASS COD/PHS/BIS")
         )
     lines.append(_label("", "END OF HEADER"))
-    # every present value formatted once (F14.3, LLI, SSI), then one line per (epoch,
-    # satellite) group of values, in the order of the satellite's system's code list
+    return lines
+
+
+def _data_lines(obs: Observations, types: dict[str, tuple[str, ...]]) -> dict[int, list[str]]:
+    """The data lines of each epoch: every present value formatted once (F14.3, LLI, SSI),
+    then one line per (epoch, satellite) group of values, in the order of the satellite's
+    system's code list."""
     idx = np.nonzero(~np.isnan(obs.values))
     digit = np.array([" ", *"123456789"])
     texts = [
@@ -137,20 +163,7 @@ def write_obs(obs: Observations, path: StrPath, *, comments: Iterable[str] = ())
             continue
         line = obs.sats[j] + "".join(have.get(k, blank) for k in sat_cols[j])
         epoch_rows.setdefault(e, []).append(line.rstrip())
-    for e, t in enumerate(obs.t_gps_s):
-        rows = epoch_rows.get(e)
-        if not rows:
-            continue
-        y, mo, d, hh, mi, ss = _calendar(float(t))
-        clk = obs.clock_offset_s[e]
-        clock = f"{'':6}{clk:15.12f}" if np.isfinite(clk) else ""
-        flag = int(obs.epoch_flag[e])
-        lines.append(
-            f"> {y:4d} {mo:02d} {d:02d} {hh:02d} {mi:02d}{ss:11.7f}  {flag:1d}{len(rows):3d}{clock}"
-        )
-        lines.extend(rows)
-    with open(path, "w", encoding="ascii", newline="\n") as f:
-        f.write("\n".join(lines) + "\n")
+    return epoch_rows
 
 
 def _d19(x: float) -> str:
@@ -198,12 +211,13 @@ def write_nav(nav: NavData, path: StrPath, *, comments: Iterable[str] = ()) -> N
         dated = table["toc_gps_s"] + BDT_MINUS_GPST_S if s == "C" else table["toc_gps_s"]
         if s == "R":
             dated = gps_to_utc(table["toc_gps_s"])
-        fields = _FIELDS[s][:15] if s == "R" else _FIELDS[s]  # RINEX 3.04: 4 GLONASS lines
+        # RINEX 3.04: 4 GLONASS lines
+        fields = RECORD_FIELDS[s][:15] if s == "R" else RECORD_FIELDS[s]
         for r in range(len(table["sat"])):
             toc = float(table["toc_gps_s"][r])
             y, mo, d, hh, mi, ss = _calendar(float(dated[r]))
             values = [
-                np.nan if f is None else float(table[f][r]) / (1e3 if f in _KM else 1.0)
+                np.nan if f is None else float(table[f][r]) / (1e3 if f in KM_FIELDS else 1.0)
                 for f in fields
             ]
             head = f"{table['sat'][r]} {y:4d} {mo:02d} {d:02d} {hh:02d} {mi:02d} {int(ss):02d}"

@@ -212,14 +212,13 @@ def _signal_parameters(
     evaluated ephemerides, or with precise orbits (``precise``) the nearest broadcast record."""
     sats = list(pr.sats)
     n_e, n_s = pr.t_gps_s.size, len(sats)
-    sats_arr = np.array(sats, dtype=str)
     gd = np.zeros((n_e, n_s))
     scale = np.zeros((n_e, n_s))
     freq = np.full((n_e, n_s), np.nan)
     freq2 = np.full((n_e, n_s), np.nan) if cfg.iono == "ionofree" else None
     fact = np.ones(n_s)
     for sys in pr.systems:
-        cols = np.flatnonzero(np.char.startswith(sats_arr, sys)) if n_s else np.array([], int)
+        cols = np.flatnonzero([sat[0] == sys for sat in sats]).astype(int)
         if cols.size == 0:
             continue
         table = tables.get(sys)
