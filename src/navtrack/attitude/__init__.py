@@ -49,7 +49,7 @@ from navtrack.attitude.quaternion import (
 )
 from navtrack.attitude.reconstruct import (
     ESTIMATES,
-    Estimate,
+    AttitudeEstimate,
     Reconstruction,
     ReconstructionConfig,
     reconstruct,
@@ -74,7 +74,7 @@ __all__ = [
     "CalibrationConfig",
     "CameraFixes",
     "CameraSimConfig",
-    "Estimate",
+    "AttitudeEstimate",
     "FixStatus",
     "GnssPositions",
     "GyroCalibration",

@@ -15,6 +15,23 @@ import json
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+import pandas as pd
+from scipy.spatial.transform import Rotation
+from tqdm import tqdm
+
+from navtrack.attitude.quaternion import attitude_errors
+from navtrack.attitude.reconstruct import Reconstruction, reconstruct
+from navtrack.attitude.simulate import simulate_sightings
+from navtrack.attitude.trajectory import pose_frame, read_gnss_positions
+from navtrack.attitude.wahba import solve_fixes
+from navtrack.cli.outputs import check_outputs
+from navtrack.data import sample_path
+from navtrack.errors import FileFormatError
+from navtrack.io.broad import BroadTrial, read_broad
+from navtrack.io.solution import write_solution
+from navtrack.io.tables import read_table
+
 _GYRO_COLUMNS = ("gyr_x_rad_s", "gyr_y_rad_s", "gyr_z_rad_s")
 _FIX_COLUMNS = ("t_s", "qx", "qy", "qz", "qw")
 _ESTIMATE_NAMES = ("propagation", "paper_correction", "calibrated", "filter", "smoother")
@@ -98,17 +115,9 @@ def register(subparsers: Any) -> None:
 
 def _read_imu(path: Path) -> tuple[Any, Any, Any]:
     """(t_s, gyr_rad_s, BroadTrial or None)."""
-    import numpy as np
-
-    from navtrack.errors import FileFormatError
-
     if path.suffix.lower() == ".mat":
-        from navtrack.io.broad import read_broad
-
         trial = read_broad(path)
         return trial.t_s, trial.gyr_rad_s, trial
-    from navtrack.io.tables import read_table
-
     df = read_table(path)
     missing = [c for c in ("t_s", *_GYRO_COLUMNS) if c not in df.columns]
     if missing:
@@ -117,11 +126,6 @@ def _read_imu(path: Path) -> tuple[Any, Any, Any]:
 
 
 def _read_fixes(path: Path, sigma_rad: float) -> tuple[Any, Any, Any]:
-    import numpy as np
-
-    from navtrack.errors import FileFormatError
-    from navtrack.io.tables import read_table
-
     df = read_table(path)
     missing = [c for c in _FIX_COLUMNS if c not in df.columns]
     if missing:
@@ -138,11 +142,6 @@ def _read_fixes(path: Path, sigma_rad: float) -> tuple[Any, Any, Any]:
 def _write_pose(args: argparse.Namespace, est: Any, t: Any) -> dict[str, Any]:
     """Write ``--out``: a solution frame when there is a GNSS position or an absolute time,
     else a pose table of the columns that have values."""
-    import numpy as np
-
-    from navtrack.attitude.trajectory import pose_frame, read_gnss_positions
-    from navtrack.io.solution import write_solution
-
     t_cam = t - est.time_offset_s
     gnss = read_gnss_positions(args.gnss) if args.gnss is not None else None
     offset = args.gnss_offset_s
@@ -150,8 +149,6 @@ def _write_pose(args: argparse.Namespace, est: Any, t: Any) -> dict[str, Any]:
         offset = float(gnss.t_s[0] - t_cam[0]) if gnss is not None else 0.0
     frame = pose_frame(t_cam, est.quat, gnss, gnss_offset_s=offset, t0_gps_s=args.t0_gps_s)
     if gnss is None and args.t0_gps_s == 0.0:
-        import pandas as pd
-
         keep = ("qx", "qy", "qz", "qw", "roll_deg", "pitch_deg", "yaw_deg")
         table = pd.DataFrame({"t_s": t_cam, **{k: frame[k] for k in keep}})
         if args.out.suffix.lower() == ".parquet":
@@ -166,50 +163,63 @@ def _write_pose(args: argparse.Namespace, est: Any, t: Any) -> dict[str, Any]:
     return {"out": str(path), "epochs_with_position": n_pos}
 
 
-def run_reconstruct(args: argparse.Namespace) -> int:
-    import numpy as np
-    from scipy.spatial.transform import Rotation
-
-    from navtrack.attitude.quaternion import attitude_errors
-    from navtrack.attitude.reconstruct import reconstruct
-
+def _check_inputs(args: argparse.Namespace) -> None:
+    """Refuse contradictory inputs; ``--example`` sets the bundled trial with simulated fixes."""
     if args.example:
         if args.imu is not None or args.fixes is not None:
             raise SystemExit(
                 "navtrack attitude reconstruct: give either IMU (--fixes | --simulate-fixes) or "
                 "--example, not both"
             )
-        from navtrack.data import sample_path
-
         args.imu, args.simulate_fixes = sample_path(EXAMPLE), True
     if args.imu is None:
         raise SystemExit("navtrack attitude reconstruct: give an IMU file, or --example")
-    from navtrack.cli.outputs import check_outputs
-
     check_outputs("navtrack attitude reconstruct", args.out, (".csv", ".parquet"))
     if (args.fixes is None) == (not args.simulate_fixes):
         raise SystemExit(
             "navtrack attitude reconstruct: give exactly one of --fixes and --simulate-fixes"
         )
+
+
+def _camera_fixes(
+    args: argparse.Namespace, t: Any, trial: BroadTrial | None, summary: dict[str, Any]
+) -> tuple[Any, Any, Any]:
+    """(t_s, quat, sigma_rad) of the camera fixes: read from ``--fixes`` or simulated from the
+    trial's optical truth (their status counts go into ``summary``)."""
+    if not args.simulate_fixes:
+        return _read_fixes(args.fixes, args.fix_sigma_rad)
+    if trial is None:
+        raise SystemExit("navtrack attitude reconstruct: --simulate-fixes needs a BROAD .mat trial")
+    rng = np.random.default_rng(args.seed)
+    sights = simulate_sightings(t, trial.opt_quat_xyzw, rng)
+    fixes = solve_fixes(sights.v_body, sights.w_ref, sights.visible, rng, min_rays=6)
+    summary["fix_status"] = fixes.status_counts()
+    return sights.t_stamp_s[fixes.ok], fixes.quat[fixes.ok], fixes.sigma_rad[fixes.ok]
+
+
+def _errors_vs_optical(
+    recon: Reconstruction, trial: BroadTrial, t: Any, ft: Any
+) -> dict[str, dict[str, float]]:
+    """Mean and largest error of every estimate against the trial's optical attitude, over the
+    moving samples inside the span of the fixes (printed, and returned for the summary)."""
+    use = np.all(np.isfinite(trial.opt_quat_xyzw), axis=1) & trial.movement
+    use &= (t >= ft[0]) & (t <= ft[-1])
+    truth = Rotation.from_quat(trial.opt_quat_xyzw[use])
+    errors: dict[str, dict[str, float]] = {}
+    for name in _ESTIMATE_NAMES:
+        e = np.degrees(
+            attitude_errors(Rotation.from_quat(recon.on_camera_clock(name, t[use])), truth)[0]
+        )
+        errors[name] = {"mean_deg": float(e.mean()), "max_deg": float(e.max())}
+        print(f"{name:<17} error vs optical: mean {e.mean():.3f} deg, max {e.max():.3f} deg")
+    return errors
+
+
+def run_reconstruct(args: argparse.Namespace) -> int:
+    _check_inputs(args)
     t, gyr, trial = _read_imu(args.imu)
     summary: dict[str, Any] = {"imu": str(args.imu), "samples": int(np.size(t))}
-    if args.simulate_fixes:
-        if trial is None:
-            raise SystemExit(
-                "navtrack attitude reconstruct: --simulate-fixes needs a BROAD .mat trial"
-            )
-        from navtrack.attitude.simulate import simulate_sightings
-        from navtrack.attitude.wahba import solve_fixes
-
-        rng = np.random.default_rng(args.seed)
-        sights = simulate_sightings(t, trial.opt_quat_xyzw, rng)
-        fixes = solve_fixes(sights.v_body, sights.w_ref, sights.visible, rng, min_rays=6)
-        summary["fix_status"] = fixes.status_counts()
-        ft, fq, fs = sights.t_stamp_s[fixes.ok], fixes.quat[fixes.ok], fixes.sigma_rad[fixes.ok]
-    else:
-        ft, fq, fs = _read_fixes(args.fixes, args.fix_sigma_rad)
-    from tqdm import tqdm
-
+    ft, fq, fs = _camera_fixes(args, t, trial, summary)
     with tqdm(total=4, unit=" stages", disable=args.no_progress, leave=False) as bar:
 
         def stage(name: str) -> None:
@@ -238,19 +248,7 @@ def run_reconstruct(args: argparse.Namespace) -> int:
         f"ms, fix rms {np.degrees(cal.rms_rad):.3f} deg"
     )
     if trial is not None:
-        use = np.all(np.isfinite(trial.opt_quat_xyzw), axis=1) & trial.movement
-        use &= (t >= ft[0]) & (t <= ft[-1])
-        truth = Rotation.from_quat(trial.opt_quat_xyzw[use])
-        summary["error_vs_optical"] = {}
-        for name in _ESTIMATE_NAMES:
-            e = np.degrees(
-                attitude_errors(Rotation.from_quat(recon.on_camera_clock(name, t[use])), truth)[0]
-            )
-            summary["error_vs_optical"][name] = {
-                "mean_deg": float(e.mean()),
-                "max_deg": float(e.max()),
-            }
-            print(f"{name:<17} error vs optical: mean {e.mean():.3f} deg, max {e.max():.3f} deg")
+        summary["error_vs_optical"] = _errors_vs_optical(recon, trial, t, ft)
     if args.out is not None:
         summary.update(_write_pose(args, recon.estimates[args.estimate], t))
     if args.json is not None:

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any, ClassVar, Generic, TypeVar
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from navtrack.errors import NavtrackError
 
@@ -131,8 +132,6 @@ class ExperimentContext:
 
     def track(self, items: Sequence[T], desc: str) -> Iterator[T]:
         """Iterate over ``items`` with a progress bar on stderr named ``desc`` (when enabled)."""
-        from tqdm.auto import tqdm
-
         yield from tqdm(items, desc=desc, disable=not self.progress, leave=False)
 
     def shared_data(self, *, required: bool = False) -> Path:

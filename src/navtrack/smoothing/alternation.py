@@ -51,7 +51,7 @@ from navtrack._typing import FloatArray
 from navtrack.smoothing._banded import weighted_band_sums
 from navtrack.smoothing.config import AriConfig
 from navtrack.smoothing.estimation import (
-    Estimate,
+    AriParameterEstimate,
     EstimatorOutcome,
     Evaluation,
     choose_estimate,
@@ -143,7 +143,7 @@ def alternate(
     *,
     accelerate: bool = True,
     vce: VceForm = "redundancy",
-) -> Estimate | None:
+) -> AriParameterEstimate | None:
     """Iterate filtering, VCE and the AR step from ``vec`` ``(p + 2,)`` on ``problem``.
 
     Stopping rule: one step of the scheme changes ``phi`` and the relative standard deviations
@@ -266,7 +266,7 @@ def estimate_alternating(
     p, n = problem.p, problem.n
     observed = problem.w > 0
     window = problem.head(min(n, config.screen_n))
-    found: list[Estimate] = []
+    found: list[AriParameterEstimate] = []
     n_iter = 0
     for start in starts:
         out = alternate(start, window, config.alternation_tol, config.max_iter, vce=config.vce)
@@ -275,7 +275,7 @@ def estimate_alternating(
             n_iter += out.n_iter
     if not found:
         return EstimatorOutcome(None, problem, n_iter, "normal matrix singular at every start")
-    best: Estimate | None = choose_estimate(found, config.boundary_margin)
+    best: AriParameterEstimate | None = choose_estimate(found, config.boundary_margin)
     if window.n < n and best is not None:
         best = alternate(best.vec, problem, config.alternation_tol, config.max_iter, vce=config.vce)
         if best is None:

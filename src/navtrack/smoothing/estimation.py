@@ -58,7 +58,7 @@ from navtrack.smoothing.model import (
 
 __all__ = [
     "MIN_WEIGHT",
-    "Estimate",
+    "AriParameterEstimate",
     "Estimator",
     "EstimatorOutcome",
     "Evaluation",
@@ -103,7 +103,7 @@ class Evaluation:
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class Estimate:
+class AriParameterEstimate:
     """A point of the estimation with its evaluation and how it was reached.
 
     Attributes
@@ -155,7 +155,7 @@ class EstimatorOutcome:
 
     Attributes
     ----------
-    estimate : Estimate or None
+    estimate : AriParameterEstimate or None
         The estimate; ``None`` when the normal matrix was singular (``message`` says where).
     problem : AriProblem
         The problem with the final robust weights.
@@ -165,7 +165,7 @@ class EstimatorOutcome:
         Why there is no estimate.
     """
 
-    estimate: Estimate | None
+    estimate: AriParameterEstimate | None
     problem: AriProblem
     n_iter: int
     message: str = ""
@@ -187,15 +187,15 @@ def min_observations(p: int, d: int) -> int:
 
 def make_estimate(
     vec: FloatArray, evaluation: Evaluation, n_eval: int, converged: bool, log_floor: float
-) -> Estimate:
-    """:class:`Estimate` at ``vec``, with the boundary test."""
+) -> AriParameterEstimate:
+    """:class:`AriParameterEstimate` at ``vec``, with the boundary test."""
     p = vec.size - 2
     # A component at its floor, or with less than one observation's worth of redundancy, is
     # not estimable from these data (the likelihood is flat towards zero variance).
     boundary = (
         min(vec[p], vec[p + 1]) <= log_floor + 1e-6 or min(evaluation.r_n, evaluation.r_e) < 1.0
     )
-    return Estimate(vec.copy(), evaluation, n_eval, converged, bool(boundary))
+    return AriParameterEstimate(vec.copy(), evaluation, n_eval, converged, bool(boundary))
 
 
 def phi_gradient_terms(
@@ -381,9 +381,9 @@ def quasi_newton(
     problem: AriProblem,
     tol: float,
     max_iter: int,
-    start: Estimate | None = None,
+    start: AriParameterEstimate | None = None,
     information: Callable[[FloatArray], FloatArray] | None = None,
-) -> Estimate | None:
+) -> AriParameterEstimate | None:
     """Quasi-Newton (BFGS from ``hess``, optionally structured) with Armijo backtracking on
     ``-log L``.
 
@@ -405,7 +405,7 @@ def quasi_newton(
         ``1e3 tol``).
     max_iter : int
         Step limit.
-    start : Estimate, optional
+    start : AriParameterEstimate, optional
         An estimate already evaluated at ``vec`` on this problem (saves that evaluation).
     information : callable, optional
         ``vec -> (p + 2, p + 2)`` curvature model (e.g. :func:`spectral_information`; ``hess``
@@ -415,7 +415,7 @@ def quasi_newton(
 
     Returns
     -------
-    Estimate or None
+    AriParameterEstimate or None
         ``None`` when the model cannot be evaluated at ``vec``.
     """
     p = problem.p
@@ -485,7 +485,7 @@ def quasi_newton(
     return make_estimate(vec, out, n_eval, converged, log_floor)
 
 
-def vce_iteration(est: Estimate, problem: AriProblem, tol: float, max_iter: int) -> Estimate:
+def vce_iteration(est: AriParameterEstimate, problem: AriProblem, tol: float, max_iter: int) -> AriParameterEstimate:
     """Iterate the reproducing VCE ``sigma_k^2 <- Omega_k / r_k`` with ``phi`` fixed.
 
     Stopping rule: relative change of both standard deviations below ``tol``. A step that would
@@ -549,7 +549,7 @@ def starting_values(y: FloatArray, p: int, d: int, n_starts: int) -> list[FloatA
     return starts
 
 
-def choose_estimate(found: list[Estimate], margin: float) -> Estimate:
+def choose_estimate(found: list[AriParameterEstimate], margin: float) -> AriParameterEstimate:
     """Largest likelihood, but an interior solution within ``margin`` beats a boundary one."""
     best = max(found, key=lambda e: e.fit.loglike)
     if best.boundary:
@@ -575,7 +575,7 @@ def _cut_small(weight: FloatArray) -> FloatArray:
 
 
 def robust_reweight(
-    est: Estimate, problem: AriProblem, observed: BoolArray, config: AriConfig
+    est: AriParameterEstimate, problem: AriProblem, observed: BoolArray, config: AriConfig
 ) -> tuple[FloatArray, FloatArray]:
     """New observation ``(n,)`` and process ``(n - m,)`` weights from the studentized deletion
     residuals at ``est`` (the process ones only with ``config.robust_process``); weights below
@@ -597,12 +597,12 @@ def robust_reweight(
 
 
 #: A search, ``(estimate, problem) -> (refined estimate or None, evaluations spent outside it)``.
-_Search = Callable[[Estimate, AriProblem], tuple[Estimate | None, int]]
+_Search = Callable[[AriParameterEstimate, AriProblem], tuple[AriParameterEstimate | None, int]]
 
 
 def _reweighting_rounds(
-    best: Estimate, problem: AriProblem, observed: BoolArray, config: AriConfig, search: _Search
-) -> tuple[Estimate, AriProblem, int]:
+    best: AriParameterEstimate, problem: AriProblem, observed: BoolArray, config: AriConfig, search: _Search
+) -> tuple[AriParameterEstimate, AriProblem, int]:
     """IRLS inside the VCE (new weights, variance components re-estimated with ``phi`` fixed
     until the weights settle), then ``phi`` and the variances jointly by ``search``, repeated
     while that moves the weights. Returns the estimate, the problem with its weights and the
@@ -704,7 +704,7 @@ def estimate_exact_likelihood(
     p, d, n = problem.p, problem.d, problem.n
     head = min(n, config.screen_n)
     window = problem.head(head)
-    found: list[Estimate] = []
+    found: list[AriParameterEstimate] = []
     n_iter = 0
     for start in starts:
         hess0 = numerical_hessian(start, window)
@@ -722,8 +722,8 @@ def estimate_exact_likelihood(
     if n < head * config.stage_growth:
 
         def finite_difference_search(
-            est: Estimate, prob: AriProblem
-        ) -> tuple[Estimate | None, int]:
+            est: AriParameterEstimate, prob: AriProblem
+        ) -> tuple[AriParameterEstimate | None, int]:
             # fresh curvature (window, current weights) scaled by the number of observations,
             # rather than the BFGS matrix of the last search
             window = prob.head(head)
@@ -754,7 +754,7 @@ def estimate_exact_likelihood(
             n_iter += spent
     else:
 
-        def spectral_search(est: Estimate, prob: AriProblem) -> tuple[Estimate | None, int]:
+        def spectral_search(est: AriParameterEstimate, prob: AriProblem) -> tuple[AriParameterEstimate | None, int]:
             n_eff = float(np.count_nonzero(prob.w))
 
             def information(vec: FloatArray) -> FloatArray:

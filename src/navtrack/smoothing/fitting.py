@@ -23,7 +23,7 @@ from navtrack.smoothing._banded import single_threaded_blas
 from navtrack.smoothing.alternation import estimate_alternating
 from navtrack.smoothing.config import AriConfig
 from navtrack.smoothing.estimation import (
-    Estimate,
+    AriParameterEstimate,
     Estimator,
     estimate_exact_likelihood,
     min_observations,
@@ -158,7 +158,7 @@ def _finish(
     offset: FloatArray,
     observed: BoolArray,
     problem: AriProblem,
-    est: Estimate,
+    est: AriParameterEstimate,
     n_iter: int,
     cfg: AriConfig,
 ) -> AriResult:
