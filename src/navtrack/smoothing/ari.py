@@ -68,7 +68,7 @@ Modules (this one re-exports the public names):
   :class:`~navtrack.smoothing.model.AriProblem` (one series ready for estimation);
 * :mod:`navtrack.smoothing.estimation` — likelihood gradient, variance components,
   quasi-Newton search, robust reweighting, the estimator
-  (:func:`~navtrack.smoothing.estimation.estimate_exact_likelihood`) and
+  (:func:`~navtrack.smoothing.exact.estimate_exact_likelihood`) and
   :func:`observed_information`;
 * :mod:`navtrack.smoothing.alternation` — the paper's estimator (``AriConfig(estimator=
   "paper")``): conditional model, alternating filtering / VCE / expected-moment AR step;

@@ -25,10 +25,10 @@ from navtrack.smoothing.config import AriConfig
 from navtrack.smoothing.estimation import (
     AriParameterEstimate,
     Estimator,
-    estimate_exact_likelihood,
     min_observations,
     starting_values,
 )
+from navtrack.smoothing.exact import estimate_exact_likelihood
 from navtrack.smoothing.model import (
     AriProblem,
     ari_polynomial,
