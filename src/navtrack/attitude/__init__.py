@@ -70,11 +70,11 @@ from navtrack.attitude.wahba import (
 __all__ = [
     "ESTIMATES",
     "LN200",
+    "AttitudeEstimate",
     "AttitudeFix",
     "CalibrationConfig",
     "CameraFixes",
     "CameraSimConfig",
-    "AttitudeEstimate",
     "FixStatus",
     "GnssPositions",
     "GyroCalibration",

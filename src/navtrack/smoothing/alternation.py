@@ -135,6 +135,36 @@ def _change(new: FloatArray, vec: FloatArray, p: int) -> float:
     )
 
 
+def _worse(new: Evaluation | None, old: Evaluation) -> bool:
+    """``new`` cannot be evaluated or its likelihood is below ``old``'s (beyond rounding)."""
+    return new is None or new.fit.loglike < old.fit.loglike - 1e-9 * abs(old.fit.loglike)
+
+
+def _squarem_jump(
+    vec: FloatArray, x1: FloatArray, x2: FloatArray, out: Evaluation, problem: AriProblem
+) -> tuple[FloatArray, Evaluation | None, int]:
+    """The SQUAREM jump from ``vec`` with the two plain steps ``x1``, ``x2`` (see
+    :func:`alternate`), ``alpha`` halved towards -1 until the likelihood at the jump is not
+    below ``out``'s: (jump, its evaluation, evaluations spent)."""
+    p = problem.p
+    r = x1 - vec
+    v = x2 - x1 - r
+    norm_v = float(np.linalg.norm(v))
+    alpha = min(-float(np.linalg.norm(r)) / norm_v, -1.0) if norm_v > 0 else -1.0
+    n_eval = 0
+    while True:
+        jump = vec - 2.0 * alpha * r + alpha**2 * v
+        # inside the box of the log-variances (and of exp() without a box)
+        jump[p:] = np.clip(
+            jump[p:], max(problem.log_floor, -700.0), min(problem.log_ceiling, 700.0)
+        )
+        out_jump = evaluate(jump, problem)
+        n_eval += 1
+        if not _worse(out_jump, out) or alpha == -1.0:
+            return jump, out_jump, n_eval
+        alpha = min(0.5 * (alpha - 1.0), -1.0) if alpha < -1.5 else -1.0
+
+
 def alternate(
     vec: FloatArray,
     problem: AriProblem,
@@ -188,10 +218,6 @@ def alternate(
     n_eval = 1
     converged = False
     monotone = vce == "redundancy"
-
-    def worse(new: Evaluation | None, old: Evaluation) -> bool:
-        return new is None or new.fit.loglike < old.fit.loglike - 1e-9 * abs(old.fit.loglike)
-
     while n_eval < max_iter + 1:
         x1 = _map_step(vec, out, problem, vce)
         if x1 is None:
@@ -202,7 +228,7 @@ def alternate(
             break
         out1 = evaluate(x1, problem)
         n_eval += 1
-        if out1 is None or (monotone and worse(out1, out)):
+        if out1 is None or (monotone and _worse(out1, out)):
             converged = out1 is not None and change < 1e3 * tol
             break
         assert out1 is not None
@@ -210,22 +236,9 @@ def alternate(
         if x2 is None:  # plain iteration (or no second step)
             vec, out = x1, out1
             continue
-        r = x1 - vec
-        v = x2 - x1 - r
-        norm_v = float(np.linalg.norm(v))
-        alpha = min(-float(np.linalg.norm(r)) / norm_v, -1.0) if norm_v > 0 else -1.0
-        while True:
-            jump = vec - 2.0 * alpha * r + alpha**2 * v
-            # inside the box of the log-variances (and of exp() without a box)
-            jump[p:] = np.clip(
-                jump[p:], max(problem.log_floor, -700.0), min(problem.log_ceiling, 700.0)
-            )
-            out_jump = evaluate(jump, problem)
-            n_eval += 1
-            if not worse(out_jump, out) or alpha == -1.0:
-                break
-            alpha = min(0.5 * (alpha - 1.0), -1.0) if alpha < -1.5 else -1.0
-        if worse(out_jump, out1):
+        jump, out_jump, spent = _squarem_jump(vec, x1, x2, out, problem)
+        n_eval += spent
+        if _worse(out_jump, out1):
             # even the plain double step lost likelihood: keep the single step
             vec, out = x1, out1
             continue

@@ -57,7 +57,8 @@ ATTITUDE_COLUMNS: dict[str, tuple[str, str, str]] = {
 }
 
 #: Euler increments (|d yaw| + |d roll|) above this multiple of the rotation angle between two
-#: samples are Euler-angle artefacts (model errors), not motion.
+#: samples are Euler-angle artefacts (model errors), not motion. How it was chosen (BROAD
+#: trial 07) and judged (trial 02): docs/ari.md, method notes, "Causes of the flags".
 EULER_AMPLIFICATION = 3.0
 
 
@@ -167,7 +168,7 @@ def euler_artefacts(
     quat_xyzw : array_like, shape (n, 4)
         As :func:`increment_path`.
     amplification : float
-        Threshold ratio (default 3: chosen on BROAD trial 07, judged on trial 02).
+        Threshold ratio (default :data:`EULER_AMPLIFICATION`).
 
     Returns
     -------

@@ -416,7 +416,7 @@ def quasi_newton(
         ``None`` when the model cannot be evaluated at ``vec``.
     """
     p = problem.p
-    log_floor, log_ceiling = problem.log_floor, problem.log_ceiling
+    log_floor = problem.log_floor
     out: Evaluation | None
     if start is not None:
         out = start.evaluation
@@ -442,44 +442,74 @@ def quasi_newton(
             1.0,
         )
         step = step / cap
-        t = 1.0
-        accepted = None
-        while t > 1e-6:
-            trial = vec + t * step
-            trial[p:] = np.clip(trial[p:], log_floor, log_ceiling)
-            # likelihood first; the selected inversion and gradient only for an accepted step
-            part = trial_solution(trial, problem)
-            n_eval += 1
-            if part is not None and -part.loglike <= f - 1e-4 * t * 2.0 * gain / cap:
-                new = evaluate(trial, problem, partial=part)
-                if new is not None:
-                    accepted = (trial, new)
-                    break
-            t *= 0.25
-            # backtrack only while the shortened step can still gain the tolerance (predicted
-            # gain about 2 t gain / cap for small t): shorter trials probe rounding noise
-            if 2.0 * t * gain / cap < tol:
-                break
+        accepted, spent = _backtrack(vec, step, f, gain, cap, problem, tol)
+        n_eval += spent
         if accepted is None:
             converged = gain < 1e3 * tol
             break
         trial, new = accepted
-        s_k = trial - vec
-        y_k = new.grad - g
-        sy = float(s_k @ y_k)
         if information is not None and info_at is not None:
-            # follow the model's change from the old to the new point; keep what the secant
-            # updates learned beyond it (unless that leaves the matrix indefinite)
-            info_new = information(trial)
-            b_mat = b_mat + (info_new - info_at)
-            info_at = info_new
-            if np.any(np.linalg.eigvalsh(b_mat) <= 0):
-                b_mat = info_new.copy()
-        if sy > 1e-12 * float(np.linalg.norm(s_k) * np.linalg.norm(y_k)):
-            bs = b_mat @ s_k
-            b_mat = b_mat - np.outer(bs, bs) / float(s_k @ bs) + np.outer(y_k, y_k) / sy
+            b_mat, info_at = _follow_information(b_mat, information(trial), info_at)
+        b_mat = _bfgs_update(b_mat, trial - vec, new.grad - g)
         vec, out = trial, new
     return make_estimate(vec, out, n_eval, converged, log_floor)
+
+
+def _backtrack(
+    vec: FloatArray,
+    step: FloatArray,
+    f: float,
+    gain: float,
+    cap: float,
+    problem: AriProblem,
+    tol: float,
+) -> tuple[tuple[FloatArray, Evaluation] | None, int]:
+    """Armijo backtracking along ``step`` (the Newton step divided by ``cap``) from ``vec``
+    (``-log L = f`` there, expected gain of the Newton step ``gain``, so about
+    ``2 t gain / cap`` for small ``t``): the accepted ``(point, evaluation)`` or None, and the
+    likelihood evaluations spent."""
+    p = problem.p
+    t = 1.0
+    n_eval = 0
+    while t > 1e-6:
+        trial = vec + t * step
+        trial[p:] = np.clip(trial[p:], problem.log_floor, problem.log_ceiling)
+        # likelihood first; the selected inversion and gradient only for an accepted step
+        part = trial_solution(trial, problem)
+        n_eval += 1
+        if part is not None and -part.loglike <= f - 1e-4 * t * 2.0 * gain / cap:
+            new = evaluate(trial, problem, partial=part)
+            if new is not None:
+                return (trial, new), n_eval
+        t *= 0.25
+        # backtrack only while the shortened step can still gain the tolerance: shorter
+        # trials probe rounding noise
+        if 2.0 * t * gain / cap < tol:
+            break
+    return None, n_eval
+
+
+def _follow_information(
+    b_mat: FloatArray, info_new: FloatArray, info_at: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Structured quasi-Newton: add the curvature model's change from the old point
+    (``info_at``) to the new (``info_new``), keeping what the secant updates learned beyond it,
+    unless that leaves the matrix indefinite (then the model alone). Returns the matrix and
+    the model at the new point."""
+    b_mat = b_mat + (info_new - info_at)
+    if np.any(np.linalg.eigvalsh(b_mat) <= 0):
+        b_mat = info_new.copy()
+    return b_mat, info_new
+
+
+def _bfgs_update(b_mat: FloatArray, s_k: FloatArray, y_k: FloatArray) -> FloatArray:
+    """BFGS update of the Hessian approximation with the step ``s_k`` and gradient change
+    ``y_k``; unchanged when the curvature condition ``s_k . y_k > 0`` fails."""
+    sy = float(s_k @ y_k)
+    if sy > 1e-12 * float(np.linalg.norm(s_k) * np.linalg.norm(y_k)):
+        bs = b_mat @ s_k
+        return b_mat - np.outer(bs, bs) / float(s_k @ bs) + np.outer(y_k, y_k) / sy
+    return b_mat
 
 
 def vce_iteration(

@@ -345,7 +345,7 @@ def _select_and_fit(y_arr: FloatArray, cfg: AriConfig, tick: Callable[[], None])
     # optimum kept. On heavy-tailed series the non-robust likelihood is multimodal (a
     # low-noise/rough-process mode and a high-noise/smooth-process one); reaching a candidate
     # from both neighbours makes its optimum, and so the selected order, independent of the
-    # path that led to it in all the cases we tried (BROAD orientation; see docs/ari.md).
+    # path that led to it (docs/ari.md, method notes, "Order selection").
     for p, d in reversed(candidates):
         upper = found.get((p + 1, d))
         if upper is None:

@@ -19,7 +19,8 @@ and the IMU gyroscope:
   from or to the neighbouring sample, is in the trial's top :data:`FAST_QUANTILE` — real
   motion an ARI model with one constant ``sigma_e`` does not follow.
 
-The thresholds were chosen on trial 07 (fast rotation) and judged on trial 02 (slow rotation).
+How the thresholds were chosen (trial 07, fast rotation) and judged (trial 02, slow rotation):
+``docs/ari.md``, method notes, "Causes of the flags".
 """
 
 from __future__ import annotations
