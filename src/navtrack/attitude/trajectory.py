@@ -20,6 +20,7 @@ from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray, StrPath
 from navtrack.attitude.quaternion import check_quaternions
 from navtrack.errors import FileFormatError
+from navtrack.io.tables import read_table
 
 __all__ = ["POSE_COLUMNS", "GnssPositions", "pose_frame", "read_gnss_positions"]
 
@@ -66,8 +67,6 @@ def read_gnss_positions(path: StrPath) -> GnssPositions:
     FileFormatError
         Neither column set present, or time stamps not increasing (the file is named).
     """
-    from navtrack.io.tables import read_table
-
     p = Path(path)
     df = read_table(p)
     cols = set(df.columns)

@@ -113,7 +113,7 @@ class _Fields:
         header_no: int,
         str_cols: Sequence[int],
     ) -> None:
-        import pandas as pd  # not on the `pos` path, which only writes .pos files
+        import pandas as pd  # for the readers only: `navtrack pos` writes without pandas
 
         self.path, self.lines, self.linenos = path, lines, linenos
         self.n_tokens, self.header_no = n_tokens, header_no
@@ -214,7 +214,7 @@ def read_pos(path: StrPath) -> pd.DataFrame:
     ----------
     T. Takasu, *RTKLIB ver. 2.4.2 Manual*, 2013, appendix B (solution file format).
     """
-    import pandas as pd  # not on the `pos` path, which only writes .pos files
+    import pandas as pd  # for the readers only: `navtrack pos` writes without pandas
 
     p = Path(path)
     text = _solution_text(p)
@@ -459,7 +459,7 @@ def to_solution_frame(pos: pd.DataFrame) -> pd.DataFrame:
     -------
     pandas.DataFrame
     """
-    import pandas as pd  # not on the `pos` path, which only writes .pos files
+    import pandas as pd  # for the readers only: `navtrack pos` writes without pandas
 
     n = len(pos)
     out = pd.DataFrame(

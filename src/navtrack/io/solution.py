@@ -63,7 +63,7 @@ from navtrack.errors import FileFormatError, MissingDependencyError
 from navtrack.io.rtklib import format_pos
 
 if TYPE_CHECKING:
-    import pandas as pd  # not on the `pos` path, which writes CSV without pandas
+    import pandas as pd  # for the readers only: `navtrack pos` writes without pandas
 
 #: A solution frame: a pandas DataFrame or any mapping of column name to a 1-D array.
 SolutionLike: TypeAlias = "pd.DataFrame | Mapping[str, Any]"
@@ -292,7 +292,7 @@ def solution_table(df: SolutionLike) -> pd.DataFrame:
 
 
 def _frame(cols: dict[str, np.ndarray]) -> pd.DataFrame:
-    import pandas as pd  # not on the `pos` path, which writes CSV without pandas
+    import pandas as pd  # for the readers only: `navtrack pos` writes without pandas
 
     table = pd.DataFrame(cols)
     table["n_sats"] = pd.array(
@@ -750,7 +750,7 @@ def read_solution(path: StrPath) -> pd.DataFrame:
     MissingDependencyError
         A Parquet file without pyarrow installed.
     """
-    import pandas as pd  # not on the `pos` path, which writes CSV without pandas
+    import pandas as pd  # for the readers only: `navtrack pos` writes without pandas
 
     p = Path(path)
     suffix = p.suffix.lower()

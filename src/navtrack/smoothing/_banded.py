@@ -61,7 +61,7 @@ def single_threaded_blas() -> AbstractContextManager[Any]:
     threadpoolctl installed this is a no-op.
     """
     try:
-        from threadpoolctl import threadpool_limits
+        from threadpoolctl import threadpool_limits  # optional (extra speed)
     except ImportError:
         return nullcontext()
     return threadpool_limits(limits=1, user_api="blas")

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+from scipy.signal import lfilter
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray
@@ -567,8 +568,6 @@ def simulate_ari(
     phi_arr = np.asarray(phi, dtype=float).ravel()
     if phi_arr.size and np.any(np.abs(np.roots(np.concatenate([[1.0], phi_arr]))) >= 1):
         raise ValueError("phi must describe a stationary AR part (roots inside the unit circle)")
-    from scipy.signal import lfilter
-
     e = rng.normal(0.0, sigma_e, n + burn_in)
     u = lfilter([1.0], np.concatenate([[1.0], phi_arr]), e)[burn_in:]
     x = u
