@@ -405,10 +405,8 @@ def quasi_newton(
     start : AriParameterEstimate, optional
         An estimate already evaluated at ``vec`` on this problem (saves that evaluation).
     information : callable, optional
-        ``vec -> (p + 2, p + 2)`` curvature model (e.g. :func:`spectral_information`; ``hess``
-        should be its value at ``vec``): its change between iterates is added to the matrix
-        before the BFGS update (structured quasi-Newton), so the search follows the model
-        where it bends and the secant updates correct it where it is wrong.
+        ``vec -> (p + 2, p + 2)`` curvature model (e.g. :func:`spectral_information`, ``hess``
+        its value at ``vec``), followed between iterates (:func:`_follow_information`).
 
     Returns
     -------
