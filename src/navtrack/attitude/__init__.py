@@ -56,7 +56,7 @@ from navtrack.attitude.reconstruct import (
 )
 from navtrack.attitude.simulate import CameraSimConfig, Sightings, simulate_sightings
 from navtrack.attitude.smoother import SmootherConfig, SmootherResult, smooth_attitude
-from navtrack.attitude.trajectory import GnssPositions, pose_frame, read_gnss_positions
+from navtrack.attitude.trajectory import GnssPositions, pose_frame
 from navtrack.attitude.wahba import (
     AttitudeFix,
     CameraFixes,
@@ -102,7 +102,6 @@ __all__ = [
     "pose_frame",
     "propagate",
     "ransac_attitude",
-    "read_gnss_positions",
     "reconstruct",
     "simulate_gyro",
     "simulate_sightings",

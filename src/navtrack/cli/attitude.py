@@ -23,14 +23,14 @@ from tqdm import tqdm
 from navtrack.attitude.quaternion import attitude_errors
 from navtrack.attitude.reconstruct import Reconstruction, reconstruct
 from navtrack.attitude.simulate import simulate_sightings
-from navtrack.attitude.trajectory import pose_frame, read_gnss_positions
+from navtrack.attitude.trajectory import pose_frame
 from navtrack.attitude.wahba import solve_fixes
 from navtrack.cli.outputs import check_outputs
 from navtrack.data import sample_path
 from navtrack.errors import FileFormatError
 from navtrack.io.broad import BroadTrial, read_broad
 from navtrack.io.solution import write_solution
-from navtrack.io.tables import read_table
+from navtrack.io.tables import read_gnss_positions, read_table
 
 _GYRO_COLUMNS = ("gyr_x_rad_s", "gyr_y_rad_s", "gyr_z_rad_s")
 _FIX_COLUMNS = ("t_s", "qx", "qy", "qz", "qw")
