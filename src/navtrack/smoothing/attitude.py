@@ -59,7 +59,8 @@ ATTITUDE_COLUMNS: dict[str, tuple[str, str, str]] = {
 
 #: Euler increments (|d yaw| + |d roll|) above this multiple of the rotation angle between two
 #: samples are Euler-angle artefacts (model errors), not motion. How it was chosen (BROAD
-#: trial 07) and judged (trial 02): docs/ari.md, method notes, "Causes of the flags".
+#: trial 07) and judged (trial 02): docs/ari.md, method notes, "Attitude without the
+#: gimbal-lock singularity".
 EULER_AMPLIFICATION = 3.0
 
 

@@ -6,7 +6,7 @@ on the whole series (or on growing leading blocks for long series), reweights ro
 inside the VCE) and ends with a VCE iteration. It is an
 :class:`~navtrack.smoothing.estimation.Estimator` built on the kernels of
 :mod:`navtrack.smoothing.estimation`; why it is staged this way is recorded in ``docs/ari.md``
-(method notes, "Exact likelihood on long series").
+(method notes, "Long series: a leading block and a structured search").
 """
 
 from __future__ import annotations
@@ -249,8 +249,8 @@ def estimate_exact_likelihood(
     new epochs, then reweighted over the block), and searched by the structured quasi-Newton
     on :func:`~navtrack.smoothing.estimation.spectral_information` (its change between
     iterates added to the BFGS matrix): the cost is the number of whole-series evaluations,
-    and a block's optimum is close to the next block's. ``docs/ari.md`` (method notes, "Exact
-    likelihood on long series") records the measurements behind this choice.
+    and a block's optimum is close to the next block's. ``docs/ari.md`` (method notes, "Long
+    series: a leading block and a structured search") records the measurements behind this choice.
     """
     head = min(problem.n, config.screen_n)
     found, n_iter = _screen_starts(problem.head(head), config, starts)

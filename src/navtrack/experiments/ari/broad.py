@@ -20,7 +20,7 @@ and the IMU gyroscope:
   motion an ARI model with one constant ``sigma_e`` does not follow.
 
 How the thresholds were chosen (trial 07, fast rotation) and judged (trial 02, slow rotation):
-``docs/ari.md``, method notes, "Causes of the flags".
+``docs/ari.md``, method notes, "What explains a flag".
 """
 
 from __future__ import annotations
