@@ -48,7 +48,7 @@ import math
 import numpy as np
 
 from navtrack._typing import FloatArray
-from navtrack.smoothing._banded import weighted_band_sums
+from navtrack.smoothing.banded import weighted_band_sums
 from navtrack.smoothing.config import AriConfig
 from navtrack.smoothing.estimation import (
     AriParameterEstimate,

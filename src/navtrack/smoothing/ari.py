@@ -59,7 +59,7 @@ Everything the paper lists is estimated without a-priori stochastic information:
 
 Selected inversion: Takahashi's recursion on the banded Cholesky factor (compiled with numba
 when installed, extra ``speed``; O(n m^2)), else an odd–even block recursion in NumPy
-(:mod:`navtrack.smoothing._banded`). Both are tested against dense inverses.
+(:mod:`navtrack.smoothing.banded`). Both are tested against dense inverses.
 
 Modules (this one re-exports the public names):
 
@@ -80,7 +80,7 @@ Modules (this one re-exports the public names):
   :func:`fit_ari`, :func:`regularize_time`;
 * :mod:`navtrack.smoothing.config`, :mod:`navtrack.smoothing.result` — :class:`AriConfig`,
   :class:`AriResult`, :class:`AriStatus`, :class:`AriEpochStatus`;
-* :mod:`navtrack.smoothing._banded` — banded Cholesky, selected inversion, band sums.
+* :mod:`navtrack.smoothing.banded` — banded Cholesky, selected inversion, band sums.
 
 Likelihood (``initial="stationary"``, the default; ``n_o`` observed epochs): the first ``d``
 states are diffuse, the first ``p`` differences ``u = (1 - B)^d x`` follow the AR's stationary

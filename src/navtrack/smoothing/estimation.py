@@ -41,7 +41,7 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
 from navtrack.estimation.robust import deletion_statistic, robust_weight
-from navtrack.smoothing._banded import weighted_band_sums
+from navtrack.smoothing.banded import weighted_band_sums
 from navtrack.smoothing.config import AriConfig
 from navtrack.smoothing.model import (
     AriProblem,
@@ -204,7 +204,7 @@ def phi_gradient_terms(
     the likelihood gradient (and of the EM / alternating least-squares step of the paper's
     iterative scheme). ``E[e_s u_{s-j}] = e_s u_{s-j} + sum_{i,k} c_i delta_k Z[s-i, s-j-k]``;
     the covariance part summed over ``s`` is ``sum_{i,k} c_i delta_k S[i, j+k]``
-    (:func:`navtrack.smoothing._banded.weighted_band_sums`).
+    (:func:`navtrack.smoothing.banded.weighted_band_sums`).
     """
     m = p + d
     n = x.size

@@ -31,7 +31,7 @@ from scipy.signal import lfilter
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray
-from navtrack.smoothing._banded import (
+from navtrack.smoothing.banded import (
     add_convolution_band,
     centred_convolution,
     cholesky_solve_banded,
@@ -107,7 +107,7 @@ def normal_band(c: FloatArray, w: FloatArray, v: FloatArray, sn2: float, se2: fl
 def process_residuals(c: FloatArray, x: FloatArray) -> FloatArray:
     """``e_s = sum_i c_i x_{s-i}`` for ``s = m..n-1``, shape ``(n - m,)`` (eq. (3)).
 
-    Summed without cancellation (:func:`navtrack.smoothing._banded.centred_convolution`): an
+    Summed without cancellation (:func:`navtrack.smoothing.banded.centred_convolution`): an
     integrated series drifts far from zero (about 1e7 sigma_e after 1e6 epochs of ARI(5, 2))
     while ``e_s`` is of the order of ``sigma_e``; ``sum_i c_i x_{s-i}`` lost ``eps |c| |x|``.
     """

@@ -8,7 +8,13 @@ from typing import Any
 from navtrack.experiments.ari.printed import PAPER_TABLE1, PAPER_TABLE2, PAPER_TABLES, fmt
 from navtrack.experiments.ari.regime_tables import regime_lines
 
-__all__ = ["PAPER_TABLES", "summary_lines", "tables_markdown"]
+__all__ = [
+    "PAPER_TABLES",
+    "flag_and_process_lines",
+    "summary_lines",
+    "table2_and_strip_lines",
+    "tables_markdown",
+]
 
 
 def _pct(value: Any) -> str:
@@ -230,7 +236,7 @@ def _explained_cells(expl: dict[str, Any] | None, flagged: int) -> str:
     )
 
 
-def _flags_and_process(
+def flag_and_process_lines(
     real: list[dict[str, Any]], euler: list[dict[str, Any]] | None = None
 ) -> list[str]:
     """What explains the flags on the attitude series (in the Euler form too when ``euler``
@@ -307,7 +313,7 @@ def _flags_and_process(
     return lines
 
 
-def _table2_and_strips(results: dict[str, Any]) -> list[str]:
+def table2_and_strip_lines(results: dict[str, Any]) -> list[str]:
     """Paper Table 2 (filtered vs single-epoch least-squares accuracy) and Table 1 (rms over
     strips) on the real series, each below the paper's printed rows."""
     lines: list[str] = []
@@ -527,14 +533,14 @@ def tables_markdown(results: dict[str, Any]) -> str:
     lines += _bars(results["synthetic"])
     lines += _published_lines()
     lines += _real_lines(results["real"])
-    lines += _flags_and_process(results["real"], results.get("attitude_euler"))
+    lines += flag_and_process_lines(results["real"], results.get("attitude_euler"))
     if results.get("real_skipped"):
         lines += ["", "Skipped: " + "; ".join(results["real_skipped"])]
     if results.get("spp_comparison"):
         lines += _spp_lines(results["spp_comparison"])
     if results.get("sarimax"):
         lines += _sarimax_lines(results["sarimax"])
-    lines += _table2_and_strips(results)
+    lines += table2_and_strip_lines(results)
     if results.get("sarimax_skipped"):
         lines += ["", f"**SARIMAX cross-check skipped:** {results['sarimax_skipped']}."]
     lines.append("")
