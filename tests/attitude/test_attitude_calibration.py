@@ -13,7 +13,7 @@ from navtrack.attitude.quaternion import attitude_errors, delta_angles, propagat
 from navtrack.attitude.reconstruct import reconstruct
 from navtrack.attitude.trajectory import GnssPositions, pose_frame
 from navtrack.errors import FileFormatError
-from navtrack.io.tables import read_gnss_positions
+from navtrack.io.positions import read_gnss_positions
 
 RATE_HZ = 100.0
 BIAS = np.array([0.004, -0.002, 0.003])

@@ -3,7 +3,7 @@
 The paper interpolates the 1 Hz GPS positions linearly to the LIDAR sample times and pairs them
 with the reconstructed attitude. :func:`pose_frame` does that on any attitude time base and
 returns a solution frame that :func:`navtrack.io.solution.write_solution` writes as CSV or
-Parquet (the attitude as extra columns); :func:`navtrack.io.tables.read_gnss_positions` reads
+Parquet (the attitude as extra columns); :func:`navtrack.io.positions.read_gnss_positions` reads
 the GNSS positions.
 """
 

@@ -23,7 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -38,7 +38,9 @@ from navtrack.experiments.contract import (
     Outcome,
     shared_data_dir,
 )
-from navtrack.experiments.runner import MonteCarloResult, run_monte_carlo
+
+if TYPE_CHECKING:
+    from navtrack.experiments.runner import MonteCarloResult
 
 __all__ = [
     "EXPERIMENTS",
@@ -161,6 +163,10 @@ def reproduce(experiment: Experiment[Any, Any] | str, options: ReproduceOptions)
         The ``results.json`` content: the header of :data:`HEADER_FIELDS`, then the entries of
         ``summarize`` and ``extra``, then ``figures`` (paths) or ``figures_error``.
     """
+    # The runner loads tqdm, multiprocessing and the Dask probe: imported when a reproduction
+    # runs, since `navtrack --help` imports this package for the list of experiments.
+    from navtrack.experiments.runner import run_monte_carlo
+
     exp = get_experiment(experiment) if isinstance(experiment, str) else experiment
     params = exp.default_params() if options.params is None else options.params
     if not isinstance(params, exp.params_type):

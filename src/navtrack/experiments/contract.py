@@ -26,7 +26,6 @@ from pathlib import Path
 from typing import Any, ClassVar, Generic, TypeVar
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from navtrack.errors import NavtrackError
 
@@ -132,6 +131,8 @@ class ExperimentContext:
 
     def track(self, items: Sequence[T], desc: str) -> Iterator[T]:
         """Iterate over ``items`` with a progress bar on stderr named ``desc`` (when enabled)."""
+        from tqdm.auto import tqdm  # not loaded by `navtrack --help`, which imports this module
+
         yield from tqdm(items, desc=desc, disable=not self.progress, leave=False)
 
     def shared_data(self, *, required: bool = False) -> Path:
