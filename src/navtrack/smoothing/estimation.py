@@ -455,7 +455,7 @@ def quasi_newton(
 
 def _backtrack(
     vec: FloatArray,
-    step: FloatArray,
+    step: np.ndarray,
     f: float,
     gain: float,
     cap: float,
