@@ -11,8 +11,9 @@ from scipy.spatial.transform import Rotation
 from navtrack.attitude.calibration import CalibrationConfig, calibrate_gyro
 from navtrack.attitude.quaternion import attitude_errors, delta_angles, propagate
 from navtrack.attitude.reconstruct import reconstruct
-from navtrack.attitude.trajectory import GnssPositions, pose_frame, read_gnss_positions
+from navtrack.attitude.trajectory import GnssPositions, pose_frame
 from navtrack.errors import FileFormatError
+from navtrack.io.positions import read_gnss_positions
 
 RATE_HZ = 100.0
 BIAS = np.array([0.004, -0.002, 0.003])

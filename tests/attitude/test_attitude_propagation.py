@@ -56,9 +56,9 @@ def test_compiled_loop_numpy_path_and_backward_propagation(method: Q.Method, ord
     rng = np.random.default_rng(7)
     d = rng.normal(0.0, 0.05, (600, 3))
     q0 = Rotation.random(rng=rng).as_quat()
-    ref = Q._propagate_numpy(q0, d, 250, method, order)
-    fwd, nf = Q._propagate_loop(q0, d[250:], method == "closed", order, False)
-    back, nb = Q._propagate_loop(
+    ref = Q.propagate_numpy(q0, d, 250, method, order)
+    fwd, nf = Q.propagate_loop(q0, d[250:], method == "closed", order, False)
+    back, nb = Q.propagate_loop(
         q0, np.ascontiguousarray(d[:250][::-1]), method == "closed", order, True
     )
     np.testing.assert_allclose(np.concatenate([back[:0:-1], fwd]), ref.quat, atol=1e-13)

@@ -41,7 +41,7 @@ def test_table2_single_epoch_sd_keeps_the_ecef_trace(gnss_data: Path) -> None:
     assert [r["column"] for r in t2] == ["e_m", "n_m", "u_m"]
     assert all(r["ls_sd_rms"] > 0 and r["sigma_n"] > 0 for r in t2)
     assert all(r["paper"] is not None for r in rows)
-    text = "\n".join(tables._table2_and_strips({"table2": t2}))
+    text = "\n".join(tables.table2_and_strip_lines({"table2": t2}))
     assert "Table 2" in text
     assert "gsi0759_gps.pos" in text
 
@@ -129,7 +129,7 @@ def test_strips_rms_recovers_sigma_n() -> None:
     # the paper's estimator on the same strips
     assert len(strips[0]["paper_sigma_n_strips"]) == 6
     assert strips[0]["paper_rms_sigma_n"] == pytest.approx(0.02, rel=0.25)
-    text = "\n".join(tables._table2_and_strips({"strips": strips}))
+    text = "\n".join(tables.table2_and_strip_lines({"strips": strips}))
     assert "| paper Table 1 (printed) | X | (5,2) | ~130 |" in text  # the printed row first
     assert "| synthetic | e_m | (1,2) | 130 |" in text
 
@@ -137,7 +137,7 @@ def test_strips_rms_recovers_sigma_n() -> None:
 def test_table2_has_the_printed_rows_and_both_estimators() -> None:
     row = {"source": "RTKLIB x", "column": "e_m", "sigma_n": 0.02, "paper_sigma_n": 0.03}
     row |= {"ls_sd_rms": 0.5, "ratio": 0.04, "paper_ratio": 0.06}
-    text = "\n".join(tables._table2_and_strips({"table2": [row]}))
+    text = "\n".join(tables.table2_and_strip_lines({"table2": [row]}))
     # paper: ARI 0.021 m against the adjustment's 0.022 m (strips 3,4,5, X)
     assert "| paper, strips 3,4,5 (printed) | X | – | 0.021 | 0.022 | – | 0.955 |" in text
     assert "| RTKLIB x | e_m | 0.02 | 0.03 | 0.5 | 0.04 | 0.06 |" in text
@@ -180,7 +180,7 @@ def test_attitude_rows_in_parallel_equal_serial_and_are_tabled(tmp_path: Path) -
     euler = broad_series(path, decimate=10, form="euler")
     before, _ = real_data_rows([euler], cfg, further=False)
     assert all(r["paper"] is None and r["robust_process"] is None for r in before)
-    text = "\n".join(tables._flags_and_process(serial, before))
+    text = "\n".join(tables.flag_and_process_lines(serial, before))
     assert "| BROAD trial | rotvec_x_deg |" in text
     assert "| BROAD trial | yaw_deg |" in text
     assert "## Robust treatment of the process equations (3)" in text

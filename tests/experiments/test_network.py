@@ -16,7 +16,8 @@ from navtrack.errors import FileFormatError
 from navtrack.experiments.network import solve_network
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
-from navtrack.gnss.spp import SppConfig, solve_spp
+from navtrack.gnss.spp import SppConfig
+from navtrack.positioning import solve_positions
 from navtrack.positioning.stations import file_kind, station_jobs
 
 pytest.importorskip("pyarrow")
@@ -50,7 +51,7 @@ def test_each_station_equals_its_own_solution_and_the_job_resumes(
     table = pd.read_parquet(out / "positions")
     assert sorted(table["station"].astype(str).unique()) == ["07590920", "SEPT078M_120"]
     for job in jobs:
-        alone = solve_spp(read_obs(job.obs), read_nav(job.navs[0]), config=config)
+        alone = solve_positions(read_obs(job.obs), read_nav(job.navs[0]), config=config)
         part = table[table["station"].astype(str) == job.name]
         np.testing.assert_array_equal(part["x_m"].to_numpy(), alone.pos_m[:, 0])
         assert (part["status"].to_numpy() == alone.to_frame()["status"].to_numpy()).all()

@@ -183,12 +183,12 @@ def test_gate_clutter_puts_m_false_measurements_in_each_gate() -> None:
     boxes overlap before and after the crossing, where a doubled density would show) gives
     m on average (840 Poisson counts: standard error 0.05)."""
     from navtrack.experiments.sdcmsjpda import sensors, simulate_scans
-    from navtrack.experiments.sdcmsjpda.experiment import _truth
+    from navtrack.experiments.sdcmsjpda.summary import truth_states
     from navtrack.tracking.gating import chi2_threshold
     from navtrack.tracking.models import wrap_angle
 
     params = SdCmsjpdaParams()
-    truth = _truth(params)
+    truth = truth_states(params)
     scans = simulate_scans(params, truth, 1e-9, np.random.default_rng(7))  # clutter only
     gamma = chi2_threshold(params.gate_probability, 2)
     counts = []

@@ -14,11 +14,14 @@ from navtrack.data import sample_path
 
 
 def test_readme_lines_give_the_solution_table() -> None:
-    from navtrack.gnss import read_nav, read_obs, solve_spp
+    from navtrack.gnss import read_nav, read_obs
     from navtrack.gnss.spp import solution_frame
     from navtrack.io.solution import solution_table
+    from navtrack.positioning import solve_positions
 
-    result = solve_spp(read_obs(sample_path("07590920.05o")), read_nav(sample_path("07590920.05n")))
+    result = solve_positions(
+        read_obs(sample_path("07590920.05o")), read_nav(sample_path("07590920.05n"))
+    )
     table = result.to_frame()
     assert isinstance(table, pd.DataFrame)
     assert len(table) == 120
@@ -28,11 +31,14 @@ def test_readme_lines_give_the_solution_table() -> None:
 
 
 def test_to_frame_reads_back_as_written(tmp_path) -> None:
-    from navtrack.gnss import read_nav, read_obs, solve_spp
+    from navtrack.gnss import read_nav, read_obs
     from navtrack.gnss.spp import solution_frame
     from navtrack.io.solution import read_solution, write_solution
+    from navtrack.positioning import solve_positions
 
-    result = solve_spp(read_obs(sample_path("07590920.05o")), read_nav(sample_path("07590920.05n")))
+    result = solve_positions(
+        read_obs(sample_path("07590920.05o")), read_nav(sample_path("07590920.05n"))
+    )
     path = write_solution(solution_frame(result), tmp_path / "sol.csv")
     back, table = read_solution(path), result.to_frame()
     assert list(back.columns) == list(table.columns)

@@ -377,8 +377,9 @@ def test_galileo_inav_ephemerides_position_the_walk() -> None:
     the RTK trajectory RTKLIB computed for this walk (GNSS_IMU ``gnss_1730_sf.pos``); a wrong
     scale, sign or week in any orbit or clock field moves them by kilometres."""
     from navtrack.geodesy import ecef_to_enu
-    from navtrack.gnss.spp import SppConfig, solve_spp
+    from navtrack.gnss.spp import SppConfig
     from navtrack.io.rtklib import read_pos
+    from navtrack.positioning import solve_positions
 
     log = read_ubx(WALK)
     assert list(log.nav.tables["E"]["sat"]) == ["E07", "E08", "E13", "E14", "E26", "E29", "E33"]
@@ -388,7 +389,7 @@ def test_galileo_inav_ephemerides_position_the_walk() -> None:
     ref_xyz = ref[["x_m", "y_m", "z_m"]].to_numpy()
     xyz = {}
     for systems in ("G", "E"):
-        sol = solve_spp(log.obs, [log.nav], config=SppConfig(systems=systems, iono="off"))
+        sol = solve_positions(log.obs, [log.nav], config=SppConfig(systems=systems, iono="off"))
         frame = sol.to_frame()
         assert (frame["status"] == "ok").all(), systems
         xyz[systems] = frame[["x_m", "y_m", "z_m"]].to_numpy()

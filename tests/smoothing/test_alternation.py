@@ -12,9 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from navtrack.smoothing._banded import weighted_band_sums
 from navtrack.smoothing.alternation import alternate, ar_step
 from navtrack.smoothing.ari import AriConfig, AriStatus, fit_ari, simulate_ari
+from navtrack.smoothing.banded import weighted_band_sums
 from navtrack.smoothing.estimation import evaluate, phi_gradient_terms, starting_values
 from navtrack.smoothing.model import AriProblem, ari_polynomial
 

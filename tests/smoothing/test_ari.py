@@ -297,7 +297,7 @@ def test_order_selection_does_not_depend_on_the_warm_start(
     y = broad_series(path, decimate=10, form="euler").columns["yaw_deg"][:2000]
     cfg = AriConfig(robust="off", min_d=1)
     plain = fit_ari(y, cfg)
-    original = fitting._fit_fixed
+    original = fitting.fit_fixed_order
 
     def perturbed_warm(yy, p, d, c, *, robust, starts=None):  # type: ignore[no-untyped-def]
         if starts is not None and len(starts) > 1:  # [warm from ARI(p-1, d), default start]
@@ -308,7 +308,7 @@ def test_order_selection_does_not_depend_on_the_warm_start(
             starts = [warm, *starts[1:]]
         return original(yy, p, d, c, robust=robust, starts=starts)
 
-    monkeypatch.setattr(fitting, "_fit_fixed", perturbed_warm)
+    monkeypatch.setattr(fitting, "fit_fixed_order", perturbed_warm)
     other = fit_ari(y, cfg)
     assert (other.p, other.d) == (plain.p, plain.d)
     a = {(p, d): s for p, d, s in plain.candidates}

@@ -7,8 +7,8 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from navtrack.smoothing import _banded
-from navtrack.smoothing._banded import (
+from navtrack.smoothing import banded
+from navtrack.smoothing.banded import (
     band_to_dense,
     cholesky_solve_banded,
     inverse_band,
@@ -51,17 +51,17 @@ def test_banded_solve_and_selected_inverse_match_dense(
     rhs = rng.normal(size=n)
     x, logdet, factor = cholesky_solve_banded(ab, rhs)
     with monkeypatch.context() as patch:  # LAPACK path (numba not installed)
-        patch.setattr(_banded, "_cholesky", None)
+        patch.setattr(banded, "_cholesky", None)
         x_lapack, logdet_lapack, factor_lapack = cholesky_solve_banded(ab, rhs)
     # same factor to rounding (the compiled loops sum in LAPACK's order), same solution
     np.testing.assert_allclose(factor, factor_lapack, rtol=1e-13, atol=1e-14)
     np.testing.assert_allclose(x, x_lapack, rtol=1e-11, atol=1e-12)
     assert logdet == pytest.approx(logdet_lapack, rel=1e-13)
-    uncompiled, failed = _banded._cholesky_py(ab)
+    uncompiled, failed = banded.cholesky_loop(ab)
     assert failed == -1
     np.testing.assert_allclose(uncompiled.T, factor_lapack, rtol=1e-13, atol=1e-14)
     np.testing.assert_allclose(
-        _banded._solve_refined_py(ab, uncompiled, rhs, 1), x_lapack, rtol=1e-11, atol=1e-12
+        banded.solve_refined_loop(ab, uncompiled, rhs, 1), x_lapack, rtol=1e-11, atol=1e-12
     )
     np.testing.assert_allclose(x, np.linalg.solve(dense, rhs), rtol=1e-9, atol=1e-10)
     assert logdet == pytest.approx(np.linalg.slogdet(dense)[1], rel=1e-10, abs=1e-9)
@@ -80,7 +80,7 @@ def test_banded_solve_and_selected_inverse_match_dense(
     for zb in (
         inverse_band(ab, width),
         inverse_band_from_factor(factor, width, method="takahashi"),
-        _banded._takahashi_py(factor, max(width, m))[: width + 1],  # uncompiled recursion
+        banded.takahashi_loop(factor, max(width, m))[: width + 1],  # uncompiled recursion
     ):
         for lag in range(min(width, n - 1) + 1):
             np.testing.assert_allclose(zb[lag, : n - lag], np.diag(inv, lag), rtol=1e-8, atol=1e-10)
@@ -101,8 +101,8 @@ def test_weighted_band_sums_match_dense(n: int, m: int, monkeypatch: pytest.Monk
     )
     zb = inverse_band(ab, m)
     np.testing.assert_allclose(weighted_band_sums(zb, v, m), expected, rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(_banded._band_sums_py(zb, v, m), expected, rtol=1e-9, atol=1e-12)
-    monkeypatch.setattr(_banded, "_band_sums", None)  # NumPy path (numba not installed)
+    np.testing.assert_allclose(banded.band_sums_loop(zb, v, m), expected, rtol=1e-9, atol=1e-12)
+    monkeypatch.setattr(banded, "_band_sums", None)  # NumPy path (numba not installed)
     np.testing.assert_allclose(weighted_band_sums(zb, v, m), expected, rtol=1e-9, atol=1e-12)
     with pytest.raises(ValueError, match="offsets"):
         weighted_band_sums(zb[:m], v, m)
@@ -118,14 +118,14 @@ def test_convolution_band_matches_dense(monkeypatch: pytest.MonkeyPatch) -> None
         a[s - m, s - np.arange(m + 1)] = c
     dense = a.T @ (vs[:, None] * a)
     compiled = np.zeros((m + 1, n))
-    _banded.add_convolution_band(compiled, c, vs)
+    banded.add_convolution_band(compiled, c, vs)
     np.testing.assert_allclose(band_to_dense(compiled), dense, rtol=1e-13, atol=1e-13)
-    monkeypatch.setattr(_banded, "_add_convolution_band", None)  # NumPy path
+    monkeypatch.setattr(banded, "_add_convolution_band", None)  # NumPy path
     plain = np.zeros((m + 1, n))
-    _banded.add_convolution_band(plain, c, vs)
+    banded.add_convolution_band(plain, c, vs)
     np.testing.assert_array_equal(plain, compiled)  # same sums in the same order
     with pytest.raises(ValueError, match="do not match"):
-        _banded.add_convolution_band(plain, c, vs[1:])
+        banded.add_convolution_band(plain, c, vs[1:])
 
 
 def test_centred_convolution_is_exact_far_from_zero(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -140,9 +140,9 @@ def test_centred_convolution_is_exact_far_from_zero(monkeypatch: pytest.MonkeyPa
             for s in range(m, far.size)
         ]
     )
-    compiled = _banded.centred_convolution(c, far)
+    compiled = banded.centred_convolution(c, far)
     np.testing.assert_allclose(compiled, exact, rtol=0, atol=1e-11)
     assert np.max(np.abs(np.convolve(far, c, mode="valid") - exact)) > 1e-8  # what it replaces
-    monkeypatch.setattr(_banded, "_centred_convolution", None)  # NumPy path
-    np.testing.assert_array_equal(_banded.centred_convolution(c, far), compiled)
-    assert _banded.centred_convolution(c, far[:3]).size == 0
+    monkeypatch.setattr(banded, "_centred_convolution", None)  # NumPy path
+    np.testing.assert_array_equal(banded.centred_convolution(c, far), compiled)
+    assert banded.centred_convolution(c, far[:3]).size == 0

@@ -49,14 +49,14 @@ from navtrack.attitude.quaternion import (
 )
 from navtrack.attitude.reconstruct import (
     ESTIMATES,
-    Estimate,
+    AttitudeEstimate,
     Reconstruction,
     ReconstructionConfig,
     reconstruct,
 )
 from navtrack.attitude.simulate import CameraSimConfig, Sightings, simulate_sightings
 from navtrack.attitude.smoother import SmootherConfig, SmootherResult, smooth_attitude
-from navtrack.attitude.trajectory import GnssPositions, pose_frame, read_gnss_positions
+from navtrack.attitude.trajectory import GnssPositions, pose_frame
 from navtrack.attitude.wahba import (
     AttitudeFix,
     CameraFixes,
@@ -70,11 +70,11 @@ from navtrack.attitude.wahba import (
 __all__ = [
     "ESTIMATES",
     "LN200",
+    "AttitudeEstimate",
     "AttitudeFix",
     "CalibrationConfig",
     "CameraFixes",
     "CameraSimConfig",
-    "Estimate",
     "FixStatus",
     "GnssPositions",
     "GyroCalibration",
@@ -102,7 +102,6 @@ __all__ = [
     "pose_frame",
     "propagate",
     "ransac_attitude",
-    "read_gnss_positions",
     "reconstruct",
     "simulate_gyro",
     "simulate_sightings",

@@ -54,12 +54,15 @@ __all__ = [
     "from_scalar_first",
     "interpolate_attitude",
     "propagate",
+    "propagate_loop",
+    "propagate_numpy",
     "qmul",
     "series_matrix",
 ]
 
-#: True when propagation runs as one compiled loop (numba, extra ``speed``); pure NumPy
-#: (vectorised step quaternions, blocked product) otherwise.
+#: True when propagation runs as one compiled loop (numba, extra ``speed``:
+#: :func:`propagate_loop` compiled); pure NumPy (:func:`propagate_numpy`: vectorised step
+#: quaternions, blocked product) otherwise. The tests check the two equal.
 HAVE_NUMBA = _numba is not None
 
 #: Tolerance on ``| |q| - 1 |`` of quaternions given as attitudes.
@@ -255,7 +258,7 @@ def _cumulative_product_blocked(q0: FloatArray, steps: FloatArray) -> FloatArray
     return out
 
 
-def _propagate_loop(
+def propagate_loop(
     q0: FloatArray, d: FloatArray, closed: bool, order: int, backward: bool
 ) -> tuple[FloatArray, FloatArray]:
     """Step quaternions and their running product in one loop (compiled by numba): the same
@@ -300,7 +303,7 @@ def _propagate_loop(
     return out, norm
 
 
-_propagate_compiled: Any = jit(_propagate_loop)
+_propagate_compiled: Any = jit(propagate_loop)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -385,10 +388,10 @@ def propagate(
             quat = np.concatenate([qb[:0:-1], quat])
             norm = np.concatenate([nb[:0:-1], norm])
         return Propagation(quat, norm, start, method, order)
-    return _propagate_numpy(q0, d, start, method, order)
+    return propagate_numpy(q0, d, start, method, order)
 
 
-def _propagate_numpy(
+def propagate_numpy(
     q0: FloatArray, d: FloatArray, start: int, method: Method, order: int
 ) -> Propagation:
     """:func:`propagate` without numba: vectorised step quaternions, blocked product."""

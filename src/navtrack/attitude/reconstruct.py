@@ -43,7 +43,7 @@ from navtrack.attitude.quaternion import (
 )
 from navtrack.attitude.smoother import SmootherConfig, SmootherResult, smooth_attitude
 
-__all__ = ["ESTIMATES", "Estimate", "Reconstruction", "ReconstructionConfig", "reconstruct"]
+__all__ = ["ESTIMATES", "AttitudeEstimate", "Reconstruction", "ReconstructionConfig", "reconstruct"]
 
 #: Names of the estimates, in the order of the chain.
 ESTIMATES = ("propagation", "paper_correction", "calibrated", "filter", "smoother")
@@ -71,7 +71,7 @@ class ReconstructionConfig:
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class Estimate:
+class AttitudeEstimate:
     """One attitude estimate (arrays read-only).
 
     Attributes
@@ -97,7 +97,7 @@ class Reconstruction:
     Attributes
     ----------
     t_s : (n,) IMU sample times, s
-    estimates : dict of str to Estimate, keys :data:`ESTIMATES`
+    estimates : dict of str to AttitudeEstimate, keys :data:`ESTIMATES`
     correction_rotvec_rad : (3,) rotation vector of the correction quaternion, reference frame
     fix_errors_rad : (m,) scalar errors ``e_s`` of the plain propagation at the fixes (paper
         Figure 16 A)
@@ -106,7 +106,7 @@ class Reconstruction:
     """
 
     t_s: FloatArray
-    estimates: dict[str, Estimate]
+    estimates: dict[str, AttitudeEstimate]
     correction_rotvec_rad: FloatArray
     fix_errors_rad: FloatArray
     calibration: GyroCalibration
@@ -180,10 +180,10 @@ def reconstruct(
     step("smoother")
     sm = smooth_attitude(t, nominal, rates, ft + cal.time_offset_s, fq, fs, cfg.smoother)
     estimates = {
-        "propagation": Estimate(plain.quat, w, 0.0),
-        "paper_correction": Estimate(corrected.quat, w, 0.0),
-        "calibrated": Estimate(nominal.quat, rates, cal.time_offset_s),
-        "filter": Estimate(sm.filter_quat, rates, cal.time_offset_s),
-        "smoother": Estimate(sm.smoother_quat, rates, cal.time_offset_s),
+        "propagation": AttitudeEstimate(plain.quat, w, 0.0),
+        "paper_correction": AttitudeEstimate(corrected.quat, w, 0.0),
+        "calibrated": AttitudeEstimate(nominal.quat, rates, cal.time_offset_s),
+        "filter": AttitudeEstimate(sm.filter_quat, rates, cal.time_offset_s),
+        "smoother": AttitudeEstimate(sm.smoother_quat, rates, cal.time_offset_s),
     }
     return Reconstruction(t, estimates, np.asarray(q_c.as_rotvec(), dtype=np.float64), e_s, cal, sm)

@@ -38,9 +38,24 @@ from navtrack._typing import ArrayLike, FloatArray, IntArray
 from navtrack.attitude.quaternion import Propagation, interpolate_attitude
 from navtrack.estimation.kalman import kalman_gain, kf_predict, kf_update
 
-__all__ = ["SmootherConfig", "SmootherResult", "smooth_attitude"]
+__all__ = [
+    "SIGMA_BIAS_RAD_S_SQRT_S",
+    "SIGMA_GYRO_RAD_SQRT_S",
+    "SmootherConfig",
+    "SmootherResult",
+    "smooth_attitude",
+]
 
 _H = np.hstack([np.eye(3), np.zeros((3, 3))])
+
+SIGMA_GYRO_RAD_SQRT_S = 2e-3
+"""Default angle random walk of the smoother's gyro model, rad/√s. Far above a MEMS data-sheet
+value because it also takes up the gyro errors the calibration leaves (scale nonlinearity at
+high rates, time-varying bias). How it was chosen (BROAD trial 07) and judged (trial 02):
+``docs/attitude.md``, method notes, "Smoother noise"."""
+
+SIGMA_BIAS_RAD_S_SQRT_S = 1e-4
+"""Default bias random walk of the smoother's gyro model, rad/s/√s."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -50,23 +65,17 @@ class SmootherConfig:
     Attributes
     ----------
     sigma_gyro_rad_sqrt_s : float
-        Angle random walk, rad/√s. The default 2e-3 was chosen on BROAD trial 07 among 5e-4,
-        2e-3, 1e-2 (``navtrack reproduce alhat`` defaults otherwise): smoother mean errors
-        0.256, 0.267, 0.271 deg with mean NIS 48, 6.5, 0.29 (3 expected) — the value whose
-        NIS is nearest to consistent, the lowest error being overconfident. Judged on trial 02:
-        0.185, 0.182, 0.184 deg (NIS 40, 5.2, 0.23). It is far above a MEMS data-sheet value
-        because it also takes up the gyro errors the calibration leaves (scale nonlinearity at
-        25 rad/s, time-varying bias).
+        Angle random walk, rad/√s (default :data:`SIGMA_GYRO_RAD_SQRT_S`).
     sigma_bias_rad_s_sqrt_s : float
-        Bias random walk, rad/s/√s.
+        Bias random walk, rad/s/√s (default :data:`SIGMA_BIAS_RAD_S_SQRT_S`).
     sigma_att0_rad, sigma_bias0_rad_s : float
         Prior standard deviations at the first node.
     node_interval_s : float
         Grid of filter nodes between fixes.
     """
 
-    sigma_gyro_rad_sqrt_s: float = 2e-3
-    sigma_bias_rad_s_sqrt_s: float = 1e-4
+    sigma_gyro_rad_sqrt_s: float = SIGMA_GYRO_RAD_SQRT_S
+    sigma_bias_rad_s_sqrt_s: float = SIGMA_BIAS_RAD_S_SQRT_S
     sigma_att0_rad: float = 0.05
     sigma_bias0_rad_s: float = 1e-3
     node_interval_s: float = 0.1
@@ -136,6 +145,56 @@ def _apply(delta: FloatArray, quat: FloatArray) -> FloatArray:
     return np.asarray((Rotation.from_rotvec(delta) * Rotation.from_quat(quat)).as_quat())
 
 
+def _forward(
+    t: FloatArray,
+    C: FloatArray,
+    nodes: IntArray,
+    fix_node: IntArray,
+    z: FloatArray,
+    fsig: FloatArray,
+    cfg: SmootherConfig,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """The filter over the nodes: filtered states and covariances, predicted ones, the
+    transitions into each node and the NIS of every fix."""
+    N = nodes.size
+    xf = np.zeros((N, 6))
+    Pf = np.zeros((N, 6, 6))
+    xp = np.zeros((N, 6))
+    Pp = np.zeros((N, 6, 6))
+    Fs = np.zeros((N, 6, 6))
+    nis = np.full(z.shape[0], np.nan)
+    x = np.zeros(6)
+    P = np.diag([cfg.sigma_att0_rad**2] * 3 + [cfg.sigma_bias0_rad_s**2] * 3)
+    fixes_at = np.split(
+        np.argsort(fix_node, kind="stable"), np.cumsum(np.bincount(fix_node, minlength=N))[:-1]
+    )
+    for j in range(N):
+        if j > 0:
+            F, Q = _transition(C[nodes[j]] - C[nodes[j - 1]], t[nodes[j]] - t[nodes[j - 1]], cfg)
+            x, P = kf_predict(x, P, F, Q)
+            Fs[j] = F
+        xp[j], Pp[j] = x, P
+        for i in fixes_at[j]:
+            upd = kf_update(x, P, z[i], _H, fsig[i] ** 2 * np.eye(3), joseph=True)
+            x, P = upd.x, upd.P
+            nis[i] = float(upd.nis)
+        xf[j], Pf[j] = x, P
+    return xf, Pf, xp, Pp, Fs, nis
+
+
+def _backward(
+    xf: FloatArray, Pf: FloatArray, xp: FloatArray, Pp: FloatArray, Fs: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Rauch–Tung–Striebel pass: smoothed states and covariances at the nodes."""
+    xs = xf.copy()
+    Ps = Pf.copy()
+    for j in range(xf.shape[0] - 2, -1, -1):
+        G = kalman_gain(Pf[j] @ Fs[j + 1].T, Pp[j + 1])
+        xs[j] = xf[j] + G @ (xs[j + 1] - xp[j + 1])
+        Ps[j] = Pf[j] + G @ (Ps[j + 1] - Pp[j + 1]) @ G.T
+    return xs, Ps
+
+
 def smooth_attitude(
     t_s: ArrayLike,
     nominal: Propagation,
@@ -187,35 +246,8 @@ def smooth_attitude(
     C = np.zeros((n, 3, 3))
     C[1:] = np.cumsum(Rm[:-1] * dt[:, None, None], axis=0)
 
-    N = nodes.size
-    xf = np.zeros((N, 6))
-    Pf = np.zeros((N, 6, 6))
-    xp = np.zeros((N, 6))
-    Pp = np.zeros((N, 6, 6))
-    Fs = np.zeros((N, 6, 6))
-    nis = np.full(ft.size, np.nan)
-    x = np.zeros(6)
-    P = np.diag([cfg.sigma_att0_rad**2] * 3 + [cfg.sigma_bias0_rad_s**2] * 3)
-    fixes_at = np.split(
-        np.argsort(fix_node, kind="stable"), np.cumsum(np.bincount(fix_node, minlength=N))[:-1]
-    )
-    for j in range(N):
-        if j > 0:
-            F, Q = _transition(C[nodes[j]] - C[nodes[j - 1]], t[nodes[j]] - t[nodes[j - 1]], cfg)
-            x, P = kf_predict(x, P, F, Q)
-            Fs[j] = F
-        xp[j], Pp[j] = x, P
-        for i in fixes_at[j]:
-            upd = kf_update(x, P, z[i], _H, fsig[i] ** 2 * np.eye(3), joseph=True)
-            x, P = upd.x, upd.P
-            nis[i] = float(upd.nis)
-        xf[j], Pf[j] = x, P
-    xs = xf.copy()
-    Ps = Pf.copy()
-    for j in range(N - 2, -1, -1):
-        G = kalman_gain(Pf[j] @ Fs[j + 1].T, Pp[j + 1])
-        xs[j] = xf[j] + G @ (xs[j + 1] - xp[j + 1])
-        Ps[j] = Pf[j] + G @ (Ps[j + 1] - Pp[j + 1]) @ G.T
+    xf, Pf, xp, Pp, Fs, nis = _forward(t, C, nodes, fix_node, z, fsig, cfg)
+    xs, Ps = _backward(xf, Pf, xp, Pp, Fs)
     filt = _apply(_carry(xf, nodes, C, n), nominal.quat)
     smooth = _apply(_carry(xs, nodes, C, n), nominal.quat)
     sigma = np.sqrt(np.trace(Ps[:, :3, :3], axis1=1, axis2=2) / 3.0)

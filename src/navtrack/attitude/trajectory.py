@@ -3,25 +3,23 @@
 The paper interpolates the 1 Hz GPS positions linearly to the LIDAR sample times and pairs them
 with the reconstructed attitude. :func:`pose_frame` does that on any attitude time base and
 returns a solution frame that :func:`navtrack.io.solution.write_solution` writes as CSV or
-Parquet (the attitude as extra columns).
+Parquet (the attitude as extra columns); :func:`navtrack.io.positions.read_gnss_positions` reads
+the GNSS positions.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from navtrack import geodesy
 from navtrack._frozen import freeze_arrays
-from navtrack._typing import ArrayLike, FloatArray, StrPath
+from navtrack._typing import ArrayLike, FloatArray
 from navtrack.attitude.quaternion import check_quaternions
-from navtrack.errors import FileFormatError
 
-__all__ = ["POSE_COLUMNS", "GnssPositions", "pose_frame", "read_gnss_positions"]
+__all__ = ["POSE_COLUMNS", "GnssPositions", "pose_frame"]
 
 #: Attitude columns a pose frame adds to the solution columns (docs/vocabulary.md).
 POSE_COLUMNS = ("qx", "qy", "qz", "qw", "roll_deg", "pitch_deg", "yaw_deg")
@@ -44,57 +42,6 @@ class GnssPositions:
 
     def __post_init__(self) -> None:
         freeze_arrays(self)
-
-
-def read_gnss_positions(path: StrPath) -> GnssPositions:
-    """GNSS positions from a table file.
-
-    Parameters
-    ----------
-    path : str or path-like
-        A CSV with ``time`` (s), ``lat``, ``lon`` (deg, WGS-84) and ``alt`` (m, ellipsoidal) —
-        the pyins receiver log — or any table :func:`navtrack.io.tables.read_table` reads with
-        ``t_gps_s`` and ``x_m, y_m, z_m`` (navtrack solutions, RTKLIB ``.pos``).
-
-    Returns
-    -------
-    GnssPositions
-        Rows with a finite position, in time order.
-
-    Raises
-    ------
-    FileFormatError
-        Neither column set present, or time stamps not increasing (the file is named).
-    """
-    from navtrack.io.tables import read_table
-
-    p = Path(path)
-    df = read_table(p)
-    cols = set(df.columns)
-    if {"time", "lat", "lon", "alt"} <= cols:
-        t = df["time"].to_numpy(dtype=float)
-        llh = np.column_stack(
-            [
-                np.radians(df["lat"].to_numpy(dtype=float)),
-                np.radians(df["lon"].to_numpy(dtype=float)),
-                df["alt"].to_numpy(dtype=float),
-            ]
-        )
-        xyz = np.asarray(geodesy.geodetic_to_ecef(llh), dtype=np.float64)
-    elif {"t_gps_s", "x_m", "y_m", "z_m"} <= cols:
-        t = df["t_gps_s"].to_numpy(dtype=float)
-        xyz = df[["x_m", "y_m", "z_m"]].to_numpy(dtype=float)
-    else:
-        raise FileFormatError(
-            p,
-            None,
-            "no GNSS positions: expected columns time, lat, lon, alt or t_gps_s, x_m, y_m, z_m",
-        )
-    ok = np.isfinite(t) & np.all(np.isfinite(xyz), axis=1)
-    t, xyz = t[ok], xyz[ok]
-    if t.size < 2 or np.any(np.diff(t) <= 0):
-        raise FileFormatError(p, None, "GNSS time stamps must increase strictly (two or more rows)")
-    return GnssPositions(t, xyz, p.name)
 
 
 def pose_frame(

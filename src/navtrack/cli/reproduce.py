@@ -12,10 +12,23 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from navtrack.experiments import (
+    EXPERIMENTS,
+    ReproduceOptions,
+    get_experiment,
+    header_lines,
+    reproduce,
+)
+from navtrack.experiments.parameters import (
+    ParameterError,
+    apply_parameters,
+    parameter_fields,
+    parse_assignments,
+    read_parameter_file,
+)
+
 
 def register(subparsers: Any) -> None:
-    from navtrack.experiments import EXPERIMENTS
-
     cmd = subparsers.add_parser(
         "reproduce",
         help="reproduce a seed paper's experiment (tables, figures, results.json)",
@@ -58,9 +71,6 @@ def register(subparsers: Any) -> None:
 
 def list_lines() -> list[str]:
     """Every registered experiment: name, description, and its parameters (name, type, default)."""
-    from navtrack.experiments import EXPERIMENTS, get_experiment
-    from navtrack.experiments.parameters import parameter_fields
-
     lines: list[str] = []
     for name in sorted(EXPERIMENTS):
         exp = get_experiment(name)
@@ -90,14 +100,6 @@ def _show(value: Any) -> str:
 
 
 def run_reproduce(args: argparse.Namespace) -> int:
-    from navtrack.experiments import ReproduceOptions, get_experiment, header_lines, reproduce
-    from navtrack.experiments.parameters import (
-        ParameterError,
-        apply_parameters,
-        parse_assignments,
-        read_parameter_file,
-    )
-
     if args.list:
         print("\n".join(list_lines()))
         return 0

@@ -23,10 +23,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from navtrack import __version__
 from navtrack.experiments.contract import (
     EXTRA_SPAWN_KEY,
     HEADER_FIELDS,
@@ -37,6 +38,9 @@ from navtrack.experiments.contract import (
     Outcome,
     shared_data_dir,
 )
+
+if TYPE_CHECKING:
+    from navtrack.experiments.runner import MonteCarloResult
 
 __all__ = [
     "EXPERIMENTS",
@@ -159,7 +163,8 @@ def reproduce(experiment: Experiment[Any, Any] | str, options: ReproduceOptions)
         The ``results.json`` content: the header of :data:`HEADER_FIELDS`, then the entries of
         ``summarize`` and ``extra``, then ``figures`` (paths) or ``figures_error``.
     """
-    from navtrack import __version__
+    # The runner loads tqdm, multiprocessing and the Dask probe: imported when a reproduction
+    # runs, since `navtrack --help` imports this package for the list of experiments.
     from navtrack.experiments.runner import run_monte_carlo
 
     exp = get_experiment(experiment) if isinstance(experiment, str) else experiment
@@ -200,11 +205,26 @@ def reproduce(experiment: Experiment[Any, Any] | str, options: ReproduceOptions)
     log("extra      real data and cross-checks ...")
     extra = exp.extra(params, context)
     log(f"extra      done in {time.perf_counter() - t_extra:.1f} s")
-    header: dict[str, Any] = {
+    header = _header(exp, params, options.seed, runs, mc)
+    results = header | _merged(exp.name, header, summary, extra.results)
+    if options.figures:
+        outcome = Outcome(params, tuple(mc.results), results, extra.artifacts)
+        results |= _figures(exp, outcome, out, log)
+    results["wall_time_s"] = time.perf_counter() - t0
+    (out / "tables.md").write_text(exp.tables(results))
+    write_json(out / "results.json", results)
+    return results
+
+
+def _header(
+    exp: Experiment[Any, Any], params: Any, seed: int, runs: int, mc: MonteCarloResult
+) -> dict[str, Any]:
+    """The header entries of ``results.json`` (:data:`HEADER_FIELDS`)."""
+    return {
         "experiment": exp.name,
         "description": exp.description,
         "parameters": dataclasses.asdict(params),
-        "seed": options.seed,
+        "seed": seed,
         "runs": runs,
         "package_version": __version__,
         "git_revision": _git_revision(),
@@ -214,24 +234,33 @@ def reproduce(experiment: Experiment[Any, Any] | str, options: ReproduceOptions)
         "run_counts": mc.counts,
         "run_errors": [r.error.splitlines()[0] for r in mc.records if r.error],
     }
-    clash = (set(header) & set(summary)) | (set(header) & set(extra.results))
-    clash |= set(summary) & set(extra.results)
+
+
+def _merged(
+    name: str, header: dict[str, Any], summary: dict[str, Any], extra: dict[str, Any]
+) -> dict[str, Any]:
+    """``summary | extra``; ``ValueError`` when an experiment returns a key twice (or one of
+    the header's)."""
+    clash = (set(header) & set(summary)) | (set(header) & set(extra))
+    clash |= set(summary) & set(extra)
     if clash:
-        raise ValueError(f"experiment {exp.name!r} returned keys twice: {sorted(clash)}")
-    results = header | summary | extra.results
-    if options.figures:
-        try:
-            outcome = Outcome(params, tuple(mc.results), results, extra.artifacts)
-            results["figures"] = []
-            for figure in exp.figures(outcome, out):
-                results["figures"].append(str(figure))
-                log(f"figure     {figure}")
-        except ImportError as exc:
-            results["figures_error"] = str(exc)
-    results["wall_time_s"] = time.perf_counter() - t0
-    (out / "tables.md").write_text(exp.tables(results))
-    write_json(out / "results.json", results)
-    return results
+        raise ValueError(f"experiment {name!r} returned keys twice: {sorted(clash)}")
+    return summary | extra
+
+
+def _figures(
+    exp: Experiment[Any, Any], outcome: Outcome, out: Path, log: Callable[[str], None]
+) -> dict[str, Any]:
+    """Write the experiment's figures: ``{"figures": paths}``, or ``{"figures_error": why}``
+    when the plotting dependency is missing."""
+    paths: list[str] = []
+    try:
+        for figure in exp.figures(outcome, out):
+            paths.append(str(figure))
+            log(f"figure     {figure}")
+    except ImportError as exc:
+        return {"figures": paths, "figures_error": str(exc)}
+    return {"figures": paths}
 
 
 def header_lines(results: dict[str, Any]) -> list[str]:

@@ -131,7 +131,7 @@ class ExperimentContext:
 
     def track(self, items: Sequence[T], desc: str) -> Iterator[T]:
         """Iterate over ``items`` with a progress bar on stderr named ``desc`` (when enabled)."""
-        from tqdm.auto import tqdm
+        from tqdm.auto import tqdm  # not loaded by `navtrack --help`, which imports this module
 
         yield from tqdm(items, desc=desc, disable=not self.progress, leave=False)
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from navtrack.errors import NavtrackError
+from navtrack.errors import FileFormatError, NavtrackError
 
 __all__ = [
     "ParameterError",
@@ -197,8 +197,6 @@ def read_parameter_file(path: Path) -> dict[str, Any]:
         with Path(path).open("rb") as fh:
             return tomllib.load(fh)
     except tomllib.TOMLDecodeError as exc:
-        from navtrack.errors import FileFormatError
-
         raise FileFormatError(path, None, f"not a TOML file: {exc}") from None
 
 

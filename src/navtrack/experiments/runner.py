@@ -31,19 +31,23 @@ from __future__ import annotations
 
 import hashlib
 import json
+import multiprocessing
 import os
 import pickle
 import tempfile
 import traceback
 from collections.abc import Callable, Iterable
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from enum import IntEnum
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from navtrack._typing import StrPath
+from navtrack.errors import CheckpointMismatchError, MissingDependencyError
 
 __all__ = [
     "MonteCarloResult",
@@ -135,7 +139,7 @@ class MonteCarloResult:
 def dask_available() -> bool:
     """True when ``dask`` (and for clusters ``distributed``) can be imported."""
     try:
-        import dask  # noqa: F401
+        import dask  # noqa: F401  # optional dependency (extra navtrack[dask])
     except ImportError:
         return False
     return True
@@ -177,8 +181,6 @@ class _Checkpoints:
         if path.exists():
             old = json.loads(path.read_text())
             if old != manifest:
-                from navtrack.errors import CheckpointMismatchError
-
                 raise CheckpointMismatchError(
                     f"checkpoint_dir {self.dir} holds runs of {old}; refusing to mix them with "
                     f"{manifest}: give a new output folder, or delete {self.dir} to start over "
@@ -255,25 +257,10 @@ def run_monte_carlo(
     -------
     MonteCarloResult
     """
-    if n_runs < 0:
-        raise ValueError(f"n_runs must be >= 0, got {n_runs}")
-    if workers is not None and workers < 1:
-        raise ValueError(f"workers must be >= 1, got {workers}")
-    if workers is not None and scheduler is not None:
-        raise ValueError("give at most one of workers and scheduler")
-    if backend not in ("auto", "loop"):
-        raise ValueError(f"backend must be 'auto' or 'loop', got {backend!r}")
+    _check_options(n_runs, workers, scheduler, backend)
     store = _Checkpoints(checkpoint_dir, name, seed, params) if checkpoint_dir is not None else None
-    records: dict[int, RunRecord] = {}
-    if store is not None:
-        for i in range(n_runs):
-            rec = store.load(i)
-            if rec is not None and (rec.status == RunStatus.OK or not retry_errors):
-                records[i] = rec
+    records = _resumed(store, n_runs, retry_errors)
     pending = [i for i in range(n_runs) if i not in records]
-
-    from tqdm.auto import tqdm
-
     bar = tqdm(
         total=n_runs,
         initial=n_runs - len(pending),
@@ -288,26 +275,7 @@ def run_monte_carlo(
             store.save(record)
         bar.update(1)
 
-    note = ""
-    if backend == "loop":
-        chosen = "loop"
-        note = "plain in-process loop (requested)"
-    elif not dask_available():
-        chosen = "loop"
-        note = "dask is not installed: runs execute in a plain in-process loop (same results)"
-        if scheduler is not None:
-            from navtrack.errors import MissingDependencyError
-
-            raise MissingDependencyError("distributed", "dask", "--scheduler")
-    elif scheduler is not None:
-        chosen = "dask-scheduler"
-        note = f"existing Dask cluster at {scheduler}"
-    elif workers is not None:
-        chosen = "dask-processes"
-        note = f"Dask multiprocessing scheduler on {workers} local worker processes"
-    else:
-        chosen = "dask-threads"
-        note = "in-process Dask threaded scheduler (no cluster)"
+    chosen, note = _choose_backend(backend, workers, scheduler)
     try:
         if chosen == "loop":
             for i in pending:
@@ -326,6 +294,56 @@ def run_monte_carlo(
     return MonteCarloResult(ordered, int(seed), chosen, note, counts)
 
 
+def _check_options(n_runs: int, workers: int | None, scheduler: str | None, backend: str) -> None:
+    """``ValueError`` naming the first option of :func:`run_monte_carlo` out of its range."""
+    if n_runs < 0:
+        raise ValueError(f"n_runs must be >= 0, got {n_runs}")
+    if workers is not None and workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    if workers is not None and scheduler is not None:
+        raise ValueError("give at most one of workers and scheduler")
+    if backend not in ("auto", "loop"):
+        raise ValueError(f"backend must be 'auto' or 'loop', got {backend!r}")
+
+
+def _resumed(store: _Checkpoints | None, n_runs: int, retry_errors: bool) -> dict[int, RunRecord]:
+    """The runs a checkpoint folder already holds (without errors when ``retry_errors``)."""
+    records: dict[int, RunRecord] = {}
+    if store is not None:
+        for i in range(n_runs):
+            rec = store.load(i)
+            if rec is not None and (rec.status == RunStatus.OK or not retry_errors):
+                records[i] = rec
+    return records
+
+
+def _choose_backend(backend: str, workers: int | None, scheduler: str | None) -> tuple[str, str]:
+    """The backend that will run the runs and the note that says why.
+
+    Raises
+    ------
+    MissingDependencyError
+        ``scheduler`` given but dask is not installed.
+    """
+    if backend == "loop":
+        return "loop", "plain in-process loop (requested)"
+    if not dask_available():
+        if scheduler is not None:
+            raise MissingDependencyError("distributed", "dask", "--scheduler")
+        return (
+            "loop",
+            "dask is not installed: runs execute in a plain in-process loop (same results)",
+        )
+    if scheduler is not None:
+        return "dask-scheduler", f"existing Dask cluster at {scheduler}"
+    if workers is not None:
+        return (
+            "dask-processes",
+            f"Dask multiprocessing scheduler on {workers} local worker processes",
+        )
+    return "dask-threads", "in-process Dask threaded scheduler (no cluster)"
+
+
 def _batches(items: list[int], size: int) -> Iterable[list[int]]:
     for start in range(0, len(items), size):
         yield items[start : start + size]
@@ -338,7 +356,7 @@ def _run_dask_local(
     pending: list[int],
     finished: Callable[[RunRecord], None],
 ) -> None:
-    import dask
+    import dask  # optional dependency (extra navtrack[dask])
 
     # Batches keep the progress bar and the checkpoints current without a cluster.
     batch_size = max(1, min(8, os.cpu_count() or 1) * 2)
@@ -357,10 +375,7 @@ def _run_dask_processes(
     finished: Callable[[RunRecord], None],
     workers: int,
 ) -> None:
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
-    import dask
+    import dask  # optional dependency (extra navtrack[dask])
 
     task = dask.delayed(_execute, pure=False)
     # One pool for every batch; a run per task (chunksize 1) and many tasks per worker in a batch
@@ -390,10 +405,8 @@ def _run_distributed(
     scheduler: str | None,
 ) -> None:
     try:
-        from distributed import Client, as_completed
+        from distributed import Client, as_completed  # optional (extra navtrack[dask])
     except ImportError as exc:
-        from navtrack.errors import MissingDependencyError
-
         raise MissingDependencyError("distributed", "dask", "Dask clusters") from exc
     client = Client(scheduler)
     try:

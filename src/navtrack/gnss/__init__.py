@@ -3,9 +3,10 @@
 The names most scripts need, imported on first use (so that ``import navtrack.gnss`` stays
 cheap)::
 
-    from navtrack.gnss import read_nav, read_obs, solve_spp
+    from navtrack.gnss import read_nav, read_obs
+from navtrack.positioning import solve_positions
 
-    result = solve_spp(read_obs("07590920.05o"), read_nav("07590920.05n"))
+    result = solve_positions(read_obs("07590920.05o"), read_nav("07590920.05n"))
     table = result.to_frame()  # pandas, one row per epoch: position, status, DOPs, ...
 """
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import scipy.io
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, StrPath
@@ -80,8 +81,6 @@ def read_broad(path: StrPath) -> BroadTrial:
         The file is not a MATLAB file or lacks one of ``imu_gyr``, ``opt_quat``,
         ``sampling_rate``, ``movement``, or their shapes disagree (the message names them).
     """
-    import scipy.io
-
     p = Path(path)
     try:
         mat = scipy.io.loadmat(p, squeeze_me=True)

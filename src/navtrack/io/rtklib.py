@@ -26,8 +26,11 @@ T. Takasu, *RTKLIB ver. 2.4.2 Manual*, 2013, appendix B (solution file format).
 
 from __future__ import annotations
 
+import csv
+import io
 import re
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from os import fspath
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -110,10 +113,7 @@ class _Fields:
         header_no: int,
         str_cols: Sequence[int],
     ) -> None:
-        import csv
-        import io
-
-        import pandas as pd
+        import pandas as pd  # for the readers only: `navtrack pos` writes without pandas
 
         self.path, self.lines, self.linenos = path, lines, linenos
         self.n_tokens, self.header_no = n_tokens, header_no
@@ -214,9 +214,64 @@ def read_pos(path: StrPath) -> pd.DataFrame:
     ----------
     T. Takasu, *RTKLIB ver. 2.4.2 Manual*, 2013, appendix B (solution file format).
     """
-    import pandas as pd
+    import pandas as pd  # for the readers only: `navtrack pos` writes without pandas
 
     p = Path(path)
+    text = _solution_text(p)
+    fields = _Fields(
+        p, text.lines, text.linenos, text.n_tokens, text.header_lineno, text.str_cols()
+    )
+    t_gps_s = _parse_times(fields, text.scale)
+    data = _column_values(fields, text.columns)
+    header = text.header
+    ref_xyz = _header_ref_xyz(header)
+    xyz, llh = _positions(p, data, header, ref_xyz)
+    front = {
+        "t_gps_s": t_gps_s,
+        "x_m": xyz[:, 0],
+        "y_m": xyz[:, 1],
+        "z_m": xyz[:, 2],
+        "lat_deg": np.degrees(llh[:, 0]),
+        "lon_deg": np.degrees(llh[:, 1]),
+        "h_m": llh[:, 2],
+    }
+    rest = {key: val for key, val in data.items() if key not in front}
+    df = pd.DataFrame({**front, **rest})
+    df.attrs["header"] = header
+    df.attrs["time_scale"] = text.scale
+    df.attrs["ref_xyz_m"] = None if ref_xyz is None else tuple(float(v) for v in ref_xyz)
+    return df
+
+
+@dataclass(frozen=True, slots=True)
+class _SolutionText:
+    """The lines of a ``.pos`` file: its header, the column header and the solution lines."""
+
+    header: list[str]
+    columns: list[str]
+    scale: str
+    header_lineno: int
+    lines: list[str]
+    linenos: list[int]
+    n_tokens: int
+
+    def str_cols(self) -> list[int]:
+        """Fields kept as text: the two time fields and the degrees of d m s angles ("-0"
+        keeps its sign)."""
+        str_cols = [0, 1]
+        k = 2
+        for label in self.columns:
+            if label.endswith("(d'\")"):
+                str_cols.append(k)
+                k += 3
+            else:
+                k += 1
+        return str_cols
+
+
+def _solution_text(p: Path) -> _SolutionText:
+    """Split ``p`` into header lines and solution lines (FileFormatError: no column header, or
+    a solution line before it)."""
     try:
         text = p.read_text(encoding="ascii", errors="replace")
     except OSError as exc:
@@ -252,18 +307,12 @@ def read_pos(path: StrPath) -> pd.DataFrame:
         linenos.append(lineno)
     if columns is None:
         raise FileFormatError(p, None, "no column header ('%  GPST  ...') found")
+    return _SolutionText(header, columns, scale, header_lineno, lines, linenos, n_tokens)
 
-    # Time fields and the degrees of d m s angles stay text ("-0" keeps its sign).
-    str_cols = [0, 1]
-    k = 2
-    for label in columns:
-        if label.endswith("(d'\")"):
-            str_cols.append(k)
-            k += 3
-        else:
-            k += 1
-    fields = _Fields(p, lines, linenos, n_tokens, header_lineno, str_cols)
-    t_gps_s = _parse_times(fields, scale)
+
+def _column_values(fields: _Fields, columns: list[str]) -> dict[str, np.ndarray]:
+    """The values of every column after the time, by vocabulary name (d m s angles in degrees,
+    ``q`` and ``ns`` as integers)."""
     data: dict[str, np.ndarray] = {}
     k = 2
     for label in columns:
@@ -276,29 +325,14 @@ def read_pos(path: StrPath) -> pd.DataFrame:
         if name in _INT_COLUMNS:
             if not np.all(values == np.round(values)):
                 bad = int(np.flatnonzero(values != np.round(values))[0])
-                raise FileFormatError(p, linenos[bad], f"column {label}: not an integer")
+                raise FileFormatError(
+                    fields.path, fields.linenos[bad], f"column {label}: not an integer"
+                )
             data[name] = values.astype(np.int64)
         else:
             data[name] = values
         k += 1
-
-    ref_xyz = _header_ref_xyz(header)
-    xyz, llh = _positions(p, data, header, ref_xyz)
-    front = {
-        "t_gps_s": t_gps_s,
-        "x_m": xyz[:, 0],
-        "y_m": xyz[:, 1],
-        "z_m": xyz[:, 2],
-        "lat_deg": np.degrees(llh[:, 0]),
-        "lon_deg": np.degrees(llh[:, 1]),
-        "h_m": llh[:, 2],
-    }
-    rest = {key: val for key, val in data.items() if key not in front}
-    df = pd.DataFrame({**front, **rest})
-    df.attrs["header"] = header
-    df.attrs["time_scale"] = scale
-    df.attrs["ref_xyz_m"] = None if ref_xyz is None else tuple(float(v) for v in ref_xyz)
-    return df
+    return data
 
 
 def _parse_times(fields: _Fields, scale: str) -> FloatArray:
@@ -425,7 +459,7 @@ def to_solution_frame(pos: pd.DataFrame) -> pd.DataFrame:
     -------
     pandas.DataFrame
     """
-    import pandas as pd
+    import pandas as pd  # for the readers only: `navtrack pos` writes without pandas
 
     n = len(pos)
     out = pd.DataFrame(

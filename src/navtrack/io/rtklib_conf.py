@@ -213,27 +213,16 @@ def _systems(path: Path, lineno: int, value: str) -> str:
     return "".join(s for bit, s in _NAVSYS_BITS.items() if mask & bit)
 
 
-def read_conf(path: StrPath) -> RtklibConf:
-    """Read an RTKLIB option file.
+#: The options :func:`read_conf` turns into settings (every other option must keep RTKLIB's
+#: single point default, :data:`IGNORED_DEFAULTS`).
+_HANDLED = {
+    "pos1-posmode", "pos1-frequency", "pos1-elmask", "pos1-ionoopt", "pos1-tropopt",
+    "pos1-sateph", "pos1-navsys", "pos2-rejgdop", "out-solformat", "out-outvel",
+}  # fmt: skip
 
-    Parameters
-    ----------
-    path : str or path-like
-        The ``.conf`` file.
 
-    Returns
-    -------
-    RtklibConf
-
-    Raises
-    ------
-    FileFormatError
-        Naming the file and line: a line that is not ``name = value``, an option RTKLIB does
-        not have, an option navtrack pos does not have set to another value than RTKLIB's
-        single point default (:data:`IGNORED_DEFAULTS`), or a value navtrack does not support
-        (``pos1-posmode`` other than ``single``, ``out-solformat`` other than ``xyz``, ...).
-    """
-    p = Path(path)
+def _option_lines(p: Path) -> dict[str, tuple[int, str]]:
+    """``name -> (line, value)`` of every ``name = value`` line (comments after ``#``)."""
     values: dict[str, tuple[int, str]] = {}
     for lineno, raw in enumerate(p.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
         line = raw.split("#", 1)[0].strip()
@@ -244,16 +233,18 @@ def read_conf(path: StrPath) -> RtklibConf:
         if not eq or not name:
             raise FileFormatError(p, lineno, f"expected 'name = value', got {raw.strip()!r}")
         values[name] = (lineno, value)
+    return values
+
+
+def _check_options(p: Path, values: dict[str, tuple[int, str]]) -> None:
+    """Refuse an unknown option, an unhandled one away from its default, and the output and
+    mode settings navtrack pos does not write."""
 
     def fail(name: str, why: str) -> FileFormatError:
         return FileFormatError(p, values[name][0], f"{name}={values[name][1]}: {why}")
 
-    handled = {
-        "pos1-posmode", "pos1-frequency", "pos1-elmask", "pos1-ionoopt", "pos1-tropopt",
-        "pos1-sateph", "pos1-navsys", "pos2-rejgdop", "out-solformat", "out-outvel",
-    }  # fmt: skip
     for name, (lineno, value) in values.items():
-        if name in handled:
+        if name in _HANDLED:
             continue
         if name not in IGNORED_DEFAULTS:
             raise FileFormatError(p, lineno, f"{name}: not an RTKLIB 2.4.3 option")
@@ -269,9 +260,11 @@ def read_conf(path: StrPath) -> RtklibConf:
     if "out-outvel" in values and values["out-outvel"][1] != "off":
         raise fail("out-outvel", "the .pos file has no velocity columns (they are in .csv)")
 
-    def get(name: str) -> tuple[int, str] | None:
-        return values.get(name)
 
+def _settings(p: Path, values: dict[str, tuple[int, str]]) -> dict[str, object]:
+    """The :class:`RtklibConf` fields the handled options set (FileFormatError: a frequency
+    that does not go with the ionosphere option)."""
+    get = values.get
     conf: dict[str, object] = {}
     if (item := get("pos1-elmask")) is not None:
         conf["elmask_deg"] = _number(p, item[0], "pos1-elmask", item[1])
@@ -295,5 +288,32 @@ def read_conf(path: StrPath) -> RtklibConf:
             f"{values.get('pos1-ionoopt', (0, 'brdc'))[1]}: navtrack pos uses L1 alone, or "
             "L1+L2 for the iono-free combination (pos1-ionoopt=dual-freq)",
         )
+    return conf
+
+
+def read_conf(path: StrPath) -> RtklibConf:
+    """Read an RTKLIB option file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.conf`` file.
+
+    Returns
+    -------
+    RtklibConf
+
+    Raises
+    ------
+    FileFormatError
+        Naming the file and line: a line that is not ``name = value``, an option RTKLIB does
+        not have, an option navtrack pos does not have set to another value than RTKLIB's
+        single point default (:data:`IGNORED_DEFAULTS`), or a value navtrack does not support
+        (``pos1-posmode`` other than ``single``, ``out-solformat`` other than ``xyz``, ...).
+    """
+    p = Path(path)
+    values = _option_lines(p)
+    _check_options(p, values)
+    conf = _settings(p, values)
     lines = {name: lineno for name, (lineno, _) in values.items()}
     return RtklibConf(path=str(p), lines=lines, **conf)  # type: ignore[arg-type]

@@ -5,6 +5,37 @@ one row per epoch (see :func:`solution_columns` for its columns). :func:`write_s
 the file format from the suffix; :func:`read_solution` reads navtrack's own CSV and Parquet
 tables back.
 
+Formats of :func:`write_solution` (by file suffix):
+
+``.csv``
+    :data:`SOLUTION_COLUMNS` in that order, then the frame's extra columns. Times are
+    GPST: ``time_gps`` ISO 8601 to the millisecond, ``tow_s`` to the microsecond;
+    metres to 0.1 mm, degrees to 1e-9, DOP to 0.001; missing values are empty fields.
+``.parquet``
+    The same table at full precision (needs pandas and pyarrow, extra ``parquet``).
+``.pos``
+    RTKLIB's solution file as ``rnx2rtkp`` writes it by default (GPST, ECEF, Q, ns,
+    ``sdx`` ... ``sdzx``, age, ratio; :func:`navtrack.io.rtklib.format_pos`); epochs
+    without a valid fix are left out, as RTKLIB leaves them out.
+``.nmea``
+    One ``$..GGA`` sentence per epoch: UTC time (GPST minus leap seconds) to 0.01 s,
+    latitude/longitude as ``ddmm.mmmmmm``/``dddmm.mmmmmm``, fix quality 1 for valid
+    epochs (or mapped from RTKLIB's ``q`` or navtrack's ``quality`` column: 1->4, 2->5,
+    3/4->2, 5->1, 6->5), 0 and empty position fields otherwise, satellites used, HDOP from a
+    ``hdop`` column when there is one, **otherwise PDOP** in the HDOP field, altitude =
+    ellipsoidal height with geoid separation 0. GGA carries no date (``nmea_rmc=True`` adds
+    RMC, with speed and course from ``ve_mps``/``vn_mps`` when the frame has them).
+``.kml``
+    KML 2.2 document with the valid epochs as one time-stamped ``gx:Track`` (UTC
+    ``when`` per epoch) clamped to the ground.
+``.gpx``
+    GPX 1.1 track; one ``trkseg`` per run of consecutive valid epochs, ``time`` in UTC,
+    ``ele`` = ellipsoidal height with ``geoidheight`` 0, ``fix`` 3d, ``sat``, ``pdop``
+    (and ``hdop``/``vdop`` when the frame has them).
+
+KML and GPX cannot hold an epoch without a position; the document's description states
+how many epochs were left out.
+
 Heights: navtrack writes WGS-84 **ellipsoidal** heights everywhere. Where a format expects a
 height above mean sea level (NMEA GGA altitude, GPX ``ele``), the ellipsoidal height is written
 and the geoid separation is stated as 0 (GGA field 11, GPX ``geoidheight``), which keeps the
@@ -32,7 +63,7 @@ from navtrack.errors import FileFormatError, MissingDependencyError
 from navtrack.io.rtklib import format_pos
 
 if TYPE_CHECKING:
-    import pandas as pd
+    import pandas as pd  # for the readers only: `navtrack pos` writes without pandas
 
 #: A solution frame: a pandas DataFrame or any mapping of column name to a 1-D array.
 SolutionLike: TypeAlias = "pd.DataFrame | Mapping[str, Any]"
@@ -166,44 +197,10 @@ def solution_columns(df: SolutionLike) -> dict[str, np.ndarray]:
         Missing required columns (named in the message), columns of different lengths or
         non-finite ``t_gps_s``.
     """
-    has_xyz = not _missing(df, ("x_m", "y_m", "z_m"))
-    has_llh = not _missing(df, ("lat_deg", "lon_deg", "h_m"))
-    missing = _missing(df, ("t_gps_s", "status"))
-    if not has_xyz and not has_llh:
-        missing += _missing(df, ("x_m", "y_m", "z_m"))
-        missing = [*missing, "(or lat_deg, lon_deg, h_m)"]
-    if missing:
-        raise ValueError(f"df: solution frame lacks the columns {', '.join(missing)}")
-    t = _float(df["t_gps_s"])
+    t = _checked_times(df)
     n = t.shape[0]
-    if t.ndim != 1:
-        raise ValueError(f"df: t_gps_s must be one-dimensional, got shape {t.shape}")
-    lengths = {k: len(df[k]) for k in _keys(df)}
-    wrong = sorted(k for k, m in lengths.items() if m != n)
-    if wrong:
-        raise ValueError(f"df: columns {', '.join(wrong)} do not have the {n} rows of t_gps_s")
-    if not np.all(np.isfinite(t)):
-        bad = int(np.flatnonzero(~np.isfinite(t))[0])
-        raise ValueError(f"df: t_gps_s is not finite in row {bad}")
-
-    if has_xyz:
-        xyz = np.stack([_float(df["x_m"]), _float(df["y_m"]), _float(df["z_m"])], axis=-1)
-    if has_llh:
-        llh_deg = np.stack(
-            [_float(df["lat_deg"]), _float(df["lon_deg"]), _float(df["h_m"])], axis=-1
-        )
-    if not has_llh:
-        llh = geodesy.ecef_to_geodetic(xyz)
-        llh_deg = np.stack([np.degrees(llh[:, 0]), np.degrees(llh[:, 1]), llh[:, 2]], axis=-1)
-    if not has_xyz:
-        xyz = geodesy.geodetic_to_ecef(
-            np.stack([np.radians(llh_deg[:, 0]), np.radians(llh_deg[:, 1]), llh_deg[:, 2]], -1)
-        )
-    week, tow = timescale.week_tow(t)
-    # Rounded (not truncated) to the millisecond.
-    t_ms = np.round((t - timescale.from_week_tow(week, 0.0)) * 1e3).astype("timedelta64[ms]")
-    week_start = timescale.GPS_EPOCH.astype("datetime64[ms]") + (week * 7).astype("timedelta64[D]")
-    time_gps = np.datetime_as_string(week_start + t_ms)
+    xyz, llh_deg = _both_positions(df)
+    week, tow, time_gps = _gps_times(t)
     keys = set(_keys(df))
 
     def optional_float(name: str) -> FloatArray:
@@ -235,13 +232,67 @@ def solution_columns(df: SolutionLike) -> dict[str, np.ndarray]:
     return cols
 
 
+def _checked_times(df: SolutionLike) -> FloatArray:
+    """``t_gps_s`` of a frame that has every required column, all of its length (ValueError
+    naming what is wrong)."""
+    has_xyz = not _missing(df, ("x_m", "y_m", "z_m"))
+    has_llh = not _missing(df, ("lat_deg", "lon_deg", "h_m"))
+    missing = _missing(df, ("t_gps_s", "status"))
+    if not has_xyz and not has_llh:
+        missing += _missing(df, ("x_m", "y_m", "z_m"))
+        missing = [*missing, "(or lat_deg, lon_deg, h_m)"]
+    if missing:
+        raise ValueError(f"df: solution frame lacks the columns {', '.join(missing)}")
+    t = _float(df["t_gps_s"])
+    n = t.shape[0]
+    if t.ndim != 1:
+        raise ValueError(f"df: t_gps_s must be one-dimensional, got shape {t.shape}")
+    lengths = {k: len(df[k]) for k in _keys(df)}
+    wrong = sorted(k for k, m in lengths.items() if m != n)
+    if wrong:
+        raise ValueError(f"df: columns {', '.join(wrong)} do not have the {n} rows of t_gps_s")
+    if not np.all(np.isfinite(t)):
+        bad = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise ValueError(f"df: t_gps_s is not finite in row {bad}")
+    return t
+
+
+def _both_positions(df: SolutionLike) -> tuple[FloatArray, FloatArray]:
+    """(xyz_m, llh_deg): the ECEF and geodetic position, the one absent derived from the other."""
+    has_xyz = not _missing(df, ("x_m", "y_m", "z_m"))
+    has_llh = not _missing(df, ("lat_deg", "lon_deg", "h_m"))
+    if has_xyz:
+        xyz = np.stack([_float(df["x_m"]), _float(df["y_m"]), _float(df["z_m"])], axis=-1)
+    if has_llh:
+        llh_deg = np.stack(
+            [_float(df["lat_deg"]), _float(df["lon_deg"]), _float(df["h_m"])], axis=-1
+        )
+    if not has_llh:
+        llh = geodesy.ecef_to_geodetic(xyz)
+        llh_deg = np.stack([np.degrees(llh[:, 0]), np.degrees(llh[:, 1]), llh[:, 2]], axis=-1)
+    if not has_xyz:
+        xyz = geodesy.geodetic_to_ecef(
+            np.stack([np.radians(llh_deg[:, 0]), np.radians(llh_deg[:, 1]), llh_deg[:, 2]], -1)
+        )
+    return xyz, llh_deg
+
+
+def _gps_times(t: FloatArray) -> tuple[IntArray, FloatArray, np.ndarray]:
+    """(week, tow_s, time_gps): GPS week, time of week and the ISO time rounded (not truncated)
+    to the millisecond."""
+    week, tow = timescale.week_tow(t)
+    t_ms = np.round((t - timescale.from_week_tow(week, 0.0)) * 1e3).astype("timedelta64[ms]")
+    week_start = timescale.GPS_EPOCH.astype("datetime64[ms]") + (week * 7).astype("timedelta64[D]")
+    return week, tow, np.datetime_as_string(week_start + t_ms)
+
+
 def solution_table(df: SolutionLike) -> pd.DataFrame:
     """:func:`solution_columns` as a pandas DataFrame (``n_sats`` as nullable ``Int64``)."""
     return _frame(solution_columns(df))
 
 
 def _frame(cols: dict[str, np.ndarray]) -> pd.DataFrame:
-    import pandas as pd
+    import pandas as pd  # for the readers only: `navtrack pos` writes without pandas
 
     table = pd.DataFrame(cols)
     table["n_sats"] = pd.array(
@@ -312,37 +363,8 @@ def write_solution(
         position, ``status`` required). Rows are written in the given order, failed epochs
         included. CSV, NMEA, KML and GPX are written without pandas.
     path : str or path-like
-        Output file; the suffix chooses the format:
-
-        ``.csv``
-            :data:`SOLUTION_COLUMNS` in that order, then the frame's extra columns. Times are
-            GPST: ``time_gps`` ISO 8601 to the millisecond, ``tow_s`` to the microsecond;
-            metres to 0.1 mm, degrees to 1e-9, DOP to 0.001; missing values are empty fields.
-        ``.parquet``
-            The same table at full precision (needs pandas and pyarrow, extra ``parquet``).
-        ``.pos``
-            RTKLIB's solution file as ``rnx2rtkp`` writes it by default (GPST, ECEF, Q, ns,
-            ``sdx`` ... ``sdzx``, age, ratio; :func:`navtrack.io.rtklib.format_pos`); epochs
-            without a valid fix are left out, as RTKLIB leaves them out.
-        ``.nmea``
-            One ``$..GGA`` sentence per epoch: UTC time (GPST minus leap seconds) to 0.01 s,
-            latitude/longitude as ``ddmm.mmmmmm``/``dddmm.mmmmmm``, fix quality 1 for valid
-            epochs (or mapped from RTKLIB's ``q`` or navtrack's ``quality`` column: 1->4, 2->5,
-            3/4->2, 5->1, 6->5), 0 and
-            empty position fields otherwise, satellites used, HDOP from a ``hdop`` column when
-            there is one, **otherwise PDOP** in the HDOP field, altitude = ellipsoidal height
-            with geoid separation 0. GGA carries no date (``nmea_rmc=True`` adds RMC, with
-            speed and course from ``ve_mps``/``vn_mps`` when the frame has them).
-        ``.kml``
-            KML 2.2 document with the valid epochs as one time-stamped ``gx:Track`` (UTC
-            ``when`` per epoch) clamped to the ground.
-        ``.gpx``
-            GPX 1.1 track; one ``trkseg`` per run of consecutive valid epochs, ``time`` in UTC,
-            ``ele`` = ellipsoidal height with ``geoidheight`` 0, ``fix`` 3d, ``sat``, ``pdop``
-            (and ``hdop``/``vdop`` when the frame has them).
-
-        KML and GPX cannot hold an epoch without a position; the document's description states
-        how many epochs were left out.
+        Output file; the suffix chooses the format (one of :data:`FORMATS`, described in
+        the module notes).
     ok_status : object, default "ok"
         ``status`` value marking a valid fix (compared as is and, case-insensitively, by name);
         a tuple of values: any of them.
@@ -439,7 +461,7 @@ def _csv(cols: dict[str, np.ndarray]) -> str:
 
 def _write_parquet(cols: dict[str, np.ndarray], path: Path) -> None:
     try:
-        import pyarrow  # noqa: F401
+        import pyarrow  # noqa: F401  # optional dependency (extra navtrack[parquet])
     except ImportError:
         raise MissingDependencyError("pyarrow", "parquet", "Parquet solution files") from None
     table = _frame(cols)
@@ -528,16 +550,7 @@ def nmea_gga(
     """
     n = len(t_gps_s)
     utc_cs = np.round(timescale.gps_to_utc(t_gps_s) * 100.0).astype(np.int64)
-    # 1980-01-06 00:00 UTC is a midnight, so the time of day is the remainder modulo one day.
-    tod = utc_cs % 8_640_000
-    hh, mm, cs = tod // 360_000, (tod // 6_000) % 60, tod % 6_000
-    times = [
-        f"{h:02d}{m:02d}{c // 100:02d}.{c % 100:02d}"
-        for h, m, c in zip(hh.tolist(), mm.tolist(), cs.tolist(), strict=True)
-    ]
-    lat = _float(cols["lat_deg"])
-    lon = _float(cols["lon_deg"])
-    h = _float(cols["h_m"])
+    times = _utc_times_of_day(utc_cs)
     if "q" in cols or "quality" in cols:  # RTKLIB's Q, or navtrack's quality column (same codes)
         q = np.asarray(cols["quality"] if "quality" in cols else cols["q"])
         quality = np.array([_RTKLIB_Q_TO_GGA.get(int(v), 0) for v in q], dtype=np.int64)
@@ -548,19 +561,7 @@ def nmea_gga(
     sats = [f"{v:02.0f}" if v == v else "" for v in n_sats.tolist()]
     dop_col = "hdop" if "hdop" in cols else "pdop"
     dops = [f"{v:.2f}" if v == v else "" for v in _float(cols[dop_col]).tolist()]
-    # Position fields of the valid rows only, in one formatting pass.
-    lat_f = _ddmm(lat[ok], 2, 6)
-    lon_f = _ddmm(lon[ok], 3, 6)
-    where_ok = [
-        f"{a},{'N' if la >= 0.0 else 'S'},{b},{'E' if lo >= 0.0 else 'W'}"
-        for a, la, b, lo in zip(lat_f, lat[ok].tolist(), lon_f, lon[ok].tolist(), strict=True)
-    ]
-    alt_ok = [f"{v:.3f}" for v in h[ok].tolist()]
-    where = [",,,"] * n
-    alt = [""] * n
-    for i, j in enumerate(np.flatnonzero(ok).tolist()):
-        where[j] = where_ok[i]
-        alt[j] = alt_ok[i]
+    where, alt = _gga_positions(cols, ok)
     sep = ["0.0" if v else "" for v in ok.tolist()]
     qual = quality.tolist()
     bodies = [
@@ -580,6 +581,39 @@ def nmea_gga(
         bodies = [b for pair in zip(bodies, rmcs, strict=True) for b in pair]
     sums = nmea_checksums(bodies).tolist()
     return [f"${b}*{_HEX[c]}" for b, c in zip(bodies, sums, strict=True)]
+
+
+def _utc_times_of_day(utc_cs: IntArray) -> list[str]:
+    """``hhmmss.ss`` of UTC times in centiseconds since the GPS epoch (1980-01-06 00:00 UTC is
+    a midnight, so the time of day is the remainder modulo one day)."""
+    tod = utc_cs % 8_640_000
+    hh, mm, cs = tod // 360_000, (tod // 6_000) % 60, tod % 6_000
+    return [
+        f"{h:02d}{m:02d}{c // 100:02d}.{c % 100:02d}"
+        for h, m, c in zip(hh.tolist(), mm.tolist(), cs.tolist(), strict=True)
+    ]
+
+
+def _gga_positions(cols: Mapping[str, np.ndarray], ok: BoolArray) -> tuple[list[str], list[str]]:
+    """(latitude/longitude fields, altitude field) of every row: formatted for the valid rows
+    (in one pass), empty for the others."""
+    n = len(ok)
+    lat = _float(cols["lat_deg"])
+    lon = _float(cols["lon_deg"])
+    h = _float(cols["h_m"])
+    lat_f = _ddmm(lat[ok], 2, 6)
+    lon_f = _ddmm(lon[ok], 3, 6)
+    where_ok = [
+        f"{a},{'N' if la >= 0.0 else 'S'},{b},{'E' if lo >= 0.0 else 'W'}"
+        for a, la, b, lo in zip(lat_f, lat[ok].tolist(), lon_f, lon[ok].tolist(), strict=True)
+    ]
+    alt_ok = [f"{v:.3f}" for v in h[ok].tolist()]
+    where = [",,,"] * n
+    alt = [""] * n
+    for i, j in enumerate(np.flatnonzero(ok).tolist()):
+        where[j] = where_ok[i]
+        alt[j] = alt_ok[i]
+    return where, alt
 
 
 def _speed_course(cols: Mapping[str, np.ndarray], ok: BoolArray) -> list[str]:
@@ -716,7 +750,7 @@ def read_solution(path: StrPath) -> pd.DataFrame:
     MissingDependencyError
         A Parquet file without pyarrow installed.
     """
-    import pandas as pd
+    import pandas as pd  # for the readers only: `navtrack pos` writes without pandas
 
     p = Path(path)
     suffix = p.suffix.lower()
@@ -727,7 +761,7 @@ def read_solution(path: StrPath) -> pd.DataFrame:
             raise FileFormatError(p, None, f"not a CSV solution table: {exc}") from None
     elif suffix == ".parquet":
         try:
-            import pyarrow  # noqa: F401
+            import pyarrow  # noqa: F401  # optional dependency (extra navtrack[parquet])
         except ImportError:
             raise MissingDependencyError("pyarrow", "parquet", "Parquet solution files") from None
         df = pd.read_parquet(p)

@@ -14,6 +14,7 @@ so that :func:`numeric_column` can name the line of a value that is not a finite
 
 from __future__ import annotations
 
+import csv
 import io
 from pathlib import Path
 
@@ -22,6 +23,8 @@ import pandas as pd
 
 from navtrack._typing import FloatArray, StrPath
 from navtrack.errors import FileFormatError, MissingDependencyError
+from navtrack.io.rtklib import read_pos
+from navtrack.io.solution import read_solution
 
 __all__ = [
     "TABLE_SUFFIXES",
@@ -68,13 +71,11 @@ def read_table(path: StrPath) -> pd.DataFrame:
     p = Path(path)
     suffix = p.suffix.lower()
     if suffix == ".pos":
-        from navtrack.io.rtklib import read_pos
-
         return read_pos(p)
     lines = None
     if suffix == ".parquet":
         try:
-            import pyarrow  # noqa: F401
+            import pyarrow  # noqa: F401  # optional dependency (extra navtrack[parquet])
         except ImportError:
             raise MissingDependencyError("pyarrow", "parquet", f"Parquet input ({p})") from None
         try:
@@ -100,8 +101,6 @@ def read_table(path: StrPath) -> pd.DataFrame:
             p, None, f"unknown table suffix {suffix!r} (known: {', '.join(TABLE_SUFFIXES)})"
         )
     if set(df.columns) >= _SOLUTION_TIME_COLUMNS:
-        from navtrack.io.solution import read_solution
-
         df = read_solution(p)
     if lines is not None and len(lines) == len(df) + 1:
         df.attrs["file_line"] = lines[1:]
@@ -145,8 +144,6 @@ def last_row_cut(text: str, comment: str | None = None) -> bool:
 
     ``comment`` starts a comment: lines empty before it are not rows (nor the header).
     """
-    import csv
-
     lines = text.rstrip().splitlines()
     if comment is not None:
         lines = [ln for ln in lines if ln.split(comment, 1)[0].strip()]

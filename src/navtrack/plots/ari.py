@@ -16,6 +16,7 @@ import numpy as np
 
 from navtrack._typing import ArrayLike, StrPath
 from navtrack.plots.canvas import new_figure, save_figure
+from navtrack.timescale import to_datetime64
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -84,8 +85,6 @@ def series_figure(
     ax2.set_ylabel(f"y − x [{unit}]" if unit else "y − x")
     t0_text = f"{time_name} = {t0:.10g} s"
     if time_name == "t_gps_s":
-        from navtrack.timescale import to_datetime64
-
         t0_text += f", {str(to_datetime64(np.array([t0]))[0])[:19]} GPST"
     ax2.set_xlabel(f"t − t0 (s), t0 = first epoch ({t0_text})")
     return fig

@@ -34,7 +34,7 @@ def new_figure(figsize: tuple[float, float]) -> Figure:
         matplotlib is not installed.
     """
     try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional (extra plot)
         from matplotlib.figure import Figure
     except ImportError:
         raise MissingDependencyError("matplotlib", "plot", "Plots") from None

@@ -357,7 +357,7 @@ def sats_dop_figure(data: SolutionPlotData, max_gdop: float | None = None) -> Fi
     near-singular epochs; values above the top are drawn as triangles on the top edge. The GDOP
     rejection threshold ``max_gdop`` (RTKLIB ``pos2-rejgdop``), when given, is a dashed line.
     """
-    from matplotlib.ticker import FixedLocator, MaxNLocator, NullLocator
+    from matplotlib.ticker import FixedLocator, MaxNLocator, NullLocator  # optional (extra plot)
 
     fig = new_figure((8.0, 5.5))
     top, bottom = fig.subplots(2, 1, sharex=True)
@@ -421,7 +421,7 @@ def skyplot_figure(tracks: Sequence[SkyTrack], elmask_deg: float | None = None) 
         k = _label_point(tr, placed)
         placed.append(_planar(tr.az_rad[k], tr.zenith_deg[k]))
         ax.text(tr.az_rad[k], tr.zenith_deg[k], tr.sat, fontsize=7, color=colour)
-    from matplotlib.lines import Line2D
+    from matplotlib.lines import Line2D  # optional dependency (extra navtrack[plot])
 
     # legend entries drawn apart from the axes' lines (one line per track stays the rule)
     handles: list[Any] = [

@@ -32,8 +32,11 @@ from navtrack.gnss.spp import (
     validate,
 )
 from navtrack.gnss.spp import solution_frame as spp_solution_frame
+from navtrack.io.solution import solution_table
 
 if TYPE_CHECKING:
+    import pandas as pd
+
     from navtrack.gnss.ephemeris import EphemerisTable
     from navtrack.gnss.observations import Observations
     from navtrack.gnss.rinex.nav import NavData
@@ -61,6 +64,13 @@ class PositionSolution(SppResult):
     def frame_columns(self) -> dict[str, np.ndarray]:
         """The solution frame with the integrity columns (:func:`solution_frame`)."""
         return solution_frame(self)
+
+    def to_frame(self) -> pd.DataFrame:
+        """The solution as a pandas DataFrame, one row per epoch: ``t_gps_s`` and the columns
+        ``pos --out`` writes, as :func:`navtrack.io.solution.read_solution` reads them back."""
+        table = solution_table(self.frame_columns())
+        table.insert(0, "t_gps_s", self.t_gps_s)
+        return table
 
 
 def solve_positions(

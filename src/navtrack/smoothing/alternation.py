@@ -48,10 +48,10 @@ import math
 import numpy as np
 
 from navtrack._typing import FloatArray
-from navtrack.smoothing._banded import weighted_band_sums
+from navtrack.smoothing.banded import weighted_band_sums
 from navtrack.smoothing.config import AriConfig
 from navtrack.smoothing.estimation import (
-    Estimate,
+    AriParameterEstimate,
     EstimatorOutcome,
     Evaluation,
     choose_estimate,
@@ -135,6 +135,36 @@ def _change(new: FloatArray, vec: FloatArray, p: int) -> float:
     )
 
 
+def _worse(new: Evaluation | None, old: Evaluation) -> bool:
+    """``new`` cannot be evaluated or its likelihood is below ``old``'s (beyond rounding)."""
+    return new is None or new.fit.loglike < old.fit.loglike - 1e-9 * abs(old.fit.loglike)
+
+
+def _squarem_jump(
+    vec: FloatArray, x1: FloatArray, x2: FloatArray, out: Evaluation, problem: AriProblem
+) -> tuple[FloatArray, Evaluation | None, int]:
+    """The SQUAREM jump from ``vec`` with the two plain steps ``x1``, ``x2`` (see
+    :func:`alternate`), ``alpha`` halved towards -1 until the likelihood at the jump is not
+    below ``out``'s: (jump, its evaluation, evaluations spent)."""
+    p = problem.p
+    r = x1 - vec
+    v = x2 - x1 - r
+    norm_v = float(np.linalg.norm(v))
+    alpha = min(-float(np.linalg.norm(r)) / norm_v, -1.0) if norm_v > 0 else -1.0
+    n_eval = 0
+    while True:
+        jump = vec - 2.0 * alpha * r + alpha**2 * v
+        # inside the box of the log-variances (and of exp() without a box)
+        jump[p:] = np.clip(
+            jump[p:], max(problem.log_floor, -700.0), min(problem.log_ceiling, 700.0)
+        )
+        out_jump = evaluate(jump, problem)
+        n_eval += 1
+        if not _worse(out_jump, out) or alpha == -1.0:
+            return jump, out_jump, n_eval
+        alpha = min(0.5 * (alpha - 1.0), -1.0) if alpha < -1.5 else -1.0
+
+
 def alternate(
     vec: FloatArray,
     problem: AriProblem,
@@ -143,7 +173,7 @@ def alternate(
     *,
     accelerate: bool = True,
     vce: VceForm = "redundancy",
-) -> Estimate | None:
+) -> AriParameterEstimate | None:
     """Iterate filtering, VCE and the AR step from ``vec`` ``(p + 2,)`` on ``problem``.
 
     Stopping rule: one step of the scheme changes ``phi`` and the relative standard deviations
@@ -188,10 +218,6 @@ def alternate(
     n_eval = 1
     converged = False
     monotone = vce == "redundancy"
-
-    def worse(new: Evaluation | None, old: Evaluation) -> bool:
-        return new is None or new.fit.loglike < old.fit.loglike - 1e-9 * abs(old.fit.loglike)
-
     while n_eval < max_iter + 1:
         x1 = _map_step(vec, out, problem, vce)
         if x1 is None:
@@ -202,7 +228,7 @@ def alternate(
             break
         out1 = evaluate(x1, problem)
         n_eval += 1
-        if out1 is None or (monotone and worse(out1, out)):
+        if out1 is None or (monotone and _worse(out1, out)):
             converged = out1 is not None and change < 1e3 * tol
             break
         assert out1 is not None
@@ -210,22 +236,9 @@ def alternate(
         if x2 is None:  # plain iteration (or no second step)
             vec, out = x1, out1
             continue
-        r = x1 - vec
-        v = x2 - x1 - r
-        norm_v = float(np.linalg.norm(v))
-        alpha = min(-float(np.linalg.norm(r)) / norm_v, -1.0) if norm_v > 0 else -1.0
-        while True:
-            jump = vec - 2.0 * alpha * r + alpha**2 * v
-            # inside the box of the log-variances (and of exp() without a box)
-            jump[p:] = np.clip(
-                jump[p:], max(problem.log_floor, -700.0), min(problem.log_ceiling, 700.0)
-            )
-            out_jump = evaluate(jump, problem)
-            n_eval += 1
-            if not worse(out_jump, out) or alpha == -1.0:
-                break
-            alpha = min(0.5 * (alpha - 1.0), -1.0) if alpha < -1.5 else -1.0
-        if worse(out_jump, out1):
+        jump, out_jump, spent = _squarem_jump(vec, x1, x2, out, problem)
+        n_eval += spent
+        if _worse(out_jump, out1):
             # even the plain double step lost likelihood: keep the single step
             vec, out = x1, out1
             continue
@@ -266,7 +279,7 @@ def estimate_alternating(
     p, n = problem.p, problem.n
     observed = problem.w > 0
     window = problem.head(min(n, config.screen_n))
-    found: list[Estimate] = []
+    found: list[AriParameterEstimate] = []
     n_iter = 0
     for start in starts:
         out = alternate(start, window, config.alternation_tol, config.max_iter, vce=config.vce)
@@ -275,7 +288,7 @@ def estimate_alternating(
             n_iter += out.n_iter
     if not found:
         return EstimatorOutcome(None, problem, n_iter, "normal matrix singular at every start")
-    best: Estimate | None = choose_estimate(found, config.boundary_margin)
+    best: AriParameterEstimate | None = choose_estimate(found, config.boundary_margin)
     if window.n < n and best is not None:
         best = alternate(best.vec, problem, config.alternation_tol, config.max_iter, vce=config.vce)
         if best is None:

@@ -59,7 +59,7 @@ Everything the paper lists is estimated without a-priori stochastic information:
 
 Selected inversion: Takahashi's recursion on the banded Cholesky factor (compiled with numba
 when installed, extra ``speed``; O(n m^2)), else an odd–even block recursion in NumPy
-(:mod:`navtrack.smoothing._banded`). Both are tested against dense inverses.
+(:mod:`navtrack.smoothing.banded`). Both are tested against dense inverses.
 
 Modules (this one re-exports the public names):
 
@@ -68,7 +68,7 @@ Modules (this one re-exports the public names):
   :class:`~navtrack.smoothing.model.AriProblem` (one series ready for estimation);
 * :mod:`navtrack.smoothing.estimation` — likelihood gradient, variance components,
   quasi-Newton search, robust reweighting, the estimator
-  (:func:`~navtrack.smoothing.estimation.estimate_exact_likelihood`) and
+  (:func:`~navtrack.smoothing.exact.estimate_exact_likelihood`) and
   :func:`observed_information`;
 * :mod:`navtrack.smoothing.alternation` — the paper's estimator (``AriConfig(estimator=
   "paper")``): conditional model, alternating filtering / VCE / expected-moment AR step;
@@ -80,7 +80,7 @@ Modules (this one re-exports the public names):
   :func:`fit_ari`, :func:`regularize_time`;
 * :mod:`navtrack.smoothing.config`, :mod:`navtrack.smoothing.result` — :class:`AriConfig`,
   :class:`AriResult`, :class:`AriStatus`, :class:`AriEpochStatus`;
-* :mod:`navtrack.smoothing._banded` — banded Cholesky, selected inversion, band sums.
+* :mod:`navtrack.smoothing.banded` — banded Cholesky, selected inversion, band sums.
 
 Likelihood (``initial="stationary"``, the default; ``n_o`` observed epochs): the first ``d``
 states are diffuse, the first ``p`` differences ``u = (1 - B)^d x`` follow the AR's stationary

@@ -31,6 +31,7 @@ import warnings
 from typing import Literal
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
 
@@ -57,7 +58,9 @@ ATTITUDE_COLUMNS: dict[str, tuple[str, str, str]] = {
 }
 
 #: Euler increments (|d yaw| + |d roll|) above this multiple of the rotation angle between two
-#: samples are Euler-angle artefacts (model errors), not motion.
+#: samples are Euler-angle artefacts (model errors), not motion. How it was chosen (BROAD
+#: trial 07) and judged (trial 02): docs/ari.md, method notes, "Attitude without the
+#: gimbal-lock singularity".
 EULER_AMPLIFICATION = 3.0
 
 
@@ -86,8 +89,6 @@ def increment_path(quat_xyzw: ArrayLike) -> FloatArray:
         ``theta_k = sum_{j <= k} rotvec(R_{j-1}^-1 R_j)`` over the observed samples (rad, body
         axes), 0 at the first observed sample, NaN where missing.
     """
-    from scipy.spatial.transform import Rotation
-
     q, ok = _quaternions(quat_xyzw)
     path = np.full((q.shape[0], 3), np.nan)
     seen = np.flatnonzero(ok)
@@ -114,8 +115,6 @@ def rotations_from_path(path: ArrayLike, first_xyzw: ArrayLike) -> FloatArray:
         ``R_k = R_first prod_j exp(theta_j - theta_{j-1})`` (scalar-last, ``w >= 0``), NaN
         where ``path`` is missing.
     """
-    from scipy.spatial.transform import Rotation
-
     th = np.asarray(path, dtype=np.float64)
     if th.ndim != 2 or th.shape[1] != 3:
         raise ValueError(f"path: expected shape (n, 3), got {th.shape}")
@@ -142,8 +141,6 @@ def euler_path(quat_xyzw: ArrayLike) -> FloatArray:
     ndarray, shape (n, 3)
         ``[yaw, pitch, roll]`` per sample, NaN where missing.
     """
-    from scipy.spatial.transform import Rotation
-
     q, ok = _quaternions(quat_xyzw)
     angles = np.full((q.shape[0], 3), np.nan)
     if np.any(ok):
@@ -167,7 +164,7 @@ def euler_artefacts(
     quat_xyzw : array_like, shape (n, 4)
         As :func:`increment_path`.
     amplification : float
-        Threshold ratio (default 3: chosen on BROAD trial 07, judged on trial 02).
+        Threshold ratio (default :data:`EULER_AMPLIFICATION`).
 
     Returns
     -------
@@ -175,8 +172,6 @@ def euler_artefacts(
     step_rad : ndarray, shape (n,)
         Rotation angle from the previous observed sample (NaN at the first and where missing).
     """
-    from scipy.spatial.transform import Rotation
-
     q, ok = _quaternions(quat_xyzw)
     n = q.shape[0]
     ypr = euler_path(q)

@@ -58,7 +58,7 @@ class AriConfig:
         ``n / stage_growth^k`` epochs (those longer than ``screen_n``) and finally whole, each
         block started from the previous one's estimate and weights and searched by BFGS
         structured on the spectral information
-        (:func:`navtrack.smoothing.estimation.estimate_exact_likelihood`); shorter series go
+        (:func:`navtrack.smoothing.exact.estimate_exact_likelihood`); shorter series go
         from the window to the whole series by BFGS. Default 16 (n = 1e6: a block of 62500
         epochs, then the whole series), set on the simulated 1e6-epoch benchmark series.
     boundary_margin : float
@@ -75,7 +75,7 @@ class AriConfig:
         likelihood conditional on them (the plain Gauss–Markov model (2)–(3), any ``phi``).
     estimator : {"exact", "paper"}
         ``"exact"``: maximum of the exact (``initial``) likelihood by quasi-Newton search
-        (:func:`navtrack.smoothing.estimation.estimate_exact_likelihood`). ``"paper"``: the
+        (:func:`navtrack.smoothing.exact.estimate_exact_likelihood`). ``"paper"``: the
         paper's conditional Gauss–Markov model and its alternating iteration of filtering,
         variance-component estimation and AR fit
         (:func:`navtrack.smoothing.alternation.estimate_alternating`; ``initial`` is then

@@ -12,15 +12,13 @@ vector ``vec = (phi_1..phi_p, log sigma_n^2, log sigma_e^2)``:
   expected information, used for series of 64000 epochs and more);
 * :func:`vce_iteration` — the reproducing VCE ``sigma_k^2 <- Omega_k / r_k`` with ``phi`` fixed;
 * :func:`robust_reweight` — new weights of both equation groups from their studentized
-  deletion residuals (:mod:`navtrack.estimation.robust`);
-* :func:`estimate_exact_likelihood` — the estimator of :func:`navtrack.smoothing.ari.fit_ari`:
-  several starts on a leading window, refinement on the whole series, IRLS inside the VCE, a
-  final VCE iteration.
+  deletion residuals (:mod:`navtrack.estimation.robust`).
 
 An *estimator* is a function ``(problem, config, starts, *, robust) -> EstimatorOutcome``
-(:data:`Estimator`); :func:`estimate_exact_likelihood` is one. Another form of the estimation
-(e.g. the paper's alternation of filtering and variance-component estimation on the
-conditional model) plugs in beside it with the same signature and reuses the kernels here.
+(:data:`Estimator`); :func:`navtrack.smoothing.exact.estimate_exact_likelihood` is one. Another
+form of the estimation (e.g. the paper's alternation of filtering and variance-component
+estimation on the conditional model) plugs in beside it with the same signature and reuses the
+kernels here.
 
 References
 ----------
@@ -43,7 +41,7 @@ import numpy as np
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
 from navtrack.estimation.robust import deletion_statistic, robust_weight
-from navtrack.smoothing._banded import weighted_band_sums
+from navtrack.smoothing.banded import weighted_band_sums
 from navtrack.smoothing.config import AriConfig
 from navtrack.smoothing.model import (
     AriProblem,
@@ -58,12 +56,11 @@ from navtrack.smoothing.model import (
 
 __all__ = [
     "MIN_WEIGHT",
-    "Estimate",
+    "AriParameterEstimate",
     "Estimator",
     "EstimatorOutcome",
     "Evaluation",
     "choose_estimate",
-    "estimate_exact_likelihood",
     "evaluate",
     "make_estimate",
     "min_observations",
@@ -103,7 +100,7 @@ class Evaluation:
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class Estimate:
+class AriParameterEstimate:
     """A point of the estimation with its evaluation and how it was reached.
 
     Attributes
@@ -155,7 +152,7 @@ class EstimatorOutcome:
 
     Attributes
     ----------
-    estimate : Estimate or None
+    estimate : AriParameterEstimate or None
         The estimate; ``None`` when the normal matrix was singular (``message`` says where).
     problem : AriProblem
         The problem with the final robust weights.
@@ -165,7 +162,7 @@ class EstimatorOutcome:
         Why there is no estimate.
     """
 
-    estimate: Estimate | None
+    estimate: AriParameterEstimate | None
     problem: AriProblem
     n_iter: int
     message: str = ""
@@ -187,15 +184,15 @@ def min_observations(p: int, d: int) -> int:
 
 def make_estimate(
     vec: FloatArray, evaluation: Evaluation, n_eval: int, converged: bool, log_floor: float
-) -> Estimate:
-    """:class:`Estimate` at ``vec``, with the boundary test."""
+) -> AriParameterEstimate:
+    """:class:`AriParameterEstimate` at ``vec``, with the boundary test."""
     p = vec.size - 2
     # A component at its floor, or with less than one observation's worth of redundancy, is
     # not estimable from these data (the likelihood is flat towards zero variance).
     boundary = (
         min(vec[p], vec[p + 1]) <= log_floor + 1e-6 or min(evaluation.r_n, evaluation.r_e) < 1.0
     )
-    return Estimate(vec.copy(), evaluation, n_eval, converged, bool(boundary))
+    return AriParameterEstimate(vec.copy(), evaluation, n_eval, converged, bool(boundary))
 
 
 def phi_gradient_terms(
@@ -207,7 +204,7 @@ def phi_gradient_terms(
     the likelihood gradient (and of the EM / alternating least-squares step of the paper's
     iterative scheme). ``E[e_s u_{s-j}] = e_s u_{s-j} + sum_{i,k} c_i delta_k Z[s-i, s-j-k]``;
     the covariance part summed over ``s`` is ``sum_{i,k} c_i delta_k S[i, j+k]``
-    (:func:`navtrack.smoothing._banded.weighted_band_sums`).
+    (:func:`navtrack.smoothing.banded.weighted_band_sums`).
     """
     m = p + d
     n = x.size
@@ -381,9 +378,9 @@ def quasi_newton(
     problem: AriProblem,
     tol: float,
     max_iter: int,
-    start: Estimate | None = None,
+    start: AriParameterEstimate | None = None,
     information: Callable[[FloatArray], FloatArray] | None = None,
-) -> Estimate | None:
+) -> AriParameterEstimate | None:
     """Quasi-Newton (BFGS from ``hess``, optionally structured) with Armijo backtracking on
     ``-log L``.
 
@@ -405,21 +402,19 @@ def quasi_newton(
         ``1e3 tol``).
     max_iter : int
         Step limit.
-    start : Estimate, optional
+    start : AriParameterEstimate, optional
         An estimate already evaluated at ``vec`` on this problem (saves that evaluation).
     information : callable, optional
-        ``vec -> (p + 2, p + 2)`` curvature model (e.g. :func:`spectral_information`; ``hess``
-        should be its value at ``vec``): its change between iterates is added to the matrix
-        before the BFGS update (structured quasi-Newton), so the search follows the model
-        where it bends and the secant updates correct it where it is wrong.
+        ``vec -> (p + 2, p + 2)`` curvature model (e.g. :func:`spectral_information`, ``hess``
+        its value at ``vec``), followed between iterates (:func:`_follow_information`).
 
     Returns
     -------
-    Estimate or None
+    AriParameterEstimate or None
         ``None`` when the model cannot be evaluated at ``vec``.
     """
     p = problem.p
-    log_floor, log_ceiling = problem.log_floor, problem.log_ceiling
+    log_floor = problem.log_floor
     out: Evaluation | None
     if start is not None:
         out = start.evaluation
@@ -445,47 +440,79 @@ def quasi_newton(
             1.0,
         )
         step = step / cap
-        t = 1.0
-        accepted = None
-        while t > 1e-6:
-            trial = vec + t * step
-            trial[p:] = np.clip(trial[p:], log_floor, log_ceiling)
-            # likelihood first; the selected inversion and gradient only for an accepted step
-            part = trial_solution(trial, problem)
-            n_eval += 1
-            if part is not None and -part.loglike <= f - 1e-4 * t * 2.0 * gain / cap:
-                new = evaluate(trial, problem, partial=part)
-                if new is not None:
-                    accepted = (trial, new)
-                    break
-            t *= 0.25
-            # backtrack only while the shortened step can still gain the tolerance (predicted
-            # gain about 2 t gain / cap for small t): shorter trials probe rounding noise
-            if 2.0 * t * gain / cap < tol:
-                break
+        accepted, spent = _backtrack(vec, step, f, gain, cap, problem, tol)
+        n_eval += spent
         if accepted is None:
             converged = gain < 1e3 * tol
             break
         trial, new = accepted
-        s_k = trial - vec
-        y_k = new.grad - g
-        sy = float(s_k @ y_k)
         if information is not None and info_at is not None:
-            # follow the model's change from the old to the new point; keep what the secant
-            # updates learned beyond it (unless that leaves the matrix indefinite)
-            info_new = information(trial)
-            b_mat = b_mat + (info_new - info_at)
-            info_at = info_new
-            if np.any(np.linalg.eigvalsh(b_mat) <= 0):
-                b_mat = info_new.copy()
-        if sy > 1e-12 * float(np.linalg.norm(s_k) * np.linalg.norm(y_k)):
-            bs = b_mat @ s_k
-            b_mat = b_mat - np.outer(bs, bs) / float(s_k @ bs) + np.outer(y_k, y_k) / sy
+            b_mat, info_at = _follow_information(b_mat, information(trial), info_at)
+        b_mat = _bfgs_update(b_mat, trial - vec, new.grad - g)
         vec, out = trial, new
     return make_estimate(vec, out, n_eval, converged, log_floor)
 
 
-def vce_iteration(est: Estimate, problem: AriProblem, tol: float, max_iter: int) -> Estimate:
+def _backtrack(
+    vec: FloatArray,
+    step: np.ndarray,
+    f: float,
+    gain: float,
+    cap: float,
+    problem: AriProblem,
+    tol: float,
+) -> tuple[tuple[FloatArray, Evaluation] | None, int]:
+    """Armijo backtracking along ``step`` (the Newton step divided by ``cap``) from ``vec``
+    (``-log L = f`` there, expected gain of the Newton step ``gain``, so about
+    ``2 t gain / cap`` for small ``t``): the accepted ``(point, evaluation)`` or None, and the
+    likelihood evaluations spent."""
+    p = problem.p
+    t = 1.0
+    n_eval = 0
+    while t > 1e-6:
+        trial = vec + t * step
+        trial[p:] = np.clip(trial[p:], problem.log_floor, problem.log_ceiling)
+        # likelihood first; the selected inversion and gradient only for an accepted step
+        part = trial_solution(trial, problem)
+        n_eval += 1
+        if part is not None and -part.loglike <= f - 1e-4 * t * 2.0 * gain / cap:
+            new = evaluate(trial, problem, partial=part)
+            if new is not None:
+                return (trial, new), n_eval
+        t *= 0.25
+        # backtrack only while the shortened step can still gain the tolerance: shorter
+        # trials probe rounding noise
+        if 2.0 * t * gain / cap < tol:
+            break
+    return None, n_eval
+
+
+def _follow_information(
+    b_mat: FloatArray, info_new: FloatArray, info_at: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Structured quasi-Newton: add the curvature model's change from the old point
+    (``info_at``) to the new (``info_new``), keeping what the secant updates learned beyond it,
+    unless that leaves the matrix indefinite (then the model alone). Returns the matrix and
+    the model at the new point."""
+    b_mat = b_mat + (info_new - info_at)
+    if np.any(np.linalg.eigvalsh(b_mat) <= 0):
+        b_mat = info_new.copy()
+    return b_mat, info_new
+
+
+def _bfgs_update(b_mat: FloatArray, s_k: FloatArray, y_k: FloatArray) -> FloatArray:
+    """BFGS update of the Hessian approximation with the step ``s_k`` and gradient change
+    ``y_k``; unchanged when the curvature condition ``s_k . y_k > 0`` fails."""
+    sy = float(s_k @ y_k)
+    if sy > 1e-12 * float(np.linalg.norm(s_k) * np.linalg.norm(y_k)):
+        bs = b_mat @ s_k
+        return b_mat - np.outer(bs, bs) / float(s_k @ bs) + np.outer(y_k, y_k) / sy
+    return b_mat
+
+
+def vce_iteration(
+    est: AriParameterEstimate, problem: AriProblem, tol: float, max_iter: int
+) -> AriParameterEstimate:
     """Iterate the reproducing VCE ``sigma_k^2 <- Omega_k / r_k`` with ``phi`` fixed.
 
     Stopping rule: relative change of both standard deviations below ``tol``. A step that would
@@ -549,7 +576,7 @@ def starting_values(y: FloatArray, p: int, d: int, n_starts: int) -> list[FloatA
     return starts
 
 
-def choose_estimate(found: list[Estimate], margin: float) -> Estimate:
+def choose_estimate(found: list[AriParameterEstimate], margin: float) -> AriParameterEstimate:
     """Largest likelihood, but an interior solution within ``margin`` beats a boundary one."""
     best = max(found, key=lambda e: e.fit.loglike)
     if best.boundary:
@@ -575,7 +602,7 @@ def _cut_small(weight: FloatArray) -> FloatArray:
 
 
 def robust_reweight(
-    est: Estimate, problem: AriProblem, observed: BoolArray, config: AriConfig
+    est: AriParameterEstimate, problem: AriProblem, observed: BoolArray, config: AriConfig
 ) -> tuple[FloatArray, FloatArray]:
     """New observation ``(n,)`` and process ``(n - m,)`` weights from the studentized deletion
     residuals at ``est`` (the process ones only with ``config.robust_process``); weights below
@@ -594,216 +621,6 @@ def robust_reweight(
     q = process_variance(c, zb)
     t_proc = deletion_statistic(-e, q, problem.v, se2)
     return w_new, _cut_small(robust_weight(t_proc, config.robust, config.tuning))
-
-
-#: A search, ``(estimate, problem) -> (refined estimate or None, evaluations spent outside it)``.
-_Search = Callable[[Estimate, AriProblem], tuple[Estimate | None, int]]
-
-
-def _reweighting_rounds(
-    best: Estimate, problem: AriProblem, observed: BoolArray, config: AriConfig, search: _Search
-) -> tuple[Estimate, AriProblem, int]:
-    """IRLS inside the VCE (new weights, variance components re-estimated with ``phi`` fixed
-    until the weights settle), then ``phi`` and the variances jointly by ``search``, repeated
-    while that moves the weights. Returns the estimate, the problem with its weights and the
-    evaluations spent."""
-    p = problem.p
-    n_iter = 0
-    budget = config.max_robust_iter
-    for _ in range(3):
-        reweighted = False
-        while budget > 0:
-            budget -= 1
-            w_new, v_new = robust_reweight(best, problem, observed, config)
-            dw = np.concatenate([np.abs(w_new - problem.w), np.abs(v_new - problem.v)])
-            # settled: no weight moved by 0.01, or on average by less than 1e-5 (on long
-            # series some weight near the cut-off always moves a little)
-            if (
-                float(np.max(dw)) < 1e-2
-                or float(np.mean(dw)) < 1e-5
-                or np.count_nonzero(w_new > 0) < min_observations(p, problem.d)
-            ):
-                break
-            problem = problem.with_weights(w_new, v_new)
-            reweighted = True
-            step_out = evaluate(best.vec, problem)
-            if step_out is None:
-                break
-            est = make_estimate(best.vec, step_out, 1, best.converged, problem.log_floor)
-            best = vce_iteration(est, problem, 1e-3, 10)
-            n_iter += 1 + best.n_iter
-        if not reweighted and best.converged:
-            break
-        refined, spent = search(best, problem)
-        n_iter += spent
-        if refined is None:
-            break
-        best = refined
-        n_iter += best.n_iter
-    return best, problem, n_iter
-
-
-def _stage_sizes(head: int, n: int, growth: int) -> list[int]:
-    """Leading blocks ``n / growth^k`` longer than ``head``, shortest first, ending with ``n``:
-    each block is ``growth`` times the one before it."""
-    sizes = [n]
-    while sizes[0] // growth > head:
-        sizes.insert(0, sizes[0] // growth)
-    return sizes
-
-
-def estimate_exact_likelihood(
-    problem: AriProblem, config: AriConfig, starts: list[FloatArray], *, robust: bool
-) -> EstimatorOutcome:
-    """Maximum of the exact (or conditional) likelihood, with robust reweighting.
-
-    Parameters
-    ----------
-    problem : AriProblem
-        Unit weights; observations with ``w > 0`` are the observed epochs.
-    config : AriConfig
-        Stopping rules, window, stages, starts margin, weight function.
-    starts : list of ndarray, shape (p + 2,)
-        Starting vectors (:func:`starting_values`).
-    robust : bool
-        Reweight (with ``config.robust``; ``"off"`` disables it too).
-
-    Returns
-    -------
-    EstimatorOutcome
-
-    Notes
-    -----
-    The likelihood is multimodal on short series (``sigma_n -> 0`` and ``sigma_e -> 0`` are
-    local optima): every start is refined (BFGS from a finite-difference Hessian) on a
-    leading window of ``config.screen_n`` epochs and the best kept
-    (:func:`choose_estimate`), then refined on the whole series by BFGS from the window's
-    Hessian scaled by the number of observations. Robust: IRLS inside the VCE, then ``phi``
-    and the variances jointly (BFGS from a fresh window Hessian), repeated while that moves the
-    weights; a final VCE iteration certifies the variance components.
-
-    A series of ``screen_n * stage_growth`` epochs or more is instead fitted on growing
-    leading blocks (``n / stage_growth^k`` epochs longer than the window, then the whole
-    series), each started
-    from the previous block's estimate and weights (unit weights on the new epochs, then
-    reweighted over the block), and searched by the structured quasi-Newton on
-    :func:`spectral_information` (its change between iterates added to the BFGS matrix).
-    Why: the cost is the number of whole-series evaluations.
-    Between the window's optimum and the whole series' lies a long stretch of the curved
-    ``sigma_e``/``phi`` ridge of ARI(p, 2), along which BFGS from the window's Hessian crawled
-    (n = 1e6, Danish weights: 124 whole-series solutions, ~57 of them in one search); a
-    block's optimum is close to the next block's, and the spectral information, recomputed at
-    every iterate, follows the bending ridge where BFGS updates did not; the secant updates on
-    top of it correct it where it is wrong (plain scoring overshot every step on the 1e5
-    benchmark series: 91 trials against 1.3 s of CPU for the whole fit now). Below
-    ``screen_n * stage_growth`` epochs the blocks and the spectral search are not used: on the
-    5324-epoch BROAD attitude series (ARI(6, 1), robust) plain scoring took 3x the time of the
-    window-Hessian BFGS and moved sigma_n by up to 3.5 % (the structured form was not tried
-    there).
-    """
-    p, d, n = problem.p, problem.d, problem.n
-    head = min(n, config.screen_n)
-    window = problem.head(head)
-    found: list[Estimate] = []
-    n_iter = 0
-    for start in starts:
-        hess0 = numerical_hessian(start, window)
-        n_iter += p + 3
-        out = quasi_newton(start, hess0, window, config.gain_tol, config.max_iter)
-        if out is None:
-            continue
-        n_iter += out.n_iter
-        found.append(out)
-    if not found:
-        return EstimatorOutcome(None, problem, n_iter, "normal matrix singular at every start")
-    best = choose_estimate(found, config.boundary_margin)
-    use_robust = robust and config.robust != "off"
-
-    if n < head * config.stage_growth:
-
-        def finite_difference_search(
-            est: Estimate, prob: AriProblem
-        ) -> tuple[Estimate | None, int]:
-            # fresh curvature (window, current weights) scaled by the number of observations,
-            # rather than the BFGS matrix of the last search
-            window = prob.head(head)
-            scale = np.count_nonzero(prob.w) / max(int(np.count_nonzero(window.w)), 1)
-            hess = numerical_hessian(est.vec, window) * scale
-            return quasi_newton(
-                est.vec, hess, prob, config.gain_tol, config.max_iter, start=est
-            ), p + 3
-
-        # Refinement on the whole series from the window's optimum with the window's Hessian
-        # scaled (also certifies the convergence of short series); a long robust fit only
-        # needs to get near the unweighted optimum before reweighting.
-        hess = numerical_hessian(best.vec, window)
-        hess = hess * (np.count_nonzero(problem.w) / max(int(np.count_nonzero(window.w)), 1))
-        n_iter += p + 3
-        first_tol = config.gain_tol * 100 if (use_robust and head < n) else config.gain_tol
-        refined = quasi_newton(best.vec, hess, problem, first_tol, config.max_iter)
-        if refined is None:
-            return EstimatorOutcome(
-                None, problem, n_iter, "normal matrix singular on the full series"
-            )
-        best = refined
-        n_iter += best.n_iter
-        if use_robust:
-            best, problem, spent = _reweighting_rounds(
-                best, problem, problem.w > 0, config, finite_difference_search
-            )
-            n_iter += spent
-    else:
-
-        def spectral_search(est: Estimate, prob: AriProblem) -> tuple[Estimate | None, int]:
-            n_eff = float(np.count_nonzero(prob.w))
-
-            def information(vec: FloatArray) -> FloatArray:
-                return spectral_information(vec, d, n_eff)
-
-            return quasi_newton(
-                est.vec,
-                information(est.vec),
-                prob,
-                config.gain_tol,
-                config.max_iter,
-                start=est,
-                information=information,
-            ), 0
-
-        full = problem
-        for size in _stage_sizes(head, n, config.stage_growth):
-            stage = full.head(size)
-            done = problem.n if problem.n < size else 0
-            if use_robust and done:
-                # the previous block's weights, unit weights after it, as the first weights
-                m = problem.m
-                stage = stage.with_weights(
-                    np.concatenate([problem.w, stage.w[done:]]),
-                    np.concatenate([problem.v, stage.v[done - m :]]),
-                )
-            at_start = evaluate(best.vec, stage)
-            n_iter += 1
-            if at_start is None:
-                return EstimatorOutcome(
-                    None, problem, n_iter, f"normal matrix singular on the first {size} epochs"
-                )
-            best = make_estimate(best.vec, at_start, 1, False, stage.log_floor)
-            if use_robust:
-                best, problem, spent = _reweighting_rounds(
-                    best, stage, full.w[:size] > 0, config, spectral_search
-                )
-            else:
-                refined, spent = spectral_search(best, stage)
-                if refined is None:
-                    return EstimatorOutcome(
-                        None, problem, n_iter, f"normal matrix singular on the first {size} epochs"
-                    )
-                best, problem = refined, stage
-                spent += best.n_iter
-            n_iter += spent
-    best = vce_iteration(best, problem, config.tol, config.max_iter)
-    n_iter += best.n_iter
-    return EstimatorOutcome(best, problem, n_iter)
 
 
 def observed_information(

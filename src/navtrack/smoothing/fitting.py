@@ -19,16 +19,16 @@ import numpy as np
 
 from navtrack._typing import ArrayLike, BoolArray, FloatArray
 from navtrack.estimation.robust import deletion_statistic, flag_outliers
-from navtrack.smoothing._banded import single_threaded_blas
 from navtrack.smoothing.alternation import estimate_alternating
+from navtrack.smoothing.banded import single_threaded_blas
 from navtrack.smoothing.config import AriConfig
 from navtrack.smoothing.estimation import (
-    Estimate,
+    AriParameterEstimate,
     Estimator,
-    estimate_exact_likelihood,
     min_observations,
     starting_values,
 )
+from navtrack.smoothing.exact import estimate_exact_likelihood
 from navtrack.smoothing.model import (
     AriProblem,
     ari_polynomial,
@@ -37,7 +37,7 @@ from navtrack.smoothing.model import (
 )
 from navtrack.smoothing.result import AriEpochStatus, AriResult, AriStatus, bad_result
 
-__all__ = ["fit_ari", "fit_ari_order", "regularize_time"]
+__all__ = ["fit_ari", "fit_ari_order", "fit_fixed_order", "regularize_time"]
 
 
 def _check_input(y: ArrayLike, t: ArrayLike | None) -> tuple[FloatArray, AriStatus, str]:
@@ -89,10 +89,10 @@ def fit_ari_order(
     # the likelihood search probes parameters where the filter overflows; such trials come back
     # non-finite, and the checks on the likelihood reject them or end the fit in a status
     with single_threaded_blas(), np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        return _fit_fixed(y_arr, p, d, cfg, robust=True)
+        return fit_fixed_order(y_arr, p, d, cfg, robust=True)
 
 
-def _fit_fixed(
+def fit_fixed_order(
     y: FloatArray,
     p: int,
     d: int,
@@ -101,7 +101,9 @@ def _fit_fixed(
     robust: bool,
     starts: list[FloatArray] | None = None,
 ) -> AriResult:
-    """ARI(p, d) of fixed order fitted to ``y`` (checked input, NaN = missing)."""
+    """ARI(p, d) of fixed order fitted to ``y`` (checked input, NaN = missing) with the
+    settings of ``cfg``; ``robust`` reweights, ``starts`` replaces the default starting
+    vectors (:func:`~navtrack.smoothing.estimation.starting_values`)."""
     n = y.size
     m = p + d
     observed = np.isfinite(y)
@@ -158,7 +160,7 @@ def _finish(
     offset: FloatArray,
     observed: BoolArray,
     problem: AriProblem,
-    est: Estimate,
+    est: AriParameterEstimate,
     n_iter: int,
     cfg: AriConfig,
 ) -> AriResult:
@@ -312,7 +314,7 @@ def fit_ari(
 def _select_and_fit(y_arr: FloatArray, cfg: AriConfig, tick: Callable[[], None]) -> AriResult:
     """Body of :func:`fit_ari` after input checks: order selection, then the robust fit."""
     if cfg.order is not None:
-        res = _fit_fixed(y_arr, cfg.order[0], cfg.order[1], cfg, robust=True)
+        res = fit_fixed_order(y_arr, cfg.order[0], cfg.order[1], cfg, robust=True)
         tick()
         return res
     candidates = [
@@ -337,7 +339,7 @@ def _select_and_fit(y_arr: FloatArray, cfg: AriConfig, tick: Callable[[], None])
                 [prev.phi, [0.0, 2 * math.log(prev.sigma_n), 2 * math.log(prev.sigma_e)]]
             )
             starts = [warm, *starting_values(yc, p, d, cfg.n_starts)[-1:]]
-        res = _fit_fixed(y_sel, p, d, cfg, robust=False, starts=starts)
+        res = fit_fixed_order(y_sel, p, d, cfg, robust=False, starts=starts)
         tick()
         if res.estimated:
             found[(p, d)] = res
@@ -345,7 +347,7 @@ def _select_and_fit(y_arr: FloatArray, cfg: AriConfig, tick: Callable[[], None])
     # optimum kept. On heavy-tailed series the non-robust likelihood is multimodal (a
     # low-noise/rough-process mode and a high-noise/smooth-process one); reaching a candidate
     # from both neighbours makes its optimum, and so the selected order, independent of the
-    # path that led to it in all the cases we tried (BROAD orientation; see docs/ari.md).
+    # path that led to it (docs/ari.md, method notes, "Order selection").
     for p, d in reversed(candidates):
         upper = found.get((p + 1, d))
         if upper is None:
@@ -355,7 +357,7 @@ def _select_and_fit(y_arr: FloatArray, cfg: AriConfig, tick: Callable[[], None])
         while phi.size and not np.all(np.abs(np.roots(np.concatenate([[1.0], phi]))) < 0.98):
             phi = np.zeros(p) if float(np.max(np.abs(phi))) < 1e-3 else 0.5 * phi
         start = np.concatenate([phi, [2 * math.log(upper.sigma_n), 2 * math.log(upper.sigma_e)]])
-        res = _fit_fixed(y_sel, p, d, cfg, robust=False, starts=[start])
+        res = fit_fixed_order(y_sel, p, d, cfg, robust=False, starts=[start])
         tick()
         current = found.get((p, d))
         if res.estimated and (current is None or _better(res, current, cfg)):
@@ -382,7 +384,7 @@ def _select_and_fit(y_arr: FloatArray, cfg: AriConfig, tick: Callable[[], None])
             best_score, best_key = score, (p, d)
     if best_key is None:
         return bad_result(y_arr, AriStatus.SINGULAR, "no candidate order could be fitted")
-    final = _fit_fixed(y_arr, best_key[0], best_key[1], cfg, robust=True)
+    final = fit_fixed_order(y_arr, best_key[0], best_key[1], cfg, robust=True)
     tick()
     aic, bic = fits[best_key]
     return _replace(final, aic=aic, bic=bic, candidates=tuple(scores))

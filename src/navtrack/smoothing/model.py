@@ -27,10 +27,11 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+from scipy.signal import lfilter
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, FloatArray
-from navtrack.smoothing._banded import (
+from navtrack.smoothing.banded import (
     add_convolution_band,
     centred_convolution,
     cholesky_solve_banded,
@@ -106,7 +107,7 @@ def normal_band(c: FloatArray, w: FloatArray, v: FloatArray, sn2: float, se2: fl
 def process_residuals(c: FloatArray, x: FloatArray) -> FloatArray:
     """``e_s = sum_i c_i x_{s-i}`` for ``s = m..n-1``, shape ``(n - m,)`` (eq. (3)).
 
-    Summed without cancellation (:func:`navtrack.smoothing._banded.centred_convolution`): an
+    Summed without cancellation (:func:`navtrack.smoothing.banded.centred_convolution`): an
     integrated series drifts far from zero (about 1e7 sigma_e after 1e6 epochs of ARI(5, 2))
     while ``e_s`` is of the order of ``sigma_e``; ``sum_i c_i x_{s-i}`` lost ``eps |c| |x|``.
     """
@@ -321,8 +322,8 @@ def solve_gauss_markov(
             ab[m - lag, lag:m] += np.diag(g, lag)
     # Solved for the correction z = x - b to the observations b (interpolated over gaps):
     # x of an integrated series is large, and the solve's error (condition number times eps
-    # |x|) entered the likelihood through the residuals, one-sided noise of up to ~1 unit at
-    # n = 1e6 that stalled line searches along the sigma_e/phi ridge; z is of the order of
+    # |x|) would enter the likelihood through the residuals as one-sided noise (up to ~1 unit
+    # at n = 1e6) that stalls line searches along the sigma_e/phi ridge; z is of the order of
     # sigma_n. N b - W y0 / sn2 has no cancellation in this form (W (b - y0) = 0).
     base = _baseline(y0, w)
     e_base = process_residuals(c, base)
@@ -342,10 +343,6 @@ def solve_gauss_markov(
     resid = (y0 - base) - z
     omega_n = float(np.sum(w * resid**2))
     omega_e = float(np.sum(v * e**2))
-    used_w = w > 0
-    used_v = v > 0
-    n_used = int(np.count_nonzero(used_w))
-    n_used_v = int(np.count_nonzero(used_v))
     diffuse = m
     extra = 0.0
     if prior is not None:
@@ -354,7 +351,33 @@ def solve_gauss_markov(
         u0 = u_base + prior.d_mat @ z[:m]
         omega_e += float(u0 @ prior.gamma_inv @ u0)
         extra = p * math.log(se2) + prior.logdet_gamma
-    loglike = -0.5 * (
+    loglike = _log_likelihood(w, v, (sn2, se2), diffuse, (extra, logdet), (omega_n, omega_e))
+    if width is None:
+        return GaussMarkovSolution(x, None, loglike, omega_n, omega_e, logdet, factor, ab)
+    zb = inverse_band_from_factor(factor, width, ab=ab)
+    return GaussMarkovSolution(x, zb, loglike, omega_n, omega_e, logdet)
+
+
+def _log_likelihood(
+    w: FloatArray,
+    v: FloatArray,
+    variances: tuple[float, float],
+    diffuse: int,
+    log_terms: tuple[float, float],
+    omegas: tuple[float, float],
+) -> float:
+    """Gaussian log-likelihood of the equations in the fit (weights > 0) at the variances
+    ``(sn2, se2)`` given the weighted squared residuals ``omegas = (omega_n, omega_e)``;
+    ``diffuse`` leading differences do not count and ``log_terms = (prior, log |N|)`` are the
+    prior's and the normal matrix's log-determinant terms."""
+    sn2, se2 = variances
+    extra, logdet = log_terms
+    omega_n, omega_e = omegas
+    used_w = w > 0
+    used_v = v > 0
+    n_used = int(np.count_nonzero(used_w))
+    n_used_v = int(np.count_nonzero(used_v))
+    return -0.5 * (
         (n_used - diffuse) * math.log(2 * math.pi)
         # sum of log(sigma^2 / weight) over the equations in the fit, without the ratio itself:
         # sigma^2 / w overflows for a weight near the underflow threshold (a Danish weight of
@@ -368,10 +391,6 @@ def solve_gauss_markov(
         + omega_n / sn2
         + omega_e / se2
     )
-    if width is None:
-        return GaussMarkovSolution(x, None, loglike, omega_n, omega_e, logdet, factor, ab)
-    zb = inverse_band_from_factor(factor, width, ab=ab)
-    return GaussMarkovSolution(x, zb, loglike, omega_n, omega_e, logdet)
 
 
 def with_inverse(fit: GaussMarkovSolution, width: int) -> GaussMarkovSolution:
@@ -549,8 +568,6 @@ def simulate_ari(
     phi_arr = np.asarray(phi, dtype=float).ravel()
     if phi_arr.size and np.any(np.abs(np.roots(np.concatenate([[1.0], phi_arr]))) >= 1):
         raise ValueError("phi must describe a stationary AR part (roots inside the unit circle)")
-    from scipy.signal import lfilter
-
     e = rng.normal(0.0, sigma_e, n + burn_in)
     u = lfilter([1.0], np.concatenate([[1.0], phi_arr]), e)[burn_in:]
     x = u

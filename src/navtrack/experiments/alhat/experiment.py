@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from navtrack.attitude.reconstruct import ESTIMATES
+from navtrack.experiments.alhat.figures import write_error_figures, write_fig16
 from navtrack.experiments.alhat.params import AlhatParams
 from navtrack.experiments.alhat.real import TrialOutcome, trial_study
 from navtrack.experiments.alhat.regime import regime_run, summarize_regime
@@ -102,8 +103,6 @@ class AlhatExperiment(Experiment[AlhatParams, _RunResult]):
         return tables_markdown(results)
 
     def figures(self, outcome: Outcome[AlhatParams, _RunResult], out_dir: Path) -> list[Path]:
-        from navtrack.experiments.alhat.figures import write_error_figures, write_fig16
-
         paths = write_error_figures(out_dir, outcome.artifacts or [])
         fig16 = write_fig16(out_dir, outcome.runs[0]["regime"]) if outcome.runs else None
         return [fig16, *paths] if fig16 else paths

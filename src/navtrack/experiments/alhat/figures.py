@@ -15,7 +15,7 @@ __all__ = ["write_error_figures", "write_fig16"]
 
 def write_error_figures(out_dir: Path, outcomes: Sequence[TrialOutcome]) -> list[Path]:
     """``attitude_error_<trial>.png``: error (deg, log scale) of every estimate against time."""
-    import matplotlib
+    import matplotlib  # optional dependency (extra navtrack[plot])
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -45,7 +45,7 @@ def write_fig16(out_dir: Path, run: dict[str, Any]) -> Path | None:
     series = run.get("fix_series")
     if not series:
         return None
-    import matplotlib
+    import matplotlib  # optional dependency (extra navtrack[plot])
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

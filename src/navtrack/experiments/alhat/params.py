@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from navtrack.attitude.smoother import SIGMA_BIAS_RAD_S_SQRT_S, SIGMA_GYRO_RAD_SQRT_S
+
 __all__ = ["AlhatParams"]
 
 
@@ -40,7 +42,8 @@ class AlhatParams:
     method, order : propagation of the first two estimates (the paper's third-order series).
     correction : reading of the correction quaternion (both are reported).
     sigma_gyro_rad_sqrt_s, sigma_bias_rad_s_sqrt_s : float
-        Smoother noise (chosen on trial 07, judged on trial 02).
+        Smoother noise (defaults :data:`~navtrack.attitude.smoother.SIGMA_GYRO_RAD_SQRT_S`,
+        :data:`~navtrack.attitude.smoother.SIGMA_BIAS_RAD_S_SQRT_S`).
     n_rays : int
         Rays per synthetic RANSAC scene (Monte Carlo runs; 20 % of them outliers).
     regime_trial : str
@@ -92,8 +95,8 @@ class AlhatParams:
     method: Literal["closed", "series"] = "series"
     order: int = 3
     correction: Literal["mean_rotvec", "paper_literal"] = "mean_rotvec"
-    sigma_gyro_rad_sqrt_s: float = 2e-3
-    sigma_bias_rad_s_sqrt_s: float = 1e-4
+    sigma_gyro_rad_sqrt_s: float = SIGMA_GYRO_RAD_SQRT_S
+    sigma_bias_rad_s_sqrt_s: float = SIGMA_BIAS_RAD_S_SQRT_S
     n_rays: int = 10
     regime_trial: str = "02_undisturbed_slow_rotation_B"
     gyro_bias_deg_h: float = 1.0

@@ -19,7 +19,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from navtrack._typing import BoolArray, FloatArray
-from navtrack.attitude.calibration import CalibrationConfig
+from navtrack.attitude.calibration import CalibrationConfig, GyroCalibration
 from navtrack.attitude.quaternion import (
     CorrectionReading,
     attitude_errors,
@@ -34,9 +34,9 @@ from navtrack.attitude.reconstruct import (
     ReconstructionConfig,
     reconstruct,
 )
-from navtrack.attitude.simulate import CameraSimConfig, simulate_sightings
+from navtrack.attitude.simulate import CameraSimConfig, Sightings, simulate_sightings
 from navtrack.attitude.smoother import SmootherConfig
-from navtrack.attitude.wahba import RansacConfig, solve_fixes
+from navtrack.attitude.wahba import CameraFixes, RansacConfig, solve_fixes
 from navtrack.experiments.alhat.params import AlhatParams
 from navtrack.io.broad import BroadTrial, read_broad
 
@@ -164,26 +164,11 @@ def _stats(e_rad: FloatArray) -> dict[str, float]:
     }
 
 
-def trial_study(
-    path: Path, params: AlhatParams, rng: np.random.Generator
-) -> tuple[dict[str, Any], TrialOutcome, Reconstruction]:
-    """Run the reproduction on one BROAD trial.
-
-    Returns
-    -------
-    results : dict
-        JSON-able: ``series``, ``fixes``, one entry per estimate (``mean_deg``, ``max_deg``,
-        ...), ``paper_correction_literal``, ``calibration``, ``timing_offset_check``.
-    outcome : TrialOutcome
-        Error series for the figures.
-    recon : Reconstruction
-    """
-    trial = _first_seconds(read_broad(path), params.duration_s)
-    res: dict[str, Any] = {
-        "trial": trial.name,
-        "duration_s": float(trial.t_s[-1] - trial.t_s[0]),
-        "series": series_accuracy(trial),
-    }
+def _camera_fixes(
+    trial: BroadTrial, params: AlhatParams, rng: np.random.Generator
+) -> tuple[Sightings, CameraFixes, dict[str, Any]]:
+    """Simulated sightings of the trial's optical attitude and the RANSAC fixes solved from
+    them, with the fixes' summary (status counts, outliers, errors against the truth)."""
     sim = CameraSimConfig(
         interval_s=params.fix_interval_s,
         n_targets=params.n_targets,
@@ -207,7 +192,7 @@ def trial_study(
         Rotation.from_quat(fixes.quat[ok]),
         Rotation.from_quat(trial.opt_quat_xyzw[sights.sample[ok]]),
     )[0]
-    res["fixes"] = {
+    summary = {
         "images": int(fixes.status.size),
         "images_without_truth": sights.n_no_truth,
         "status": fixes.status_counts(),
@@ -219,18 +204,19 @@ def trial_study(
         "sigma_mean_deg": float(np.degrees(np.nanmean(fixes.sigma_rad[ok]))),
         "ms_per_fix": per_fix_ms,
     }
-    ft = sights.t_stamp_s[ok]
-    fq = fixes.quat[ok]
-    t0 = time.perf_counter()
-    recon = reconstruct(trial.t_s, trial.gyr_rad_s, ft, fq, fixes.sigma_rad[ok], _config(params))
-    res["reconstruction_s"] = time.perf_counter() - t0
-    use = np.all(np.isfinite(trial.opt_quat_xyzw), axis=1) & trial.movement
-    use &= (trial.t_s >= ft[0]) & (trial.t_s <= ft[-1])
-    res["evaluated_samples"] = int(use.sum())
-    errors = {}
-    for name in ESTIMATES:
-        errors[name] = _errors(recon, name, trial, use, params.camera_offset_s)
-        res[name] = _stats(errors[name])
+    return sights, fixes, summary
+
+
+def _other_correction(
+    trial: BroadTrial,
+    recon: Reconstruction,
+    ft: FloatArray,
+    fq: FloatArray,
+    use: BoolArray,
+    params: AlhatParams,
+) -> dict[str, Any]:
+    """Errors of the propagation corrected by the reading of the paper's correction quaternion
+    that ``params.correction`` does not use (``paper_correction_<reading>``)."""
     other: CorrectionReading = (
         "paper_literal" if params.correction == "mean_rotvec" else "mean_rotvec"
     )
@@ -252,17 +238,15 @@ def trial_study(
     alt_err = attitude_errors(
         Rotation.from_quat(est), Rotation.from_quat(trial.opt_quat_xyzw[use])
     )[0]
-    res[f"paper_correction_{other}"] = _stats(alt_err)
-    res["paper_fix_errors"] = {
-        "e_s_mean_deg": float(np.degrees(recon.fix_errors_rad.mean())),
-        "e_s_max_deg": float(np.degrees(recon.fix_errors_rad.max())),
-        "correction_deg": float(np.degrees(np.linalg.norm(recon.correction_rotvec_rad))),
-    }
-    cal = recon.calibration
+    return {f"paper_correction_{other}": _stats(alt_err)}
+
+
+def _calibration_record(cal: GyroCalibration) -> dict[str, Any]:
+    """The gyro calibration with the standard deviation of every estimated parameter."""
     names = [f"start_rotvec_{a}_rad" for a in "xyz"] + [f"bias_{a}_rad_s" for a in "xyz"]
     names += [f"scale_{a}" for a in "xyz"] + [f"misalignment_{i}" for i in range(6)]
     names += ["time_offset_s"]
-    res["calibration"] = {
+    return {
         "bias_rad_s": cal.bias_rad_s,
         "scale": cal.scale,
         "misalignment": cal.misalignment,
@@ -273,6 +257,50 @@ def trial_study(
         "nfev": cal.nfev,
         "message": cal.message,
     }
+
+
+def trial_study(
+    path: Path, params: AlhatParams, rng: np.random.Generator
+) -> tuple[dict[str, Any], TrialOutcome, Reconstruction]:
+    """Run the reproduction on one BROAD trial.
+
+    Returns
+    -------
+    results : dict
+        JSON-able: ``series``, ``fixes``, one entry per estimate (``mean_deg``, ``max_deg``,
+        ...), ``paper_correction_literal``, ``calibration``, ``timing_offset_check``.
+    outcome : TrialOutcome
+        Error series for the figures.
+    recon : Reconstruction
+    """
+    trial = _first_seconds(read_broad(path), params.duration_s)
+    res: dict[str, Any] = {
+        "trial": trial.name,
+        "duration_s": float(trial.t_s[-1] - trial.t_s[0]),
+        "series": series_accuracy(trial),
+    }
+    sights, fixes, res["fixes"] = _camera_fixes(trial, params, rng)
+    ok = fixes.ok
+    ft = sights.t_stamp_s[ok]
+    fq = fixes.quat[ok]
+    t0 = time.perf_counter()
+    recon = reconstruct(trial.t_s, trial.gyr_rad_s, ft, fq, fixes.sigma_rad[ok], _config(params))
+    res["reconstruction_s"] = time.perf_counter() - t0
+    use = np.all(np.isfinite(trial.opt_quat_xyzw), axis=1) & trial.movement
+    use &= (trial.t_s >= ft[0]) & (trial.t_s <= ft[-1])
+    res["evaluated_samples"] = int(use.sum())
+    errors = {}
+    for name in ESTIMATES:
+        errors[name] = _errors(recon, name, trial, use, params.camera_offset_s)
+        res[name] = _stats(errors[name])
+    res |= _other_correction(trial, recon, ft, fq, use, params)
+    res["paper_fix_errors"] = {
+        "e_s_mean_deg": float(np.degrees(recon.fix_errors_rad.mean())),
+        "e_s_max_deg": float(np.degrees(recon.fix_errors_rad.max())),
+        "correction_deg": float(np.degrees(np.linalg.norm(recon.correction_rotvec_rad))),
+    }
+    cal = recon.calibration
+    res["calibration"] = _calibration_record(cal)
     lag = optical_rate_lag_s(trial)
     res["timing_offset_check"] = {
         "calibrated_s": cal.time_offset_s,

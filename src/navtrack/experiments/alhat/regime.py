@@ -297,6 +297,36 @@ def _extensions(
     return {name: to_enu(recon.on_camera_clock(name, rec.t_s)) for name in ESTIMATES}
 
 
+def _weighted_average(
+    t_s: FloatArray, starts: SequenceStarts, params: AlhatParams
+) -> tuple[FloatArray, dict[str, Any]]:
+    """The paper's weighted attitude (eq. 7) of the corrected sequences in the configured
+    reading of the average, and how far the other reading departs from it."""
+    b = np.radians(params.b_deg_h) / 3600.0
+    sigma0 = np.maximum(starts.sigma0_rad, SIGMA0_FLOOR_RAD)
+    record: dict[str, Any] = {"sigma0_floored": int(np.sum(starts.sigma0_rad < SIGMA0_FLOOR_RAD))}
+
+    def combine(average: AverageReading) -> FloatArray:
+        return weighted_attitude(
+            t_s,
+            starts.quat,
+            starts.t_q0_s,
+            sigma0,
+            b,
+            weight_power=params.weight_power,
+            average=average,
+        )
+
+    u = combine(params.average)
+    other = combine("relative" if params.average == "absolute" else "absolute")
+    gap = attitude_errors(Rotation.from_quat(u), Rotation.from_quat(other))[0]
+    # the printed (absolute) average is undefined where the propagations straddle a rotation
+    # of π; the two readings then part
+    record["average_readings_differ_samples"] = int(np.sum(gap > AVERAGE_AGREEMENT_RAD))
+    record["average_readings_max_gap_deg"] = float(np.degrees(gap.max()))
+    return u, record
+
+
 def regime_run(
     params: AlhatParams, broad: Path, rng: np.random.Generator, *, extensions: bool = False
 ) -> dict[str, Any]:
@@ -350,28 +380,8 @@ def regime_run(
         "e_s_before_deg": np.degrees(starts.e_s_before_rad).tolist(),
         "e_s_after_deg": np.degrees(starts.e_s_after_rad).tolist(),
     }
-    b = np.radians(params.b_deg_h) / 3600.0
-    sigma0 = np.maximum(starts.sigma0_rad, SIGMA0_FLOOR_RAD)
-    res["sigma0_floored"] = int(np.sum(starts.sigma0_rad < SIGMA0_FLOOR_RAD))
-
-    def combine(average: AverageReading) -> FloatArray:
-        return weighted_attitude(
-            rec.t_s,
-            starts.quat,
-            starts.t_q0_s,
-            sigma0,
-            b,
-            weight_power=params.weight_power,
-            average=average,
-        )
-
-    u = combine(params.average)
-    other = combine("relative" if params.average == "absolute" else "absolute")
-    gap = attitude_errors(Rotation.from_quat(u), Rotation.from_quat(other))[0]
-    # the printed (absolute) average is undefined where the propagations straddle a rotation
-    # of π; the two readings then part
-    res["average_readings_differ_samples"] = int(np.sum(gap > AVERAGE_AGREEMENT_RAD))
-    res["average_readings_max_gap_deg"] = float(np.degrees(gap.max()))
+    u, averages = _weighted_average(rec.t_s, starts, params)
+    res |= averages
     eq7 = to_enu(u)
     span = (rec.t_s >= ft[0]) & (rec.t_s <= ft[-1])
     ev = np.flatnonzero(span)

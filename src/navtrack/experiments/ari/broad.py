@@ -19,7 +19,8 @@ and the IMU gyroscope:
   from or to the neighbouring sample, is in the trial's top :data:`FAST_QUANTILE` — real
   motion an ARI model with one constant ``sigma_e`` does not follow.
 
-The thresholds were chosen on trial 07 (fast rotation) and judged on trial 02 (slow rotation).
+How the thresholds were chosen (trial 07, fast rotation) and judged (trial 02, slow rotation):
+``docs/ari.md``, method notes, "What explains a flag".
 """
 
 from __future__ import annotations
@@ -28,9 +29,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from navtrack._typing import BoolArray, FloatArray
-from navtrack.experiments.ari.real import RealSeries
+from navtrack.experiments.ari.series import RealSeries
+from navtrack.io.broad import read_broad
 from navtrack.smoothing.attitude import (
     ATTITUDE_COLUMNS,
     ATTITUDE_FORMS,
@@ -84,8 +87,6 @@ def flag_causes(
     levels : dict of str to float
         The thresholds actually used (deg, deg/s per sample).
     """
-    from scipy.spatial.transform import Rotation
-
     big_n = quat_xyzw.shape[0]
     ok_full = np.all(np.isfinite(quat_xyzw), axis=1)
     idx = np.arange(0, big_n, decimate)
@@ -159,8 +160,6 @@ def broad_series(path: Path, *, decimate: int = 1, form: AttitudeForm = "rotvec"
         ``meta`` holds ``form``, ``max_pitch_deg``, ``rotation_deg_per_sample_p99``, the
         per-epoch ``flag_causes`` (:func:`flag_causes`) and their ``cause_levels``.
     """
-    from navtrack.io.broad import read_broad
-
     if form not in ATTITUDE_FORMS:
         raise ValueError(f"form: expected one of {ATTITUDE_FORMS}, got {form!r}")
     if decimate < 1:

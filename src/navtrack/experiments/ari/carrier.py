@@ -30,7 +30,12 @@ from typing import Any
 
 import numpy as np
 
+from navtrack import geodesy
 from navtrack._typing import FloatArray
+from navtrack.data import sample_path
+from navtrack.gnss.relative import RtkConfig, RtkStatus, solve_relative
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.rinex.obs import read_obs
 from navtrack.smoothing.ari import AriConfig, AriResult, fit_ari
 from navtrack.smoothing.identifiability import sigma_bounds
 
@@ -141,8 +146,6 @@ class CarrierSeries:
 
 def _path(shared_gnss: Path, name: str) -> Path:
     if name.startswith("package:"):
-        from navtrack.data import sample_path
-
         return Path(sample_path(name.removeprefix("package:")))
     return shared_gnss / name
 
@@ -154,11 +157,6 @@ def carrier_series(shared_gnss: Path, run: RtkRun) -> list[CarrierSeries]:
     Epochs without a relative solution (``no_base``, ``single``, ``no_solution``) are missing
     (NaN); the series keep the rover's epochs, trimmed of leading and trailing missing ones.
     """
-    from navtrack import geodesy
-    from navtrack.gnss.relative import RtkConfig, RtkStatus, solve_relative
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.rinex.obs import read_obs
-
     rover = read_obs(_path(shared_gnss, run.rover))
     base = read_obs(_path(shared_gnss, run.base))
     navs = [read_nav(_path(shared_gnss, p)) for p in run.nav]

@@ -41,6 +41,8 @@ from navtrack.experiments.ari.synthetic import (
 from navtrack.experiments.ari.tables import PAPER_TABLES, summary_lines, tables_markdown
 from navtrack.experiments.ari.truths import printed_truths
 from navtrack.experiments.contract import Experiment, ExperimentContext, ExtraResult, Outcome
+from navtrack.plots import ari as ari_plots
+from navtrack.plots.canvas import save_figure
 from navtrack.smoothing.ari import AriConfig
 
 __all__ = ["EXPERIMENT", "AriExperiment"]
@@ -133,9 +135,6 @@ class AriExperiment(Experiment[AriExperimentParams, _RunResult]):
     def figures(
         self, outcome: Outcome[AriExperimentParams, _RunResult], out_dir: Path
     ) -> Iterator[Path]:
-        from navtrack.plots import ari as ari_plots
-        from navtrack.plots.canvas import save_figure
-
         sources, fits = outcome.artifacts
         yield from ari_plots.write_reproduction_figures(
             out_dir, outcome.runs, outcome.params.cases, sources, fits

@@ -33,8 +33,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
+from scipy.interpolate import CubicSpline
+from scipy.spatial.transform import Rotation
 
 from navtrack._typing import FloatArray
+from navtrack.attitude.imu_sim import LN200, integrate_rates, simulate_gyro
+from navtrack.errors import FileFormatError
 from navtrack.experiments.ari.carrier import strip_fits
 
 __all__ = [
@@ -94,15 +99,9 @@ def vehicle_attitude(
 ) -> tuple[FloatArray, FloatArray]:
     """True attitude of the pyins car at ``rate_hz``: times ``(n,)`` s and body -> NED
     quaternions ``(n, 4)`` scalar-last (see the module notes)."""
-    import pandas as pd
-    from scipy.interpolate import CubicSpline
-    from scipy.spatial.transform import Rotation
-
     df = pd.read_csv(path)
     missing = [c for c in ("time", "VN", "VE", "VD") if c not in df.columns]
     if missing:
-        from navtrack.errors import FileFormatError
-
         raise FileFormatError(path, None, f"no column {', '.join(missing)}")
     t = df["time"].to_numpy(dtype=float)
     vn, ve, vd = (df[c].to_numpy(dtype=float) for c in ("VN", "VE", "VD"))
@@ -126,8 +125,6 @@ def vehicle_attitude(
 
 def _angles_deg(q_xyzw: FloatArray) -> FloatArray:
     """Yaw, pitch, roll ``(n, 3)`` in degrees of body -> NED quaternions, yaw unwrapped."""
-    from scipy.spatial.transform import Rotation
-
     ang = np.asarray(Rotation.from_quat(q_xyzw).as_euler("ZYX"), dtype=np.float64)
     ang[:, 0] = np.unwrap(ang[:, 0])
     return np.degrees(ang)
@@ -149,8 +146,6 @@ def ins_series(
     of ``readouts`` (one gyro recording, integrated once; the central ``max_epochs`` kept; see
     the module notes). Each series carries the true angles at the same epochs in
     ``meta["truth_deg"]`` (the control: the motion alone)."""
-    from navtrack.attitude.imu_sim import LN200, integrate_rates, simulate_gyro
-
     t, truth = vehicle_attitude(path, LN200.rate_hz, min_speed_mps)
     record = simulate_gyro(t, truth, LN200, rng)
     ins = integrate_rates(t, record.gyr_rad_s, truth[0])

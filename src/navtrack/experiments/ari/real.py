@@ -17,15 +17,24 @@ import dataclasses
 import math
 import time
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
-from navtrack._frozen import freeze_arrays
+from navtrack import geodesy
 from navtrack._typing import BoolArray, FloatArray
 from navtrack.errors import FileFormatError
+from navtrack.experiments.ari.broad import broad_series
+from navtrack.experiments.ari.series import RealSeries
+from navtrack.gnss.rinex.nav import read_nav
+from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.spp import SppConfig, solution_frame, solve_spp
+from navtrack.io.rtklib import to_solution_frame
+from navtrack.io.tables import read_table
 from navtrack.smoothing.ari import AriConfig, AriResult, fit_ari, regularize_time
 from navtrack.smoothing.attitude import AttitudeForm
 from navtrack.smoothing.identifiability import identifiability_warnings, sigma_bounds
@@ -49,43 +58,8 @@ __all__ = [
 STRIP_EPOCHS = {"m": 130, "deg": 400}
 
 
-@dataclass(frozen=True, slots=True)
-class RealSeries:
-    """Columns of one real data set on a uniform time grid (NaN = missing epoch).
-
-    Attributes
-    ----------
-    source : str
-    t_s : ndarray, shape (n,)
-    columns : dict of str to ndarray (n,)
-    unit : str
-    dt_s : float
-    n_inserted : int
-        Epochs inserted into gaps by :func:`regularize_time`.
-    meta : dict
-        Provenance of the series (for GNSS solutions: solver, run, epochs, solved, statuses).
-    """
-
-    source: str
-    t_s: FloatArray
-    columns: dict[str, FloatArray]
-    unit: str
-    dt_s: float
-    n_inserted: int = 0
-    meta: dict[str, Any] = field(default_factory=dict)
-
-    def __post_init__(self) -> None:
-        freeze_arrays(self)
-        for values in self.columns.values():
-            values.flags.writeable = False
-
-
 def pyins_series(path: Path) -> RealSeries:
     """pyins receiver track (``gnss.csv``) as ENU (m) about its first epoch."""
-    import pandas as pd
-
-    from navtrack import geodesy
-
     df = pd.read_csv(path)
     llh = np.column_stack(
         [np.radians(df["lat"].to_numpy()), np.radians(df["lon"].to_numpy()), df["alt"].to_numpy()]
@@ -105,8 +79,6 @@ def solution_series(path: Path) -> RealSeries:
     The file is read by :func:`navtrack.io.tables.read_table` (format by suffix). Epochs missing
     from the file are inserted as missing (NaN) on the median time step.
     """
-    from navtrack.io.tables import read_table
-
     return _table_series(path.name, read_table(path), path=path)
 
 
@@ -116,8 +88,6 @@ def _table_series(
     """ENU (m) about the mean of the usable epochs of a solution table (``t_gps_s``, ``x_m``,
     ``y_m``, ``z_m``, optional ``status``); unusable epochs and gaps are missing (NaN).
     ``path``: the file the table was read from, named in the error when columns are missing."""
-    from navtrack import geodesy
-
     missing = [c for c in ("t_gps_s", "x_m", "y_m", "z_m") if c not in df.columns]
     if missing:
         message = f"not a solution table: no column {', '.join(missing)}"
@@ -155,8 +125,6 @@ def _single_epoch_sd(df: Any) -> FloatArray | None:
     ``None`` when the table carries neither."""
     cols = ["sd_e_m", "sd_n_m", "sd_u_m"]
     if not set(cols) <= set(df.columns) and {"sdx_m", "lat_deg"} <= set(df.columns):
-        from navtrack.io.rtklib import to_solution_frame
-
         df = to_solution_frame(df)
     if not set(cols) <= set(df.columns):
         return None
@@ -227,12 +195,6 @@ def spp_series(gnss: Path, run: SppRun) -> RealSeries:
         Source ``navtrack <name>``; epochs without a solution (any status but ``ok``) are
         missing (NaN). ``meta`` holds the SPP epoch count, status counts and solve time.
     """
-    import pandas as pd
-
-    from navtrack.gnss.rinex.nav import read_nav
-    from navtrack.gnss.rinex.obs import read_obs
-    from navtrack.gnss.spp import SppConfig, solution_frame, solve_spp
-
     obs = read_obs(gnss / run.obs)
     navs = [read_nav(gnss / p) for p in run.nav]
     t0 = time.perf_counter()
@@ -422,8 +384,6 @@ def real_data_rows(
         for k in order if track is None else track(order, "real series"):
             done[k] = _fit_column(tasks[k], cfg, further)
     else:
-        from concurrent.futures import ProcessPoolExecutor
-
         with ProcessPoolExecutor(max_workers=workers) as pool:
             futures = [(k, pool.submit(_fit_column, tasks[k], cfg, further)) for k in order]
             for k, fut in futures if track is None else track(futures, "real series"):
@@ -516,8 +476,6 @@ def default_real_sources(
     of ``spp_runs``: RTKLIB's stored solution and navtrack's own SPP solution of the same
     observation and navigation files (:func:`spp_series`), each as ENU about its mean.
     """
-    from navtrack.experiments.ari.broad import broad_series
-
     sources: list[RealSeries] = []
     skipped: list[str] = []
     broad = shared / "trajectory" / "broad"

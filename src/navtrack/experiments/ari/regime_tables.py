@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from navtrack.experiments.ari.tables import PAPER_TABLE1, PAPER_TABLE2, PAPER_TABLES, fmt
+from navtrack.experiments.ari.printed import PAPER_TABLE1, PAPER_TABLE2, PAPER_TABLES, fmt
 
 __all__ = ["regime_lines"]
 
@@ -42,6 +42,17 @@ def _carrier_lines(results: dict[str, Any]) -> list[str]:
     if not rows:
         return ["", "No carrier-phase series: " + ("; ".join(skipped) or "switched off.")]
     strips = _by_strip(rows)
+    return (
+        _carrier_series_lines(rows, skipped)
+        + _carrier_table1(strips)
+        + _carrier_table2(strips)
+        + _carrier_table3(strips)
+        + _carrier_order_lines(rows)
+    )
+
+
+def _carrier_series_lines(rows: list[dict[str, Any]], skipped: list[str]) -> list[str]:
+    """What the carrier-phase series are: one row per source."""
     rp = "reweighted" if rows[0]["robust_process"] else "not reweighted"
     lines = [
         "",
@@ -79,8 +90,12 @@ def _carrier_lines(results: dict[str, Any]) -> list[str]:
         )
     if skipped:
         lines += ["", "Skipped: " + "; ".join(skipped)]
-    # Table 1
-    lines += [
+    return lines
+
+
+def _carrier_table1(strips: dict[tuple[str, int], dict[str, dict[str, Any]]]) -> list[str]:
+    """Table 1: sigma_n per strip, the printed values first."""
+    lines = [
         "",
         "### Table 1: σn per strip (m), e / n / u",
         "",
@@ -103,8 +118,12 @@ def _carrier_lines(results: dict[str, Any]) -> list[str]:
             + " | ".join(_cells(cols, fit, "sigma_n") for fit, _ in _FITS_F)
             + " |"
         )
-    # Table 2
-    lines += [
+    return lines
+
+
+def _carrier_table2(strips: dict[tuple[str, int], dict[str, dict[str, Any]]]) -> list[str]:
+    """Table 2: ARI sigma_n against the least-squares accuracy."""
+    lines = [
         "",
         "### Table 2: ARI σn against the least-squares accuracy",
         "",
@@ -139,8 +158,12 @@ def _carrier_lines(results: dict[str, Any]) -> list[str]:
             + " / ".join(fmt(cols.get(c, {}).get("ls_sd_rms"), 3) for c in _COLS)
             + f" | {ratio('exact')} | {ratio('paper_forstner')} |"
         )
-    # Table 3
-    lines += [
+    return lines
+
+
+def _carrier_table3(strips: dict[tuple[str, int], dict[str, dict[str, Any]]]) -> list[str]:
+    """Table 3: sigma_x and r(1..3) of the filtered series."""
+    lines = [
         "",
         "### Table 3: σx (m) and r(1..3) of the filtered series",
         "",
@@ -168,12 +191,16 @@ def _carrier_lines(results: dict[str, Any]) -> list[str]:
                 + (" ".join(fmt(v, 2) for v in pf.get("r", [])) or "–")
                 + " |"
             )
-    # orders
+    return lines
+
+
+def _carrier_order_lines(rows: list[dict[str, Any]]) -> list[str]:
+    """The orders BIC chose, against the paper's ARI(5,2)."""
     n_52 = sum(1 for r in rows if r["exact"]["order"] == [5, 2])
     orders: dict[str, int] = {}
     for r in rows:
         orders[_order(r["exact"])] = orders.get(_order(r["exact"]), 0) + 1
-    lines += [
+    lines = [
         "",
         "### The order: does the paper's ARI(5,2) come out of phase data?",
         "",

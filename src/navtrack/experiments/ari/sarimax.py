@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from navtrack._typing import FloatArray
-from navtrack.experiments.ari.real import RealSeries
+from navtrack.experiments.ari.series import RealSeries
 from navtrack.experiments.ari.synthetic import SyntheticCase
 from navtrack.smoothing.ari import AriConfig, AriResult, fit_ari, gauss_markov_filter, simulate_ari
 
@@ -33,11 +34,9 @@ def sarimax_compare(y: FloatArray, p: int, d: int, label: str) -> dict[str, Any]
     Returns None when statsmodels is not installed.
     """
     try:
-        from statsmodels.tsa.statespace.sarimax import SARIMAX
+        from statsmodels.tsa.statespace.sarimax import SARIMAX  # optional (extra compare)
     except ImportError:
         return None
-    import warnings
-
     y_c = y - float(np.nanmean(y))
     t0 = time.perf_counter()
     ours = fit_ari(y, AriConfig(order=(p, d), robust="off"))

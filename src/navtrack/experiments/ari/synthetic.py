@@ -319,85 +319,16 @@ def synthetic_run(params: AriExperimentParams, rng: np.random.Generator) -> dict
     index = run_index(rng)
     out: dict[str, dict[str, Any]] = {}
     for case in params.cases:
-        p = len(case.phi)
         y, _ = simulate_ari(rng, case.n, case.phi, case.d, case.sigma_n, case.sigma_e)
         k = max(1, round(params.outlier_rate * case.n))
         idx = rng.choice(case.n, size=k, replace=False)
         lo, hi = params.outlier_sigma
         mag = rng.uniform(lo, hi, size=k) * rng.choice([-1.0, 1.0], size=k)
-        rec: dict[str, Any] = {}
-        t0 = time.perf_counter()
-        clean = fit_ari(y, AriConfig(order=(p, case.d), robust="off"))
-        rec["exact_seconds"] = time.perf_counter() - t0
-        rec["clean_status"] = str(clean.status)
-        rec["sigma_n_ratio"] = clean.sigma_n / case.sigma_n
-        rec["sigma_e_ratio"] = clean.sigma_e / case.sigma_e
-        rec["sigma_x_over_sigma_n"] = clean.sigma_x_rms / clean.sigma_n
-        rec["r"] = [float(v) for v in clean.autocorr]
-        info = observed_information(y, case.phi, case.d, case.sigma_n, case.sigma_e)
-        try:
-            cov = np.linalg.inv(info)
-            rec["crb_sigma_n"] = 0.5 * math.sqrt(max(cov[p, p], 0.0))
-            rec["crb_sigma_e"] = 0.5 * math.sqrt(max(cov[p + 1, p + 1], 0.0))
-        except np.linalg.LinAlgError:
-            rec["crb_sigma_n"] = rec["crb_sigma_e"] = math.nan
-        ratio, r_true = filtered_statistics(case.phi, case.d, case.sigma_n, case.sigma_e, case.n)
-        rec["true_sigma_x_over_sigma_n"] = ratio
-        rec["true_r"] = [float(v) for v in r_true]
-        if index < params.paper_runs:  # the paper's estimator on the same clean series
-            t0 = time.perf_counter()
-            paper = fit_ari(y, AriConfig(order=(p, case.d), robust="off", estimator="paper"))
-            rec["paper_seconds"] = time.perf_counter() - t0
-            rec["paper_status"] = str(paper.status)
-            rec["paper_n_iter"] = paper.n_iter
-            rec["paper_sigma_n_ratio"] = paper.sigma_n / case.sigma_n
-            rec["paper_sigma_e_ratio"] = paper.sigma_e / case.sigma_e
-            rec["paper_sigma_x_over_sigma_n"] = paper.sigma_x_rms / paper.sigma_n
-            rec["paper_r"] = [float(v) for v in paper.autocorr]
-        dirty = y.copy()
-        dirty[idx] += mag * case.sigma_n
-        truth = np.zeros(case.n, dtype=bool)
-        truth[idx] = True
-        t0 = time.perf_counter()
-        robust = fit_ari(
-            dirty,
-            AriConfig(
-                order=(p, case.d), robust=params.robust, robust_process=params.robust_process
-            ),
-        )
-        rec["robust_seconds"] = time.perf_counter() - t0
-        rec.update(_robust_record("robust", robust, case, idx, truth))
-        rec["n_injected"] = int(k)
-        rec["magnitude_sigma"] = [float(v) for v in np.abs(mag)]
-        rec["n_clean_epochs"] = int(np.count_nonzero(~truth))
-        if index < params.paper_runs:  # the paper's estimator on the same contaminated series
-            t0 = time.perf_counter()
-            paper = fit_ari(
-                dirty,
-                AriConfig(
-                    order=(p, case.d),
-                    robust=params.robust,
-                    robust_process=params.robust_process,
-                    estimator="paper",
-                ),
-            )
-            rec["paper_robust_seconds"] = time.perf_counter() - t0
-            rec.update(_robust_record("paper_robust", paper, case, idx, truth))
-        # the same series without robust weighting, for comparison
-        plain = fit_ari(dirty, AriConfig(order=(p, case.d), robust="off"))
-        rec["plain_detected"] = int(np.count_nonzero(plain.gross_error[idx]))
-        rec["plain_sigma_n_ratio"] = plain.sigma_n / case.sigma_n
+        with_paper = index < params.paper_runs
+        rec = _clean_record(case, y, with_paper)
+        rec.update(_contaminated_record(params, case, y, idx, mag, with_paper))
         if params.select_order and index < params.order_runs:
-            selections: tuple[tuple[str, Literal["exact", "paper"]], ...] = (
-                ("", "exact"),
-                ("paper_", "paper"),
-            )
-            for prefix, estimator in selections:
-                if prefix and not params.paper_order:
-                    continue
-                auto = fit_ari(y, AriConfig(robust="off", min_d=1, estimator=estimator))
-                rec[f"{prefix}order"] = [auto.p, auto.d]
-                rec[f"{prefix}bic_true_minus_chosen"] = _bic_gap(auto, (p, case.d))
+            rec.update(_order_record(params, case, y))
         out[case.name] = rec
     return out
 
@@ -424,6 +355,109 @@ def _robust_record(
     }
 
 
+def _clean_record(case: SyntheticCase, y: FloatArray, with_paper: bool) -> dict[str, Any]:
+    """Estimates of the clean series against the truth, the CRB and the true filtered
+    statistics (and the paper's estimator's when ``with_paper``)."""
+    p = len(case.phi)
+    rec: dict[str, Any] = {}
+    t0 = time.perf_counter()
+    clean = fit_ari(y, AriConfig(order=(p, case.d), robust="off"))
+    rec["exact_seconds"] = time.perf_counter() - t0
+    rec["clean_status"] = str(clean.status)
+    rec["sigma_n_ratio"] = clean.sigma_n / case.sigma_n
+    rec["sigma_e_ratio"] = clean.sigma_e / case.sigma_e
+    rec["sigma_x_over_sigma_n"] = clean.sigma_x_rms / clean.sigma_n
+    rec["r"] = [float(v) for v in clean.autocorr]
+    info = observed_information(y, case.phi, case.d, case.sigma_n, case.sigma_e)
+    try:
+        cov = np.linalg.inv(info)
+        rec["crb_sigma_n"] = 0.5 * math.sqrt(max(cov[p, p], 0.0))
+        rec["crb_sigma_e"] = 0.5 * math.sqrt(max(cov[p + 1, p + 1], 0.0))
+    except np.linalg.LinAlgError:
+        rec["crb_sigma_n"] = rec["crb_sigma_e"] = math.nan
+    ratio, r_true = filtered_statistics(case.phi, case.d, case.sigma_n, case.sigma_e, case.n)
+    rec["true_sigma_x_over_sigma_n"] = ratio
+    rec["true_r"] = [float(v) for v in r_true]
+    if with_paper:  # the paper's estimator on the same clean series
+        t0 = time.perf_counter()
+        paper = fit_ari(y, AriConfig(order=(p, case.d), robust="off", estimator="paper"))
+        rec["paper_seconds"] = time.perf_counter() - t0
+        rec["paper_status"] = str(paper.status)
+        rec["paper_n_iter"] = paper.n_iter
+        rec["paper_sigma_n_ratio"] = paper.sigma_n / case.sigma_n
+        rec["paper_sigma_e_ratio"] = paper.sigma_e / case.sigma_e
+        rec["paper_sigma_x_over_sigma_n"] = paper.sigma_x_rms / paper.sigma_n
+        rec["paper_r"] = [float(v) for v in paper.autocorr]
+    return rec
+
+
+def _contaminated_record(
+    params: AriExperimentParams,
+    case: SyntheticCase,
+    y: FloatArray,
+    idx: Any,
+    mag: FloatArray,
+    with_paper: bool,
+) -> dict[str, Any]:
+    """The series with gross errors of ``mag`` sigma_n at ``idx``: robust fits (and the
+    paper's estimator's when ``with_paper``) and the plain fit, against the injected errors."""
+    p = len(case.phi)
+    k = idx.size
+    rec: dict[str, Any] = {}
+    dirty = y.copy()
+    dirty[idx] += mag * case.sigma_n
+    truth = np.zeros(case.n, dtype=bool)
+    truth[idx] = True
+    t0 = time.perf_counter()
+    robust = fit_ari(
+        dirty,
+        AriConfig(order=(p, case.d), robust=params.robust, robust_process=params.robust_process),
+    )
+    rec["robust_seconds"] = time.perf_counter() - t0
+    rec.update(_robust_record("robust", robust, case, idx, truth))
+    rec["n_injected"] = int(k)
+    rec["magnitude_sigma"] = [float(v) for v in np.abs(mag)]
+    rec["n_clean_epochs"] = int(np.count_nonzero(~truth))
+    if with_paper:  # the paper's estimator on the same contaminated series
+        t0 = time.perf_counter()
+        paper = fit_ari(
+            dirty,
+            AriConfig(
+                order=(p, case.d),
+                robust=params.robust,
+                robust_process=params.robust_process,
+                estimator="paper",
+            ),
+        )
+        rec["paper_robust_seconds"] = time.perf_counter() - t0
+        rec.update(_robust_record("paper_robust", paper, case, idx, truth))
+    # the same series without robust weighting, for comparison
+    plain = fit_ari(dirty, AriConfig(order=(p, case.d), robust="off"))
+    rec["plain_detected"] = int(np.count_nonzero(plain.gross_error[idx]))
+    rec["plain_sigma_n_ratio"] = plain.sigma_n / case.sigma_n
+    return rec
+
+
+def _order_record(
+    params: AriExperimentParams, case: SyntheticCase, y: FloatArray
+) -> dict[str, Any]:
+    """The order BIC selects on the clean series (both estimators with ``params.paper_order``)
+    and its BIC gap to the true order."""
+    p = len(case.phi)
+    rec: dict[str, Any] = {}
+    selections: tuple[tuple[str, Literal["exact", "paper"]], ...] = (
+        ("", "exact"),
+        ("paper_", "paper"),
+    )
+    for prefix, estimator in selections:
+        if prefix and not params.paper_order:
+            continue
+        auto = fit_ari(y, AriConfig(robust="off", min_d=1, estimator=estimator))
+        rec[f"{prefix}order"] = [auto.p, auto.d]
+        rec[f"{prefix}bic_true_minus_chosen"] = _bic_gap(auto, (p, case.d))
+    return rec
+
+
 def summarize_synthetic(
     params: AriExperimentParams, runs: Sequence[dict[str, Any]]
 ) -> dict[str, Any]:
@@ -441,112 +475,119 @@ def summarize_synthetic(
         Case name -> summary (truth, medians and IQRs, CRB, recall, false flags, bars).
     """
     summary: dict[str, Any] = {}
-    crb_limit = params.identifiable_crb
     for case in params.cases:
         recs = [r[case.name] for r in runs if case.name in r]
-        if not recs:
-            continue
-
-        def arr(key: str, recs: list[dict] = recs) -> FloatArray:
-            return np.array([r[key] for r in recs], dtype=float)
-
-        exact_robust = _contamination(recs, "robust")
-        crb_n = float(np.median(arr("crb_sigma_n")))
-        crb_e = float(np.median(arr("crb_sigma_e")))
-        med_n = float(np.median(arr("sigma_n_ratio")))
-        med_e = float(np.median(arr("sigma_e_ratio")))
-        orders: dict[str, int] = {}
-        paper_orders: dict[str, int] = {}
-        for r in recs:
-            for key, counts in (("order", orders), ("paper_order", paper_orders)):
-                if key in r:
-                    name = f"({r[key][0]},{r[key][1]})"
-                    counts[name] = counts.get(name, 0) + 1
-        statuses: dict[str, int] = {}
-        paper_statuses: dict[str, int] = {}
-        for r in recs:
-            statuses[r["clean_status"]] = statuses.get(r["clean_status"], 0) + 1
-            if "paper_status" in r:
-                paper_statuses[r["paper_status"]] = paper_statuses.get(r["paper_status"], 0) + 1
-
-        estimators = {
-            "exact": {
-                "status": statuses,
-                "sigma_n_ratio": _spread(recs, "sigma_n_ratio"),
-                "sigma_e_ratio": _spread(recs, "sigma_e_ratio"),
-                "sigma_x_over_sigma_n": _spread(recs, "sigma_x_over_sigma_n"),
-                "r": _spread(recs, "r"),
-                "seconds": _spread(recs, "exact_seconds"),
-                "bic_true_minus_chosen": _spread(recs, "bic_true_minus_chosen"),
-                "robust": exact_robust,
-            },
-            "paper": {
-                "status": paper_statuses,
-                "sigma_n_ratio": _spread(recs, "paper_sigma_n_ratio"),
-                "sigma_e_ratio": _spread(recs, "paper_sigma_e_ratio"),
-                "sigma_x_over_sigma_n": _spread(recs, "paper_sigma_x_over_sigma_n"),
-                "r": _spread(recs, "paper_r"),
-                "seconds": _spread(recs, "paper_seconds"),
-                "n_iter": _spread(recs, "paper_n_iter"),
-                "bic_true_minus_chosen": _spread(recs, "paper_bic_true_minus_chosen"),
-                "robust": _contamination(recs, "paper_robust"),
-            },
-        }
-        for est in estimators.values():
-            est["bars"] = _bars(est, crb_n, crb_e, crb_limit)
-        recall = exact_robust["recall"]
-        false_rate = exact_robust["false_flag_rate"]
-        summary[case.name] = {
-            "label": case.label,
-            "truth": {
-                "order": [len(case.phi), case.d],
-                "phi": list(case.phi),
-                "sigma_n": case.sigma_n,
-                "sigma_e": case.sigma_e,
-                "n": case.n,
-                "dt_s": case.dt_s,
-                "unit": case.unit,
-                "sigma_x_over_sigma_n": float(np.median(arr("true_sigma_x_over_sigma_n"))),
-                "r": [float(v) for v in np.median([r["true_r"] for r in recs], axis=0)],
-            },
-            "printed": {
-                "source": case.printed_source,
-                "sigma_n": case.printed_sigma_n,
-                "sigma_e": case.printed_sigma_e,
-                "sigma_x_over_sigma_n": case.printed_ratio,
-                "r": list(case.printed_r),
-            },
-            "estimators": estimators,
-            "runs": len(recs),
-            "paper_runs": sum("paper_status" in r for r in recs),
-            "order_runs": sum("order" in r for r in recs),
-            "clean_status": statuses,
-            "median_sigma_n_ratio": med_n,
-            "median_sigma_e_ratio": med_e,
-            "iqr_sigma_n_ratio": [float(v) for v in np.percentile(arr("sigma_n_ratio"), [25, 75])],
-            "iqr_sigma_e_ratio": [float(v) for v in np.percentile(arr("sigma_e_ratio"), [25, 75])],
-            "median_sigma_n": med_n * case.sigma_n,
-            "median_sigma_e": med_e * case.sigma_e,
-            "median_sigma_x_over_sigma_n": float(np.median(arr("sigma_x_over_sigma_n"))),
-            "median_r": [float(v) for v in np.median(np.array([r["r"] for r in recs]), axis=0)],
-            "crb_rel_sd_sigma_n": crb_n,
-            "crb_rel_sd_sigma_e": crb_e,
-            "identifiable_sigma_n": crb_n < crb_limit,
-            "identifiable_sigma_e": crb_e < crb_limit,
-            "robust_median_sigma_n_ratio": float(np.median(arr("robust_sigma_n_ratio"))),
-            "robust_median_sigma_e_ratio": float(np.median(arr("robust_sigma_e_ratio"))),
-            "plain_median_sigma_n_ratio": float(np.median(arr("plain_sigma_n_ratio"))),
-            "plain_recall": float(arr("plain_detected").sum() / max(exact_robust["injected"], 1)),
-            "injected": exact_robust["injected"],
-            "recall": recall,
-            "recall_by_magnitude": exact_robust["recall_by_magnitude"],
-            "false_flags": exact_robust["false_flags"],
-            "false_flag_rate": false_rate,
-            "orders_selected": orders,
-            "orders_selected_paper": paper_orders,
-            "bars": estimators["exact"]["bars"],
-        }
+        if recs:
+            summary[case.name] = _case_summary(case, recs, params.identifiable_crb)
     return summary
+
+
+def _counts(recs: Sequence[dict[str, Any]], key: str) -> dict[str, int]:
+    """How often each value of ``key`` occurs (records without it skipped); orders as
+    ``"(p,d)"``."""
+    counts: dict[str, int] = {}
+    for r in recs:
+        if key in r:
+            value = r[key]
+            name = f"({value[0]},{value[1]})" if isinstance(value, list | tuple) else value
+            counts[name] = counts.get(name, 0) + 1
+    return counts
+
+
+def _estimator_summaries(recs: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Spread of every estimate of both estimators (exact likelihood, the paper's)."""
+    return {
+        "exact": {
+            "status": _counts(recs, "clean_status"),
+            "sigma_n_ratio": _spread(recs, "sigma_n_ratio"),
+            "sigma_e_ratio": _spread(recs, "sigma_e_ratio"),
+            "sigma_x_over_sigma_n": _spread(recs, "sigma_x_over_sigma_n"),
+            "r": _spread(recs, "r"),
+            "seconds": _spread(recs, "exact_seconds"),
+            "bic_true_minus_chosen": _spread(recs, "bic_true_minus_chosen"),
+            "robust": _contamination(recs, "robust"),
+        },
+        "paper": {
+            "status": _counts(recs, "paper_status"),
+            "sigma_n_ratio": _spread(recs, "paper_sigma_n_ratio"),
+            "sigma_e_ratio": _spread(recs, "paper_sigma_e_ratio"),
+            "sigma_x_over_sigma_n": _spread(recs, "paper_sigma_x_over_sigma_n"),
+            "r": _spread(recs, "paper_r"),
+            "seconds": _spread(recs, "paper_seconds"),
+            "n_iter": _spread(recs, "paper_n_iter"),
+            "bic_true_minus_chosen": _spread(recs, "paper_bic_true_minus_chosen"),
+            "robust": _contamination(recs, "paper_robust"),
+        },
+    }
+
+
+def _case_summary(
+    case: SyntheticCase, recs: list[dict[str, Any]], crb_limit: float
+) -> dict[str, Any]:
+    """The summary of one case over its runs' records."""
+
+    def arr(key: str) -> FloatArray:
+        return np.array([r[key] for r in recs], dtype=float)
+
+    crb_n = float(np.median(arr("crb_sigma_n")))
+    crb_e = float(np.median(arr("crb_sigma_e")))
+    med_n = float(np.median(arr("sigma_n_ratio")))
+    med_e = float(np.median(arr("sigma_e_ratio")))
+    estimators = _estimator_summaries(recs)
+    for est in estimators.values():
+        est["bars"] = _bars(est, crb_n, crb_e, crb_limit)
+    exact_robust = estimators["exact"]["robust"]
+    statuses = estimators["exact"]["status"]
+    return {
+        "label": case.label,
+        "truth": {
+            "order": [len(case.phi), case.d],
+            "phi": list(case.phi),
+            "sigma_n": case.sigma_n,
+            "sigma_e": case.sigma_e,
+            "n": case.n,
+            "dt_s": case.dt_s,
+            "unit": case.unit,
+            "sigma_x_over_sigma_n": float(np.median(arr("true_sigma_x_over_sigma_n"))),
+            "r": [float(v) for v in np.median([r["true_r"] for r in recs], axis=0)],
+        },
+        "printed": {
+            "source": case.printed_source,
+            "sigma_n": case.printed_sigma_n,
+            "sigma_e": case.printed_sigma_e,
+            "sigma_x_over_sigma_n": case.printed_ratio,
+            "r": list(case.printed_r),
+        },
+        "estimators": estimators,
+        "runs": len(recs),
+        "paper_runs": sum("paper_status" in r for r in recs),
+        "order_runs": sum("order" in r for r in recs),
+        "clean_status": statuses,
+        "median_sigma_n_ratio": med_n,
+        "median_sigma_e_ratio": med_e,
+        "iqr_sigma_n_ratio": [float(v) for v in np.percentile(arr("sigma_n_ratio"), [25, 75])],
+        "iqr_sigma_e_ratio": [float(v) for v in np.percentile(arr("sigma_e_ratio"), [25, 75])],
+        "median_sigma_n": med_n * case.sigma_n,
+        "median_sigma_e": med_e * case.sigma_e,
+        "median_sigma_x_over_sigma_n": float(np.median(arr("sigma_x_over_sigma_n"))),
+        "median_r": [float(v) for v in np.median(np.array([r["r"] for r in recs]), axis=0)],
+        "crb_rel_sd_sigma_n": crb_n,
+        "crb_rel_sd_sigma_e": crb_e,
+        "identifiable_sigma_n": crb_n < crb_limit,
+        "identifiable_sigma_e": crb_e < crb_limit,
+        "robust_median_sigma_n_ratio": float(np.median(arr("robust_sigma_n_ratio"))),
+        "robust_median_sigma_e_ratio": float(np.median(arr("robust_sigma_e_ratio"))),
+        "plain_median_sigma_n_ratio": float(np.median(arr("plain_sigma_n_ratio"))),
+        "plain_recall": float(arr("plain_detected").sum() / max(exact_robust["injected"], 1)),
+        "injected": exact_robust["injected"],
+        "recall": exact_robust["recall"],
+        "recall_by_magnitude": exact_robust["recall_by_magnitude"],
+        "false_flags": exact_robust["false_flags"],
+        "false_flag_rate": exact_robust["false_flag_rate"],
+        "orders_selected": _counts(recs, "order"),
+        "orders_selected_paper": _counts(recs, "paper_order"),
+        "bars": estimators["exact"]["bars"],
+    }
 
 
 def _spread(recs: Sequence[dict[str, Any]], key: str) -> dict[str, Any] | None:

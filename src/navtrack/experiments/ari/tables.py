@@ -5,49 +5,16 @@ from __future__ import annotations
 import math
 from typing import Any
 
-__all__ = ["PAPER_TABLES", "summary_lines", "tables_markdown"]
+from navtrack.experiments.ari.printed import PAPER_TABLE1, PAPER_TABLE2, PAPER_TABLES, fmt
+from navtrack.experiments.ari.regime_tables import regime_lines
 
-#: The paper's published figures (Lindenberger, Tables 1, 3, 4, 5), for the tables' context.
-PAPER_TABLES: dict[str, dict[str, Any]] = {
-    "GPS (Table 1 rms strips 3,4,5 / Table 3), m, 0.6 s, ARI(5,2)": {
-        "sigma_n": [0.021, 0.010, 0.026],
-        "sigma_x": [0.017, 0.007, 0.021],
-        "r": [[0.46, -0.06, 0.06], [0.69, 0.11, -0.15], [0.52, -0.01, -0.10]],
-        "columns": ["X", "Y", "Z"],
-        # Table 1 rms of strips 1,6,7 and Table 3's second sigma_x row (same r(h) printed)
-        "sigma_n_167": [0.018, 0.010, 0.021],
-        "sigma_x_167": [0.013, 0.006, 0.016],
-    },
-    "Shuttle INS (Table 4), deg, 2 s, ARI(6,1)": {
-        "sigma_n": [0.0060, 0.0048, 0.0060],
-        "sigma_e": [0.0019, 0.0012, 0.0014],
-        "sigma_x": [0.0027, 0.0027, 0.0031],
-        "r": [[0.71, 0.46, 0.18, 0.13], [0.62, 0.39, 0.10, 0.13], [0.67, 0.47, 0.15, 0.13]],
-        "columns": ["yaw", "pitch", "roll"],
-    },
-    "Aircraft INS (Table 5), deg, 10 Hz, ARI(2,2)": {
-        "sigma_n": [0.0023, 0.0035, 0.0030],
-        "sigma_e": [0.0005, 0.0013, 0.0026],
-        "sigma_x": [0.0011, 0.0013, 0.0017],
-        "r": [[0.86, 0.57, 0.29, 0.09], [0.79, 0.40, 0.09, -0.07], [0.80, 0.41, 0.08, -0.09]],
-        "columns": ["yaw", "pitch", "roll"],
-    },
-}
-
-
-def fmt(value: Any, digits: int = 4) -> str:
-    """A table cell: ``–`` for none or non-finite, yes/no, 4 significant digits (``digits``)."""
-    if value is None:
-        return "–"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, float):
-        if not math.isfinite(value):
-            return "–"
-        if value != 0 and (abs(value) < 1e-3 or abs(value) >= 1e5):
-            return f"{value:.{digits - 1}e}"
-        return f"{value:.{digits}g}"
-    return str(value)
+__all__ = [
+    "PAPER_TABLES",
+    "flag_and_process_lines",
+    "summary_lines",
+    "table2_and_strip_lines",
+    "tables_markdown",
+]
 
 
 def _pct(value: Any) -> str:
@@ -269,7 +236,7 @@ def _explained_cells(expl: dict[str, Any] | None, flagged: int) -> str:
     )
 
 
-def _flags_and_process(
+def flag_and_process_lines(
     real: list[dict[str, Any]], euler: list[dict[str, Any]] | None = None
 ) -> list[str]:
     """What explains the flags on the attitude series (in the Euler form too when ``euler``
@@ -346,21 +313,7 @@ def _flags_and_process(
     return lines
 
 
-#: Paper Tables 1 and 2: ARI ``sigma_n`` (rms of strips) and the single-epoch least-squares
-#: accuracy with the assumed sigma_0 = 0.006 m, GPS X/Y/Z in m.
-PAPER_TABLE2: dict[str, dict[str, list[float]]] = {
-    "strips 3,4,5": {"ari": [0.021, 0.010, 0.026], "ls": [0.022, 0.009, 0.017]},
-    "strips 1,6,7": {"ari": [0.018, 0.010, 0.021], "ls": [0.020, 0.009, 0.020]},
-}
-#: Paper Table 1: ARI ``sigma_n`` per strip (strips 1, 3, 4, 5, 6, 7), GPS X/Y/Z in m.
-PAPER_TABLE1: dict[str, list[float]] = {
-    "X": [0.027, 0.020, 0.024, 0.020, 0.014, 0.012],
-    "Y": [0.011, 0.009, 0.009, 0.013, 0.011, 0.007],
-    "Z": [0.038, 0.026, 0.027, 0.024, 0.014, 0.010],
-}
-
-
-def _table2_and_strips(results: dict[str, Any]) -> list[str]:
+def table2_and_strip_lines(results: dict[str, Any]) -> list[str]:
     """Paper Table 2 (filtered vs single-epoch least-squares accuracy) and Table 1 (rms over
     strips) on the real series, each below the paper's printed rows."""
     lines: list[str] = []
@@ -424,42 +377,9 @@ def _table2_and_strips(results: dict[str, Any]) -> list[str]:
     return lines
 
 
-def tables_markdown(results: dict[str, Any]) -> str:
-    """The paper-style tables of a results dictionary, as Markdown.
-
-    Parameters
-    ----------
-    results : dict
-        The ``results.json`` content of ``navtrack reproduce ari``: header (``runs``, ``seed``,
-        ``backend``, ``parameters``), ``synthetic``, ``real``, ``real_skipped``,
-        ``spp_comparison``, ``sarimax``.
-    """
+def _published_lines() -> list[str]:
+    """The paper's published values (for comparison with the synthetic truths)."""
     lines = [
-        "# ARI modelling of orientation parameters (paper 5) — reproduction",
-        "",
-        f"Runs: {results['runs']} (seed {results['seed']}, backend {results['backend']}). "
-        "Ratios are estimate / truth; CRB = relative Cramér–Rao standard deviation of one "
-        "series at the truth; a sigma is *identifiable* when CRB < "
-        f"{results['parameters']['identifiable_crb']:.0%}.",
-        "",
-    ]
-    from navtrack.experiments.ari.regime_tables import regime_lines
-
-    lines += regime_lines(results)
-    lines += [
-        "",
-        "# Consistency study on synthetic truths",
-        "",
-        "The series below are simulated from truths fitted to the paper's printed statistics: "
-        "they test the estimators' consistency (does the estimate return the truth, is the "
-        "order recoverable) on series like the paper's, not the paper's numbers, which no "
-        "data re-derive here.",
-    ]
-    lines += _synthetic_truths(results["synthetic"])
-    lines += _printed_vs_estimators(results["synthetic"])
-    lines += _gross_errors(results["synthetic"], results["parameters"]["robust"])
-    lines += _bars(results["synthetic"])
-    lines += [
         "",
         "## The paper's published values (for comparison with the synthetic truths)",
         "",
@@ -474,7 +394,12 @@ def tables_markdown(results: dict[str, Any]) -> str:
                 + " ".join(f"{v:.2f}" for v in tab["r"][k])
                 + " |"
             )
-    lines += [
+    return lines
+
+
+def _real_lines(rows: list[dict[str, Any]]) -> list[str]:
+    """Real data: one row per series and column, both estimators."""
+    lines = [
         "",
         "## Real data (paper Tables 1, 3, 4, 5 quantities)",
         "",
@@ -494,7 +419,7 @@ def tables_markdown(results: dict[str, Any]) -> str:
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
         "---|---|---|---|",
     ]
-    for row in results["real"]:
+    for row in rows:
         r = row["r"]
         u = row["unit"]
         lines.append(
@@ -508,67 +433,114 @@ def tables_markdown(results: dict[str, Any]) -> str:
             + ("; ".join(row.get("warnings", [])) or "–")
             + " |"
         )
-    lines += _flags_and_process(results["real"], results.get("attitude_euler"))
+    return lines
+
+
+def _spp_lines(rows: list[dict[str, Any]]) -> list[str]:
+    """navtrack's SPP solutions against RTKLIB's, smoothed alike."""
+    lines = [
+        "",
+        "## GNSS SPP: navtrack's own solutions vs RTKLIB's (same files and options)",
+        "",
+        "ENU about each solution's mean; static stations except the walking rover. "
+        "Cells are navtrack / RTKLIB, exact-likelihood estimator (the paper's estimator on "
+        "the same rows: *paper* columns of the real-data table).",
+        "",
+        "| run | column | solved | order | σn (m) | σe (m) | σx (m) | r(1) | flagged | status |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+
+    def pair(c: dict[str, Any], key: str, cell: Any = fmt) -> str:
+        return " / ".join("–" if c[s] is None else cell(c[s][key]) for s in ("navtrack", "rtklib"))
+
+    for c in rows:
+        kin = any(c[s] and c[s]["kinematic"] for s in ("navtrack", "rtklib"))
+        lines.append(
+            f"| {c['run']}{' (kinematic)' if kin else ''} | {c['column']} | "
+            f"{pair(c, 'solved')} | "
+            f"{pair(c, 'order', lambda o: f'({o[0]},{o[1]})')} | {pair(c, 'sigma_n')} | "
+            f"{pair(c, 'sigma_e')} | {pair(c, 'sigma_x')} | "
+            f"{pair(c, 'r', lambda r: fmt(r[0], 2))} | {pair(c, 'n_flagged')} | "
+            f"{pair(c, 'status')} |"
+        )
+    return lines
+
+
+def _sarimax_lines(rows: list[dict[str, Any]]) -> list[str]:
+    """The SARIMAX cross-check."""
+    lines = [
+        "",
+        "## SARIMAX cross-check (same series, same order; both scored by both likelihoods)",
+        "",
+        "navtrack's exact-likelihood estimator against statsmodels' SARIMAX, which "
+        "maximises the same exact likelihood; the paper's estimator maximises the "
+        "conditional one and is compared with the exact estimator in the tables above.",
+        "",
+        "| series | (p,d) | n | navtrack s | SARIMAX s | speed-up | SARIMAX converged | "
+        "σn nav / SM | σe nav / SM | logL_SM(nav) − logL_SM(SM) | "
+        "logL_nav(nav) − logL_nav(SM) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for c in rows:
+        gain_ours = (
+            c["loglike_navtrack_at_navtrack"] - c["loglike_navtrack_at_sarimax"]
+            if c["loglike_navtrack_at_sarimax"] is not None
+            and math.isfinite(c["loglike_navtrack_at_sarimax"])
+            else math.nan
+        )
+        lines.append(
+            f"| {c['series']} | ({c['order'][0]},{c['order'][1]}) | {c['n']} | "
+            f"{c['navtrack_seconds']:.3f} | {c['sarimax_seconds']:.3f} | {c['speedup']:.1f} | "
+            f"{fmt(c['sarimax_converged'])} | {fmt(c['navtrack_sigma_n'])} / "
+            f"{fmt(c['sarimax_sigma_n'])} | {fmt(c['navtrack_sigma_e'])} / "
+            f"{fmt(c['sarimax_sigma_e'])} | {c['loglike_gain']:+.4f} | {gain_ours:+.4f} |"
+        )
+    return lines
+
+
+def tables_markdown(results: dict[str, Any]) -> str:
+    """The paper-style tables of a results dictionary, as Markdown.
+
+    Parameters
+    ----------
+    results : dict
+        The ``results.json`` content of ``navtrack reproduce ari``: header (``runs``, ``seed``,
+        ``backend``, ``parameters``), ``synthetic``, ``real``, ``real_skipped``,
+        ``spp_comparison``, ``sarimax``.
+    """
+    lines = [
+        "# ARI modelling of orientation parameters (paper 5) — reproduction",
+        "",
+        f"Runs: {results['runs']} (seed {results['seed']}, backend {results['backend']}). "
+        "Ratios are estimate / truth; CRB = relative Cramér–Rao standard deviation of one "
+        "series at the truth; a sigma is *identifiable* when CRB < "
+        f"{results['parameters']['identifiable_crb']:.0%}.",
+        "",
+    ]
+    lines += regime_lines(results)
+    lines += [
+        "",
+        "# Consistency study on synthetic truths",
+        "",
+        "The series below are simulated from truths fitted to the paper's printed statistics: "
+        "they test the estimators' consistency (does the estimate return the truth, is the "
+        "order recoverable) on series like the paper's, not the paper's numbers, which no "
+        "data re-derive here.",
+    ]
+    lines += _synthetic_truths(results["synthetic"])
+    lines += _printed_vs_estimators(results["synthetic"])
+    lines += _gross_errors(results["synthetic"], results["parameters"]["robust"])
+    lines += _bars(results["synthetic"])
+    lines += _published_lines()
+    lines += _real_lines(results["real"])
+    lines += flag_and_process_lines(results["real"], results.get("attitude_euler"))
     if results.get("real_skipped"):
         lines += ["", "Skipped: " + "; ".join(results["real_skipped"])]
     if results.get("spp_comparison"):
-        lines += [
-            "",
-            "## GNSS SPP: navtrack's own solutions vs RTKLIB's (same files and options)",
-            "",
-            "ENU about each solution's mean; static stations except the walking rover. "
-            "Cells are navtrack / RTKLIB, exact-likelihood estimator (the paper's estimator on "
-            "the same rows: *paper* columns of the real-data table).",
-            "",
-            "| run | column | solved | order | σn (m) | σe (m) | σx (m) | r(1) | flagged "
-            "| status |",
-            "|---|---|---|---|---|---|---|---|---|---|",
-        ]
-
-        def pair(c: dict[str, Any], key: str, cell: Any = fmt) -> str:
-            return " / ".join(
-                "–" if c[s] is None else cell(c[s][key]) for s in ("navtrack", "rtklib")
-            )
-
-        for c in results["spp_comparison"]:
-            kin = any(c[s] and c[s]["kinematic"] for s in ("navtrack", "rtklib"))
-            lines.append(
-                f"| {c['run']}{' (kinematic)' if kin else ''} | {c['column']} | "
-                f"{pair(c, 'solved')} | "
-                f"{pair(c, 'order', lambda o: f'({o[0]},{o[1]})')} | {pair(c, 'sigma_n')} | "
-                f"{pair(c, 'sigma_e')} | {pair(c, 'sigma_x')} | "
-                f"{pair(c, 'r', lambda r: fmt(r[0], 2))} | {pair(c, 'n_flagged')} | "
-                f"{pair(c, 'status')} |"
-            )
+        lines += _spp_lines(results["spp_comparison"])
     if results.get("sarimax"):
-        lines += [
-            "",
-            "## SARIMAX cross-check (same series, same order; both scored by both likelihoods)",
-            "",
-            "navtrack's exact-likelihood estimator against statsmodels' SARIMAX, which "
-            "maximises the same exact likelihood; the paper's estimator maximises the "
-            "conditional one and is compared with the exact estimator in the tables above.",
-            "",
-            "| series | (p,d) | n | navtrack s | SARIMAX s | speed-up | SARIMAX converged | "
-            "σn nav / SM | σe nav / SM | logL_SM(nav) − logL_SM(SM) | "
-            "logL_nav(nav) − logL_nav(SM) |",
-            "|---|---|---|---|---|---|---|---|---|---|---|",
-        ]
-        for c in results["sarimax"]:
-            gain_ours = (
-                c["loglike_navtrack_at_navtrack"] - c["loglike_navtrack_at_sarimax"]
-                if c["loglike_navtrack_at_sarimax"] is not None
-                and math.isfinite(c["loglike_navtrack_at_sarimax"])
-                else math.nan
-            )
-            lines.append(
-                f"| {c['series']} | ({c['order'][0]},{c['order'][1]}) | {c['n']} | "
-                f"{c['navtrack_seconds']:.3f} | {c['sarimax_seconds']:.3f} | {c['speedup']:.1f} | "
-                f"{fmt(c['sarimax_converged'])} | {fmt(c['navtrack_sigma_n'])} / "
-                f"{fmt(c['sarimax_sigma_n'])} | {fmt(c['navtrack_sigma_e'])} / "
-                f"{fmt(c['sarimax_sigma_e'])} | {c['loglike_gain']:+.4f} | {gain_ours:+.4f} |"
-            )
-    lines += _table2_and_strips(results)
+        lines += _sarimax_lines(results["sarimax"])
+    lines += table2_and_strip_lines(results)
     if results.get("sarimax_skipped"):
         lines += ["", f"**SARIMAX cross-check skipped:** {results['sarimax_skipped']}."]
     lines.append("")

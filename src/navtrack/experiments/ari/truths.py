@@ -26,8 +26,10 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from navtrack._typing import ArrayLike, FloatArray
+from navtrack.experiments.ari.printed import PAPER_TABLES
 from navtrack.smoothing.ari import gauss_markov_filter
 
 __all__ = [
@@ -101,8 +103,6 @@ def fit_published(
     cost : float
         RMS of the residuals in units of 0.01 (without the ridge).
     """
-    from scipy.optimize import least_squares
-
     target_r = np.asarray(r, dtype=float)
     free_e = sigma_e is None
 
@@ -145,8 +145,6 @@ def printed_columns() -> list[dict[str, Any]]:
     """Every column the paper prints with its order, sigmas, ``sigma_x`` and ``r(h)``: GPS X,
     Y, Z for strips 3,4,5 and 1,6,7 (Tables 1, 3), Shuttle and aircraft yaw, pitch, roll
     (Tables 4, 5)."""
-    from navtrack.experiments.ari.tables import PAPER_TABLES
-
     out = []
     for label, tab in PAPER_TABLES.items():
         app = next(a for a in _APPLICATIONS if label.startswith(a))

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from navtrack.experiments.contract import Experiment, ExperimentContext, ExtraResult, Outcome
+from navtrack.experiments.foveal.figures import write_figures
 from navtrack.experiments.foveal.gains import gain_check
 from navtrack.experiments.foveal.study import FovealParams, foveal_run, summarize_foveal
 from navtrack.experiments.foveal.tables import PAPER_TABLES, summary_lines, tables_markdown
@@ -55,8 +56,6 @@ class FovealExperiment(Experiment[FovealParams, _RunResult]):
         return tables_markdown(results)
 
     def figures(self, outcome: Outcome[FovealParams, _RunResult], out_dir: Path) -> list[Path]:
-        from navtrack.experiments.foveal.figures import write_figures
-
         return write_figures(outcome.results, list(outcome.runs), out_dir)
 
     def summary_lines(self, results: dict[str, Any]) -> list[str]:

@@ -30,8 +30,8 @@ import numpy as np
 from scipy.stats import binom
 
 from navtrack.experiments.runner import run_monte_carlo
-from navtrack.experiments.sdcmsjpda.experiment import PAPER_TABLE1
 from navtrack.experiments.sdcmsjpda.scenario import SdCmsjpdaParams, paper3_run
+from navtrack.experiments.sdcmsjpda.summary import PAPER_TABLE1
 
 __all__ = [
     "DENSITY_GRID",

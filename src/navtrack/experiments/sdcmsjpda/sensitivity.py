@@ -21,6 +21,7 @@ import numpy as np
 from navtrack.experiments.contract import ExperimentContext
 from navtrack.experiments.runner import run_monte_carlo
 from navtrack.experiments.sdcmsjpda.scenario import SdCmsjpdaParams, paper3_run
+from navtrack.experiments.sdcmsjpda.summary import summarize_runs
 
 __all__ = ["READINGS", "compact", "run_readings", "sensitivity_markdown"]
 
@@ -58,8 +59,6 @@ def _run(index: int, rng: np.random.Generator, params: SdCmsjpdaParams) -> dict[
 def run_readings(params: SdCmsjpdaParams, context: ExperimentContext) -> list[dict[str, Any]]:
     """Every reading of :data:`READINGS` on ``params``: ``{"label", "settings", "by_pd"}``
     (:func:`compact`), ``params.sensitivity_runs`` runs each."""
-    from navtrack.experiments.sdcmsjpda.experiment import summarize_runs
-
     parallel = context.workers > 1
     out = []
     for i, (label, settings) in enumerate(context.track(READINGS, "sensitivity")):

@@ -4,7 +4,6 @@ and its solution frame (the columns ``pos --out`` writes)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -13,9 +12,6 @@ from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
 from navtrack.gnss.spp.config import STATUS_NAMES, SppStatus
 from navtrack.gnss.spp.estimate import PositionEstimate
 from navtrack.gnss.spp.measurements import Measurements
-
-if TYPE_CHECKING:
-    import pandas as pd
 
 __all__ = ["SppResult", "concatenate_results", "solution_frame", "spp_result"]
 
@@ -105,15 +101,6 @@ class SppResult:
     def frame_columns(self) -> dict[str, np.ndarray]:
         """The solution frame of the result (:func:`solution_frame`)."""
         return solution_frame(self)
-
-    def to_frame(self) -> pd.DataFrame:
-        """The solution as a pandas DataFrame, one row per epoch: ``t_gps_s`` and the columns
-        ``pos --out`` writes, as :func:`navtrack.io.solution.read_solution` reads them back."""
-        from navtrack.io.solution import solution_table  # pandas: imported where a table is asked
-
-        table = solution_table(self.frame_columns())
-        table.insert(0, "t_gps_s", self.t_gps_s)
-        return table
 
 
 def spp_result(

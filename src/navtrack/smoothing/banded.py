@@ -20,6 +20,13 @@ Kernels, each O(n) in time and memory for a fixed half-bandwidth ``m``:
 Storage is LAPACK's *upper* banded form: ``ab[m + i - j, j] = N[i, j]`` for ``i <= j <= i + m``.
 The band of the inverse is returned by diagonal offset: ``zb[l, t] = Z[t, t + l]`` (``Z = N^-1``),
 ``l = 0..width``; entries past the end of the matrix are NaN.
+
+Compiled kernels and their twins: each ``*_loop`` function (:func:`cholesky_loop`,
+:func:`solve_refined_loop`, :func:`takahashi_loop`, :func:`band_sums_loop`,
+:func:`centred_convolution_loop`, :func:`add_convolution_band_loop`) is the plain-Python source
+that numba compiles when installed (extra ``speed``); without numba the public functions above
+take vectorised NumPy or LAPACK paths instead, and the tests check both against each other and
+against dense algebra.
 """
 
 from __future__ import annotations
@@ -38,13 +45,19 @@ _numba: Any = numba_module()  # optional accelerator; everything works without i
 __all__ = [
     "HAVE_NUMBA",
     "add_convolution_band",
+    "add_convolution_band_loop",
     "band_matvec",
+    "band_sums_loop",
     "band_to_dense",
     "centred_convolution",
+    "centred_convolution_loop",
+    "cholesky_loop",
     "cholesky_solve_banded",
     "inverse_band",
     "inverse_band_from_factor",
     "single_threaded_blas",
+    "solve_refined_loop",
+    "takahashi_loop",
     "weighted_band_sums",
 ]
 
@@ -61,7 +74,7 @@ def single_threaded_blas() -> AbstractContextManager[Any]:
     threadpoolctl installed this is a no-op.
     """
     try:
-        from threadpoolctl import threadpool_limits
+        from threadpoolctl import threadpool_limits  # optional (extra speed)
     except ImportError:
         return nullcontext()
     return threadpool_limits(limits=1, user_api="blas")
@@ -140,7 +153,7 @@ def cholesky_solve_banded(
     return x, logdet, cb
 
 
-def _cholesky_py(ab: FloatArray) -> tuple[FloatArray, int]:
+def cholesky_loop(ab: FloatArray) -> tuple[FloatArray, int]:
     # U^T U = N column by column; ut[j, m + i - j] = U[i, j] (the transpose of LAPACK's upper
     # band, so that a column of U is contiguous). Within column j the entries follow each
     # other: U[i, j] is final once the updates of the rows above it are in, and then updates
@@ -171,7 +184,7 @@ def _cholesky_py(ab: FloatArray) -> tuple[FloatArray, int]:
     return ut, -1
 
 
-def _solve_refined_py(ab: FloatArray, ut: FloatArray, rhs: FloatArray, refine: int) -> FloatArray:
+def solve_refined_loop(ab: FloatArray, ut: FloatArray, rhs: FloatArray, refine: int) -> FloatArray:
     # U^T z = r forwards, U dx = z backwards, x += dx; r = rhs - N x for the refinement steps
     n = ut.shape[0]
     m = ut.shape[1] - 1
@@ -202,8 +215,8 @@ def _solve_refined_py(ab: FloatArray, ut: FloatArray, rhs: FloatArray, refine: i
     return x
 
 
-_cholesky: Any = jit(_cholesky_py)
-_solve_refined: Any = jit(_solve_refined_py)
+_cholesky: Any = jit(cholesky_loop)
+_solve_refined: Any = jit(solve_refined_loop)
 
 
 def inverse_band_from_factor(
@@ -249,7 +262,7 @@ def inverse_band_from_factor(
     raise ValueError(f"method must be 'auto', 'takahashi' or 'cyclic', got {method!r}")
 
 
-def _takahashi_py(cb: FloatArray, width: int) -> FloatArray:
+def takahashi_loop(cb: FloatArray, width: int) -> FloatArray:
     # Row i of Z needs rows i+1..i+width only: they live in a ring buffer of rows (cache
     # friendly), and the off-diagonal entries of row i, which are independent of each other,
     # are accumulated together (k outer, j inner) instead of one dependent sum at a time.
@@ -291,10 +304,10 @@ def _takahashi_py(cb: FloatArray, width: int) -> FloatArray:
     return zb
 
 
-_takahashi: Any = jit(_takahashi_py) or _takahashi_py
+_takahashi: Any = jit(takahashi_loop) or takahashi_loop
 
 
-def _band_sums_py(zb: FloatArray, v: FloatArray, m: int) -> FloatArray:
+def band_sums_loop(zb: FloatArray, v: FloatArray, m: int) -> FloatArray:
     # one pass over the band (all (m + 1)(m + 2)/2 sums together); each sum still runs over s
     # ascending, so the rounding is that of one sum at a time
     ns = v.size
@@ -311,10 +324,10 @@ def _band_sums_py(zb: FloatArray, v: FloatArray, m: int) -> FloatArray:
     return out
 
 
-_band_sums: Any = jit(_band_sums_py)
+_band_sums: Any = jit(band_sums_loop)
 
 
-def _centred_convolution_py(c: FloatArray, x: FloatArray) -> FloatArray:
+def centred_convolution_loop(c: FloatArray, x: FloatArray) -> FloatArray:
     m = c.size - 1
     ns = x.size - m
     csum = 0.0
@@ -330,7 +343,7 @@ def _centred_convolution_py(c: FloatArray, x: FloatArray) -> FloatArray:
     return e
 
 
-_centred_convolution: Any = jit(_centred_convolution_py)
+_centred_convolution: Any = jit(centred_convolution_loop)
 
 
 def centred_convolution(c: FloatArray, x: FloatArray) -> FloatArray:
@@ -360,7 +373,7 @@ def centred_convolution(c: FloatArray, x: FloatArray) -> FloatArray:
     return np.asarray(e, dtype=np.float64)
 
 
-def _add_convolution_band_py(ab: FloatArray, c: FloatArray, vs: FloatArray) -> None:
+def add_convolution_band_loop(ab: FloatArray, c: FloatArray, vs: FloatArray) -> None:
     m = c.size - 1
     ns = vs.size
     for i in range(m + 1):
@@ -372,7 +385,7 @@ def _add_convolution_band_py(ab: FloatArray, c: FloatArray, vs: FloatArray) -> N
                 ab[row, off + s] += vs[s] * cc
 
 
-_add_convolution_band: Any = jit(_add_convolution_band_py)
+_add_convolution_band: Any = jit(add_convolution_band_loop)
 
 
 def add_convolution_band(ab: FloatArray, c: FloatArray, vs: FloatArray) -> None:
