@@ -29,11 +29,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from enum import IntEnum
+from typing import NamedTuple
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
-from navtrack._typing import BoolArray, FloatArray, IntArray
+from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
 
 ModelFn = Callable[[FloatArray, IntArray], tuple[FloatArray, FloatArray, FloatArray, BoolArray]]
 """``fun(x (b, P), idx (b,)) -> (v (b, M), J (b, M, P), w (b, M), valid (b, M))``."""
@@ -326,9 +327,7 @@ def marquardt(
     if beta <= 1.0:
         raise ValueError(f"beta: growth factor must be > 1, got {beta}")
     x = _check(x0)
-    B, P = x.shape
-    idx_all = np.arange(B)
-    _, _, _, valid0 = fun(x, idx_all)
+    _, _, _, valid0 = fun(x, np.arange(x.shape[0]))
     valid0 = valid0.copy()
 
     def model(xb: FloatArray, idx: IntArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -336,11 +335,44 @@ def marquardt(
         vm = valid0[idx]
         return np.where(vm, v, 0.0), J * vm[..., None], np.where(vm, w, 0.0)
 
+    damping = _Damping(mu0=mu0, beta=beta, eps=eps, max_iter=max_iter, xtol=xtol)
+    status, iterations, accepted = _marquardt_steps(model, x, valid0, damping)
+
+    def final(
+        xb: FloatArray, idx: IntArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray]:
+        v_, J_, w_, _ = fun(xb, idx)
+        return v_, J_, w_, valid0[idx]
+
+    return _finish(final, x, iterations, status, rcond, accepted)
+
+
+class _Damping(NamedTuple):
+    """The settings of :func:`marquardt`'s damping and stopping rules."""
+
+    mu0: float
+    beta: float
+    eps: float
+    max_iter: int
+    xtol: float
+
+
+def _marquardt_steps(
+    model: Callable[[FloatArray, IntArray], tuple[FloatArray, FloatArray, FloatArray]],
+    x: FloatArray,
+    valid0: BoolArray,
+    damping: _Damping,
+) -> tuple[Int8Array, IntArray, IntArray]:
+    """Steps 1-6 of :func:`marquardt` on every epoch at once; ``x`` is updated in place.
+
+    Returns the status, the trial steps and the accepted steps of every epoch."""
+    B, P = x.shape
+    idx_all = np.arange(B)
     status = np.full(B, LsqStatus.NO_CONVERGENCE, dtype=np.int8)
     iterations = np.zeros(B, dtype=np.int64)
     accepted = np.zeros(B, dtype=np.int64)
     n_valid = valid0.sum(axis=1)
-    mu = np.full(B, float(mu0))
+    mu = np.full(B, float(damping.mu0))
     active = idx_all.copy()
     v, J, w = model(x, active)
     F = np.einsum("bm,bm->b", w, v**2)
@@ -360,29 +392,22 @@ def marquardt(
         vt, Jt, wt = model(xt, active)
         Ft = np.einsum("bm,bm->b", wt, vt**2)
         better = Ft < F
-        small = (gnorm <= eps) | (np.linalg.norm(d, axis=1) < xtol)
+        small = (gnorm <= damping.eps) | (np.linalg.norm(d, axis=1) < damping.xtol)
         # step 6: accept; stop if the gradient at x_k was already small
         acc = active[better]
         x[acc] = xt[better]
         accepted[acc] += 1
         status[acc[small[better]]] = LsqStatus.CONVERGED
-        mu[acc] /= beta
+        mu[acc] /= damping.beta
         # step 5: reject; stop at x_k if its gradient is small, else grow mu
         rej = active[~better]
         status[rej[small[~better]]] = LsqStatus.CONVERGED
-        mu[rej] *= beta
-        cont = ~small & (iterations[active] < max_iter)
+        mu[rej] *= damping.beta
+        cont = ~small & (iterations[active] < damping.max_iter)
         # for accepted steps the model at the new point is the trial evaluation
         v = np.where(better[:, None], vt, v)[cont]
         J = np.where(better[:, None, None], Jt, J)[cont]
         w = np.where(better[:, None], wt, w)[cont]
         F = np.where(better, Ft, F)[cont]
         active = active[cont]
-
-    def final(
-        xb: FloatArray, idx: IntArray
-    ) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray]:
-        v_, J_, w_, _ = fun(xb, idx)
-        return v_, J_, w_, valid0[idx]
-
-    return _finish(final, x, iterations, status, rcond, accepted)
+    return status, iterations, accepted

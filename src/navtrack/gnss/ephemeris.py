@@ -400,6 +400,27 @@ def kepler_orbit(
     is_geo = np.zeros(t.shape, dtype=bool) if geo is None else np.asarray(geo, dtype=bool)
     om_rate = np.where(is_geo, p["omegadot"], p["omegadot"] - we)
     om = p["omega0"] + om_rate * tk - we * p["toe_sow"]
+    pos, vel = _plane_to_ecef((xp, yp, xp_dot, yp_dot), (om, om_rate), (inc, i_dot))
+    if is_geo.any():
+        pos[is_geo] = _bds_geo_rotate(pos[is_geo], tk[is_geo], we)
+        if geo_velocity:
+            sub = {k: v[is_geo] for k, v in p.items()}
+            vel[is_geo] = _bds_geo_velocity(sub, t[is_geo], system)
+    dtr = -2.0 * np.sqrt(mu) / C_MPS**2 * e * p["sqrta"] * sin_e
+    return pos, vel, dtr
+
+
+def _plane_to_ecef(
+    plane: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    node: tuple[FloatArray, FloatArray],
+    inclination: tuple[FloatArray, FloatArray],
+) -> tuple[FloatArray, FloatArray]:
+    """ECEF position and velocity from the orbital-plane position and velocity
+    ``(xp, yp, xp_dot, yp_dot)``, the corrected longitude of the ascending node and its rate
+    ``(om, om_rate)`` and the inclination and its rate (IS-GPS-200 table 20-IV)."""
+    xp, yp, xp_dot, yp_dot = plane
+    om, om_rate = node
+    inc, i_dot = inclination
     so, co = np.sin(om), np.cos(om)
     si, ci = np.sin(inc), np.cos(inc)
     x = xp * co - yp * ci * so
@@ -408,20 +429,15 @@ def kepler_orbit(
     vx = xp_dot * co - yp_dot * ci * so + yp * si * so * i_dot - y * om_rate
     vy = xp_dot * so + yp_dot * ci * co - yp * si * co * i_dot + x * om_rate
     vz = yp_dot * si + yp * ci * i_dot
-    pos = np.stack([x, y, z], axis=-1)
-    vel = np.stack([vx, vy, vz], axis=-1)
-    if is_geo.any():
-        pos[is_geo] = _bds_geo_rotate(pos[is_geo], tk[is_geo], we)
-        if geo_velocity:
-            # velocity of the rotated GEO orbit by a central difference over +-0.5 s
-            sub = {k: v[is_geo] for k, v in p.items()}
-            g = np.ones(int(is_geo.sum()), dtype=bool)
-            tg = t[is_geo]
-            p_plus = kepler_orbit(sub, tg + 0.5, system, geo=g, geo_velocity=False)[0]
-            p_minus = kepler_orbit(sub, tg - 0.5, system, geo=g, geo_velocity=False)[0]
-            vel[is_geo] = p_plus - p_minus
-    dtr = -2.0 * np.sqrt(mu) / C_MPS**2 * e * p["sqrta"] * sin_e
-    return pos, vel, dtr
+    return np.stack([x, y, z], axis=-1), np.stack([vx, vy, vz], axis=-1)
+
+
+def _bds_geo_velocity(p: Mapping[str, FloatArray], t_gps_s: FloatArray, system: str) -> FloatArray:
+    """Velocity of BeiDou GEO items' rotated orbits, by a central difference over +-0.5 s."""
+    geo = np.ones(t_gps_s.size, dtype=bool)
+    p_plus = kepler_orbit(p, t_gps_s + 0.5, system, geo=geo, geo_velocity=False)[0]
+    p_minus = kepler_orbit(p, t_gps_s - 0.5, system, geo=geo, geo_velocity=False)[0]
+    return p_plus - p_minus
 
 
 def _bds_geo_rotate(pos: FloatArray, tk: FloatArray, we: float) -> FloatArray:
@@ -613,33 +629,41 @@ def broadcast_states(
             continue
         e_i, s_i = np.nonzero(use)
         rows = idx[e_i, s_i]
-        tsv = ts[e_i, s_i]
-        t = tsv.copy()
-        for _ in range(2):
-            t = tsv - broadcast_clock(table, rows, t)
-        dts = broadcast_clock(table, rows, t)
-        if sys == "R":
-            p = {k: table.get(k)[rows] for k in GLONASS_FIELDS}
-            ps, vs = glonass_orbit(p, t)
-            rel = np.zeros(rows.size)
-        else:
-            p = {k: table.get(k)[rows] for k in KEPLER_FIELDS}
-            geo = None
-            if sys == "C":
-                prn = np.array([int(sats[c][1:]) for c in cols[s_i]])
-                geo = np.isin(prn, list(BDS_GEO_PRN))
-            ps, vs, rel = kepler_orbit(p, t, sys, geo=geo)
         ee, ss = e_i, cols[s_i]
-        pos[ee, ss] = ps
-        vel[ee, ss] = vs
-        clk[ee, ss] = dts + rel
-        if sys == "R":
-            var[ee, ss] = 5.0**2  # no URA in RINEX 2/3.04 GLONASS records: a nominal 5 m
-        else:
-            var[ee, ss] = ura_variance(sys, table.get("sva_m")[rows], quantise=quantise_ura)
+        ids = [sats[c] for c in ss] if sys == "C" else []
+        pos[ee, ss], vel[ee, ss], clk[ee, ss], var[ee, ss] = _record_states(
+            table, sys, rows, ts[e_i, s_i], ids, quantise_ura
+        )
         svh[ee, ss] = table.get("svh", 0)[rows]
     valid = (index >= 0) & np.isfinite(clk) & np.isfinite(pos).all(axis=-1)
     return SatStates(pos, vel, clk, var, svh, index, valid)
+
+
+def _record_states(
+    table: EphemerisTable,
+    sys: str,
+    rows: IntArray,
+    tsv: FloatArray,
+    sat_ids: list[str],
+    quantise_ura: bool,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Position, velocity, clock (relativistic term included) and URA variance of the records
+    ``rows`` of one system at the transmission times ``tsv`` read by the satellite clock, which
+    is removed by two fixed-point steps; ``sat_ids`` name BeiDou's items (GEO by PRN)."""
+    t = tsv.copy()
+    for _ in range(2):
+        t = tsv - broadcast_clock(table, rows, t)
+    dts = broadcast_clock(table, rows, t)
+    if sys == "R":
+        ps, vs = glonass_orbit({k: table.get(k)[rows] for k in GLONASS_FIELDS}, t)
+        # no URA in RINEX 2/3.04 GLONASS records: a nominal 5 m
+        return ps, vs, dts, np.full(rows.size, 5.0**2)
+    geo = None
+    if sys == "C":
+        geo = np.isin(np.array([int(s[1:]) for s in sat_ids]), list(BDS_GEO_PRN))
+    p = {k: table.get(k)[rows] for k in KEPLER_FIELDS}
+    ps, vs, rel = kepler_orbit(p, t, sys, geo=geo)
+    return ps, vs, dts + rel, ura_variance(sys, table.get("sva_m")[rows], quantise=quantise_ura)
 
 
 def ephemeris_tables(nav: NavData | Mapping[str, pd.DataFrame]) -> dict[str, EphemerisTable]:
