@@ -359,6 +359,14 @@ def _problem(
     rho = rho + d_ant
     if cfg.phase_windup:  # the same cycles on both carriers: c / (f1 + f2) metres per cycle
         phase = phase - C_MPS / f.sum(axis=1) * phase_windup_cyc(sig.sat_pos_m, x_lin, sun)
+    warnings += [
+        f"{name} switched off (PppConfig.{flag}=False): left in the position"
+        for name, flag, on in (
+            ("solid Earth tide", "solid_tide", cfg.solid_tide),
+            ("carrier phase wind-up", "phase_windup", cfg.phase_windup),
+        )
+        if not on
+    ]
     llh = ecef_to_geodetic(x_lin)
     dry, m_w = _wet_mapping(np.full_like(el, llh[0]), np.full_like(el, llh[2]), el)
     a, b = cfg.sigma_phase_m
