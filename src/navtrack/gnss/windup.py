@@ -3,9 +3,10 @@
 A receiver sees the carrier phase of a circularly polarised wave advance by one cycle for every
 turn of the transmitting antenna relative to the receiving one about the line of sight. For a
 static receiver the satellite turns as it yaws to keep its solar panels to the Sun and as the
-line of sight sweeps across its body: up to a few decimetres of ionosphere-free phase over a
-pass, more during the fast yaw turns near noon and midnight of the orbit. The code is not
-affected, so the term is removed from the phase alone.
+line of sight sweeps across its body: typically a fraction of a cycle over a pass (one cycle is
+10.7 cm of GPS ionosphere-free phase), up to whole cycles during the yaw turns near noon and
+midnight of the orbit, where the nominal attitude used here turns faster than a real satellite
+can. The code is not affected, so the term is removed from the phase alone.
 
 Wu et al. (1993), eq. 15-17, with ``k`` the unit vector from the satellite to the receiver and
 each antenna an effective dipole built from its axes ``x, y``::
