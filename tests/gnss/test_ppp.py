@@ -108,3 +108,21 @@ def test_antenna_phase_centres_move_sept_towards_its_reference(gnss_data: Path) 
             plain.pos_m[t] - SEPT_REF
         )
     assert with_atx.inside_bound(SEPT_REF)[300:].mean() >= 0.9
+
+
+def test_phase_windup_moves_sept_by_its_change_over_the_pass(sept) -> None:  # type: ignore[no-untyped-def]
+    """Switched off, the wind-up's change over 15 minutes (a fraction of a cycle of the
+    10.7 cm ionosphere-free wavelength per satellite) stays in the phase: the position moves by
+    millimetres to centimetres, not more, and the result says the term is off."""
+    from navtrack.gnss.rinex.nav import read_nav
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.sp3 import read_sp3
+
+    res, files = sept
+    off = solve_ppp(
+        read_obs(files[0]), [read_nav(files[1])], read_sp3(files[2]), PppConfig(phase_windup=False)
+    )
+    assert any("phase wind-up switched off" in w for w in off.warnings)
+    assert not any("wind-up" in w for w in res.warnings)
+    moved = np.linalg.norm(off.pos_m[-1] - res.pos_m[-1])
+    assert 0.002 < moved < 0.05

@@ -61,7 +61,7 @@ def test_tide_over_a_day_has_the_expected_size() -> None:
     """At SEPT (35 deg N) the vertical tide spans a few decimetres over a day, horizontal
     centimetres."""
     station = np.array([-3962108.673, 3381309.574, 3668678.638])
-    t = calendar_gps_seconds(2021, 3, 19, 0, 0, 0.0) + 900.0 * np.arange(96)
+    t = calendar_gps_seconds(2021, 3, 19, 0, 0, 0.0) + 900.0 * np.arange(96, dtype=np.float64)
     d = solid_tide_m(station, *sun_moon_ecef_m(t))
     up = d @ (station / np.linalg.norm(station))
     assert 0.15 < np.ptp(up) < 0.6

@@ -37,6 +37,7 @@ __all__ = [
     "Antex",
     "read_antex",
     "receiver_range_m",
+    "satellite_axes",
     "satellite_offset_m",
 ]
 
@@ -201,16 +202,21 @@ def receiver_range_m(pattern: AntennaPattern, los_enu: FloatArray) -> FloatArray
     return -(e[..., 0] * east + e[..., 1] * north + e[..., 2] * up) + pattern.variation_at(zenith)
 
 
+def satellite_axes(sat_m: FloatArray, sun_m: FloatArray) -> tuple[FloatArray, ...]:
+    """Unit body axes ``x, y, z`` (ECEF, each ``(..., 3)``) of satellites at ``sat_m`` in the
+    nominal yaw attitude: z to the geocentre, y along z x (Sun - satellite), x = y x z."""
+    r = np.asarray(sat_m, dtype=float)
+    ez = -r / np.linalg.norm(r, axis=-1, keepdims=True)
+    ey = np.cross(ez, np.asarray(sun_m, dtype=float) - r)
+    ey /= np.linalg.norm(ey, axis=-1, keepdims=True)
+    return np.cross(ey, ez), ey, ez
+
+
 def satellite_offset_m(
     offset_body_m: FloatArray, sat_m: FloatArray, sun_m: FloatArray
 ) -> FloatArray:
     """ECEF vector (m) from the centre of mass to the antenna phase centre of satellites at
     ``sat_m (..., 3)`` with body offsets ``offset_body_m (3,)`` in the nominal yaw attitude."""
-    r = np.asarray(sat_m, dtype=float)
-    ez = -r / np.linalg.norm(r, axis=-1, keepdims=True)
-    to_sun = np.asarray(sun_m, dtype=float) - r
-    ey = np.cross(ez, to_sun)
-    ey /= np.linalg.norm(ey, axis=-1, keepdims=True)
-    ex = np.cross(ey, ez)
+    ex, ey, ez = satellite_axes(sat_m, sun_m)
     x, y, z = np.asarray(offset_body_m, dtype=float)
     return x * ex + y * ey + z * ez

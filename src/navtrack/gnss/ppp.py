@@ -16,8 +16,9 @@ Kalman filter is the recursive least-squares solution of all epochs so far, and 
 at each epoch is the convergence series.
 
 The station is corrected for the solid Earth tide (IERS 2010 step 1,
-:mod:`navtrack.gnss.tides`). Not applied: satellite and receiver antenna phase-centre offsets
-and variations, phase wind-up, ocean-loading and pole tides, differential code biases between
+:mod:`navtrack.gnss.tides`), the phase for the carrier wind-up (:mod:`navtrack.gnss.windup`),
+the antennas for their phase centres when an ANTEX file is given. Not applied: satellite antenna
+nadir variations, ocean-loading and pole tides, differential code biases between
 the tracked code (``C1C``) and the code of the SP3 clocks (``C1W``). The errors they leave are
 part of the measurement model instead: code errors correlated over
 :data:`CODE_CORRELATION_S`, phase errors over :data:`PHASE_CORRELATION_S`, and a range error
@@ -58,6 +59,7 @@ from navtrack.gnss.relative import (
     receiver_signals,
 )
 from navtrack.gnss.tides import solid_tide_m, sun_moon_ecef_m
+from navtrack.gnss.windup import phase_windup_cyc
 
 if TYPE_CHECKING:
     from navtrack.gnss.observations import Observations
@@ -123,6 +125,9 @@ class PppConfig:
     solid_tide : bool
         Correct the station for the solid Earth tide (:func:`navtrack.gnss.tides.solid_tide_m`,
         IERS 2010 step 1); off leaves up to ~0.4 m of twice-daily motion in the position.
+    phase_windup : bool
+        Remove the carrier phase wind-up from the phase (:func:`navtrack.gnss.windup.
+        phase_windup_cyc`, satellites in nominal yaw attitude, receiver antenna pointed north).
     min_sats : int
         Fewest satellites with both code and phase for an update.
     max_outage : int
@@ -141,6 +146,7 @@ class PppConfig:
     sigma_amb0_m: float = 30.0
     sigma_pos0_m: float = 100.0
     solid_tide: bool = True
+    phase_windup: bool = True
     min_sats: int = 5
     max_outage: int = 5
 
@@ -351,6 +357,16 @@ def _problem(
         rho = rho + np.einsum("esj,ej->es", G, solid_tide_m(x_lin, sun, moon))
     d_ant, warnings = antenna_range_m(sig, antenna[0], antenna[1], los, sun)
     rho = rho + d_ant
+    if cfg.phase_windup:  # the same cycles on both carriers: c / (f1 + f2) metres per cycle
+        phase = phase - C_MPS / f.sum(axis=1) * phase_windup_cyc(sig.sat_pos_m, x_lin, sun)
+    warnings += [
+        f"{name} switched off (PppConfig.{flag}=False): left in the position"
+        for name, flag, on in (
+            ("solid Earth tide", "solid_tide", cfg.solid_tide),
+            ("carrier phase wind-up", "phase_windup", cfg.phase_windup),
+        )
+        if not on
+    ]
     llh = ecef_to_geodetic(x_lin)
     dry, m_w = _wet_mapping(np.full_like(el, llh[0]), np.full_like(el, llh[2]), el)
     a, b = cfg.sigma_phase_m
