@@ -336,6 +336,7 @@ def _run_lines(associator: str, vel: Any, res: TrackerResult) -> dict[str, Any]:
             f"{res.counts.deleted_coast} {res.counts.deleted_covariance} "
             f"{res.counts.deleted_unconfirmed}"
         ),
+        "tracks continuing an ended track": res.counts.tracks_continued,
     }
     if associator == "jpda":
         out["jpda clusters (exact, k-best)"] = (
@@ -366,7 +367,9 @@ def _score_lines(
         "id switches": scores.id_switches,
         "fragmentations": scores.fragmentations,
         "track purity": round(scores.purity, 4),
-        "ids / confirmed tracks": f"{scores.n_ids} / {res.counts.tracks_confirmed}",
+        "ids / confirmed tracks": (
+            f"{scores.n_ids} / {res.counts.tracks_confirmed - res.counts.tracks_continued}"
+        ),
     }
 
 

@@ -444,7 +444,7 @@ def auto_config(
     vq = None if V is None else V[:kq]
     gnn = replace(cfg, associator="gnn")  # the trials, like the first pass, use GNN
     q_fit, trials = fit_q(t[:kq], Z[:kq], vq, gnn, q if imm_q is None else imm_q[1])
-    cfg = replace(_with_q(cfg, q_fit), gnn_density_at_gate=imm_q is None)
+    cfg = replace(_with_q(cfg, q_fit), gnn_density_at_gate=imm_q is None, continue_tracks=True)
     if associator == "jpda":  # module notes, step 5
         s_bar = steady_innovation_variance(q_fit if imm_q is None else imm_q[0], sigma, dt50)
         cfg = replace(cfg, clutter_density=gate_edge_density(pd, pg, s_bar))
