@@ -59,6 +59,9 @@ searches q by a few more runs; it never reads the ids:
    edge of its own predicted gate ties a miss, so that any report inside a gate is worth
    assigning. The IMM (ships) family keeps the σ-based λ: in a harbour the competitors of a
    report are the neighbouring ships.
+7. **Track continuation** (``TrackerConfig.continue_tracks``) on for every family: a new track
+   that continues one lost in a gap takes its id
+   (:func:`~navtrack.tracking.trackers.management.continuation`).
 
 The tuning sees the reports as read, stale repeats included (the tracker skips them,
 :func:`navtrack.io.tracks.stale_repeats`). How each constant was chosen, on which data, and
