@@ -494,6 +494,7 @@ def model_summary(preset: str, cfg: Any, tune: Any) -> dict[str, Any]:
         "max coast (s)": round(cfg.max_coast_s, 1),
         "gate probability": cfg.gate_probability,
         "scan window (s)": round(cfg.scan_window_s, 2),
+        "track continuation": "on" if cfg.continue_tracks else "off",
     }
     if tune is not None:
         out["auto: report interval p50/p95 (s)"] = (
