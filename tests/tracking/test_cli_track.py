@@ -401,7 +401,11 @@ def test_track_file_has_exact_positions_speeds_and_a_track_table(
     assert np.isfinite(df.alt_m[df.confirmed]).mean() > 0.9
     table = pd.read_csv(tmp_path / "t.tracks.csv")
     assert table.track_id.is_unique
-    started = int(re.search(r"tracks started / confirmed +(\d+)", text).group(1))
-    assert len(table) == started
+    started_m = re.search(r"tracks started / confirmed +(\d+)", text)
+    continued_m = re.search(r"tracks continuing an ended track +(\d+)", text)
+    assert started_m
+    assert continued_m
+    started, continued = int(started_m.group(1)), int(continued_m.group(1))
+    assert len(table) == started - continued  # a continuing track keeps the ended one's row
     assert set(table.end_reason) <= {"coast", "covariance", "unconfirmed", "end_of_data"}
     assert {"coast", "end_of_data"} <= set(table.end_reason)

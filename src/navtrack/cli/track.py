@@ -336,6 +336,7 @@ def _run_lines(associator: str, vel: Any, res: TrackerResult) -> dict[str, Any]:
             f"{res.counts.deleted_coast} {res.counts.deleted_covariance} "
             f"{res.counts.deleted_unconfirmed}"
         ),
+        "tracks continuing an ended track": res.counts.tracks_continued,
     }
     if associator == "jpda":
         out["jpda clusters (exact, k-best)"] = (
@@ -366,7 +367,9 @@ def _score_lines(
         "id switches": scores.id_switches,
         "fragmentations": scores.fragmentations,
         "track purity": round(scores.purity, 4),
-        "ids / confirmed tracks": f"{scores.n_ids} / {res.counts.tracks_confirmed}",
+        "ids / confirmed tracks": (
+            f"{scores.n_ids} / {res.counts.tracks_confirmed - res.counts.tracks_continued}"
+        ),
     }
 
 
@@ -491,6 +494,7 @@ def model_summary(preset: str, cfg: Any, tune: Any) -> dict[str, Any]:
         "max coast (s)": round(cfg.max_coast_s, 1),
         "gate probability": cfg.gate_probability,
         "scan window (s)": round(cfg.scan_window_s, 2),
+        "track continuation": "on" if cfg.continue_tracks else "off",
     }
     if tune is not None:
         out["auto: report interval p50/p95 (s)"] = (

@@ -59,6 +59,9 @@ searches q by a few more runs; it never reads the ids:
    edge of its own predicted gate ties a miss, so that any report inside a gate is worth
    assigning. The IMM (ships) family keeps the σ-based λ: in a harbour the competitors of a
    report are the neighbouring ships.
+7. **Track continuation** (``TrackerConfig.continue_tracks``) on for every family: a new track
+   that continues one lost in a gap takes its id
+   (:func:`~navtrack.tracking.trackers.management.continuation`).
 
 The tuning sees the reports as read, stale repeats included (the tracker skips them,
 :func:`navtrack.io.tracks.stale_repeats`). How each constant was chosen, on which data, and
@@ -444,7 +447,7 @@ def auto_config(
     vq = None if V is None else V[:kq]
     gnn = replace(cfg, associator="gnn")  # the trials, like the first pass, use GNN
     q_fit, trials = fit_q(t[:kq], Z[:kq], vq, gnn, q if imm_q is None else imm_q[1])
-    cfg = replace(_with_q(cfg, q_fit), gnn_density_at_gate=imm_q is None)
+    cfg = replace(_with_q(cfg, q_fit), gnn_density_at_gate=imm_q is None, continue_tracks=True)
     if associator == "jpda":  # module notes, step 5
         s_bar = steady_innovation_variance(q_fit if imm_q is None else imm_q[0], sigma, dt50)
         cfg = replace(cfg, clutter_density=gate_edge_density(pd, pg, s_bar))

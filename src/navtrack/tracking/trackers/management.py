@@ -9,13 +9,16 @@ import numpy as np
 
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
+from navtrack.tracking.gating import chi2_threshold
 from navtrack.tracking.models import LinearMotion
 from navtrack.tracking.trackers.stages import Seeds, TrackStore
 from navtrack.tracking.trackers.track_config import DetStatus, TrackEnd, TrackerConfig, TrackerModel
 
 __all__ = [
+    "EndedTracks",
     "Initiation",
     "Management",
+    "continuation",
     "initiate",
     "manage",
     "one_point_state",
@@ -98,8 +101,9 @@ class Management:
 
     Attributes
     ----------
-    id : (T,) track ids; x : (T, n) combined state; std_m : (T,) position standard deviation
-        ``sqrt(trace(P_pos) / 2)``, m; confirmed : (T,) after this scan's confirmations
+    id : (T,) track ids; x : (T, n) combined state; P : (T, n, n) its covariance; std_m : (T,)
+        position standard deviation ``sqrt(trace(P_pos) / 2)``, m; confirmed : (T,) after this
+        scan's confirmations; confirmed_new : (T,) confirmed by this scan
     kept : (T,) bool, still in the store
     end_reason : (T,) int8, the :class:`TrackEnd` of each deleted track, -1 where kept
     confirmed_now, deleted_coast, deleted_covariance, deleted_unconfirmed : int
@@ -108,8 +112,10 @@ class Management:
 
     id: IntArray
     x: FloatArray
+    P: FloatArray
     std_m: FloatArray
     confirmed: BoolArray
+    confirmed_new: BoolArray
     kept: BoolArray
     end_reason: Int8Array
     confirmed_now: int
@@ -154,8 +160,10 @@ def manage(store: TrackStore, hit: BoolArray, t_s: float, config: TrackerConfig)
     out = Management(
         store.id.copy(),
         np.array(xc),
+        np.array(Pc),
         std,
         conf,
+        new_conf & ~gone,
         ~gone,
         reason,
         int(np.count_nonzero(new_conf)),
@@ -301,3 +309,91 @@ def report(
     xc, _ = store.combined()
     xg = xc[c] @ motion.F(t_s - now_s).T
     return store.id[c], xg[:, list(motion.position_index)]
+
+
+class EndedTracks:
+    """Confirmed tracks that ended by coasting or by their covariance, each with its state and
+    covariance at its end, waiting for a new track to continue them (:func:`continuation`)."""
+
+    def __init__(self, dim_x: int) -> None:
+        self.id = np.zeros(0, dtype=np.int64)
+        self.t_s = np.zeros(0)
+        self.x = np.zeros((0, dim_x))
+        self.P = np.zeros((0, dim_x, dim_x))
+
+    def add(self, m: Management, t_s: float) -> None:
+        """The confirmed tracks of ``m`` deleted for coasting or covariance at ``t_s``."""
+        lost = ~m.kept & m.confirmed & (m.end_reason != TrackEnd.UNCONFIRMED)
+        if lost.any():
+            self.id = np.concatenate([self.id, m.id[lost]])
+            self.t_s = np.concatenate([self.t_s, np.full(int(lost.sum()), t_s)])
+            self.x = np.concatenate([self.x, m.x[lost]])
+            self.P = np.concatenate([self.P, m.P[lost]])
+
+    def remove(self, k: IntArray) -> None:
+        """Forget the ended tracks ``k``."""
+        keep = np.ones(self.id.size, dtype=bool)
+        keep[k] = False
+        self.keep(keep)
+
+    def keep(self, keep: BoolArray) -> None:
+        """Keep the ended tracks where ``keep`` is True."""
+        self.id, self.t_s, self.x, self.P = (
+            self.id[keep],
+            self.t_s[keep],
+            self.x[keep],
+            self.P[keep],
+        )
+
+
+def continuation(
+    ended: EndedTracks, x: FloatArray, P: FloatArray, t_s: float, model: TrackerModel
+) -> IntArray:
+    """(k,) id of the ended track that each newly confirmed track continues, -1.
+
+    A target that goes unreported for longer than its track can coast comes back as a new
+    track (track fragmentation after gaps). Each ended track is predicted from its end to
+    ``t_s`` with the motion model (the last of an IMM's, the most manoeuvrable) and compared
+    with each new track's state ``x (k, n)``, ``P (k, n, n)`` over the whole state (position
+    and velocity): ``Δ = x - x_end``, ``S = P + P_end`` with the prediction ``x_end``,
+    ``P_end``. An ended track whose predicted position standard deviation exceeds
+    ``config.max_position_std_m`` (the widest a live track may be) continues nothing. A pair
+    is a continuation when ``Δ`` lies inside the chi-square gate of ``S``
+    (``config.gate_probability``, ``n`` degrees of freedom) and each of the two is the
+    other's likeliest partner by ``log N(Δ; 0, S)``, which does not favour an old track for
+    the width of its prediction. ``ended`` forgets the tracks continued and those too wide
+    to continue any; the caller gives the new track the ended track's id (track segment
+    association, as in Yeom, Kirubarajan & Bar-Shalom 2004, with a mutual-best rule in
+    place of their assignment).
+    """
+    k, E = x.shape[0], ended.id.size
+    link = np.full(k, -1, dtype=np.int64)
+    if not (k and E):
+        return link
+    motion = model.motions[-1]
+    n = x.shape[1]
+    xe = np.empty((E, n))
+    Pe = np.empty((E, n, n))
+    for e in range(E):
+        F = motion.F(t_s - ended.t_s[e])
+        xe[e] = F @ ended.x[e]
+        Pe[e] = F @ ended.P[e] @ F.T + motion.Q(t_s - ended.t_s[e])
+    d = x[:, None, :] - xe[None, :, :]  # (k, E, n)
+    S = P[:, None] + Pe[None, :]
+    Si = np.linalg.inv(S)
+    d2 = np.einsum("kei,keij,kej->ke", d, Si, d)
+    _sign, logdet = np.linalg.slogdet(S)
+    pos = list(model.config.motion.position_index)
+    std_e = np.sqrt(0.5 * Pe[:, pos, pos].sum(axis=-1))
+    inside = (d2 <= chi2_threshold(model.config.gate_probability, n)) & (
+        std_e <= model.config.max_position_std_m
+    )
+    ll = np.where(inside, -0.5 * (d2 + logdet), -np.inf)
+    best_e = np.argmax(ll, axis=1)
+    best_k = np.argmax(ll, axis=0)
+    ok = np.isfinite(ll[np.arange(k), best_e]) & (best_k[best_e] == np.arange(k))
+    link[ok] = ended.id[best_e[ok]]
+    keep = std_e <= model.config.max_position_std_m  # (their predictions only widen)
+    keep[best_e[ok]] = False
+    ended.keep(keep)
+    return link

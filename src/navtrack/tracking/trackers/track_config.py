@@ -78,6 +78,11 @@ class TrackerConfig:
     track whose prediction is uncertain (NIS below 3.7 against a gate at 18.4 for 10 s
     ADS-B reports), and the reports it leaves start duplicate tracks.
 
+    ``continue_tracks``: a newly confirmed track that continues a confirmed track ended by
+    coasting or covariance takes the ended track's id
+    (:func:`~navtrack.tracking.trackers.management.continuation`): a target unreported for
+    longer than its track can coast keeps its identity when it is reported again.
+
     The defaults suit ships (AIS); :meth:`for_aircraft` gives ADS-B values.
     """
 
@@ -102,6 +107,7 @@ class TrackerConfig:
     imm_sojourn_s: float = 300.0
     scan_window_s: float = 0.0
     gnn_density_at_gate: bool = False
+    continue_tracks: bool = False
 
     def __post_init__(self) -> None:
         if self.motion.ndim != 2:

@@ -41,7 +41,7 @@ References
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -51,7 +51,9 @@ from navtrack._typing import ArrayLike, BoolArray, FloatArray, Int8Array, IntArr
 from navtrack.tracking.jpda import JpdaMethod
 from navtrack.tracking.models import LinearMotion
 from navtrack.tracking.trackers.management import (
+    EndedTracks,
     Management,
+    continuation,
     initiate,
     manage,
     repeat_reports,
@@ -108,6 +110,8 @@ class TrackerCounts:
         / by k-best (:class:`~navtrack.tracking.jpda.JpdaMethod`)
     ambiguous_detections : detections inside the gates of two or more confirmed tracks
         (gates wide for the spacing of the targets; :mod:`navtrack.tracking.trackers.autotune`)
+    tracks_continued : newly confirmed tracks that took the id of an ended track
+        (``TrackerConfig.continue_tracks``)
     """
 
     scans: int = 0
@@ -119,6 +123,7 @@ class TrackerCounts:
     jpda_exact_clusters: int = 0
     jpda_kbest_clusters: int = 0
     ambiguous_detections: int = 0
+    tracks_continued: int = 0
 
 
 @dataclass(frozen=True, slots=True, eq=False, kw_only=True)
@@ -319,6 +324,8 @@ class _Run:
         self.det_nis = np.full(n, np.nan)
         self.det_ll = np.full(n, np.nan)
         self.counts = dict.fromkeys(TrackerCounts.__dataclass_fields__, 0)
+        self.ended = EndedTracks(cfg.motion.dim_x)
+        self.alias: dict[int, int] = {}  # id of a continuing track -> id it continues
 
     def scan(self, s0: int, t: FloatArray, Z: FloatArray, V: FloatArray, tk: float) -> None:
         """One scan (detections ``s0, s0 + 1, ...`` at times ``t``), the tracks predicted to
@@ -341,6 +348,8 @@ class _Run:
             self.det_status[rows[repeat]] = DetStatus.UNUSED
             claimed = claimed | repeat
             m = manage(store, a.hit, tk, cfg)
+            if cfg.continue_tracks:
+                self._continue(m, tk)
             self.log.updates(tk, m, 1.0 - a.beta[:, 0])
             _add_counts(self.counts, a, m)
         free = np.flatnonzero(~claimed)
@@ -352,6 +361,20 @@ class _Run:
         self.det_track[ini.seed_det] = ini.seed_track
         self.det_status[ini.seed_det] = DetStatus.STARTED
         self.counts["tracks_started"] += int(np.count_nonzero(ini.track >= 0))
+
+    def _continue(self, m: Management, t_s: float) -> None:
+        """Give each newly confirmed track that continues an ended one the ended track's id
+        (:func:`continuation`), then add this scan's lost tracks to the ended ones."""
+        new = np.flatnonzero(m.confirmed_new)
+        if new.size:
+            old = continuation(self.ended, m.x[new], m.P[new], t_s, self.model)
+            hit = old >= 0
+            if hit.any():
+                self.alias.update(zip(m.id[new[hit]].tolist(), old[hit].tolist(), strict=True))
+                rows = np.flatnonzero(np.isin(self.store.id, m.id[new[hit]]))
+                self.store.id[rows] = [self.alias[int(i)] for i in self.store.id[rows]]
+                self.counts["tracks_continued"] += int(hit.sum())
+        self.ended.add(m, t_s)
 
     def _fates(self, rows: IntArray, g: ScanGate, a: ScanAssociation) -> None:
         """Fates of the associated detections, by the status of their track before manage."""
@@ -370,13 +393,37 @@ class _Run:
         self.det_ll[rows[used]] = g.log_likelihood_mix[k[used], used]
 
     def result(self) -> TrackerResult:
-        return self.log.result(
+        res = self.log.result(
             self.det_track,
             self.det_status,
             self.det_nis,
             self.cfg.motion.dim_x,
             TrackerCounts(**self.counts),
             self.det_ll,
+        )
+        if not self.alias:
+            return res
+        # the rows a continuing track wrote under its own id before it was confirmed, and the
+        # end rows of the tracks it continued
+        new = np.array(list(self.alias), dtype=np.int64)
+        old = np.array(list(self.alias.values()), dtype=np.int64)
+        order = np.argsort(new)
+        new, old = new[order], old[order]
+
+        def renamed(ids: IntArray) -> IntArray:
+            k = np.clip(np.searchsorted(new, ids), 0, new.size - 1)
+            return np.where(new[k] == ids, old[k], ids)
+
+        last_end = np.zeros(res.end_id.size, dtype=bool)  # (rows are in time order)
+        _, last = np.unique(res.end_id[::-1], return_index=True)
+        last_end[res.end_id.size - 1 - last] = True
+        return replace(
+            res,
+            det_track=renamed(res.det_track),
+            track_id=renamed(res.track_id),
+            end_id=res.end_id[last_end],
+            end_time_s=res.end_time_s[last_end],
+            end_reason=res.end_reason[last_end],
         )
 
 
