@@ -31,11 +31,9 @@ from navtrack.cli.pos import (
 )
 from navtrack.data import REFERENCE_XYZ_M, sample_path
 from navtrack.errors import FileFormatError, NavtrackError
-from navtrack.gnss.android import read_gnsslogger
 from navtrack.gnss.ephemeris import EphemerisTable, first_record_group_delays
 from navtrack.gnss.observations import Observations
 from navtrack.gnss.rinex.nav import NavData, read_nav
-from navtrack.gnss.sp3 import Sp3, read_sp3
 from navtrack.gnss.spp import (
     CHUNK_EPOCHS,
     SppConfig,
@@ -43,12 +41,12 @@ from navtrack.gnss.spp import (
     observation_codes,
     subset_epochs,
 )
-from navtrack.io.rtklib_conf import read_conf
 from navtrack.io.solution import FORMATS, write_solution
 from navtrack.positioning import PositionSolution, solution_frame, solve_positions
 from navtrack.timescale import parse_gpst, select_epochs, to_datetime64, week_tow
 
 if TYPE_CHECKING:
+    from navtrack.gnss.sp3 import Sp3
     from navtrack.integrity.raim import RaimConfig
 
 __all__ = ["run_pos"]
@@ -171,6 +169,9 @@ def _read_inputs(
     (of those systems only) and precise orbits."""
     navs = [read_nav(p, systems=config.systems) for p in args.nav]
     if args.android:
+        # the Android reader is loaded for an Android log only (`pos` start-up)
+        from navtrack.gnss.android import read_gnsslogger
+
         obs = read_gnsslogger(args.obs)
     else:
         obs, log_nav = read_observations(
@@ -180,6 +181,8 @@ def _read_inputs(
             navs.insert(0, log_nav)
     sp3 = None
     if args.sp3 is not None:
+        from navtrack.gnss.sp3 import read_sp3  # precise orbits with --sp3 only (start-up)
+
         sp3 = read_sp3(args.sp3)
         for bad in sp3.implausible:
             print(f"navtrack pos: {args.sp3}, line {bad.line}: {bad.reason}", file=sys.stderr)
@@ -241,6 +244,8 @@ def _read_conf(args: argparse.Namespace) -> Any:
     if not args.conf.is_file():
         raise SystemExit(f"navtrack pos: --conf file {str(args.conf)!r} not found")
     try:
+        from navtrack.io.rtklib_conf import read_conf  # with --conf only (start-up)
+
         conf = read_conf(args.conf)
     except FileFormatError as exc:
         raise SystemExit(f"navtrack pos: {exc}") from None

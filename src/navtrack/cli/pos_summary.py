@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections import Counter
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -15,10 +16,12 @@ from navtrack.geodesy import ecef_to_enu
 from navtrack.gnss.accuracy import enu_error_stats
 from navtrack.gnss.observations import Observations
 from navtrack.gnss.rinex.nav import NavData
-from navtrack.gnss.sp3 import Sp3
 from navtrack.gnss.spp import STATUS_NAMES, SppConfig, SppResult, klobuchar_params
 from navtrack.gnss.velocity import doppler_velocity
 from navtrack.positioning import PositionSolution
+
+if TYPE_CHECKING:
+    from navtrack.gnss.sp3 import Sp3
 
 __all__ = [
     "input_warnings",

@@ -13,7 +13,6 @@ from navtrack._frozen import freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.gnss import ephemeris as eph
 from navtrack.gnss.corrections import FREQ_L1_HZ, frequency_hz, transmit_time
-from navtrack.gnss.precise import sp3_states
 from navtrack.gnss.spp.config import EFACT_GLO, IONOFREE_BANDS, PRIMARY_BAND, SppConfig
 from navtrack.gnss.spp.signals import Pseudoranges, klobuchar_params
 
@@ -145,6 +144,8 @@ def satellite_states(
     t_rx = pr.t_gps_s
     t_sv = np.where(pr.observed, transmit_time(t_rx, pr.pr_m), np.nan)
     if sp3 is not None:
+        from navtrack.gnss.precise import sp3_states  # with an SP3 file only (`pos` start-up)
+
         states = sp3_states(sp3, sats, t_sv)
     else:
         states = _broadcast(tables, sats, t_rx, t_sv, cfg, healthy_only=cfg.healthy_only)
