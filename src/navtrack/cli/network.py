@@ -4,17 +4,17 @@ observation files in one command) on the Dask runner (:mod:`navtrack.experiments
 from __future__ import annotations
 
 import argparse
+import time
 from typing import TYPE_CHECKING
+
+from navtrack.positioning.stations import StationJob, station_jobs
 
 if TYPE_CHECKING:
     from navtrack.gnss.spp import SppConfig
-    from navtrack.positioning.stations import StationJob
 
 
 def network_jobs(args: argparse.Namespace) -> list[StationJob] | None:
     """The stations of ``pos``'s files when they hold several observation files, else None."""
-    from navtrack.positioning.stations import station_jobs
-
     files = [args.obs, *args.nav]
     if len(files) < 2:
         return None
@@ -24,8 +24,7 @@ def network_jobs(args: argparse.Namespace) -> list[StationJob] | None:
 
 def run_network(args: argparse.Namespace, jobs: list[StationJob], config: SppConfig) -> int:
     """Solve the network, print one line per station and the throughput."""
-    import time
-
+    # the Monte Carlo runner (Dask) is loaded for a network run only: `pos` start-up
     from navtrack.experiments.network import solve_network
 
     if args.out is None or args.out.suffix:
