@@ -9,20 +9,17 @@ from typing import Any
 import numpy as np
 
 from navtrack.experiments.alhat.real import TrialOutcome
+from navtrack.plots.canvas import new_figure, save_figure
 
 __all__ = ["write_error_figures", "write_fig16"]
 
 
 def write_error_figures(out_dir: Path, outcomes: Sequence[TrialOutcome]) -> list[Path]:
     """``attitude_error_<trial>.png``: error (deg, log scale) of every estimate against time."""
-    import matplotlib  # optional dependency (extra navtrack[plot])
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     paths = []
     for oc in outcomes:
-        fig, ax = plt.subplots(figsize=(9, 4.5))
+        fig = new_figure((9, 4.5))
+        ax = fig.add_subplot()
         for name, err in oc.errors_deg.items():
             ax.semilogy(oc.t_s, err, lw=0.6, label=name)
         for t in oc.fix_t_s:
@@ -31,11 +28,7 @@ def write_error_figures(out_dir: Path, outcomes: Sequence[TrialOutcome]) -> list
         ax.set_ylabel("attitude error (deg)")
         ax.set_title(f"BROAD {oc.name}: error against optical truth (grey: camera fixes)")
         ax.legend(loc="upper left", fontsize=8)
-        fig.tight_layout()
-        path = out_dir / f"attitude_error_{oc.name}.png"
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
-        paths.append(path)
+        paths.append(save_figure(fig, out_dir / f"attitude_error_{oc.name}.png", dpi=120))
     return paths
 
 
@@ -45,14 +38,10 @@ def write_fig16(out_dir: Path, run: dict[str, Any]) -> Path | None:
     series = run.get("fix_series")
     if not series:
         return None
-    import matplotlib  # optional dependency (extra navtrack[plot])
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     t = np.asarray(series["t_since_first_fix_s"])
     seq = np.asarray(series["sequence"])
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    fig = new_figure((10, 4))
+    axes = fig.subplots(1, 2, sharey=True)
     for ax, key, title in (
         (axes[0], "e_s_before_deg", "before the correction (Fig. 16 A)"),
         (axes[1], "e_s_after_deg", "after the correction (Fig. 16 C)"),
@@ -66,8 +55,4 @@ def write_fig16(out_dir: Path, run: dict[str, Any]) -> Path | None:
     axes[0].set_ylabel("scalar error e_s (deg)")
     axes[0].legend(fontsize=8)
     fig.suptitle("Paper's regime (LN-200, 30° camera, target patch), first run")
-    fig.tight_layout()
-    path = out_dir / "fig16_scalar_error.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, out_dir / "fig16_scalar_error.png", dpi=120)
