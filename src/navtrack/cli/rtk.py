@@ -151,6 +151,12 @@ def _add_fix_options(p: argparse.ArgumentParser) -> None:
         "--hold", action="store_true", help="fix-and-hold: feed validated fixes to the filter"
     )
     p.add_argument(
+        "--float-position-test",
+        action="store_true",
+        help="refuse a fix outside the float position's confidence region (off: the float "
+        "covariance is optimistic where code multipath is correlated in time)",
+    )
+    p.add_argument(
         "--max-age",
         type=float,
         default=_DEFAULTS.max_age_s,
@@ -221,6 +227,7 @@ def _rtk_config(args: argparse.Namespace) -> RtkConfig:
             max_age_ar_s=args.max_age_ar,
             min_success_rate=args.min_success_rate,
             hold=args.hold,
+            float_position_test=args.float_position_test,
             max_age_s=args.max_age,
             ambiguity=AmbiguityConfig(ratio_threshold=args.ratio, partial=args.partial),
             fix=not args.float,
