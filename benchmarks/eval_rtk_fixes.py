@@ -334,20 +334,18 @@ def _mosaic(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
             )
     d = data / MOSAIC_2018
     if d.is_dir():
-        _case(
-            "MatRTKLIB 2018 pair",
-            (
-                d / "rover_1Hz.obs",
-                d / "base.obs",
-                d / "base.nav",
-                llh_file(d / "base_position.txt"),
-            ),
-            cfg,
-            opts,
-            llh_file(d / "rover_mean_position.txt"),
-            wrong_m,
-            tmp,
-        )
+        files = (d / "rover_1Hz.obs", d / "base.obs", d / "base.nav")
+        base_xyz, ref = llh_file(d / "base_position.txt"), llh_file(d / "rover_mean_position.txt")
+        for freq in (1, 2):
+            _case(
+                f"MatRTKLIB 2018 pair L{'1+L2' if freq == 2 else '1'}",
+                (*files, base_xyz),
+                dataclasses.replace(cfg, frequencies=freq),
+                ["-p", "2", "-f", str(freq), "-sys", "G,E,J,C"],
+                ref,
+                wrong_m,
+                tmp,
+            )
 
 
 def main(argv: list[str] | None = None) -> int:
