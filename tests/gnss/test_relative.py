@@ -574,8 +574,8 @@ def test_systems_option_accepts_glonass_and_refuses_unknown_letters() -> None:
 def test_second_frequency_is_the_band_both_receivers_track() -> None:
     """The X20P walk log tracks Galileo E1 and E5a (no E5b): with two frequencies its Galileo
     double differences use E5a, so a zero baseline of the log against itself fixes every epoch
-    and twice as many ambiguities as with one; against convbin's single-band Galileo RINEX of the same log
-    the second frequency is reported missing and E1 alone is used."""
+    and twice as many ambiguities as with one; against convbin's single-band Galileo RINEX of
+    the same log the second frequency is reported missing and E1 alone is used."""
     from navtrack.data import sample_path
     from navtrack.gnss.rinex.obs import read_obs
     from navtrack.gnss.ubx import read_ubx

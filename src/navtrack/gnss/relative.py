@@ -366,7 +366,7 @@ def solution_frame(result: RtkResult) -> dict[str, np.ndarray]:
     ``ratio``, ``n_fixed``, ``age_s`` (age of the base observations) and ``fix_rejected``
     (why a float epoch was not fixed, :class:`FixRejection` name; empty otherwise)."""
     names = np.array(STATUS_NAMES, dtype=object)[result.status.astype(np.int64)]
-    reasons = np.array([""] + list(REJECTION_NAMES[1:]), dtype=object)
+    reasons = np.array(["", *REJECTION_NAMES[1:]], dtype=object)
     return {
         "t_gps_s": result.t_gps_s,
         "x_m": result.pos_m[:, 0],
