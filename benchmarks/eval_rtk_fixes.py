@@ -13,6 +13,12 @@ Cases (all in ``shared/data/gnss``):
   to 60 s with base observations used up to 60 s old (both programs), L1 and L1+L2.
   Reference: the station coordinate of the data README.
 
+* ``mosaic``: MatRTKLIB's static pair of two Septentrio mosaic-X5 receivers (1 m apart, 1 Hz,
+  5 min, GPS/Galileo/BeiDou/QZSS L1+L2), forward; also with the base thinned to 5 s and 30 s.
+  Reference: the rover coordinate published with the data. ``mosaic2018``: MatRTKLIB's earlier
+  static pair (a 1 Hz rover against a Trimble NetR9 base 7 m away, 10 min), forward L1+L2.
+  Both from ``--data`` (default ``../data_r30``, see its README); skipped when absent.
+
 A wrong fix is a fixed epoch more than ``--wrong-m`` (0.10 m) from the reference. Time to first
 fix is the time from the first common epoch to the first fixed one (forward runs).
 
@@ -22,6 +28,7 @@ by its integers (:func:`evidence_055954`).
 Usage::
 
     PYTHONPATH=src python benchmarks/eval_rtk_fixes.py [--set min_fix_sats=3 ...] [--evidence]
+        [--data DIR] [--only NAME]
 """
 
 from __future__ import annotations
@@ -38,6 +45,7 @@ from typing import Any
 
 import numpy as np
 
+from navtrack.geodesy import geodetic_to_ecef
 from navtrack.gnss.relative import RtkConfig, RtkStatus, solve_relative
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
@@ -50,6 +58,16 @@ GSI = SHARED / "rtklib_gsi0759"
 YAMA_BASE = (-3749943.5172, 3683398.2394, 3600629.5295)
 GSI_BASE = (-3978241.958, 3382840.234, 3649900.853)  # 3040, as RTKLIB's own tests hold it
 GSI_REF = (-3976219.188, 3382371.606, 3652511.143)  # 0759, shared data README
+EXTRA = Path(os.environ.get("NAVTRACK_RTK_DATA", REPO.parent / "data_r30"))
+MOSAIC = "matrtklib_static"
+MOSAIC_2018 = "matrtklib_static_2023"  # the folder is named after the commit year
+
+
+def llh_file(path: Path) -> tuple[float, float, float]:
+    """ECEF of a MatRTKLIB ``*_position.txt`` (latitude, longitude in degrees, height in m)."""
+    lat, lon, h = (float(v) for v in path.read_text().split()[:3])
+    x, y, z = geodetic_to_ecef([np.radians(lat), np.radians(lon), h])
+    return (float(x), float(y), float(z))
 
 
 def thin_rinex2(src: Path, dst: Path, step_s: int) -> Path:
@@ -73,6 +91,30 @@ def thin_rinex2(src: Path, dst: Path, step_s: int) -> Path:
         sod = int(head[10:12]) * 3600 + int(head[13:15]) * 60 + round(float(head[15:26]))
         if sod % step_s == 0:
             out.extend(block)
+    dst.write_text("".join(out))
+    return dst
+
+
+def thin_rinex3(src: Path, dst: Path, step_s: int) -> Path:
+    """A RINEX 3 observation file keeping the epochs whose time of day is a multiple of
+    ``step_s`` (to the second), records copied unchanged."""
+    out: list[str] = []
+    keep = True
+    in_header = True
+    for line in src.read_text().splitlines(keepends=True):
+        if in_header:
+            out.append(line)
+            in_header = "END OF HEADER" not in line
+            continue
+        if line.startswith(">"):
+            flag = int(line[31])
+            if flag <= 1:
+                sod = int(line[13:15]) * 3600 + int(line[16:18]) * 60 + round(float(line[18:29]))
+                keep = sod % step_s == 0
+            else:
+                keep = True  # event records are kept with their lines
+        if keep:
+            out.append(line)
     dst.write_text("".join(out))
     return dst
 
@@ -217,12 +259,105 @@ def evidence_055954() -> None:
     )
 
 
+def _yamatogawa(base_cfg: RtkConfig, wrong_m: float, tmp: Path) -> None:
+    ref = read_pos(YAMA / "yamatogawa_rover_ref_rtklib_rtk_combined.pos")
+    rover, master, nav = (
+        YAMA / "yamatogawa_rover.obs",
+        YAMA / "yamatogawa_master.obs",
+        YAMA / "brdc0060.10n",
+    )
+    kin = ["-p", "2", "-f", "1", "-t"]
+    for step in (1, 5, 30):
+        base = master if step == 1 else thin_rinex2(master, tmp / f"master_{step}s.obs", step)
+        for direction, opt in (("forward", []), ("combined", ["-c"])):
+            cfg = dataclasses.replace(base_cfg, systems="G", direction=direction)
+            _case(
+                f"yamatogawa {step} s base {direction}",
+                (rover, base, nav, YAMA_BASE),
+                cfg,
+                kin + opt,
+                ref,
+                wrong_m,
+                tmp,
+            )
+
+
+def _geonet(base_cfg: RtkConfig, wrong_m: float, tmp: Path) -> None:
+    g_rover, g_nav = GSI / "07590920.05o", GSI / "07590920.05n"
+    g_base = REPO / "src/navtrack/data/30400920.05o"
+    for mode, p_opt in (("kinematic", "2"), ("static", "3")):
+        cfg = dataclasses.replace(base_cfg, systems="G", mode=mode, frequencies=2)
+        _case(
+            f"gsi0759 L1+L2 {mode}",
+            (g_rover, g_base, g_nav, GSI_BASE),
+            cfg,
+            ["-p", p_opt, "-f", "2"],
+            GSI_REF,
+            wrong_m,
+            tmp,
+        )
+    thin = thin_rinex2(g_base, tmp / "3040_60s.obs", 60)
+    for freq in (1, 2):
+        cfg = dataclasses.replace(base_cfg, systems="G", frequencies=freq, max_age_s=60.0)
+        _case(
+            f"gsi0759 L{'1+L2' if freq == 2 else '1'} kinematic 60 s base",
+            (g_rover, thin, g_nav, GSI_BASE),
+            cfg,
+            ["-p", "2", "-f", str(freq), "maxage=60"],
+            GSI_REF,
+            wrong_m,
+            tmp,
+        )
+
+
+def _mosaic(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
+    """The MatRTKLIB static pairs, kinematic processing (every epoch its own position),
+    GPS + Galileo + BeiDou + QZSS, L1+L2, against the published rover coordinate."""
+    opts = ["-p", "2", "-f", "2", "-sys", "G,E,J,C"]
+    cfg = dataclasses.replace(base_cfg, frequencies=2)
+    d = data / MOSAIC
+    if d.is_dir():
+        files = (d / "rover.obs", d / "base.obs", d / "base.nav")
+        base_xyz, ref = llh_file(d / "base_position.txt"), llh_file(d / "rover_position.txt")
+        for step in (1, 5, 30):
+            base = (
+                files[1] if step == 1 else thin_rinex3(files[1], tmp / f"mosaic_{step}s.obs", step)
+            )
+            _case(
+                f"mosaic-X5 pair {step} s base",
+                (files[0], base, files[2], base_xyz),
+                cfg,
+                opts,
+                ref,
+                wrong_m,
+                tmp,
+            )
+    d = data / MOSAIC_2018
+    if d.is_dir():
+        files = (d / "rover_1Hz.obs", d / "base.obs", d / "base.nav")
+        base_xyz, ref = llh_file(d / "base_position.txt"), llh_file(d / "rover_mean_position.txt")
+        for freq in (1, 2):
+            _case(
+                f"MatRTKLIB 2018 pair L{'1+L2' if freq == 2 else '1'}",
+                (*files, base_xyz),
+                dataclasses.replace(cfg, frequencies=freq),
+                ["-p", "2", "-f", str(freq), "-sys", "G,E,J,C"],
+                ref,
+                wrong_m,
+                tmp,
+            )
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--wrong-m", type=float, default=0.10)
     ap.add_argument("--evidence", action="store_true", help="only the evidence on the 05:59:54 fix")
     ap.add_argument(
         "--set", action="append", default=[], metavar="K=V", help="RtkConfig field (number)"
+    )
+    ap.add_argument("--data", type=Path, default=EXTRA, help="folder of the MatRTKLIB pairs")
+    ap.add_argument(
+        "--only", choices=("yamatogawa", "gsi0759", "mosaic"), help="one group of cases"
     )
     args = ap.parse_args(argv)
     if shutil.which("rnx2rtkp") is None or not YAMA.is_dir():
@@ -232,65 +367,15 @@ def main(argv: list[str] | None = None) -> int:
         evidence_055954()
         return 0
     over = {k: type(getattr(RtkConfig(), k))(v) for k, v in (s.split("=") for s in args.set)}
-    base_cfg = dataclasses.replace(RtkConfig(systems="G"), **over)
-    ref = read_pos(YAMA / "yamatogawa_rover_ref_rtklib_rtk_combined.pos")
+    base_cfg = dataclasses.replace(RtkConfig(), **over)
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
-        rover, master, nav = (
-            YAMA / "yamatogawa_rover.obs",
-            YAMA / "yamatogawa_master.obs",
-            YAMA / "brdc0060.10n",
-        )
-        kin = ["-p", "2", "-f", "1", "-t"]
-        for direction, opt in (("forward", []), ("combined", ["-c"])):
-            cfg = dataclasses.replace(base_cfg, direction=direction)
-            _case(
-                f"yamatogawa 1 s base {direction}",
-                (rover, master, nav, YAMA_BASE),
-                cfg,
-                kin + opt,
-                ref,
-                args.wrong_m,
-                tmp,
-            )
-        for step in (5, 30):
-            thin = thin_rinex2(master, tmp / f"master_{step}s.obs", step)
-            for direction, opt in (("forward", []), ("combined", ["-c"])):
-                cfg = dataclasses.replace(base_cfg, direction=direction)
-                _case(
-                    f"yamatogawa {step} s base {direction}",
-                    (rover, thin, nav, YAMA_BASE),
-                    cfg,
-                    kin + opt,
-                    ref,
-                    args.wrong_m,
-                    tmp,
-                )
-        g_rover, g_nav = GSI / "07590920.05o", GSI / "07590920.05n"
-        g_base = REPO / "src/navtrack/data/30400920.05o"
-        for mode, p_opt in (("kinematic", "2"), ("static", "3")):
-            cfg = dataclasses.replace(base_cfg, mode=mode, frequencies=2)
-            _case(
-                f"gsi0759 L1+L2 {mode}",
-                (g_rover, g_base, g_nav, GSI_BASE),
-                cfg,
-                ["-p", p_opt, "-f", "2"],
-                GSI_REF,
-                args.wrong_m,
-                tmp,
-            )
-        thin = thin_rinex2(g_base, tmp / "3040_60s.obs", 60)
-        for freq in (1, 2):
-            cfg = dataclasses.replace(base_cfg, frequencies=freq, max_age_s=60.0)
-            _case(
-                f"gsi0759 L{'1+L2' if freq == 2 else '1'} kinematic 60 s base",
-                (g_rover, thin, g_nav, GSI_BASE),
-                cfg,
-                ["-p", "2", "-f", str(freq), "maxage=60"],
-                GSI_REF,
-                args.wrong_m,
-                tmp,
-            )
+        if args.only in (None, "yamatogawa"):
+            _yamatogawa(base_cfg, args.wrong_m, tmp)
+        if args.only in (None, "gsi0759"):
+            _geonet(base_cfg, args.wrong_m, tmp)
+        if args.only in (None, "mosaic"):
+            _mosaic(base_cfg, args.wrong_m, tmp, args.data)
     return 0
 
 

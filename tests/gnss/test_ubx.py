@@ -333,8 +333,8 @@ def test_convert_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> 
 
 def test_rtk_with_a_ubx_rover_zero_baseline(tmp_path: Path) -> None:
     """``navtrack rtk LOG RINEX``: the UBX log against convbin's RINEX of the same log (a zero
-    baseline through the two readers): every epoch fixed at the base position (the phases
-    agree to RINEX's printed 0.001 cycle)."""
+    baseline through the two readers): every epoch after the first fixed at the base position
+    (the phases agree to RINEX's printed 0.001 cycle)."""
     import pandas as pd
 
     from navtrack.cli import main
@@ -344,9 +344,12 @@ def test_rtk_with_a_ubx_rover_zero_baseline(tmp_path: Path) -> None:
     args = ["rtk", str(WALK), str(DATA / "gnss_imu_walk_cut_convbin.obs"), "--no-progress"]
     assert main([*args, "--base-pos", *map(str, base), "--out", str(out)]) == 0
     sol = pd.read_csv(out)
-    assert (sol["status"] == "fix").all()
+    # the first epoch's float (code alone) gives its integers below even odds: refused
+    assert (sol["status"][1:] == "fix").all()
+    assert sol["status"][0] == "fix" or sol["fix_rejected"][0] == "success_rate"
     assert len(sol) == 60
-    assert np.abs(sol[["x_m", "y_m", "z_m"]].to_numpy() - base).max() < 0.01
+    fixed = (sol["status"] == "fix").to_numpy()
+    assert np.abs(sol[["x_m", "y_m", "z_m"]].to_numpy()[fixed] - base).max() < 0.01
 
 
 def test_beidou_d1_ephemerides_as_convbin(tmp_path: Path) -> None:

@@ -41,6 +41,7 @@ from navtrack.gnss.relative import (
     solve_relative,
 )
 from navtrack.gnss.rinex.nav import NavData, read_nav
+from navtrack.gnss.rtcm import is_rtcm3, read_rtcm
 from navtrack.gnss.sp3 import Sp3, read_sp3
 from navtrack.io.solution import FORMATS, write_solution
 
@@ -60,7 +61,10 @@ def register(subparsers: Any) -> None:
         "rover", type=Path, nargs="?", help="rover RINEX observation file or u-blox UBX log"
     )
     p.add_argument(
-        "base", type=Path, nargs="?", help="base RINEX observation file or u-blox UBX log"
+        "base",
+        type=Path,
+        nargs="?",
+        help="base RINEX observation file, u-blox UBX log or RTCM 3 file (MSM4-7)",
     )
     p.add_argument(
         "nav",
@@ -151,6 +155,12 @@ def _add_fix_options(p: argparse.ArgumentParser) -> None:
         "--hold", action="store_true", help="fix-and-hold: feed validated fixes to the filter"
     )
     p.add_argument(
+        "--float-position-test",
+        action="store_true",
+        help="refuse a fix outside the float position's confidence region (off: the float "
+        "covariance is optimistic where code multipath is correlated in time)",
+    )
+    p.add_argument(
         "--max-age",
         type=float,
         default=_DEFAULTS.max_age_s,
@@ -221,6 +231,7 @@ def _rtk_config(args: argparse.Namespace) -> RtkConfig:
             max_age_ar_s=args.max_age_ar,
             min_success_rate=args.min_success_rate,
             hold=args.hold,
+            float_position_test=args.float_position_test,
             max_age_s=args.max_age,
             ambiguity=AmbiguityConfig(ratio_threshold=args.ratio, partial=args.partial),
             fix=not args.float,
@@ -236,7 +247,15 @@ def _read_inputs(
     """Rover, base, navigation data, SP3 and the base position with its source."""
     base_xyz, base_src = _base_position(args)
     rover, rover_nav = read_observations(args.rover)
-    base, base_nav = read_observations(args.base)
+    base_nav = None
+    if args.base.is_file() and is_rtcm3(args.base):
+        log = read_rtcm(args.base, float(np.median(rover.t_gps_s)))
+        base = log.obs
+        if base_src == "header" and log.station_xyz_m is not None:
+            base_xyz = log.station_xyz_m
+            base_src = f"RTCM 1005/1006 of {args.base} (give --base-pos for a surveyed one)"
+    else:
+        base, base_nav = read_observations(args.base)
     if base_src == "header":
         if base.header.approx_xyz_m is None:
             raise SystemExit(

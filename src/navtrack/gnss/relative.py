@@ -363,8 +363,10 @@ def solution_frame(result: RtkResult) -> dict[str, np.ndarray]:
     """The solution as a solution frame (:func:`navtrack.io.solution.write_solution`): the
     SPP columns ``t_gps_s``, ``x_m``, ``y_m``, ``z_m``, ``sd_e_m``, ``sd_n_m``, ``sd_u_m``,
     ``n_sats``, ``status`` (name), ``excluded`` (empty), then ``quality`` (RTKLIB Q),
-    ``ratio``, ``n_fixed`` and ``age_s`` (age of the base observations)."""
+    ``ratio``, ``n_fixed``, ``age_s`` (age of the base observations) and ``fix_rejected``
+    (why a float epoch was not fixed, :class:`FixRejection` name; empty otherwise)."""
     names = np.array(STATUS_NAMES, dtype=object)[result.status.astype(np.int64)]
+    reasons = np.array(["", *REJECTION_NAMES[1:]], dtype=object)
     return {
         "t_gps_s": result.t_gps_s,
         "x_m": result.pos_m[:, 0],
@@ -380,4 +382,5 @@ def solution_frame(result: RtkResult) -> dict[str, np.ndarray]:
         "ratio": result.ratio,
         "n_fixed": result.n_fixed,
         "age_s": result.age_s,
+        "fix_rejected": reasons[result.fix_rejected.astype(np.int64)],
     }

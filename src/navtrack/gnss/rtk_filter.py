@@ -426,8 +426,9 @@ class _Filter:
             self.x, self.P = gain_update(self.x, self.P, fix.z - T @ self.x, K, S)
 
     def _validate(self, k: int, dd: _DoubleDifferences, xf: FloatArray) -> FixRejection:
-        """Beyond the ratio test: the fixed state must close the phase DDs and stay within the
-        float position's uncertainty (chi-square tests at ``fix_test_p``)."""
+        """Beyond the ratio test: the fixed state must close the phase DDs and, with
+        ``float_position_test``, stay within the float position's uncertainty (chi-square tests
+        at ``fix_test_p``)."""
         ep, cfg = self.ep, self.cfg
         n_p = dd.ref_p.size
         v = dd.Dp @ np.where(dd.phase_ok, ep.sd_phase[k] - ep.G[k] @ (xf[:3] - ep.x_lin[k]), 0.0)
@@ -435,6 +436,8 @@ class _Filter:
         chi2_v = float(v @ np.linalg.solve(dd.R[:n_p, :n_p], v))
         if chi2_v > float(chdtri(n_p, cfg.fix_test_p)):
             return FixRejection.RESIDUALS
+        if not cfg.float_position_test:
+            return FixRejection.NONE
         d = xf[:3] - self.x[:3]
         if float(d @ np.linalg.solve(self.P[:3, :3], d)) > float(chdtri(3, cfg.fix_test_p)):
             return FixRejection.FLOAT_POSITION
