@@ -99,3 +99,29 @@ def test_the_study_takes_its_error_model_from_an_ism_file(tmp_path: Path) -> Non
         assert ism is not None
         assert ism.constellations["G"].p_sat == 1e-3
     assert raim_config(exp.RaimFcmParams(), "araim", 0.05).ism is None
+
+
+def test_the_example_states_the_fuzziness_limit_under_both_stopping_rules() -> None:
+    """The reproduction's paper example scans the FCM exponent: both faults (4, 7) are named
+    for m <= 2 and only 7 at 2.5 and 3, stopping on the memberships or on the centres; the
+    table in tables.md says so."""
+    ex = exp.paper_example(2.0, "centres")
+    assert ex["double"]["fcm_gross_errors"] == [4, 7]
+    named = {row["m"]: row for row in ex["fuzziness_scan"]}
+    assert sorted(named) == [1.5, 2.0, 2.5, 3.0]
+    for m, faulty in ((1.5, [4, 7]), (2.0, [4, 7]), (2.5, [7]), (3.0, [7])):
+        for stop in ("memberships", "centres"):
+            assert named[m][stop]["fcm_gross_errors"] == faulty
+    md = exp.tables_markdown({"example": ex})
+    assert "| 2.5 | [7] (" in md
+    assert "| 2 | [4, 7] (" in md
+
+
+def test_the_study_offers_the_centre_stopping_rule() -> None:
+    """``--set fcm_stop=centres`` reaches every method's RAIM configuration; another value
+    is refused by name."""
+    params = exp.RaimFcmParams(fcm_stop="centres")
+    assert raim_config(params, "fcm", 0.05).fcm_stop == "centres"
+    assert raim_config(exp.RaimFcmParams(), "fcm", 0.05).fcm_stop == "memberships"
+    with pytest.raises(ValueError, match="fcm_stop"):
+        exp.RaimFcmParams(fcm_stop="labels")

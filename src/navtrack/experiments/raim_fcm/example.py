@@ -22,7 +22,20 @@ from navtrack.integrity.fcm import (
     mahalanobis_whitening,
 )
 
-__all__ = ["EPS_ONE", "EPS_TWO", "F_ONE", "F_TWO", "T_PAPER", "T_PRINTED", "paper_example"]
+__all__ = [
+    "EPS_ONE",
+    "EPS_TWO",
+    "FUZZINESS_SCAN",
+    "F_ONE",
+    "F_TWO",
+    "T_PAPER",
+    "T_PRINTED",
+    "fuzziness_scan",
+    "paper_example",
+]
+
+FUZZINESS_SCAN = (1.5, 2.0, 2.5, 3.0)
+"""Weighting exponents of the two-fault scan (the issue's 2.5 and 3 beside Bezdek's 2)."""
 
 
 def _matrix(text: str, rows: int) -> np.ndarray:
@@ -65,13 +78,42 @@ F_TWO = _matrix(
 )
 
 
-def paper_example(m: float = 2.0) -> dict[str, Any]:
-    """Full design matrices, FCM memberships and classes, hierarchical classes of both cases.
+def fuzziness_scan(ms: tuple[float, ...] = FUZZINESS_SCAN) -> list[dict[str, Any]]:
+    """The satellites FCM names in the two-fault case for each exponent and stopping rule.
+
+    The paper gives no exponent; its two-fault success (4 and 7 named where hierarchical
+    clustering names only 7) holds for ``m <= 2`` only (docs/integrity.md, "Paper 2").
+
+    Returns
+    -------
+    list of dict
+        Per exponent: ``m`` and, per stopping rule (``memberships``, ``centres``), the named
+        satellites (1-based) and the iterations.
+    """
+    x = mahalanobis_whitening(full_design_matrix(T_PAPER, EPS_TWO).T, cov=np.eye(5))
+    rows = []
+    for m in ms:
+        row: dict[str, Any] = {"m": float(m)}
+        for stop in ("memberships", "centres"):
+            res = fuzzy_cmeans(x, 3, m, stop=stop, max_iter=1000)
+            row[stop] = {
+                "fcm_gross_errors": (np.flatnonzero(gross_error_columns(res.classes)) + 1).tolist(),
+                "iterations": int(res.iterations),
+            }
+        rows.append(row)
+    return rows
+
+
+def paper_example(m: float = 2.0, stop: str = "memberships") -> dict[str, Any]:
+    """Full design matrices, FCM memberships and classes, hierarchical classes of both cases,
+    and the two-fault case over the exponents of :data:`FUZZINESS_SCAN`.
 
     Parameters
     ----------
     m : float
         FCM weighting exponent.
+    stop : {"memberships", "centres"}
+        FCM stopping rule (:func:`navtrack.integrity.fcm.fuzzy_cmeans`).
 
     Returns
     -------
@@ -79,7 +121,7 @@ def paper_example(m: float = 2.0) -> dict[str, Any]:
         JSON-able: per case (``single``, ``double``) the computed and printed full design
         matrix, the largest difference, the memberships ``u`` (3 x 10), the FCM classes, the
         satellites FCM and hierarchical clustering name as gross errors (1-based), and the
-        orthonormality error of ``T``.
+        orthonormality error of ``T``; ``fuzziness_scan`` from :func:`fuzziness_scan`.
     """
     out: dict[str, Any] = {
         "t_orthonormality_error": float(np.max(np.abs(T_PAPER @ T_PAPER.T - np.eye(5)))),
@@ -93,7 +135,7 @@ def paper_example(m: float = 2.0) -> dict[str, Any]:
     ):
         f = full_design_matrix(T_PAPER, eps)
         x = mahalanobis_whitening(f.T, cov=np.eye(5))
-        res = fuzzy_cmeans(x, 3, m)
+        res = fuzzy_cmeans(x, 3, m, stop=stop)
         hard = hierarchical_classes(x, 2)
         out[name] = {
             "injected": faulty,
@@ -107,4 +149,5 @@ def paper_example(m: float = 2.0) -> dict[str, Any]:
             "hierarchical_classes": (hard + 1).tolist(),
             "hierarchical_gross_errors": (np.flatnonzero(gross_error_columns(hard)) + 1).tolist(),
         }
+    out["fuzziness_scan"] = fuzziness_scan()
     return out

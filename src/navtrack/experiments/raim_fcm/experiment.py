@@ -109,7 +109,7 @@ class RaimFcmExperiment(Experiment[RaimFcmParams, _RunResult]):
 
     def extra(self, params: RaimFcmParams, context: ExperimentContext) -> ExtraResult:
         protection, art = clean_protection(params, _gnss_dir())
-        example = paper_example(params.fcm_m)
+        example = paper_example(params.fcm_m, params.fcm_stop)
         results = {"example": example, "clean_protection": protection}
         methods = [m for m in params.methods if m != "rtklib"]
         day, day_art = whole_day_protection(context.inputs, methods)
@@ -151,6 +151,22 @@ def _example_lines(ex: dict[str, Any]) -> list[str]:
             f"| {case} | {c['injected']} | {c['fcm_gross_errors']} | "
             f"{c['hierarchical_gross_errors']} | {c['max_abs_difference']:.4f} |"
         )
+    scan = ex.get("fuzziness_scan")
+    if scan:
+        out += [
+            "",
+            "Two faults (4 and 7) against the FCM weighting exponent m: satellites named "
+            "(iterations), stopping on the memberships or on the cluster centres.",
+            "",
+            "| m | memberships | centres |",
+            "|---|---|---|",
+        ]
+        for row in scan:
+            cells = [
+                f"{row[s]['fcm_gross_errors']} ({row[s]['iterations']})"
+                for s in ("memberships", "centres")
+            ]
+            out.append(f"| {row['m']:g} | {cells[0]} | {cells[1]} |")
     return [*out, ""]
 
 

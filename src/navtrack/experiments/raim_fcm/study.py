@@ -114,6 +114,9 @@ class RaimFcmParams:
         As :class:`navtrack.integrity.raim.RaimConfig`.
     fcm_m : float
         FCM weighting exponent.
+    fcm_stop : {"memberships", "centres"}
+        FCM stopping rule: the change of the memberships (Bezdek, the default) or of the
+        cluster centres (the paper's section 3.2).
     iono : {"klobuchar", "ionofree"}
         Ionosphere handling of the stations' SPP (:class:`navtrack.gnss.spp.SppConfig`); the
         injected fault is added to the pseudorange the solution uses (the ionosphere-free
@@ -131,12 +134,15 @@ class RaimFcmParams:
     pfa: float = 1e-3
     pmd: float = 1e-3
     fcm_m: float = 2.0
+    fcm_stop: str = "memberships"
     iono: str = "klobuchar"
     ism: str = ""
 
     def __post_init__(self) -> None:
         if self.iono not in ("klobuchar", "ionofree"):
             raise ValueError(f"iono: expected klobuchar or ionofree, got {self.iono!r}")
+        if self.fcm_stop not in ("memberships", "centres"):
+            raise ValueError(f"fcm_stop: expected memberships or centres, got {self.fcm_stop!r}")
         bad = [s for s in self.stations if s not in STATIONS]
         if bad:
             raise ValueError(f"stations: unknown {bad}; expected some of {sorted(STATIONS)}")
@@ -180,13 +186,19 @@ def station_data(gnss_dir: str, name: str, iono: str = "klobuchar") -> StationDa
 
 def raim_config(params: RaimFcmParams, method: str, s2: float) -> RaimConfig:
     """The RAIM configuration of a study method (``rtklib``: navtrack's ``loo`` with RTKLIB's
-    unit variance factor) with the study's ``pfa``, ``pmd``, FCM exponent and the station's
-    variance factor ``s2``."""
+    unit variance factor) with the study's ``pfa``, ``pmd``, FCM exponent and stopping rule and
+    the station's variance factor ``s2``."""
     ism = _read_ism(params.ism) if params.ism else None
     if method == "rtklib":
         return RaimConfig("loo", pfa=params.pfa, pmd=params.pmd, variance_factor=1.0, ism=ism)
     return RaimConfig(
-        method, pfa=params.pfa, pmd=params.pmd, fcm_m=params.fcm_m, variance_factor=s2, ism=ism
+        method,
+        pfa=params.pfa,
+        pmd=params.pmd,
+        fcm_m=params.fcm_m,
+        fcm_stop=params.fcm_stop,
+        variance_factor=s2,
+        ism=ism,
     )
 
 
