@@ -51,6 +51,7 @@ from navtrack.geodesy import C_MPS, ecef_to_enu, ecef_to_geodetic, enu_rotation
 from navtrack.gnss.antex import AntennaPattern, Antex, receiver_range_m, satellite_offset_m
 from navtrack.gnss.corrections import geometric_range, ionofree, saastamoinen_delay_m
 from navtrack.gnss.observations import ObsHeader
+from navtrack.gnss.precise import ClockInterpolationError, clock_interpolation_error
 from navtrack.gnss.relative import (
     ReceiverSignals,
     RtkConfig,
@@ -125,6 +126,12 @@ class PppConfig:
     solid_tide : bool
         Correct the station for the solid Earth tide (:func:`navtrack.gnss.tides.solid_tide_m`,
         IERS 2010 step 1); off leaves up to ~0.4 m of twice-daily motion in the position.
+    clock_interpolation : bool
+        Add the error of the linearly interpolated satellite clocks to the code and phase
+        variances, measured on the clock source (:func:`navtrack.gnss.precise.
+        clock_interpolation_error`) and correlated over its sample interval; off treats the
+        interpolated clocks as exact (the 5- or 15-minute SP3 clocks then make the formal
+        bound too tight).
     phase_windup : bool
         Remove the carrier phase wind-up from the phase (:func:`navtrack.gnss.windup.
         phase_windup_cyc`, satellites in nominal yaw attitude, receiver antenna pointed north).
@@ -146,6 +153,7 @@ class PppConfig:
     sigma_amb0_m: float = 30.0
     sigma_pos0_m: float = 100.0
     solid_tide: bool = True
+    clock_interpolation: bool = True
     phase_windup: bool = True
     min_sats: int = 5
     max_outage: int = 5
@@ -268,6 +276,18 @@ def _correlation_factor(t_gps_s: FloatArray, tau_s: float) -> float:
     return max(1.0, tau_s / interval) if interval > 0 else 1.0
 
 
+def _clock_variance(clock_error: ClockInterpolationError, t_gps_s: FloatArray) -> FloatArray:
+    """Per-epoch variance ``(1, S)`` (m^2) of the interpolated satellite clocks: the variance
+    between samples, counted once per sample interval (the error is one value of a random walk
+    bridged between two samples, the same for all epochs in between). A satellite whose clock
+    source gives no measure takes the largest of the others."""
+    var = clock_error.var_m2
+    if not np.isfinite(var).any():
+        return np.zeros((1, var.size))
+    var = np.where(np.isfinite(var), var, np.nanmax(var))
+    return var[None, :] * _correlation_factor(t_gps_s, clock_error.interval_s)
+
+
 _BAND_CODES = ((1575.42e6, "01"), (1227.60e6, "02"), (1176.45e6, "05"), (1207.14e6, "07"))
 """Carrier frequencies (Hz) and their ANTEX frequency numbers (L1/E1, L2, L5/E5a, E5b)."""
 
@@ -338,7 +358,11 @@ def antenna_range_m(
 
 
 def _problem(
-    sig: ReceiverSignals, slips: Slips, cfg: PppConfig, antenna: tuple[ObsHeader, Antex | None]
+    sig: ReceiverSignals,
+    slips: Slips,
+    cfg: PppConfig,
+    antenna: tuple[ObsHeader, Antex | None],
+    clock_error: ClockInterpolationError,
 ) -> tuple[_Problem, list[str]]:
     """The reduced observables of :class:`_Problem` from a receiver's signals, and the
     warnings of the antenna corrections."""
@@ -364,6 +388,7 @@ def _problem(
         for name, flag, on in (
             ("solid Earth tide", "solid_tide", cfg.solid_tide),
             ("carrier phase wind-up", "phase_windup", cfg.phase_windup),
+            ("satellite clock interpolation error", "clock_interpolation", cfg.clock_interpolation),
         )
         if not on
     ]
@@ -373,6 +398,7 @@ def _problem(
     sin_el2 = np.maximum(np.sin(el), 0.05) ** 2
     var_phase = 9.0 * (a * a + b * b / sin_el2)
     var_model = cfg.sigma_model_m**2 / sin_el2
+    var_clock = _clock_variance(clock_error, sig.t_gps_s) if cfg.clock_interpolation else 0.0
     systems = [s for s in cfg.systems if any(x[0] == s for x in sig.sats)]
     sys_col = np.array([systems.index(x[0]) if x[0] in systems else -1 for x in sig.sats])
     prob = _Problem(
@@ -384,9 +410,11 @@ def _problem(
         m_w=m_w,
         el=el,
         var_code=(var_phase * cfg.code_phase_ratio**2 + var_model)
-        * _correlation_factor(sig.t_gps_s, cfg.code_correlation_s),
+        * _correlation_factor(sig.t_gps_s, cfg.code_correlation_s)
+        + var_clock,
         var_phase=(var_phase + var_model)
-        * _correlation_factor(sig.t_gps_s, cfg.phase_correlation_s),
+        * _correlation_factor(sig.t_gps_s, cfg.phase_correlation_s)
+        + var_clock,
         sys_col=sys_col.astype(np.int64),
         n_clk=len(systems),
         reset=np.asarray(slips.any.any(axis=2)),
@@ -434,7 +462,8 @@ def solve_ppp(
     if not np.all(np.isfinite(sig.spp_pos_m), axis=1).any():
         raise ValueError(f"obs: {obs.path!r}: no epoch has a single point solution")
     slips = detect_slips(sig, rcfg)
-    prob, warnings = _problem(sig, slips, cfg, (obs.header, antex))
+    clock_error = clock_interpolation_error(sp3, sig.sats)
+    prob, warnings = _problem(sig, slips, cfg, (obs.header, antex), clock_error)
     pos, cov, zwd, n_used, updated = _run_filter(prob, cfg)
     llh = ecef_to_geodetic(prob.x_lin)
     rot = enu_rotation(llh[0], llh[1])
