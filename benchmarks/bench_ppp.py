@@ -15,12 +15,16 @@ repeat), medians of ``--repeat`` runs after one warm-up of each:
 * the two solutions' difference: median and last-epoch 3-D distance.
 
 Cases: the shared SEPT (15 min, 1 s, CODE MGEX SP3) and ARL1 (1 h, 30 s, NGA SP3) stations;
-``--case NAME OBS NAV SP3 CLK X Y Z`` adds one with a RINEX clock file (``-`` for none), e.g. the
-NIST station of 2023-01-01 with WUM's 30 s clocks (jtec/prx test data, not in the shared data).
+``--data DIR`` adds the files of ``DIR`` that are present: the eight 3-hour sessions of NIST on
+2023-01-01 (``NIST_HHh_3h.rnx``), each with WUM's 30 s clock file and with its 5-minute SP3
+clocks, and 30 minutes of TLSE the same day (jtec/prx test data, not in the shared data; the
+folder's README says how to fetch and cut them); ``--case NAME OBS NAV SP3 CLK X Y Z`` adds one
+more (``-`` for no clock file). A markdown table of all cases ends the output.
 
 Usage::
 
-    PYTHONPATH=src python benchmarks/bench_ppp.py [--repeat 5] [--antex ATX] [--case ...]
+    PYTHONPATH=src python benchmarks/bench_ppp.py [--repeat 5] [--antex ATX] [--data DIR]
+        [--case ...]
 """
 
 from __future__ import annotations
@@ -77,9 +81,25 @@ CASES: dict[str, Case] = {
         SHARED / "gpstk_arl1" / "arlm2000.15n",
         SHARED / "gpstk_arl1" / "test_input_sp3_nav_2015_200.sp3",
         None,
-        (-740289.9180, -5457071.7340, 3207245.5420),
+        (-740289.9049, -5457071.7352, 3207245.5544),  # GPSTk's ARL.2012.0000 (docs/ppp.md)
     ),
 }
+NIST_REF = (-1288398.574, -4721696.936, 4078625.349)  # docs/ppp.md, references
+TLSE_REF = (4627851.574, 119640.425, 4372993.792)
+
+
+def data_cases(d: Path) -> dict[str, Case]:
+    """The NIST sessions (30 s clock file and SP3 clocks) and TLSE of 2023-01-01 in ``d``."""
+    nav = d / "BRDC00IGS_R_20230010000_01D_MN.rnx"
+    sp3 = d / "WUM0MGXFIN_20230010000_01D_05M_ORB.SP3"
+    clk = d / "WUM0MGXFIN_20230010000_01D_30S_CLK.CLK"
+    cases: dict[str, Case] = {}
+    for obs in sorted(d.glob("NIST_??h_3h.rnx")):
+        cases[f"NIST {obs.name[5:8]}"] = (obs, nav, sp3, clk, NIST_REF)
+        cases[f"NIST {obs.name[5:8]} SP3 clocks"] = (obs, nav, sp3, None, NIST_REF)
+    if (d / "TLSE_30M.crx.gz").is_file():
+        cases["TLSE"] = (d / "TLSE_30M.crx.gz", nav, sp3, clk, TLSE_REF)
+    return cases
 
 
 def _run(cmd: list[str]) -> tuple[float, float]:
@@ -119,20 +139,27 @@ def _covariance_enu(pos: np.ndarray, sd: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ejk,lk->eil", rot, cov, rot)
 
 
-def _scores(t: np.ndarray, pos: np.ndarray, cov: np.ndarray, ref: np.ndarray) -> str:
+Scores = tuple[float, float, float, float]
+"""Last 3-D error (m), median 3-D error from 5 minutes on (m), and the shares (%) of the epochs
+from 5 and from 30 minutes on inside the program's own 95 % ellipsoid (NaN: too short)."""
+
+
+def _scores(t: np.ndarray, pos: np.ndarray, cov: np.ndarray, ref: np.ndarray) -> Scores:
     enu = ecef_to_enu(pos, ref)
     after = t - t[0] >= 300.0
     inside = np.einsum("ei,eij,ej->e", enu, np.linalg.inv(cov), enu) <= CHI2_3DOF_95
     late = t - t[0] >= 1800.0
     e3 = np.linalg.norm(enu, axis=1)
-    from_30 = f", from 30 min {100.0 * np.mean(inside[late]):.0f} %" if late.any() else ""
-    return (
-        f"last {e3[-1]:.3f} m, median from 5 min {np.median(e3[after]):.3f} m, inside own 95 % "
-        f"{100.0 * np.mean(inside[after]):.0f} % of {int(after.sum())} epochs{from_30}"
-    )
+    in_30 = 100.0 * float(np.mean(inside[late])) if late.any() else float("nan")
+    return float(e3[-1]), float(np.median(e3[after])), 100.0 * float(np.mean(inside[after])), in_30
 
 
-def _compare(case: Case, tmp: Path, atx: Path | None) -> None:
+def _line(s: Scores) -> str:
+    late = "" if np.isnan(s[3]) else f", from 30 min {s[3]:.0f} %"
+    return f"last {s[0]:.3f} m, median from 5 min {s[1]:.3f} m, inside own 95 % {s[2]:.0f} %{late}"
+
+
+def _compare(case: Case, tmp: Path, atx: Path | None) -> tuple[Scores, Scores]:
     obs_p, nav_p, sp3_p, clk_p, ref_t = case
     ref = np.asarray(ref_t, dtype=float)
     sp3 = read_sp3(sp3_p)
@@ -143,17 +170,36 @@ def _compare(case: Case, tmp: Path, atx: Path | None) -> None:
         antex=read_antex(atx) if atx else None,
     )
     ok = res.updated
-    print(f"  navtrack  {_scores(res.t_gps_s[ok], res.pos_m[ok], res.cov_enu_m2[ok], ref)}")
+    ours = _scores(res.t_gps_s[ok], res.pos_m[ok], res.cov_enu_m2[ok], ref)
+    print(f"  navtrack  {_line(ours)}")
     rp = read_pos(tmp / "rtklib.pos")
     r_pos = rp[["x_m", "y_m", "z_m"]].to_numpy(float)
     r_sd = rp[["sdx_m", "sdy_m", "sdz_m", "sdxy_m", "sdyz_m", "sdzx_m"]].to_numpy(float)
     r_t = rp["t_gps_s"].to_numpy(float)
-    print(f"  RTKLIB    {_scores(r_t, r_pos, _covariance_enu(r_pos, r_sd), ref)}")
+    theirs = _scores(r_t, r_pos, _covariance_enu(r_pos, r_sd), ref)
+    print(f"  RTKLIB    {_line(theirs)}")
     written = read_solution(tmp / "navtrack.csv")
     np.testing.assert_allclose(written["x_m"].to_numpy()[ok], res.pos_m[ok, 0], atol=1e-4)
     _, a, b = np.intersect1d(np.round(res.t_gps_s * 1e3), np.round(r_t * 1e3), return_indices=True)
     d = np.linalg.norm(res.pos_m[a] - r_pos[b], axis=1)
     print(f"  difference navtrack - RTKLIB: median {np.nanmedian(d):.3f} m, last {d[-1]:.3f} m")
+    return ours, theirs
+
+
+def _table(rows: list[tuple[str, Scores, Scores, float]]) -> None:
+    """The markdown table of all cases (as in docs/ppp.md)."""
+    print(
+        "\n| case | navtrack error from 5 min, median (last) | navtrack inside 5 / 30 min "
+        "| RTKLIB error from 5 min, median (last) | RTKLIB inside 5 / 30 min | CPU ratio |"
+    )
+    print("|---|---|---|---|---|---|")
+    for name, ours, theirs, ratio in rows:
+        cells = [
+            f"{s[1]:.3f} ({s[0]:.3f}) m | {s[2]:.0f} % / "
+            + ("–" if np.isnan(s[3]) else f"{s[3]:.0f} %")
+            for s in (ours, theirs)
+        ]
+        print(f"| {name} | {cells[0]} | {cells[1]} | {ratio:.2f} |")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -161,8 +207,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--case", nargs=8, action="append", default=[], metavar="ARG")
     ap.add_argument("--antex", type=Path, help="ANTEX file given to both programs")
+    ap.add_argument("--data", type=Path, help="folder with the NIST/TLSE files of 2023-01-01")
     args = ap.parse_args(argv)
-    cases = dict(CASES)
+    cases = dict(CASES) | (data_cases(args.data) if args.data else {})
     for name, obs, nav, sp3, clk, x, y, z in args.case:
         cases[name] = (
             Path(obs),
@@ -174,31 +221,37 @@ def main(argv: list[str] | None = None) -> int:
     if shutil.which("rnx2rtkp") is None:
         print("rnx2rtkp missing: nothing to compare", file=sys.stderr)
         return 1
+    rows = []
     for name, case in cases.items():
         if not Path(case[0]).is_file():
             print(f"{name}: {case[0]} missing, skipped", file=sys.stderr)
             continue
         with tempfile.TemporaryDirectory() as d:
             tmp = Path(d)
-            nav_cmd, rtk_cmd = _commands(case, tmp, args.antex)
-            _run(nav_cmd), _run(rtk_cmd)  # warm-up
-            times: dict[str, list[tuple[float, float]]] = {"navtrack": [], "rtklib": []}
-            for k in range(args.repeat):
-                order = [("navtrack", nav_cmd), ("rtklib", rtk_cmd)][:: 1 if k % 2 == 0 else -1]
-                for who, cmd in order:
-                    times[who].append(_run(cmd))
-            med = {
-                w: [statistics.median(v[i] for v in t) for i in (0, 1)] for w, t in times.items()
-            }
             clk = f", clocks {Path(case[3]).name}" if case[3] else ""
             print(f"{name}{clk}: median of {args.repeat} alternating whole-process runs")
-            print(
-                f"  wall navtrack {med['navtrack'][0]:.3f} s, RTKLIB {med['rtklib'][0]:.3f} s, "
-                f"ratio {med['navtrack'][0] / med['rtklib'][0]:.2f}; CPU {med['navtrack'][1]:.3f} "
-                f"s vs {med['rtklib'][1]:.3f} s, ratio {med['navtrack'][1] / med['rtklib'][1]:.2f}"
-            )
-            _compare(case, tmp, args.antex)
+            ratio = _time_case(case, tmp, args.antex, args.repeat)
+            rows.append((name, *_compare(case, tmp, args.antex), ratio))
+    _table(rows)
     return 0
+
+
+def _time_case(case: Case, tmp: Path, atx: Path | None, repeat: int) -> float:
+    """Print the median wall and CPU times of both programs; return the CPU ratio."""
+    nav_cmd, rtk_cmd = _commands(case, tmp, atx)
+    _run(nav_cmd), _run(rtk_cmd)  # warm-up
+    times: dict[str, list[tuple[float, float]]] = {"navtrack": [], "rtklib": []}
+    for k in range(repeat):
+        order = [("navtrack", nav_cmd), ("rtklib", rtk_cmd)][:: 1 if k % 2 == 0 else -1]
+        for who, cmd in order:
+            times[who].append(_run(cmd))
+    med = {w: [statistics.median(v[i] for v in t) for i in (0, 1)] for w, t in times.items()}
+    print(
+        f"  wall navtrack {med['navtrack'][0]:.3f} s, RTKLIB {med['rtklib'][0]:.3f} s, "
+        f"ratio {med['navtrack'][0] / med['rtklib'][0]:.2f}; CPU {med['navtrack'][1]:.3f} "
+        f"s vs {med['rtklib'][1]:.3f} s, ratio {med['navtrack'][1] / med['rtklib'][1]:.2f}"
+    )
+    return float(med["navtrack"][1] / med["rtklib"][1])
 
 
 if __name__ == "__main__":

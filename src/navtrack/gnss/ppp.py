@@ -20,10 +20,12 @@ The station is corrected for the solid Earth tide (IERS 2010 step 1,
 the antennas for their phase centres when an ANTEX file is given. Not applied: satellite antenna
 nadir variations, ocean-loading and pole tides, differential code biases between
 the tracked code (``C1C``) and the code of the SP3 clocks (``C1W``). The errors they leave are
-part of the measurement model instead: code errors correlated over
-:data:`CODE_CORRELATION_S`, phase errors over :data:`PHASE_CORRELATION_S`, and a range error
-of :data:`SIGMA_MODEL_M` common to code and phase, so that the formal covariance describes the
-error of the position (``docs/ppp.md``).
+part of the model instead, so that the formal covariance describes the error of the position
+(``docs/ppp.md``): code errors correlated over :data:`CODE_CORRELATION_S`, phase noise over
+:data:`PHASE_CORRELATION_S`, a range error common to code and phase per satellite
+(:data:`SIGMA_MODEL_M`, a first-order Gauss-Markov state correlated over
+:data:`MODEL_CORRELATION_S`), and the error of the linearly interpolated satellite clocks,
+measured on the clock product itself (:func:`navtrack.gnss.precise.clock_interpolation_error`).
 
 References
 ----------
@@ -32,6 +34,8 @@ of GPS data from large networks. JGR 102(B3), 5005-5017.
 Kouba, J., Heroux, P. (2001). Precise point positioning using IGS orbit and clock products.
 GPS Solutions 5(2), 12-28 (eq. 1-2, ionosphere-free observation equations).
 Takasu, T. (2013). RTKLIB ver. 2.4.2 Manual, appendix E.8 (PPP: states, process noises).
+Gelb, A. (ed.) (1974). Applied Optimal Estimation, MIT Press, chapter 4 (correlated
+measurement errors as first-order Markov states of the filter).
 """
 
 from __future__ import annotations
@@ -51,6 +55,7 @@ from navtrack.geodesy import C_MPS, ecef_to_enu, ecef_to_geodetic, enu_rotation
 from navtrack.gnss.antex import AntennaPattern, Antex, receiver_range_m, satellite_offset_m
 from navtrack.gnss.corrections import geometric_range, ionofree, saastamoinen_delay_m
 from navtrack.gnss.observations import ObsHeader
+from navtrack.gnss.precise import ClockInterpolationError, clock_interpolation_error
 from navtrack.gnss.relative import (
     ReceiverSignals,
     RtkConfig,
@@ -68,6 +73,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CODE_CORRELATION_S",
+    "MODEL_CORRELATION_S",
     "PHASE_CORRELATION_S",
     "PppConfig",
     "PppResult",
@@ -87,10 +93,17 @@ PHASE_CORRELATION_S = 30.0
 """Correlation time of the phase errors left by the model (s), applied as
 :data:`CODE_CORRELATION_S` to the phase variance (``docs/ppp.md``, method notes)."""
 
-SIGMA_MODEL_M = 0.03
-"""Standard deviation (m, at zenith; divided by ``sin(el)``) of the range errors the model
-leaves in code and phase alike: satellite clock interpolation, orbit, antenna phase centres,
-wind-up, tides and troposphere mapping (``docs/ppp.md``, method notes)."""
+SIGMA_MODEL_M = 0.015
+"""Standard deviation (m, at zenith; divided by ``sin(el)``) of the range error the model
+leaves in code and phase alike: orbit, satellite and receiver antenna variations, wind-up,
+tides and troposphere mapping (``docs/ppp.md``, method notes: chosen on four 3-hour NIST
+sessions, judged on four others, ARL1, SEPT and TLSE)."""
+
+
+MODEL_CORRELATION_S = 1800.0
+"""Correlation time (s) of the range error :data:`SIGMA_MODEL_M`: orbit, antenna and
+troposphere mapping errors change with the geometry, over many minutes (chosen with
+:data:`SIGMA_MODEL_M`, ``docs/ppp.md``, method notes)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,8 +125,12 @@ class PppConfig:
         Correlation times of the code and phase errors (:data:`CODE_CORRELATION_S`,
         :data:`PHASE_CORRELATION_S`); 0 treats every epoch as independent.
     sigma_model_m : float
-        Range error left by the model (:data:`SIGMA_MODEL_M`), added to the code and phase
-        variances.
+        Range error left by the model (:data:`SIGMA_MODEL_M`, at zenith, divided by
+        ``sin(el)``), common to code and phase.
+    model_correlation_s : float
+        Its correlation time (:data:`MODEL_CORRELATION_S`): a first-order Gauss-Markov state per
+        satellite; 0 adds it to the code and phase variances instead (every epoch independent
+        after the phase's correlation factor).
     sigma_zwd0_m : float
         Start standard deviation of the zenith wet delay (RTKLIB: 0.3 m).
     q_zwd_m : float
@@ -125,6 +142,12 @@ class PppConfig:
     solid_tide : bool
         Correct the station for the solid Earth tide (:func:`navtrack.gnss.tides.solid_tide_m`,
         IERS 2010 step 1); off leaves up to ~0.4 m of twice-daily motion in the position.
+    clock_interpolation : bool
+        Add the error of the linearly interpolated satellite clocks to the code and phase
+        variances, measured on the clock source (:func:`navtrack.gnss.precise.
+        clock_interpolation_error`) and correlated over its sample interval; off treats the
+        interpolated clocks as exact (the 5- or 15-minute SP3 clocks then make the formal
+        bound too tight).
     phase_windup : bool
         Remove the carrier phase wind-up from the phase (:func:`navtrack.gnss.windup.
         phase_windup_cyc`, satellites in nominal yaw attitude, receiver antenna pointed north).
@@ -141,11 +164,13 @@ class PppConfig:
     code_correlation_s: float = CODE_CORRELATION_S
     phase_correlation_s: float = PHASE_CORRELATION_S
     sigma_model_m: float = SIGMA_MODEL_M
+    model_correlation_s: float = MODEL_CORRELATION_S
     sigma_zwd0_m: float = 0.3
     q_zwd_m: float = 1e-4
     sigma_amb0_m: float = 30.0
     sigma_pos0_m: float = 100.0
     solid_tide: bool = True
+    clock_interpolation: bool = True
     phase_windup: bool = True
     min_sats: int = 5
     max_outage: int = 5
@@ -155,9 +180,16 @@ class PppConfig:
             raise ValueError(f"systems: expected letters of GECJ, got {self.systems!r}")
         if self.min_sats < 4:
             raise ValueError(f"min_sats: expected >= 4, got {self.min_sats}")
-        if min(self.code_correlation_s, self.phase_correlation_s, self.sigma_model_m) < 0:
+        values = (
+            self.code_correlation_s,
+            self.phase_correlation_s,
+            self.sigma_model_m,
+            self.model_correlation_s,
+        )
+        if min(values) < 0:
             raise ValueError(
-                "code_correlation_s, phase_correlation_s, sigma_model_m: expected >= 0"
+                "code_correlation_s, phase_correlation_s, sigma_model_m, model_correlation_s: "
+                "expected >= 0"
             )
 
 
@@ -247,6 +279,7 @@ class _Problem:
     el: FloatArray
     var_code: FloatArray
     var_phase: FloatArray
+    var_model: FloatArray
     sys_col: IntArray
     n_clk: int
     reset: np.ndarray
@@ -266,6 +299,18 @@ def _correlation_factor(t_gps_s: FloatArray, tau_s: float) -> float:
     steps = np.diff(t_gps_s)
     interval = float(np.median(steps)) if steps.size else 1.0
     return max(1.0, tau_s / interval) if interval > 0 else 1.0
+
+
+def _clock_variance(clock_error: ClockInterpolationError, t_gps_s: FloatArray) -> FloatArray:
+    """Per-epoch variance ``(1, S)`` (m^2) of the interpolated satellite clocks: the variance
+    between samples, counted once per sample interval (the error is one value of a random walk
+    bridged between two samples, the same for all epochs in between). A satellite whose clock
+    source gives no measure takes the largest of the others."""
+    var = clock_error.var_m2
+    if not np.isfinite(var).any():
+        return np.zeros((1, var.size))
+    var = np.where(np.isfinite(var), var, np.nanmax(var))
+    return var[None, :] * _correlation_factor(t_gps_s, clock_error.interval_s)
 
 
 _BAND_CODES = ((1575.42e6, "01"), (1227.60e6, "02"), (1176.45e6, "05"), (1207.14e6, "07"))
@@ -338,7 +383,11 @@ def antenna_range_m(
 
 
 def _problem(
-    sig: ReceiverSignals, slips: Slips, cfg: PppConfig, antenna: tuple[ObsHeader, Antex | None]
+    sig: ReceiverSignals,
+    slips: Slips,
+    cfg: PppConfig,
+    antenna: tuple[ObsHeader, Antex | None],
+    clock_error: ClockInterpolationError,
 ) -> tuple[_Problem, list[str]]:
     """The reduced observables of :class:`_Problem` from a receiver's signals, and the
     warnings of the antenna corrections."""
@@ -364,6 +413,7 @@ def _problem(
         for name, flag, on in (
             ("solid Earth tide", "solid_tide", cfg.solid_tide),
             ("carrier phase wind-up", "phase_windup", cfg.phase_windup),
+            ("satellite clock interpolation error", "clock_interpolation", cfg.clock_interpolation),
         )
         if not on
     ]
@@ -373,6 +423,8 @@ def _problem(
     sin_el2 = np.maximum(np.sin(el), 0.05) ** 2
     var_phase = 9.0 * (a * a + b * b / sin_el2)
     var_model = cfg.sigma_model_m**2 / sin_el2
+    white_model = var_model if cfg.model_correlation_s == 0 else 0.0
+    var_clock = _clock_variance(clock_error, sig.t_gps_s) if cfg.clock_interpolation else 0.0
     systems = [s for s in cfg.systems if any(x[0] == s for x in sig.sats)]
     sys_col = np.array([systems.index(x[0]) if x[0] in systems else -1 for x in sig.sats])
     prob = _Problem(
@@ -383,10 +435,13 @@ def _problem(
         G=G,
         m_w=m_w,
         el=el,
-        var_code=(var_phase * cfg.code_phase_ratio**2 + var_model)
-        * _correlation_factor(sig.t_gps_s, cfg.code_correlation_s),
-        var_phase=(var_phase + var_model)
-        * _correlation_factor(sig.t_gps_s, cfg.phase_correlation_s),
+        var_code=(var_phase * cfg.code_phase_ratio**2 + white_model)
+        * _correlation_factor(sig.t_gps_s, cfg.code_correlation_s)
+        + var_clock,
+        var_phase=(var_phase + white_model)
+        * _correlation_factor(sig.t_gps_s, cfg.phase_correlation_s)
+        + var_clock,
+        var_model=var_model,
         sys_col=sys_col.astype(np.int64),
         n_clk=len(systems),
         reset=np.asarray(slips.any.any(axis=2)),
@@ -434,7 +489,8 @@ def solve_ppp(
     if not np.all(np.isfinite(sig.spp_pos_m), axis=1).any():
         raise ValueError(f"obs: {obs.path!r}: no epoch has a single point solution")
     slips = detect_slips(sig, rcfg)
-    prob, warnings = _problem(sig, slips, cfg, (obs.header, antex))
+    clock_error = clock_interpolation_error(sp3, sig.sats)
+    prob, warnings = _problem(sig, slips, cfg, (obs.header, antex), clock_error)
     pos, cov, zwd, n_used, updated = _run_filter(prob, cfg)
     llh = ecef_to_geodetic(prob.x_lin)
     rot = enu_rotation(llh[0], llh[1])
@@ -457,10 +513,14 @@ def _run_filter(
     prob: _Problem, cfg: PppConfig
 ) -> tuple[FloatArray, FloatArray, FloatArray, IntArray, np.ndarray]:
     """The Kalman filter over all epochs: position, its covariance (ECEF), ZWD, satellites
-    used and whether each epoch was updated."""
+    used and whether each epoch was updated.
+
+    States: position, one clock per system, ZWD, one ambiguity per satellite and, with
+    ``model_correlation_s > 0``, one range error per satellite (first-order Gauss-Markov)."""
     n_e, n_s = prob.y_code.shape
-    _i_clk, i_zwd, i_amb = 3, 3 + prob.n_clk, 4 + prob.n_clk
-    x = np.zeros(i_amb + n_s)
+    i_zwd, i_amb = 3 + prob.n_clk, 4 + prob.n_clk
+    n_rng = n_s if cfg.model_correlation_s > 0 else 0
+    x = np.zeros(i_amb + n_s + n_rng)
     x[:3] = prob.x_lin
     x[i_zwd] = 0.1
     P = np.zeros((x.size, x.size))
@@ -479,14 +539,41 @@ def _run_filter(
         if ok.sum() < cfg.min_sats:
             continue
         t = prob.t_gps_s[k]
-        P[i_zwd, i_zwd] += cfg.q_zwd_m**2 * (0.0 if t_prev is None else t - t_prev)
+        dt = 0.0 if t_prev is None else t - t_prev
+        P[i_zwd, i_zwd] += cfg.q_zwd_m**2 * dt
         t_prev = t
         restart = ok & (~active | prob.reset[k] | (k - last > cfg.max_outage + 1))
+        if n_rng:
+            _propagate_range_errors(prob, cfg, k, dt, restart, x, P)
         active |= restart
         last[ok] = k
         x, P = _update(prob, cfg, k, ok, restart, x, P)
         pos[k], cov[k], zwd[k], n_used[k] = x[:3], P[:3, :3], x[i_zwd], ok.sum()
     return pos, cov, zwd, n_used, n_used > 0
+
+
+def _propagate_range_errors(
+    prob: _Problem,
+    cfg: PppConfig,
+    k: int,
+    dt: float,
+    restart: np.ndarray,
+    x: FloatArray,
+    P: FloatArray,
+) -> None:
+    """Predict the per-satellite range errors over ``dt`` (first-order Gauss-Markov with the
+    variance of the current elevation) in place; a restarted arc starts its error afresh."""
+    n_s = prob.sys_col.size
+    rng = np.arange(n_s) + 4 + prob.n_clk + n_s
+    var = np.nan_to_num(prob.var_model[k], nan=0.0)
+    phi = math.exp(-dt / cfg.model_correlation_s)
+    x[rng] *= phi
+    P[rng, :] *= phi
+    P[:, rng] *= phi
+    P[rng, rng] += var * (1.0 - phi * phi)
+    if restart.any():
+        restart_states(P, rng[restart], var[restart])
+        x[rng[restart]] = 0.0
 
 
 def _update(
@@ -522,6 +609,11 @@ def _update(
         H[rows, i_zwd] = prob.m_w[k, idx]
     H[np.arange(m), amb[idx]] = 1.0
     pred = geo[idx] + clk[idx]
+    if x.size > amb[-1] + 1:  # the range error of each satellite, in its code and phase
+        rng = amb[idx] + prob.sys_col.size
+        H[np.arange(m), rng] = 1.0
+        H[np.arange(m, 2 * m), rng] = 1.0
+        pred = pred + x[rng]
     y = np.concatenate([prob.y_phase[k, idx] - pred - x[amb[idx]], prob.y_code[k, idx] - pred])
     R = np.diag(np.concatenate([prob.var_phase[k, idx], prob.var_code[k, idx]]))
     S, K = innovation_gain(P, H, R)

@@ -14,11 +14,15 @@ M. Schenewerk, "A brief review of basic GPS orbit interpolation strategies", GPS
 IS-GPS-200N 20.3.3.3.3.1 (relativistic clock correction, here in vector form ``-2 r.v / c^2``).
 Kouba, J., "A guide to using International GNSS Service (IGS) products", 2015, section 4.2
 (linear interpolation of 30 s satellite clocks).
+Allan, D.W. (1987). Time and frequency (time-domain) characterization, estimation, and
+prediction of precision clocks and oscillators. IEEE Trans. UFFC 34(6), 647-654 (the second
+difference of clock samples as the measure of their wander between samples).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -28,7 +32,13 @@ from navtrack.gnss.ephemeris import SatStates
 from navtrack.gnss.rinex_clock import interpolate_clock
 from navtrack.gnss.sp3 import Sp3
 
-__all__ = ["lagrange_weights", "sp3_clock", "sp3_states"]
+__all__ = [
+    "ClockInterpolationError",
+    "clock_interpolation_error",
+    "lagrange_weights",
+    "sp3_clock",
+    "sp3_states",
+]
 
 
 def lagrange_weights(t_nodes: FloatArray, t: FloatArray) -> FloatArray:
@@ -64,6 +74,55 @@ def sp3_clock(sp3: Sp3, sat: str, t_gps_s: FloatArray, max_gap_s: float = 900.0)
     dts = c0 + (c1 - c0) * (ts - t0) / (t1 - t0)
     near = np.minimum(np.abs(ts - t0), np.abs(ts - t1)) <= max_gap_s
     return np.where(near, dts, np.nan)
+
+
+@dataclass(frozen=True, slots=True)
+class ClockInterpolationError:
+    """Size of the error of linearly interpolated satellite clocks, from the clock samples.
+
+    Attributes
+    ----------
+    var_m2 : ndarray, shape (S,)
+        Variance (m^2) of the interpolation error between two samples of each satellite's clock
+        (NaN: fewer than three samples in a row).
+    interval_s : float
+        Sample interval of the clock source (s): the time over which that error is correlated.
+    """
+
+    var_m2: FloatArray
+    interval_s: float
+
+
+def clock_interpolation_error(sp3: Sp3, sats: Sequence[str]) -> ClockInterpolationError:
+    """Variance of the error that linear interpolation leaves between clock samples, measured
+    on the clock source itself (the attached RINEX clock file, else the SP3 clocks).
+
+    Each interior sample ``c_k`` is predicted from its two neighbours one interval ``h`` away;
+    the misfit ``r_k = c_k - (c_{k-1} + c_{k+1}) / 2`` is the interpolation error at the middle of
+    a ``2h`` span. For a clock whose phase wanders as a random walk (white frequency noise, the
+    short-term behaviour of the GNSS rubidium and hydrogen-maser clocks) the error in the middle
+    of an ``h`` span has half that variance: ``var = mean(r^2) / 2`` per satellite, used for every
+    epoch between samples (``docs/ppp.md``, method notes: this form was chosen on WUM's 5-minute
+    clocks against its 30 s clocks of 2023-01-01).
+    """
+    src = sp3.clock
+    t_nodes = np.asarray(src.t_gps_s if src is not None else sp3.t_gps_s, dtype=float)
+    names = src.sats if src is not None else sp3.sats
+    values = src.clock_s if src is not None else sp3.clock_s
+    steps = np.diff(t_nodes)
+    h = float(np.median(steps)) if steps.size else float("nan")
+    var = np.full(len(sats), np.nan)
+    # second differences only across two steps of the nominal interval
+    regular = (np.abs(steps[:-1] - h) < 1e-3) & (np.abs(steps[1:] - h) < 1e-3)
+    for i, sat in enumerate(sats):
+        if sat not in names:
+            continue
+        c = values[:, names.index(sat)] * C_MPS
+        r = (c[1:-1] - 0.5 * (c[:-2] + c[2:]))[regular]
+        r = r[np.isfinite(r)]
+        if r.size:
+            var[i] = 0.5 * float(np.mean(r * r))
+    return ClockInterpolationError(var_m2=var, interval_s=h)
 
 
 def _orbit(sp3: Sp3, j: int, t: FloatArray, n_nodes: int, max_gap_s: float) -> FloatArray:
