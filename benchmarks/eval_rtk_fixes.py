@@ -45,10 +45,12 @@ from typing import Any
 
 import numpy as np
 
-from navtrack.geodesy import geodetic_to_ecef
+from navtrack.geodesy import C_MPS, geodetic_to_ecef
 from navtrack.gnss.relative import RtkConfig, RtkStatus, solve_relative
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.rtk_filter import satellite_geometry
+from navtrack.gnss.rtk_signals import common_epochs, receiver_signals
 from navtrack.io.rtklib import read_pos
 
 REPO = Path(__file__).resolve().parents[1]
@@ -61,6 +63,10 @@ GSI_REF = (-3976219.188, 3382371.606, 3652511.143)  # 0759, shared data README
 EXTRA = Path(os.environ.get("NAVTRACK_RTK_DATA", REPO.parent / "data_r30"))
 MOSAIC = "matrtklib_static"
 MOSAIC_2018 = "matrtklib_static_2023"  # the folder is named after the commit year
+UBLOX = "geofis_ppk_2022"
+UBLOX_BASE = (2078720.6329, -5683487.5402, 2007608.6397)  # the base file's header position
+GLONASS_CHANNEL_HZ = 0.5625e6  # G1 channel spacing, GLONASS ICD 3.3.1.4
+GLONASS_G1_HZ = 1602e6
 
 
 def llh_file(path: Path) -> tuple[float, float, float]:
@@ -348,6 +354,159 @@ def _mosaic(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
             )
 
 
+def _ublox_files(data: Path) -> tuple[Path, Path, Path] | None:
+    d = data / UBLOX
+    if not d.is_dir():
+        return None
+    return (
+        d / "rover_2022-02-25_13-26-06_GNSS-1.obs",
+        d / "base_2022-02-25_00-00-00_GNSS-1.obs",
+        d / "base_2022-02-25_00-00-00_GNSS-1.nav",
+    )
+
+
+def _ublox_reference(files: tuple[Path, Path, Path], tmp: Path) -> tuple[float, float, float]:
+    """The rover's static position: RTKLIB's static L1+L2 solution of the whole 4 h session
+    (its last epoch), against the same base position."""
+    pos = _rtklib(*files, UBLOX_BASE, ["-p", "3", "-f", "2", "-sys", "G,E,C,J"], tmp / "ref.pos")
+    x = pos[["x_m", "y_m", "z_m"]].to_numpy()[-1]
+    return float(x[0]), float(x[1]), float(x[2])
+
+
+def _ublox(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
+    """The u-blox ZED-F9P pair of geofis/ppk (static rover 1.2 km from the base, 15 s, 4 h),
+    kinematic, GPS + Galileo + BeiDou + QZSS, L1 and L1+L2."""
+    files = _ublox_files(data)
+    if files is None:
+        return
+    ref = _ublox_reference(files, tmp)
+    for freq in (1, 2):
+        _case(
+            f"u-blox F9P pair L{'1+L2' if freq == 2 else '1'}",
+            (*files, UBLOX_BASE),
+            dataclasses.replace(base_cfg, frequencies=freq),
+            ["-p", "2", "-f", str(freq), "-sys", "G,E,C,J"],
+            ref,
+            wrong_m,
+            tmp,
+        )
+
+
+def _pairs(data: Path, tmp: Path) -> list[tuple[str, tuple[Path, Path, Path], Any, Any]]:
+    """The low-cost pairs with GLONASS L1/L2: name, files, base position, rover reference."""
+    out = []
+    d = data / MOSAIC
+    if d.is_dir():
+        files = (d / "rover.obs", d / "base.obs", d / "base.nav")
+        out.append(
+            (
+                "mosaic-X5 pair",
+                files,
+                llh_file(d / "base_position.txt"),
+                llh_file(d / "rover_position.txt"),
+            )
+        )
+    d = data / MOSAIC_2018
+    if d.is_dir():
+        files = (d / "rover_1Hz.obs", d / "base.obs", d / "base.nav")
+        out.append(
+            (
+                "2018 pair (vs NetR9)",
+                files,
+                llh_file(d / "base_position.txt"),
+                llh_file(d / "rover_mean_position.txt"),
+            )
+        )
+    files_u = _ublox_files(data)
+    if files_u is not None:
+        out.append(("u-blox F9P pair", files_u, UBLOX_BASE, _ublox_reference(files_u, tmp)))
+    return out
+
+
+def glonass_code_bias(
+    rover: Path, base: Path, nav: Path, base_xyz: Any, ref_xyz: Any
+) -> list[tuple[float, float, float, int]]:
+    """The GLONASS code inter-frequency bias between two receivers, per band: the slope
+    (m per channel number) of the single-differenced code residuals at the known positions,
+    each epoch's mean over satellites removed (the receiver clocks), then averaged per
+    satellite; its standard error from the scatter of the satellites about the line (a
+    satellite's multipath is correlated over the whole session, so satellites, not epochs,
+    are the independent samples), the RMS of that scatter (m) and the number of satellites."""
+    cfg = RtkConfig(systems="R", frequencies=2)
+    navd = [read_nav(nav)]
+    sig = [receiver_signals(read_obs(p), navd, cfg, second_bands={"R": "2"}) for p in (rover, base)]
+    ir, ib, _ = common_epochs(sig[0].t_gps_s, sig[1].t_gps_s, max_age_s=0.5)
+    sats = [s for s in sig[0].sats if s in sig[1].sats]
+    cols = [[x.sats.index(s) for s in sats] for x in sig]
+    res = []
+    for x, idx, c, at in zip(sig, (ir, ib), cols, (ref_xyz, base_xyz), strict=True):
+        pos = np.broadcast_to(np.asarray(at, dtype=float), (idx.size, 3))
+        rho, _, _ = satellite_geometry(x.sat_pos_m[idx][:, c], pos)
+        res.append(x.code_m[idx][:, c] - rho[..., None])
+    sd = res[0] - res[1]
+    freq = C_MPS / sig[0].wavelength_m[cols[0], 0]
+    k = np.round((freq - GLONASS_G1_HZ) / GLONASS_CHANNEL_HZ)
+    out = []
+    for f in range(2):
+        y = sd[:, :, f]
+        kk = np.where(np.isfinite(y), k[None, :], np.nan)
+        y, kk = y - np.nanmean(y, 1, keepdims=True), kk - np.nanmean(kk, 1, keepdims=True)
+        seen = np.isfinite(y).sum(0) >= 10
+        ys, ks = np.nanmean(y[:, seen], 0), np.nanmean(kk[:, seen], 0)
+        ks = ks - ks.mean()
+        beta = float((ys * ks).sum() / (ks**2).sum())
+        r = ys - ys.mean() - beta * ks
+        se = float(np.sqrt((r**2).sum() / max(r.size - 2, 1) / (ks**2).sum()))
+        out.append((beta, se, float(np.sqrt(np.mean(r**2))), int(seen.sum())))
+    return out
+
+
+def _float_errors(res: Any, ref: Any) -> str:
+    err = np.linalg.norm(res.pos_m - np.asarray(ref), axis=1)
+    fl = err[res.status == RtkStatus.FLOAT]
+    if not fl.size:
+        return "no float epoch"
+    return (
+        f"float {fl.size} epochs, 3-D error median {np.median(fl):.3f} m, 95 % "
+        f"{np.percentile(fl, 95):.3f} m"
+    )
+
+
+def _glonass(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
+    """GLONASS on the low-cost pairs: its code inter-frequency bias between the receivers,
+    GLONASS alone in the float solution (the integer search never sees it), and the four
+    other systems with and without GLONASS beside RTKLIB (which fixes GLONASS ambiguities by
+    default, ``pos2-gloarmode=on``)."""
+    for name, files, base_xyz, ref in _pairs(data, tmp):
+        for band, (beta, se, rms, n) in zip(
+            ("G1", "G2"), glonass_code_bias(*files, base_xyz, ref), strict=True
+        ):
+            print(
+                f"{name:<34} code IFB {band}: {beta:+.3f} ± {se:.3f} m per channel number, "
+                f"scatter of the satellites' means {rms:.2f} m ({n} satellites)"
+            )
+        for freq in (1, 2):
+            res = solve_relative(
+                read_obs(files[0]),
+                read_obs(files[1]),
+                [read_nav(files[2])],
+                np.asarray(base_xyz),
+                dataclasses.replace(base_cfg, systems="R", frequencies=freq),
+            )
+            label = "L1+L2" if freq == 2 else "L1"
+            print(f"{name:<34} GLONASS alone {label}: {_float_errors(res, ref)}")
+        for systems, opt in (("GECJ", "G,E,C,J"), ("GECJR", "G,E,C,J,R")):
+            _case(
+                f"{name} {systems} L1+L2",
+                (*files, base_xyz),
+                dataclasses.replace(base_cfg, systems=systems, frequencies=2),
+                ["-p", "2", "-f", "2", "-sys", opt],
+                ref,
+                wrong_m,
+                tmp,
+            )
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--wrong-m", type=float, default=0.10)
@@ -357,7 +516,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--data", type=Path, default=EXTRA, help="folder of the MatRTKLIB pairs")
     ap.add_argument(
-        "--only", choices=("yamatogawa", "gsi0759", "mosaic"), help="one group of cases"
+        "--only",
+        choices=("yamatogawa", "gsi0759", "mosaic", "ublox", "glonass"),
+        help="one group of cases",
     )
     args = ap.parse_args(argv)
     if shutil.which("rnx2rtkp") is None or not YAMA.is_dir():
@@ -376,6 +537,10 @@ def main(argv: list[str] | None = None) -> int:
             _geonet(base_cfg, args.wrong_m, tmp)
         if args.only in (None, "mosaic"):
             _mosaic(base_cfg, args.wrong_m, tmp, args.data)
+        if args.only in (None, "ublox"):
+            _ublox(base_cfg, args.wrong_m, tmp, args.data)
+        if args.only in (None, "glonass"):
+            _glonass(base_cfg, args.wrong_m, tmp, args.data)
     return 0
 
 
