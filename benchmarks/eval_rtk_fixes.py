@@ -392,8 +392,9 @@ def _ublox(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
         )
 
 
-def _pairs(data: Path, tmp: Path) -> list[tuple[str, tuple[Path, Path, Path], Any, Any]]:
-    """The low-cost pairs with GLONASS L1/L2: name, files, base position, rover reference."""
+def _pairs(data: Path, tmp: Path) -> list[tuple[str, tuple[Path, Path, Path], Any, Any, int]]:
+    """The low-cost pairs with GLONASS L1/L2: name, files, base position, rover reference and
+    the frequencies at which the other four systems fix (the 2018 pair: L1 alone)."""
     out = []
     d = data / MOSAIC
     if d.is_dir():
@@ -404,6 +405,7 @@ def _pairs(data: Path, tmp: Path) -> list[tuple[str, tuple[Path, Path, Path], An
                 files,
                 llh_file(d / "base_position.txt"),
                 llh_file(d / "rover_position.txt"),
+                2,
             )
         )
     d = data / MOSAIC_2018
@@ -415,11 +417,12 @@ def _pairs(data: Path, tmp: Path) -> list[tuple[str, tuple[Path, Path, Path], An
                 files,
                 llh_file(d / "base_position.txt"),
                 llh_file(d / "rover_mean_position.txt"),
+                1,
             )
         )
     files_u = _ublox_files(data)
     if files_u is not None:
-        out.append(("u-blox F9P pair", files_u, UBLOX_BASE, _ublox_reference(files_u, tmp)))
+        out.append(("u-blox F9P pair", files_u, UBLOX_BASE, _ublox_reference(files_u, tmp), 2))
     return out
 
 
@@ -428,10 +431,11 @@ def glonass_code_bias(
 ) -> list[tuple[float, float, float, int]]:
     """The GLONASS code inter-frequency bias between two receivers, per band: the slope
     (m per channel number) of the single-differenced code residuals at the known positions,
-    each epoch's mean over satellites removed (the receiver clocks), then averaged per
-    satellite; its standard error from the scatter of the satellites about the line (a
-    satellite's multipath is correlated over the whole session, so satellites, not epochs,
-    are the independent samples), the RMS of that scatter (m) and the number of satellites."""
+    elevation above the mask, each epoch's median over satellites removed (the receiver
+    clocks), then the median of each satellite; its standard error from the scatter of the
+    satellites about the line (a satellite's multipath is correlated over the whole session,
+    so satellites, not epochs, are the independent samples), the RMS of that scatter (m) and
+    the number of satellites."""
     cfg = RtkConfig(systems="R", frequencies=2)
     navd = [read_nav(nav)]
     sig = [receiver_signals(read_obs(p), navd, cfg, second_bands={"R": "2"}) for p in (rover, base)]
@@ -441,8 +445,9 @@ def glonass_code_bias(
     res = []
     for x, idx, c, at in zip(sig, (ir, ib), cols, (ref_xyz, base_xyz), strict=True):
         pos = np.broadcast_to(np.asarray(at, dtype=float), (idx.size, 3))
-        rho, _, _ = satellite_geometry(x.sat_pos_m[idx][:, c], pos)
-        res.append(x.code_m[idx][:, c] - rho[..., None])
+        rho, _, el = satellite_geometry(x.sat_pos_m[idx][:, c], pos)
+        low = (el < np.radians(cfg.elmask_deg))[..., None]
+        res.append(np.where(low, np.nan, x.code_m[idx][:, c] - rho[..., None]))
     sd = res[0] - res[1]
     freq = C_MPS / sig[0].wavelength_m[cols[0], 0]
     k = np.round((freq - GLONASS_G1_HZ) / GLONASS_CHANNEL_HZ)
@@ -450,9 +455,9 @@ def glonass_code_bias(
     for f in range(2):
         y = sd[:, :, f]
         kk = np.where(np.isfinite(y), k[None, :], np.nan)
-        y, kk = y - np.nanmean(y, 1, keepdims=True), kk - np.nanmean(kk, 1, keepdims=True)
+        y, kk = y - np.nanmedian(y, 1, keepdims=True), kk - np.nanmedian(kk, 1, keepdims=True)
         seen = np.isfinite(y).sum(0) >= 10
-        ys, ks = np.nanmean(y[:, seen], 0), np.nanmean(kk[:, seen], 0)
+        ys, ks = np.nanmedian(y[:, seen], 0), np.nanmedian(kk[:, seen], 0)
         ks = ks - ks.mean()
         beta = float((ys * ks).sum() / (ks**2).sum())
         r = ys - ys.mean() - beta * ks
@@ -477,13 +482,13 @@ def _glonass(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None
     GLONASS alone in the float solution (the integer search never sees it), and the four
     other systems with and without GLONASS beside RTKLIB (which fixes GLONASS ambiguities by
     default, ``pos2-gloarmode=on``)."""
-    for name, files, base_xyz, ref in _pairs(data, tmp):
+    for name, files, base_xyz, ref, n_f in _pairs(data, tmp):
         for band, (beta, se, rms, n) in zip(
             ("G1", "G2"), glonass_code_bias(*files, base_xyz, ref), strict=True
         ):
             print(
                 f"{name:<34} code IFB {band}: {beta:+.3f} ± {se:.3f} m per channel number, "
-                f"scatter of the satellites' means {rms:.2f} m ({n} satellites)"
+                f"scatter of the satellites' medians {rms:.2f} m ({n} satellites)"
             )
         for freq in (1, 2):
             res = solve_relative(
@@ -497,10 +502,10 @@ def _glonass(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None
             print(f"{name:<34} GLONASS alone {label}: {_float_errors(res, ref)}")
         for systems, opt in (("GECJ", "G,E,C,J"), ("GECJR", "G,E,C,J,R")):
             _case(
-                f"{name} {systems} L1+L2",
+                f"{name} {systems} L{'1+L2' if n_f == 2 else '1'}",
                 (*files, base_xyz),
-                dataclasses.replace(base_cfg, systems=systems, frequencies=2),
-                ["-p", "2", "-f", "2", "-sys", opt],
+                dataclasses.replace(base_cfg, systems=systems, frequencies=n_f),
+                ["-p", "2", "-f", str(n_f), "-sys", opt],
                 ref,
                 wrong_m,
                 tmp,
