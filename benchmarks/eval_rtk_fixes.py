@@ -64,6 +64,7 @@ EXTRA = Path(os.environ.get("NAVTRACK_RTK_DATA", REPO.parent / "data_r30"))
 MOSAIC = "matrtklib_static"
 MOSAIC_2018 = "matrtklib_static_2023"  # the folder is named after the commit year
 UBLOX = "geofis_ppk_2022"
+RTKLIB_NAVSYS = {"G": 1, "R": 4, "E": 8, "J": 16, "C": 32}  # RTKLIB's pos1-navsys bits
 UBLOX_BASE = (2078720.6329, -5683487.5402, 2007608.6397)  # the base file's header position
 GLONASS_CHANNEL_HZ = 0.5625e6  # G1 channel spacing, GLONASS ICD 3.3.1.4
 GLONASS_G1_HZ = 1602e6
@@ -128,8 +129,15 @@ def thin_rinex3(src: Path, dst: Path, step_s: int) -> Path:
 def _rtklib(rover: Path, base: Path, nav: Path, base_xyz: tuple, opts: list[str], out: Path):  # type: ignore[no-untyped-def]
     conf = out.with_suffix(".conf")  # the base age limit has no command-line option
     age = next((o.split("=")[1] for o in opts if o.startswith("maxage=")), "30")
-    conf.write_text(f"pos2-maxage        ={age}\n")
-    cmd = ["rnx2rtkp", "-k", str(conf), *(o for o in opts if not o.startswith("maxage="))]
+    text = f"pos2-maxage        ={age}\n"
+    opts = [o for o in opts if not o.startswith("maxage=")]
+    if "-sys" in opts:  # rnx2rtkp 2.4.3 b34's -sys turns on every system whatever its letters
+        k = opts.index("-sys")
+        mask = sum(RTKLIB_NAVSYS[c] for c in opts[k + 1].split(","))
+        text += f"pos1-navsys        ={mask}\n"
+        opts = opts[:k] + opts[k + 2 :]
+    conf.write_text(text)
+    cmd = ["rnx2rtkp", "-k", str(conf), *opts]
     cmd += ["-m", "15", "-e"]
     cmd += ["-r", *(f"{v:.4f}" for v in base_xyz)]
     cmd += [str(rover), str(nav), str(base), "-o", str(out)]
