@@ -199,10 +199,19 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
             "reading u-blox logs needs pyubx2: pip install 'navtrack[ublox]'"
         ) from exc
     scan = _Scan(path, lenient)
+    number = 0
     with open(path, "rb") as stream:
-        reader = UBXReader(stream, protfilter=UBX_PROTOCOL, parsing=False, quitonerror=0)
-        for number, (raw, _) in enumerate(reader, start=1):
-            scan.add(raw, number)
+        while True:  # a new reader after each undecodable text line, from the byte after it
+            reader = UBXReader(stream, protfilter=UBX_PROTOCOL, parsing=False, quitonerror=0)
+            try:
+                for raw, _ in reader:
+                    number += 1
+                    scan.add(raw, number)
+                break
+            except UnicodeDecodeError:  # a truncated NMEA sentence runs into binary messages
+                number += 1
+                where = f"text line ending at byte {stream.tell()}"
+                scan.bad(number, where, "not NMEA (a truncated sentence?)")
     epochs, subframes = scan.epochs, scan.subframes
     if not epochs and not subframes:
         raise FileFormatError(path, None, "no RXM-RAWX nor RXM-SFRBX message: not a raw log")
@@ -245,7 +254,7 @@ class _Scan:
             return
         cls_id = (raw[2], raw[3])
         if not checksum_ok(raw):
-            self._bad(number, where, "checksum error")
+            self.bad(number, where, "checksum error")
             return
         self.messages[_identity(cls_id)] += 1
         why = ""
@@ -254,9 +263,9 @@ class _Scan:
         elif cls_id == _SFRBX:
             why = self._sfrbx(raw[6:-2], number)
         if why:
-            self._bad(number, where, why)
+            self.bad(number, where, why)
 
-    def _bad(self, number: int, where: str, reason: str) -> None:
+    def bad(self, number: int, where: str, reason: str) -> None:
         if not self.lenient:
             raise FileFormatError(self.path, None, f"{where}: {reason}")
         self.skipped.append(SkippedLine(line=number, reason=f"{where}: {reason}"))
