@@ -488,3 +488,18 @@ def test_truncated_nmea_sentence_before_binary_messages(tmp_path: Path) -> None:
     ]
     whole = read_ubx(RAWX_1HZ).obs.t_gps_s
     np.testing.assert_array_equal(log.obs.t_gps_s, whole[1:])
+
+
+def test_a_damaged_length_does_not_swallow_the_next_messages(tmp_path: Path) -> None:
+    """A damaged length field makes a message claim the bytes of the messages after it; with
+    lenient reading framing resumes after the damaged message's sync characters, so only
+    that message is lost (RTKLIB's decoder resynchronises the same way)."""
+    data = bytearray(RAWX_1HZ.read_bytes())
+    data[5] += 4  # the first RXM-RAWX's length, high byte: 1,024 bytes more than it has
+    bad = tmp_path / "long.ubx"
+    bad.write_bytes(bytes(data))
+    with pytest.raises(FileFormatError, match="message at byte 0: checksum error"):
+        read_ubx(bad)
+    log = read_ubx(bad, lenient=True)
+    whole = read_ubx(RAWX_1HZ).obs.t_gps_s
+    np.testing.assert_array_equal(log.obs.t_gps_s, whole[1:])
