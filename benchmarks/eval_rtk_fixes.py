@@ -49,9 +49,11 @@ from navtrack.geodesy import C_MPS, geodetic_to_ecef
 from navtrack.gnss.relative import RtkConfig, RtkStatus, solve_relative
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.rtcm import read_rtcm
 from navtrack.gnss.rtk_filter import satellite_geometry
 from navtrack.gnss.rtk_signals import common_epochs, receiver_signals
 from navtrack.io.rtklib import read_pos
+from navtrack.timescale import parse_gpst
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("NAVTRACK_SHARED_DATA", REPO.parent / "shared" / "data")) / "gnss"
@@ -64,6 +66,7 @@ EXTRA = Path(os.environ.get("NAVTRACK_RTK_DATA", REPO.parent / "data_r30"))
 MOSAIC = "matrtklib_static"
 MOSAIC_2018 = "matrtklib_static_2023"  # the folder is named after the commit year
 UBLOX = "geofis_ppk_2022"
+NTRIP_RECORDING = "geofis_ppk_2021/20210809-111055-rtcm3-base-corrections.rtcm3"
 RTKLIB_NAVSYS = {"G": 1, "R": 4, "E": 8, "J": 16, "C": 32}  # RTKLIB's pos1-navsys bits
 UBLOX_BASE = (2078720.6329, -5683487.5402, 2007608.6397)  # the base file's header position
 GLONASS_CHANNEL_HZ = 0.5625e6  # G1 channel spacing, GLONASS ICD 3.3.1.4
@@ -520,6 +523,40 @@ def _glonass(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None
             )
 
 
+def rtcm_against_convbin(data: Path, tmp: Path) -> None:
+    """The NTRIP recording of the CORS station RDSD (MSM7 of GPS, GLONASS, Galileo, BeiDou)
+    read by navtrack and by ``convbin -r rtcm3``: epochs, and per system and code the values
+    both hold, those only one holds and the largest difference (convbin prints 0.001)."""
+    path = data / NTRIP_RECORDING
+    if not path.is_file():
+        return
+    out = tmp / "rdsd.obs"
+    cmd = ["convbin", "-r", "rtcm3", "-tr", "2021/08/09", "15:10:00", "-o", str(out), str(path)]
+    subprocess.run(cmd, check=True, capture_output=True)
+    ref = read_obs(out)
+    log = read_rtcm(path, parse_gpst("2021-08-09T15:10:00"))
+    obs = log.obs
+    same = np.array_equal(np.round(obs.t_gps_s, 3), np.round(ref.t_gps_s, 3))
+    print(
+        f"RDSD NTRIP recording: navtrack {obs.t_gps_s.size} epochs, convbin {ref.t_gps_s.size}, same tags {same}"
+    )
+    for code in ref.codes:
+        for system in "GREC":
+            sats = [x for x in ref.sats if x[0] == system and x in obs.sats]
+            if not sats or code not in obs.codes:
+                continue
+            a = obs.values[:, [obs.sats.index(x) for x in sats], obs.codes.index(code)]
+            b = ref.values[:, [ref.sats.index(x) for x in sats], ref.codes.index(code)]
+            both = np.isfinite(a) & np.isfinite(b)
+            if both.any():
+                print(
+                    f"  {system} {code}: {int(both.sum())} values, only navtrack "
+                    f"{int((np.isfinite(a) & ~np.isfinite(b)).sum())}, only convbin "
+                    f"{int((~np.isfinite(a) & np.isfinite(b)).sum())}, max difference "
+                    f"{np.abs(a - b)[both].max():.4f}"
+                )
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--wrong-m", type=float, default=0.10)
@@ -530,7 +567,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--data", type=Path, default=EXTRA, help="folder of the MatRTKLIB pairs")
     ap.add_argument(
         "--only",
-        choices=("yamatogawa", "gsi0759", "mosaic", "ublox", "glonass"),
+        choices=("yamatogawa", "gsi0759", "mosaic", "ublox", "glonass", "rtcm"),
         help="one group of cases",
     )
     args = ap.parse_args(argv)
@@ -554,6 +591,8 @@ def main(argv: list[str] | None = None) -> int:
             _ublox(base_cfg, args.wrong_m, tmp, args.data)
         if args.only in (None, "glonass"):
             _glonass(base_cfg, args.wrong_m, tmp, args.data)
+        if args.only in (None, "rtcm"):
+            rtcm_against_convbin(args.data, tmp)
     return 0
 
 
