@@ -538,7 +538,8 @@ def rtcm_against_convbin(data: Path, tmp: Path) -> None:
     obs = log.obs
     same = np.array_equal(np.round(obs.t_gps_s, 3), np.round(ref.t_gps_s, 3))
     print(
-        f"RDSD NTRIP recording: navtrack {obs.t_gps_s.size} epochs, convbin {ref.t_gps_s.size}, same tags {same}"
+        f"RDSD NTRIP recording: navtrack {obs.t_gps_s.size} epochs, convbin "
+        f"{ref.t_gps_s.size}, same tags {same}"
     )
     for code in ref.codes:
         for system in "GREC":
