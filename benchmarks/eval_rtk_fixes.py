@@ -19,6 +19,18 @@ Cases (all in ``shared/data/gnss``):
   static pair (a 1 Hz rover against a Trimble NetR9 base 7 m away, 10 min), forward L1+L2.
   Both from ``--data`` (default ``../data_r30``, see its README); skipped when absent.
 
+* ``ublox``: the geofis/ppk pair of two u-blox ZED-F9P receivers (static rover 1.2 km from
+  the base, 15 s, 4 h, GPS/Galileo/BeiDou/QZSS), L1 and L1+L2. Reference: RTKLIB's static
+  solution of the whole session against the same base position.
+* ``glonass``: on the three low-cost pairs, the GLONASS code inter-frequency bias between the
+  receivers (:func:`glonass_code_bias`), GLONASS alone in the float solution, and the other
+  systems without and with GLONASS beside RTKLIB.
+* ``rtcm``: GLONASS and the other MSM7 of the RDSD NTRIP recording read as ``convbin`` reads
+  them (:func:`rtcm_against_convbin`).
+
+RTKLIB's systems are set through ``pos1-navsys``: this build's ``-sys`` option turns on every
+system whatever its letters.
+
 A wrong fix is a fixed epoch more than ``--wrong-m`` (0.10 m) from the reference. Time to first
 fix is the time from the first common epoch to the first fixed one (forward runs).
 
