@@ -19,6 +19,18 @@ Cases (all in ``shared/data/gnss``):
   static pair (a 1 Hz rover against a Trimble NetR9 base 7 m away, 10 min), forward L1+L2.
   Both from ``--data`` (default ``../data_r30``, see its README); skipped when absent.
 
+* ``ublox``: the geofis/ppk pair of two u-blox ZED-F9P receivers (static rover 1.2 km from
+  the base, 15 s, 4 h, GPS/Galileo/BeiDou/QZSS), L1 and L1+L2. Reference: RTKLIB's static
+  solution of the whole session against the same base position.
+* ``glonass``: on the three low-cost pairs, the GLONASS code inter-frequency bias between the
+  receivers (:func:`glonass_code_bias`), GLONASS alone in the float solution, and the other
+  systems without and with GLONASS beside RTKLIB.
+* ``rtcm``: GLONASS and the other MSM7 of the RDSD NTRIP recording read as ``convbin`` reads
+  them (:func:`rtcm_against_convbin`).
+
+RTKLIB's systems are set through ``pos1-navsys``: this build's ``-sys`` option turns on every
+system whatever its letters.
+
 A wrong fix is a fixed epoch more than ``--wrong-m`` (0.10 m) from the reference. Time to first
 fix is the time from the first common epoch to the first fixed one (forward runs).
 
@@ -45,11 +57,15 @@ from typing import Any
 
 import numpy as np
 
-from navtrack.geodesy import geodetic_to_ecef
+from navtrack.geodesy import C_MPS, geodetic_to_ecef
 from navtrack.gnss.relative import RtkConfig, RtkStatus, solve_relative
 from navtrack.gnss.rinex.nav import read_nav
 from navtrack.gnss.rinex.obs import read_obs
+from navtrack.gnss.rtcm import read_rtcm
+from navtrack.gnss.rtk_filter import satellite_geometry
+from navtrack.gnss.rtk_signals import common_epochs, receiver_signals
 from navtrack.io.rtklib import read_pos
+from navtrack.timescale import parse_gpst
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("NAVTRACK_SHARED_DATA", REPO.parent / "shared" / "data")) / "gnss"
@@ -61,6 +77,12 @@ GSI_REF = (-3976219.188, 3382371.606, 3652511.143)  # 0759, shared data README
 EXTRA = Path(os.environ.get("NAVTRACK_RTK_DATA", REPO.parent / "data_r30"))
 MOSAIC = "matrtklib_static"
 MOSAIC_2018 = "matrtklib_static_2023"  # the folder is named after the commit year
+UBLOX = "geofis_ppk_2022"
+NTRIP_RECORDING = "geofis_ppk_2021/20210809-111055-rtcm3-base-corrections.rtcm3"
+RTKLIB_NAVSYS = {"G": 1, "R": 4, "E": 8, "J": 16, "C": 32}  # RTKLIB's pos1-navsys bits
+UBLOX_BASE = (2078720.6329, -5683487.5402, 2007608.6397)  # the base file's header position
+GLONASS_CHANNEL_HZ = 0.5625e6  # G1 channel spacing, GLONASS ICD 3.3.1.4
+GLONASS_G1_HZ = 1602e6
 
 
 def llh_file(path: Path) -> tuple[float, float, float]:
@@ -122,8 +144,15 @@ def thin_rinex3(src: Path, dst: Path, step_s: int) -> Path:
 def _rtklib(rover: Path, base: Path, nav: Path, base_xyz: tuple, opts: list[str], out: Path):  # type: ignore[no-untyped-def]
     conf = out.with_suffix(".conf")  # the base age limit has no command-line option
     age = next((o.split("=")[1] for o in opts if o.startswith("maxage=")), "30")
-    conf.write_text(f"pos2-maxage        ={age}\n")
-    cmd = ["rnx2rtkp", "-k", str(conf), *(o for o in opts if not o.startswith("maxage="))]
+    text = f"pos2-maxage        ={age}\n"
+    opts = [o for o in opts if not o.startswith("maxage=")]
+    if "-sys" in opts:  # rnx2rtkp 2.4.3 b34's -sys turns on every system whatever its letters
+        k = opts.index("-sys")
+        mask = sum(RTKLIB_NAVSYS[c] for c in opts[k + 1].split(","))
+        text += f"pos1-navsys        ={mask}\n"
+        opts = opts[:k] + opts[k + 2 :]
+    conf.write_text(text)
+    cmd = ["rnx2rtkp", "-k", str(conf), *opts]
     cmd += ["-m", "15", "-e"]
     cmd += ["-r", *(f"{v:.4f}" for v in base_xyz)]
     cmd += [str(rover), str(nav), str(base), "-o", str(out)]
@@ -348,6 +377,199 @@ def _mosaic(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
             )
 
 
+def _ublox_files(data: Path) -> tuple[Path, Path, Path] | None:
+    d = data / UBLOX
+    if not d.is_dir():
+        return None
+    return (
+        d / "rover_2022-02-25_13-26-06_GNSS-1.obs",
+        d / "base_2022-02-25_00-00-00_GNSS-1.obs",
+        d / "base_2022-02-25_00-00-00_GNSS-1.nav",
+    )
+
+
+def _ublox_reference(files: tuple[Path, Path, Path], tmp: Path) -> tuple[float, float, float]:
+    """The rover's static position: RTKLIB's static L1+L2 solution of the whole 4 h session
+    (its last epoch), against the same base position."""
+    pos = _rtklib(*files, UBLOX_BASE, ["-p", "3", "-f", "2", "-sys", "G,E,C,J"], tmp / "ref.pos")
+    x = pos[["x_m", "y_m", "z_m"]].to_numpy()[-1]
+    return float(x[0]), float(x[1]), float(x[2])
+
+
+def _ublox(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
+    """The u-blox ZED-F9P pair of geofis/ppk (static rover 1.2 km from the base, 15 s, 4 h),
+    kinematic, GPS + Galileo + BeiDou + QZSS, L1 and L1+L2."""
+    files = _ublox_files(data)
+    if files is None:
+        return
+    ref = _ublox_reference(files, tmp)
+    for freq in (1, 2):
+        _case(
+            f"u-blox F9P pair L{'1+L2' if freq == 2 else '1'}",
+            (*files, UBLOX_BASE),
+            dataclasses.replace(base_cfg, frequencies=freq),
+            ["-p", "2", "-f", str(freq), "-sys", "G,E,C,J"],
+            ref,
+            wrong_m,
+            tmp,
+        )
+
+
+def _pairs(data: Path, tmp: Path) -> list[tuple[str, tuple[Path, Path, Path], Any, Any, int]]:
+    """The low-cost pairs with GLONASS L1/L2: name, files, base position, rover reference and
+    the frequencies at which the other four systems fix (the 2018 pair: L1 alone)."""
+    out = []
+    d = data / MOSAIC
+    if d.is_dir():
+        files = (d / "rover.obs", d / "base.obs", d / "base.nav")
+        out.append(
+            (
+                "mosaic-X5 pair",
+                files,
+                llh_file(d / "base_position.txt"),
+                llh_file(d / "rover_position.txt"),
+                2,
+            )
+        )
+    d = data / MOSAIC_2018
+    if d.is_dir():
+        files = (d / "rover_1Hz.obs", d / "base.obs", d / "base.nav")
+        out.append(
+            (
+                "2018 pair (vs NetR9)",
+                files,
+                llh_file(d / "base_position.txt"),
+                llh_file(d / "rover_mean_position.txt"),
+                1,
+            )
+        )
+    files_u = _ublox_files(data)
+    if files_u is not None:
+        out.append(("u-blox F9P pair", files_u, UBLOX_BASE, _ublox_reference(files_u, tmp), 2))
+    return out
+
+
+def glonass_code_bias(
+    rover: Path, base: Path, nav: Path, base_xyz: Any, ref_xyz: Any
+) -> list[tuple[float, float, float, int]]:
+    """The GLONASS code inter-frequency bias between two receivers, per band: the slope
+    (m per channel number) of the single-differenced code residuals at the known positions,
+    elevation above the mask, each epoch's median over satellites removed (the receiver
+    clocks), then the median of each satellite; its standard error from the scatter of the
+    satellites about the line (a satellite's multipath is correlated over the whole session,
+    so satellites, not epochs, are the independent samples), the RMS of that scatter (m) and
+    the number of satellites."""
+    cfg = RtkConfig(systems="R", frequencies=2)
+    navd = [read_nav(nav)]
+    sig = [receiver_signals(read_obs(p), navd, cfg, second_bands={"R": "2"}) for p in (rover, base)]
+    ir, ib, _ = common_epochs(sig[0].t_gps_s, sig[1].t_gps_s, max_age_s=0.5)
+    sats = [s for s in sig[0].sats if s in sig[1].sats]
+    cols = [[x.sats.index(s) for s in sats] for x in sig]
+    res = []
+    for x, idx, c, at in zip(sig, (ir, ib), cols, (ref_xyz, base_xyz), strict=True):
+        pos = np.broadcast_to(np.asarray(at, dtype=float), (idx.size, 3))
+        rho, _, el = satellite_geometry(x.sat_pos_m[idx][:, c], pos)
+        low = (el < np.radians(cfg.elmask_deg))[..., None]
+        res.append(np.where(low, np.nan, x.code_m[idx][:, c] - rho[..., None]))
+    sd = res[0] - res[1]
+    freq = C_MPS / sig[0].wavelength_m[cols[0], 0]
+    k = np.round((freq - GLONASS_G1_HZ) / GLONASS_CHANNEL_HZ)
+    out = []
+    for f in range(2):
+        y = sd[:, :, f]
+        kk = np.where(np.isfinite(y), k[None, :], np.nan)
+        y, kk = y - np.nanmedian(y, 1, keepdims=True), kk - np.nanmedian(kk, 1, keepdims=True)
+        seen = np.isfinite(y).sum(0) >= 10
+        ys, ks = np.nanmedian(y[:, seen], 0), np.nanmedian(kk[:, seen], 0)
+        ks = ks - ks.mean()
+        beta = float((ys * ks).sum() / (ks**2).sum())
+        r = ys - ys.mean() - beta * ks
+        se = float(np.sqrt((r**2).sum() / max(r.size - 2, 1) / (ks**2).sum()))
+        out.append((beta, se, float(np.sqrt(np.mean(r**2))), int(seen.sum())))
+    return out
+
+
+def _float_errors(res: Any, ref: Any) -> str:
+    err = np.linalg.norm(res.pos_m - np.asarray(ref), axis=1)
+    fl = err[res.status == RtkStatus.FLOAT]
+    if not fl.size:
+        return "no float epoch"
+    return (
+        f"float {fl.size} epochs, 3-D error median {np.median(fl):.3f} m, 95 % "
+        f"{np.percentile(fl, 95):.3f} m"
+    )
+
+
+def _glonass(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
+    """GLONASS on the low-cost pairs: its code inter-frequency bias between the receivers,
+    GLONASS alone in the float solution (the integer search never sees it), and the four
+    other systems with and without GLONASS beside RTKLIB (which fixes GLONASS ambiguities by
+    default, ``pos2-gloarmode=on``)."""
+    for name, files, base_xyz, ref, n_f in _pairs(data, tmp):
+        for band, (beta, se, rms, n) in zip(
+            ("G1", "G2"), glonass_code_bias(*files, base_xyz, ref), strict=True
+        ):
+            print(
+                f"{name:<34} code IFB {band}: {beta:+.3f} ± {se:.3f} m per channel number, "
+                f"scatter of the satellites' medians {rms:.2f} m ({n} satellites)"
+            )
+        for freq in (1, 2):
+            res = solve_relative(
+                read_obs(files[0]),
+                read_obs(files[1]),
+                [read_nav(files[2])],
+                np.asarray(base_xyz),
+                dataclasses.replace(base_cfg, systems="R", frequencies=freq),
+            )
+            label = "L1+L2" if freq == 2 else "L1"
+            print(f"{name:<34} GLONASS alone {label}: {_float_errors(res, ref)}")
+        for systems, opt in (("GECJ", "G,E,C,J"), ("GECJR", "G,E,C,J,R")):
+            _case(
+                f"{name} {systems} L{'1+L2' if n_f == 2 else '1'}",
+                (*files, base_xyz),
+                dataclasses.replace(base_cfg, systems=systems, frequencies=n_f),
+                ["-p", "2", "-f", str(n_f), "-sys", opt],
+                ref,
+                wrong_m,
+                tmp,
+            )
+
+
+def rtcm_against_convbin(data: Path, tmp: Path) -> None:
+    """The NTRIP recording of the CORS station RDSD (MSM7 of GPS, GLONASS, Galileo, BeiDou)
+    read by navtrack and by ``convbin -r rtcm3``: epochs, and per system and code the values
+    both hold, those only one holds and the largest difference (convbin prints 0.001)."""
+    path = data / NTRIP_RECORDING
+    if not path.is_file():
+        return
+    out = tmp / "rdsd.obs"
+    cmd = ["convbin", "-r", "rtcm3", "-tr", "2021/08/09", "15:10:00", "-o", str(out), str(path)]
+    subprocess.run(cmd, check=True, capture_output=True)
+    ref = read_obs(out)
+    log = read_rtcm(path, parse_gpst("2021-08-09T15:10:00"))
+    obs = log.obs
+    same = np.array_equal(np.round(obs.t_gps_s, 3), np.round(ref.t_gps_s, 3))
+    print(
+        f"RDSD NTRIP recording: navtrack {obs.t_gps_s.size} epochs, convbin "
+        f"{ref.t_gps_s.size}, same tags {same}"
+    )
+    for code in ref.codes:
+        for system in "GREC":
+            sats = [x for x in ref.sats if x[0] == system and x in obs.sats]
+            if not sats or code not in obs.codes:
+                continue
+            a = obs.values[:, [obs.sats.index(x) for x in sats], obs.codes.index(code)]
+            b = ref.values[:, [ref.sats.index(x) for x in sats], ref.codes.index(code)]
+            both = np.isfinite(a) & np.isfinite(b)
+            if both.any():
+                print(
+                    f"  {system} {code}: {int(both.sum())} values, only navtrack "
+                    f"{int((np.isfinite(a) & ~np.isfinite(b)).sum())}, only convbin "
+                    f"{int((~np.isfinite(a) & np.isfinite(b)).sum())}, max difference "
+                    f"{np.abs(a - b)[both].max():.4f}"
+                )
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--wrong-m", type=float, default=0.10)
@@ -357,7 +579,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--data", type=Path, default=EXTRA, help="folder of the MatRTKLIB pairs")
     ap.add_argument(
-        "--only", choices=("yamatogawa", "gsi0759", "mosaic"), help="one group of cases"
+        "--only",
+        choices=("yamatogawa", "gsi0759", "mosaic", "ublox", "glonass", "rtcm"),
+        help="one group of cases",
     )
     args = ap.parse_args(argv)
     if shutil.which("rnx2rtkp") is None or not YAMA.is_dir():
@@ -376,6 +600,12 @@ def main(argv: list[str] | None = None) -> int:
             _geonet(base_cfg, args.wrong_m, tmp)
         if args.only in (None, "mosaic"):
             _mosaic(base_cfg, args.wrong_m, tmp, args.data)
+        if args.only in (None, "ublox"):
+            _ublox(base_cfg, args.wrong_m, tmp, args.data)
+        if args.only in (None, "glonass"):
+            _glonass(base_cfg, args.wrong_m, tmp, args.data)
+        if args.only in (None, "rtcm"):
+            rtcm_against_convbin(args.data, tmp)
     return 0
 
 

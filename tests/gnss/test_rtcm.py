@@ -75,3 +75,22 @@ def test_a_file_without_msm_is_refused_with_its_name(tmp_path: Path) -> None:
     empty.write_bytes(b"\xd3\x00\x00\x47\xea\x4b")  # one empty, CRC-valid frame
     with pytest.raises(FileFormatError, match=r"none\.rtcm3"):
         read_rtcm(empty, T_APPROX)
+
+
+def test_a_recorded_ntrip_stream_keeps_the_casters_header(tmp_path: Path) -> None:
+    """A stream recorded from an NTRIP caster starts with the caster's response header (the
+    lines of the geofis/ppk recording of 2021-08-09 below): recognised and read as the same
+    epochs as the bare stream."""
+    header = (
+        b"Ntrip-Version: Ntrip/1.0\r\nServer: NTRIP Caster 1.0\r\n"
+        b"Date:  8/ 9/2021 15:10:55\r\nContent-Type: gnss/data\r\n\r\n"
+    )
+    for head in (header, b"ICY 200 OK\r\n\r\n"):
+        recorded = tmp_path / "recorded.rtcm3"
+        recorded.write_bytes(head + MSM7.read_bytes())
+        assert is_rtcm3(recorded)
+        log = read_rtcm(recorded, T_APPROX)
+        np.testing.assert_array_equal(log.obs.t_gps_s, read_rtcm(MSM7, T_APPROX).obs.t_gps_s)
+    text = tmp_path / "header_only.rtcm3"
+    text.write_bytes(b"ICY 200 OK\r\n\r\nnot a frame")
+    assert not is_rtcm3(text)

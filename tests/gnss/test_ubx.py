@@ -471,3 +471,35 @@ def test_rawx_without_gps_time_counted_not_tagged(tmp_path: Path) -> None:
     log = read_ubx(path)
     assert log.undated_epochs == 1
     np.testing.assert_array_equal(log.obs.t_gps_s, read_ubx(RAWX_1HZ).obs.t_gps_s[1:])
+
+
+def test_truncated_nmea_sentence_before_binary_messages(tmp_path: Path) -> None:
+    """A logger that writes NMEA and UBX interleaved can cut a sentence short, so that the
+    text runs into binary messages (the geofis/ppk ZED-F9P logs do so in their first 300
+    bytes). Strict reading refuses it naming the byte; lenient reading skips the text up to
+    its next line end (the first RXM-RAWX of this log with it) and reads the rest."""
+    bad = tmp_path / "nmea_cut.ubx"
+    bad.write_bytes(b"$GNGSV,3,1,12,02,,00" + RAWX_1HZ.read_bytes())
+    with pytest.raises(FileFormatError, match="text line ending at byte 328: not NMEA"):
+        read_ubx(bad)
+    log = read_ubx(bad, lenient=True)
+    assert [s.reason for s in log.skipped] == [
+        "text line ending at byte 328: not NMEA (a truncated sentence?)"
+    ]
+    whole = read_ubx(RAWX_1HZ).obs.t_gps_s
+    np.testing.assert_array_equal(log.obs.t_gps_s, whole[1:])
+
+
+def test_a_damaged_length_does_not_swallow_the_next_messages(tmp_path: Path) -> None:
+    """A damaged length field makes a message claim the bytes of the messages after it; with
+    lenient reading framing resumes after the damaged message's sync characters, so only
+    that message is lost (RTKLIB's decoder resynchronises the same way)."""
+    data = bytearray(RAWX_1HZ.read_bytes())
+    data[5] += 4  # the first RXM-RAWX's length, high byte: 1,024 bytes more than it has
+    bad = tmp_path / "long.ubx"
+    bad.write_bytes(bytes(data))
+    with pytest.raises(FileFormatError, match="message at byte 0: checksum error"):
+        read_ubx(bad)
+    log = read_ubx(bad, lenient=True)
+    whole = read_ubx(RAWX_1HZ).obs.t_gps_s
+    np.testing.assert_array_equal(log.obs.t_gps_s, whole[1:])

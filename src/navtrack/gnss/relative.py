@@ -233,6 +233,9 @@ def solve_relative(
     base = receiver_signals(base_obs, nav, cfg, sp3=sp3, ephemeris=tables, second_bands=second)
     pair = _pair(rover, base, base_xyz, cfg)
     warnings = _input_warnings(pair, cfg)
+    if cfg.frequencies == 2:
+        systems = list(dict.fromkeys(x[0] for x in pair.sats))
+        warnings += _second_band_warnings(rover_obs, base_obs, second, systems)
     dist = float(np.linalg.norm(np.nanmedian(base.spp_pos_m, axis=0) - base_xyz))
     if dist > base_warn_m:
         warnings.insert(
@@ -308,13 +311,27 @@ def _input_warnings(pair: Baseline, cfg: RtkConfig) -> list[str]:
         for who, sig, js in (("rover", rover, pair.rover_cols), ("base", base, pair.base_cols)):
             if not np.isfinite(sig.phase_cyc[:, js[cols], 0]).any():
                 out.append(f"system {s}: no carrier phase in the {who} {sig.path!r}: code only")
-        if cfg.frequencies == 2:
-            for who, sig, js in (
-                ("rover", rover, pair.rover_cols),
-                ("base", base, pair.base_cols),
-            ):
-                if not np.isfinite(sig.phase_cyc[:, js[cols], 1]).any():
-                    out.append(f"system {s}: no second-frequency carrier in the {who}")
+    return out
+
+
+def _second_band_warnings(
+    rover: Observations, base: Observations, second: Mapping[str, str], systems: Sequence[str]
+) -> list[str]:
+    """A warning for each system of ``systems`` without a second band carried by both
+    receivers, naming the second bands each one does carry."""
+    out = []
+    for s in systems:
+        if s in second or s not in SECOND_BANDS:
+            continue
+        held = {
+            who: carrier_bands(obs, s, SECOND_BANDS[s])
+            for who, obs in (("rover", rover), ("base", base))
+        }
+        named = ", ".join(f"{who} {'/'.join(b) if b else 'none'}" for who, b in held.items())
+        out.append(
+            f"system {s}: no second band with carrier phase in both receivers (bands "
+            f"{'/'.join(SECOND_BANDS[s])}; {named}): first frequency only"
+        )
     return out
 
 

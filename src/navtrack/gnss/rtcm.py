@@ -81,10 +81,20 @@ class RtcmLog:
 
 
 def is_rtcm3(path: StrPath) -> bool:
-    """True when the file starts with an RTCM 3 frame (preamble 0xD3, six zero bits)."""
+    """True when the file starts with an RTCM 3 frame (preamble 0xD3, six zero bits), or with
+    the response header of an NTRIP caster (``ICY 200 OK``, ``HTTP/1.1 200 OK`` or
+    ``Ntrip-Version: ...`` lines up to a blank line, as a recorded stream keeps it) followed
+    by one."""
     with open(path, "rb") as f:
-        head = f.read(3)
-    return len(head) == 3 and head[0] == 0xD3 and head[1] & 0xFC == 0
+        head = f.read(_NTRIP_HEADER_MAX)
+    if head.startswith((b"ICY ", b"HTTP/", b"Ntrip-")):
+        end = head.find(b"\r\n\r\n")
+        head = head[end + 4 :] if end >= 0 else b""
+    return len(head) >= 3 and head[0] == 0xD3 and head[1] & 0xFC == 0
+
+
+_NTRIP_HEADER_MAX = 4096
+"""Bytes searched for the end of an NTRIP caster's response header."""
 
 
 def _epoch_gps_s(msg: Any, system: str, t_ref: float) -> float:

@@ -56,10 +56,11 @@ RINEX 3.04 table A2 (LLI) and section 5.1 (codes).
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from os import fspath
 from types import MappingProxyType
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -200,9 +201,11 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
         ) from exc
     scan = _Scan(path, lenient)
     with open(path, "rb") as stream:
-        reader = UBXReader(stream, protfilter=UBX_PROTOCOL, parsing=False, quitonerror=0)
-        for number, (raw, _) in enumerate(reader, start=1):
-            scan.add(raw, number)
+        _frame(
+            stream,
+            scan,
+            lambda: UBXReader(stream, protfilter=UBX_PROTOCOL, parsing=False, quitonerror=0),
+        )
     epochs, subframes = scan.epochs, scan.subframes
     if not epochs and not subframes:
         raise FileFormatError(path, None, "no RXM-RAWX nor RXM-SFRBX message: not a raw log")
@@ -222,6 +225,31 @@ def read_ubx(path: StrPath, *, lenient: bool = False, max_cp_std_cycles: float =
     )
 
 
+def _frame(stream: BinaryIO, scan: _Scan, reader: Callable[[], Any]) -> None:
+    """Pass every UBX message of ``stream`` to ``scan``, framed by the pyubx2 readers that
+    ``reader`` makes. After a damaged message (lenient reading) framing resumes at the byte
+    after its sync characters, so that the messages a false length would swallow are found
+    (as RTKLIB's decoder does); after a text line that is not NMEA (a sentence cut short and
+    run into binary messages) it resumes at that line's end."""
+    number = 0
+    while True:
+        try:
+            for raw, _ in reader():
+                if raw is None:
+                    continue
+                number += 1
+                at = stream.tell() - len(raw)
+                if not scan.add(raw, number, at):
+                    stream.seek(at + 2)
+                    break
+            else:
+                return
+        except UnicodeDecodeError:
+            number += 1
+            where = f"text line ending at byte {stream.tell()}"
+            scan.bad(number, where, "not NMEA (a truncated sentence?)")
+
+
 class _Scan:
     """The RXM-RAWX epochs and RXM-SFRBX messages of a log, checked as they are framed."""
 
@@ -234,19 +262,16 @@ class _Scan:
         self.subframes: list[tuple[int, int, int, int, int, np.ndarray, int]] = []
         self.leap: int | None = None
         self.undated = 0
-        self.offset = 0
 
-    def add(self, raw: bytes | None, number: int) -> None:
-        where = f"message at byte {self.offset}"
-        if raw is None:
-            return
-        self.offset += len(raw)
+    def add(self, raw: bytes, number: int, at: int) -> bool:
+        """Take message ``number``, starting at byte ``at``; False when its checksum fails."""
+        where = f"message at byte {at}"
         if len(raw) < 8:
-            return
+            return True
         cls_id = (raw[2], raw[3])
         if not checksum_ok(raw):
-            self._bad(number, where, "checksum error")
-            return
+            self.bad(number, where, "checksum error")
+            return False
         self.messages[_identity(cls_id)] += 1
         why = ""
         if cls_id == _RAWX:
@@ -254,9 +279,10 @@ class _Scan:
         elif cls_id == _SFRBX:
             why = self._sfrbx(raw[6:-2], number)
         if why:
-            self._bad(number, where, why)
+            self.bad(number, where, why)
+        return True
 
-    def _bad(self, number: int, where: str, reason: str) -> None:
+    def bad(self, number: int, where: str, reason: str) -> None:
         if not self.lenient:
             raise FileFormatError(self.path, None, f"{where}: {reason}")
         self.skipped.append(SkippedLine(line=number, reason=f"{where}: {reason}"))
