@@ -256,4 +256,5 @@ def test_auto_coast_from_the_bulk_of_the_intervals_and_continuation_keeps_the_id
     assert res.counts.tracks_continued == res.counts.deleted_coast - 1
     used = res.det_track >= 0
     ids = {k: set(res.det_track[used & (target == k)].tolist()) for k in (0, 1)}
-    assert len(ids[0]) == len(ids[1]) == 1 and ids[0] != ids[1]
+    assert len(ids[0]) == len(ids[1]) == 1
+    assert ids[0] != ids[1]
