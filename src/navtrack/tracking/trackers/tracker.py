@@ -143,7 +143,8 @@ class TrackerResult:
         ``1 - β₀``: every soft update that moved the track has a row, also below 1/2).
     report_frame, report_id, report_xy :
         Confirmed tracks predicted to each requested report time (index into
-        ``report_times``), for scoring.
+        ``report_times``), for scoring; a track more than ``max_coast_s`` past its last update
+        is left out.
     counts : TrackerCounts
     det_nis : (N,) float
         Normalised innovation squared ``νᵀ S⁻¹ ν`` of each detection against the track it
