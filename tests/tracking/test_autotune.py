@@ -224,10 +224,14 @@ def test_steady_innovation_variance_is_the_kalman_fixed_point() -> None:
     assert ratio == pytest.approx(s / sigma**2)
 
 
-def test_auto_coast_spans_the_gaps_of_fast_reports(shared_data) -> None:
-    """Real 1 s GPS reports of one UAV with gaps cut into them (every 40 s, 6 s missing, as a
-    1 s ADS-B feed has): the median interval stays 1 s, and a coast of two median intervals
-    would delete the track at every gap. The coast spans the gaps: one confirmed track."""
+def test_auto_coast_from_the_bulk_of_the_intervals_and_continuation_keeps_the_id(
+    shared_data,
+) -> None:
+    """Real 1 s GPS reports of one UAV with gaps cut into them (every 40 s, 6 s missing), and
+    the same reports 20 s later and 50 km east as a second target, so that scans go on while
+    either is silent. The gaps are 3 % of the intervals: the coast is two 90 % points of the
+    intervals (2 s), so each gap ends a track, and the track started after it continues the
+    ended one: one id per target, the ended tracks counted as coast ends."""
     from navtrack.io.tracks import read_tracks, to_local_enu
 
     det = read_tracks(
@@ -238,8 +242,19 @@ def test_auto_coast_spans_the_gaps_of_fast_reports(shared_data) -> None:
     en, _ = to_local_enu(det)
     t = det.t_gps_s
     keep = ((t - t[0]) % 40.0) < 34.0
-    tune = auto_config(t[keep], en[keep])
-    assert tune.report_interval_p95_s == 1.0
-    assert tune.config.max_coast_s >= 2 * 7.0  # the 7 s between the reports around a gap
-    res = run_tracker(t[keep], en[keep], tune.config)
-    assert res.counts.tracks_confirmed == 1
+    t2 = np.r_[t[keep], t[keep] + 20.0]
+    z2 = np.r_[en[keep], en[keep] + [50_000.0, 0.0]]
+    target = np.r_[np.zeros(keep.sum(), int), np.ones(keep.sum(), int)]
+    order = np.argsort(t2, kind="stable")
+    t2, z2, target = t2[order], z2[order], target[order]
+    tune = auto_config(t2, z2)
+    assert tune.config.imm_q is None  # one CV model
+    assert tune.config.max_coast_s == 2.0  # 2 x the 90 % point (1 s) of the intervals
+    res = run_tracker(t2, z2, tune.config)
+    assert res.counts.deleted_coast >= 2 * 20  # ended at (nearly) every gap of both
+    # every end is continued but the first target's last (its reports stop 20 s earlier)
+    assert res.counts.tracks_continued == res.counts.deleted_coast - 1
+    used = res.det_track >= 0
+    ids = {k: set(res.det_track[used & (target == k)].tolist()) for k in (0, 1)}
+    assert len(ids[0]) == len(ids[1]) == 1
+    assert ids[0] != ids[1]

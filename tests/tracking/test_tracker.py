@@ -178,3 +178,24 @@ def test_simulate_detections_rejects_bad_clutter_box() -> None:
         simulate_detections(truth, meas, 0.9, 1.0, [-1.0, -1.0, -1.0], [1.0, 1.0, 1.0], rng)
     with pytest.raises(ValueError, match="clutter box"):
         simulate_detections(truth, meas, 0.9, 1.0, [1.0, -1.0], [-1.0, 1.0], rng)
+
+
+@pytest.mark.parametrize("associator", ["gnn", "jpda"])
+def test_a_track_past_its_coast_is_not_reported_while_no_scan_comes(associator: str) -> None:
+    """One target reports every 2 s for 40 s and falls silent; the next report (another
+    target, far away) comes 1000 s later. Coasting tracks are deleted at scans, and none comes
+    in between: the first track is reported at the output times up to ``max_coast_s`` after
+    its last update and not after, though it is still alive until that next scan deletes it."""
+    t1 = np.arange(0.0, 40.1, 2.0)
+    z1 = np.column_stack([100.0 * t1, np.zeros_like(t1)])  # 100 m/s east
+    t2 = 1040.0 + np.arange(0.0, 20.1, 2.0)
+    z2 = np.column_stack([np.zeros_like(t2), 50_000.0 + 100.0 * (t2 - t2[0])])
+    t, z = np.r_[t1, t2], np.r_[z1, z2]
+    cfg = replace(TrackerConfig.for_aircraft(associator), max_coast_s=30.0, init_max_dt_s=5.0)
+    frames = np.arange(0.0, 1061.0, 10.0)
+    res = run_tracker(t, z, cfg, report_times=frames)
+    first = res.report_id == res.det_track[0]
+    shown = frames[res.report_frame[first]]
+    assert shown.max() == 70.0  # last update at 40 s, coast 30 s
+    assert shown.min() <= 10.0  # confirmed within its first reports
+    assert res.end_time_s[res.end_id == res.det_track[0]][0] >= 1040.0  # deleted at that scan

@@ -9,12 +9,20 @@ an acceleration proportional to the speed), sets the model from what that pass s
 searches q by a few more runs; it never reads the ids:
 
 1. **Time scales** from the first-pass tracks: the report interval of a target is the median
-   interval between consecutive detections of a confirmed track; its 95 % point over the
-   tracks, or the 99 % point of all the tracks' intervals if longer (fast reports with gaps:
-   a coast of two median intervals of a 1 s reporter would delete its track at every gap),
-   sets the coast time (``COAST_INTERVALS`` intervals) and the confirmation window (1.5 × the
-   coast time); the 95 % point the seed age of two-point initiation (two intervals); the 10 %
-   point of all intervals the scan window (at most 10 s;
+   interval between consecutive detections of a confirmed track. The coast time is
+   ``COAST_INTERVALS`` intervals: for
+   one CV model (targets all moving or all still, one report rate with gaps) the interval is
+   the ``COAST_QUANTILE`` (90 %) point of all the confirmed tracks' intervals, so that a
+   track coasts over the gaps between a target's reports but not through the minutes a
+   target goes unreported (it left coverage, or a trace left out points), where its
+   predicted positions report nothing; for the IMM (moored and moving targets, whose report
+   rates differ: AIS ships moored every 3 min, moving every 2-10 s) the slow reporters set
+   it: the 95 % point over the tracks of their report interval, tentative tracks included
+   (a sample of minutes confirms no track of a ship that reports every 3 min, yet its
+   tentative track of two reports shows that interval), or the 99 % point of all intervals
+   if longer. The confirmation window is 1.5 × the coast time; the 95 % point over
+   the tracks sets the seed age of two-point initiation (two intervals); the 10 % point of
+   all intervals the scan window (at most 10 s;
    :func:`~navtrack.tracking.trackers.tracker.scan_windows` keeps two reports of one target
    apart).
 2. **Speed distribution** (reported speeds where the file has them, else the first-pass track
@@ -76,7 +84,7 @@ from typing import Literal
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
-from navtrack._typing import ArrayLike, FloatArray
+from navtrack._typing import ArrayLike, FloatArray, IntArray
 from navtrack.tracking.gating import chi2_threshold
 from navtrack.tracking.models import constant_velocity
 from navtrack.tracking.trackers.tracker import DetStatus, TrackerConfig, TrackerResult, run_tracker
@@ -100,6 +108,10 @@ BOOT_SIGMA_M = 50.0
 BOOT_SPEED_MPS = 350.0
 BOOT_Q_MIN_TOP = 1.0  # m²/s³, the manoeuvring first-pass model never below this
 COAST_INTERVALS = 2.0
+COAST_QUANTILE = 0.9
+"""One CV model: the coast time is ``COAST_INTERVALS`` times this quantile of the first-pass
+tracks' report intervals (docs/tracking.md, "Which data chose what": chosen on Monterey
+2025-06-01, judged on Monterey 2025-06-02, KWVI and OpenSky)."""
 STATIONARY_MPS = 0.5
 IMM_MIN_SHARE = 0.1
 AIRCRAFT_MPS = 25.0
@@ -162,10 +174,14 @@ class AutoTune:
     q_trials: tuple[QTrial, ...] = ()
 
 
-def _confirmed_sequences(t_s: FloatArray, result: TrackerResult) -> tuple[np.ndarray, np.ndarray]:
-    """Detections claimed by the confirmed tracks, ordered by track then time; their tracks."""
-    conf_ids = np.unique(result.track_id[result.track_confirmed])
-    mine = np.isin(result.det_track, conf_ids) & (result.det_status != DetStatus.UNUSED)
+def _track_sequences(
+    t_s: FloatArray, result: TrackerResult, confirmed: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
+    """Detections claimed by the confirmed tracks (``confirmed=False``: by any track), ordered
+    by track then time; their tracks."""
+    mine = (result.det_track >= 0) & (result.det_status != DetStatus.UNUSED)
+    if confirmed:
+        mine &= np.isin(result.det_track, np.unique(result.track_id[result.track_confirmed]))
     idx = np.flatnonzero(mine)
     order = idx[np.lexsort((t_s[idx], result.det_track[idx]))]
     return order, result.det_track[order]
@@ -178,7 +194,7 @@ def track_triplets(t_s: FloatArray, z: FloatArray, result: TrackerResult) -> Flo
     -------
     (K, 5) rows ``[d1, d2, a, e_east, e_north]`` (s, s, -, m, m), with ``d1, d2 > 0``.
     """
-    order, tr = _confirmed_sequences(t_s, result)
+    order, tr = _track_sequences(t_s, result)
     t, p = t_s[order], z[order]
     same = (tr[2:] == tr[:-2]) & (tr[1:-1] == tr[:-2])
     d1 = t[1:-1] - t[:-2]
@@ -361,15 +377,20 @@ def steady_innovation_variance(q: float, sigma_m: float, dt_s: float) -> float:
     return float(P[0, 0] + sigma_m**2)
 
 
-def _track_intervals(t_s: FloatArray, result: TrackerResult) -> tuple[FloatArray, FloatArray]:
-    """All intervals between consecutive detections of the confirmed tracks, and the median
-    interval of each track (s)."""
-    order, tr = _confirmed_sequences(t_s, result)
+def _median_per_track(dt: FloatArray, track: IntArray) -> FloatArray:
+    """The median of each track's intervals ``dt`` (s)."""
+    return np.array([np.median(dt[track == i]) for i in np.unique(track)])
+
+
+def _track_intervals(
+    t_s: FloatArray, result: TrackerResult, confirmed: bool
+) -> tuple[FloatArray, IntArray]:
+    """Intervals (s) between consecutive detections of the confirmed tracks
+    (``confirmed=False``: of every track), and their track ids."""
+    order, tr = _track_sequences(t_s, result, confirmed)
     dt = np.diff(t_s[order])
     ok = (tr[1:] == tr[:-1]) & (dt > 0)
-    dt, tk = dt[ok], tr[1:][ok]
-    per_track = np.array([np.median(dt[tk == i]) for i in np.unique(tk)])
-    return dt, per_track
+    return dt[ok], tr[1:][ok]
 
 
 def auto_config(
@@ -420,12 +441,12 @@ def auto_config(
         else NoiseFit(float("nan"), float("nan"), int(first.triplets.shape[0]), 0)
     )  # too few tracks to fit: the floor sets σ (NaN shows it in the summary)
     st = _first_pass_statistics(first)
-    dt50, dt95, dt10, gap99 = st.dt50, st.dt95, st.dt10, st.gap99
+    dt50, dt95, dt10 = st.dt50, st.dt95, st.dt10
     v50, v99, still = st.v50, st.v99, st.still
     q, imm_q, family = _motion_family(v50, still)
     sigma = SIGMA_FLOOR_M if not fit.sigma_m > SIGMA_FLOOR_M else fit.sigma_m
     pd, pg = 0.9, 0.9999
-    coast = COAST_INTERVALS * max(dt95, gap99)
+    coast = COAST_INTERVALS * (st.gap90 if imm_q is None else max(st.slow95, st.gap99))
     cfg = TrackerConfig(
         motion=constant_velocity(2, q, "continuous"),
         sigma_m=sigma,
@@ -460,7 +481,9 @@ class _Statistics:
 
     dt50: float
     dt95: float
+    slow95: float
     dt10: float
+    gap90: float
     gap99: float
     v50: float
     v99: float
@@ -469,18 +492,27 @@ class _Statistics:
 
 
 def _first_pass_statistics(first: _FirstPass) -> _Statistics:
-    """Median and 95 % point of the tracks' median report intervals, 10 % and 99 % points of
-    all their intervals; median and 99 % point of the speeds (reported, else the confirmed
+    """Median and 95 % point of the tracks' median report intervals, 10 %, 90 % and 99 % points
+    of all their intervals; median and 99 % point of the speeds (reported, else the confirmed
     tracks'), and the share below ``STATIONARY_MPS``."""
-    dt_all, dt_track = _track_intervals(first.t_s, first.result)
+    dt_all, tk = _track_intervals(first.t_s, first.result, confirmed=True)
+    dt_track = _median_per_track(dt_all, tk)
     dt50, dt95 = (
         (float(np.quantile(dt_track, 0.5)), float(np.quantile(dt_track, 0.95)))
         if dt_track.size
         else (60.0, 60.0)
     )
+    # the slow reporters' interval from every track of two reports or more: a short sample
+    # confirms no track of a ship that reports every 3 min, yet its tentative track shows it
+    slow = _median_per_track(*_track_intervals(first.t_s, first.result, confirmed=False))
+    slow95 = max(float(np.quantile(slow, 0.95)), dt95) if slow.size else dt95
     dt10 = float(np.quantile(dt_all, 0.1)) if dt_all.size else 0.0
-    # the coast spans the long gaps of a track, not only its typical interval (step 1)
-    gap99 = float(np.quantile(dt_all, 0.99)) if dt_all.size else dt95
+    # the coast spans the gaps between a target's reports (step 1)
+    gap90, gap99 = (
+        (float(np.quantile(dt_all, COAST_QUANTILE)), float(np.quantile(dt_all, 0.99)))
+        if dt_all.size
+        else (dt95, dt95)
+    )
     speed, source = first.speed, "reported"
     if speed is None:
         conf = first.result.track_confirmed
@@ -494,7 +526,7 @@ def _first_pass_statistics(first: _FirstPass) -> _Statistics:
         else (10.0, BOOT_SPEED_MPS)
     )
     still = float(np.mean(speed < STATIONARY_MPS)) if speed.size else 0.0
-    return _Statistics(dt50, dt95, dt10, gap99, v50, v99, still, source)
+    return _Statistics(dt50, dt95, slow95, dt10, gap90, gap99, v50, v99, still, source)
 
 
 @dataclass(frozen=True, slots=True, eq=False)

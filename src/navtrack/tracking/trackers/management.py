@@ -301,11 +301,14 @@ def initiate(
 
 
 def report(
-    store: TrackStore, now_s: float, t_s: float, motion: LinearMotion
+    store: TrackStore, now_s: float, t_s: float, motion: LinearMotion, max_coast_s: float
 ) -> tuple[IntArray, FloatArray]:
     """Ids ``(k,)`` and positions ``(k, 2)`` (m) of the confirmed tracks, predicted from their
-    last scan at ``now_s`` to ``t_s >= now_s`` without noise."""
-    c = store.confirmed
+    last scan at ``now_s`` to ``t_s >= now_s`` without noise. A track without an update for
+    longer than ``max_coast_s`` at ``t_s`` is not reported: the next scan deletes it, and when
+    no report comes for a long time (a quiet night at an airfield) that scan may be hours
+    later."""
+    c = store.confirmed & (t_s - store.last_s <= max_coast_s)
     xc, _ = store.combined()
     xg = xc[c] @ motion.F(t_s - now_s).T
     return store.id[c], xg[:, list(motion.position_index)]

@@ -49,7 +49,6 @@ from scipy.spatial import cKDTree
 from navtrack._frozen import freeze_arrays
 from navtrack._typing import ArrayLike, BoolArray, FloatArray, Int8Array, IntArray
 from navtrack.tracking.jpda import JpdaMethod
-from navtrack.tracking.models import LinearMotion
 from navtrack.tracking.trackers.management import (
     EndedTracks,
     Management,
@@ -144,7 +143,8 @@ class TrackerResult:
         ``1 - β₀``: every soft update that moved the track has a row, also below 1/2).
     report_frame, report_id, report_xy :
         Confirmed tracks predicted to each requested report time (index into
-        ``report_times``), for scoring.
+        ``report_times``), for scoring; a track more than ``max_coast_s`` past its last update
+        is left out.
     counts : TrackerCounts
     det_nis : (N,) float
         Normalised innovation squared ``νᵀ S⁻¹ ν`` of each detection against the track it
@@ -275,11 +275,11 @@ def run_tracker(
             progress(s0 - done)
             done = s0
         tk = t[s1 - 1]  # a window of reports is processed at its last time
-        run.log.report_until(run.store, now, tk, cfg.motion, inclusive=False)
+        run.log.report_until(run.store, now, tk, cfg, inclusive=False)
         predict(run.store, tk - now, run.model)
         now = tk
         run.scan(s0, t[s0:s1], Z[s0:s1], V[s0:s1], tk)
-    run.log.report_until(run.store, now, now, cfg.motion, inclusive=True)
+    run.log.report_until(run.store, now, now, cfg, inclusive=True)
     run.log.ends(now, run.store.id, np.full(run.store.size, TrackEnd.END_OF_DATA, dtype=np.int8))
     if progress is not None:
         progress(t.size - done)
@@ -492,14 +492,14 @@ class _Log:
             self.end_reason.append(np.asarray(reason, dtype=np.int8))
 
     def report_until(
-        self, store: TrackStore, now_s: float, limit_s: float, motion: LinearMotion, inclusive: bool
+        self, store: TrackStore, now_s: float, limit_s: float, cfg: TrackerConfig, inclusive: bool
     ) -> None:
         rep = self.rep
         while self.r_next < rep.size and (
             rep[self.r_next] < limit_s or (inclusive and rep[self.r_next] <= limit_s)
         ):
             if rep[self.r_next] >= now_s:
-                ids, xy = report(store, now_s, rep[self.r_next], motion)
+                ids, xy = report(store, now_s, rep[self.r_next], cfg.motion, cfg.max_coast_s)
                 self.rep_f.append(np.full(ids.size, self.r_next, dtype=np.int64))
                 self.rep_id.append(ids)
                 self.rep_xy.append(xy)
