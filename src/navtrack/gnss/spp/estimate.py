@@ -3,11 +3,9 @@ and clocks (RTKLIB ``estpos``) and its validity tests (``valsol``)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from navtrack._frozen import freeze_arrays
+from navtrack._frozen import Record, freeze_arrays
 from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
 from navtrack.estimation.chi2 import chi2_quantile
 from navtrack.estimation.least_squares import LsqStatus, gauss_newton
@@ -18,8 +16,7 @@ from navtrack.gnss.spp.model import PseudorangeModel
 __all__ = ["PositionEstimate", "dops", "estimate_position", "merge_estimates", "validate"]
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class PositionEstimate:
+class PositionEstimate(Record):
     """Weighted least-squares estimate of a batch of epochs with everything fault detection
     needs (RTKLIB ``estpos``).
 
@@ -229,7 +226,7 @@ def merge_estimates(estimate: PositionEstimate, update: PositionEstimate) -> Pos
     ):
         raise ValueError("update: epochs that estimate does not have")
     fields = {}
-    for name in PositionEstimate.__dataclass_fields__:
+    for name in PositionEstimate.record_fields:
         value = np.array(getattr(estimate, name))
         if name != "epochs":
             value[rows] = getattr(update, name)

@@ -5,11 +5,11 @@ variance models (``varerr``)."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
+from navtrack._frozen import Record
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.geodesy import ecef_to_geodetic, enu_rotation
 from navtrack.gnss.corrections import geometric_range, klobuchar_delay_m, saastamoinen_delay_m
@@ -41,8 +41,7 @@ class Geometry(NamedTuple):
     deep: BoolArray  # (b,) receiver inside the earth (start at the centre)
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class PseudorangeModel:
+class PseudorangeModel(Record):
     """The per-epoch pseudorange model of a batch of epochs (the SPP kernel, RTKLIB ``rescode``):
     batch row ``b`` is measurement epoch ``epochs[b]``, candidates ``usable[b]``."""
 
