@@ -5,7 +5,6 @@ variance models (``varerr``)."""
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
 
 import numpy as np
 
@@ -29,7 +28,7 @@ from navtrack.gnss.spp.measurements import Measurements
 __all__ = ["Geometry", "PseudorangeModel", "measurement_variance"]
 
 
-class Geometry(NamedTuple):
+class Geometry(Record):
     """Receiver-satellite geometry of a batch ``(b, S)`` at the receiver positions ``(b, 3)``."""
 
     rho: FloatArray  # (b, S) geometric range with Sagnac term, m
@@ -75,10 +74,18 @@ class PseudorangeModel(Record):
         lat = llh[:, 0:1]
         lon = llh[:, 1:2]
         h = llh[:, 2:3]
-        atm = ~deep[:, None]
+        # the atmosphere on the cells that count only (invalid cells get no weight), 0 elsewhere
+        atm = valid & ~deep[:, None]
         if cfg.iono == "klobuchar":
-            iono_l1 = klobuchar_delay_m(m.t_gps_s[e, None], lat, lon, az, el, m.klobuchar)
-            iono_l1 = np.where(atm, iono_l1, 0.0)
+            iono_l1 = np.zeros_like(el)
+            iono_l1[atm] = klobuchar_delay_m(
+                _cells(m.t_gps_s[e, None], atm),
+                _cells(lat, atm),
+                _cells(lon, atm),
+                az[atm],
+                el[atm],
+                m.klobuchar,
+            )
             iono = iono_l1 * m.iono_scale[e]
             var_iono = (ERR_BRDCI * iono_l1) ** 2
         elif cfg.iono == "ionofree":
@@ -88,7 +95,8 @@ class PseudorangeModel(Record):
             iono = np.zeros_like(el)
             var_iono = np.full_like(el, ERR_ION_M**2)
         if cfg.tropo == "saastamoinen":
-            trop = np.where(atm, saastamoinen_delay_m(lat, h, el), 0.0)
+            trop = np.zeros_like(el)
+            trop[atm] = saastamoinen_delay_m(_cells(lat, atm), _cells(h, atm), el[atm])
             var_trop = (ERR_SAAS_M / (np.sin(el) + 0.1)) ** 2
         else:
             trop = np.zeros_like(el)
@@ -109,6 +117,11 @@ class PseudorangeModel(Record):
         w = np.where(valid, 1.0 / np.where(valid, var, 1.0), 0.0)
         J = np.where(valid[..., None], J, 0.0)
         return np.where(valid, v, 0.0), J, w, valid
+
+
+def _cells(per_epoch: FloatArray, cells: BoolArray) -> FloatArray:
+    """A per-epoch column ``(B, 1)`` at the selected cells of a ``(B, S)`` grid."""
+    return np.broadcast_to(per_epoch, cells.shape)[cells]
 
 
 def measurement_variance(
