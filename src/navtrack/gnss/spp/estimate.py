@@ -120,7 +120,6 @@ def estimate_position(
     status = _estimation_status(meas, idx, usable, lsq.status)
 
     geo = model.geometry(lsq.x, np.arange(idx.size))
-    los_enu = geo.los @ np.swapaxes(geo.rot, -1, -2)
     return PositionEstimate(
         epochs=idx,
         x=lsq.x,
@@ -129,9 +128,9 @@ def estimate_position(
         design=lsq.jacobian,
         weights=lsq.weights,
         used=lsq.valid,
-        azel_rad=np.stack([geo.az, geo.el], axis=-1),
+        azel_rad=np.stack([geo.azimuth(), geo.el], axis=-1),
         enu_rotation=geo.rot,
-        dop=dops(los_enu, lsq.valid),
+        dop=dops(geo.los_enu, lsq.valid),
         chi2=lsq.cost,
         dof=lsq.dof,
         iterations=lsq.iterations,

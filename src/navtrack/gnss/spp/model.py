@@ -35,9 +35,16 @@ class Geometry(Record):
     los: FloatArray  # (b, S, 3) unit line of sight, ECEF
     llh: FloatArray  # (b, 3) receiver latitude, longitude (rad), height (m)
     rot: FloatArray  # (b, 3, 3) ECEF -> ENU
-    az: FloatArray  # (b, S) rad
+    los_enu: FloatArray  # (b, S, 3) unit line of sight, east / north / up
     el: FloatArray  # (b, S) rad; 90 deg for receivers inside the earth
     deep: BoolArray  # (b,) receiver inside the earth (start at the centre)
+
+    def azimuth(self, cells: BoolArray | None = None) -> FloatArray:
+        """Azimuth (rad) of every satellite, or of the selected ``cells`` only (1-D)."""
+        east, north = self.los_enu[..., 0], self.los_enu[..., 1]
+        if cells is not None:
+            east, north = east[cells], north[cells]
+        return np.mod(np.arctan2(east, north), 2.0 * np.pi)
 
 
 class PseudorangeModel(Record):
@@ -55,13 +62,14 @@ class PseudorangeModel(Record):
         rho, los = geometric_range(rs, rcv[:, None, :])
         llh = ecef_to_geodetic(rcv)
         rot = enu_rotation(llh[:, 0], llh[:, 1])  # (b, 3, 3)
-        enu = los @ np.swapaxes(rot, -1, -2)  # rot @ los per satellite
-        az = np.mod(np.arctan2(enu[..., 0], enu[..., 1]), 2.0 * np.pi)
+        # rot @ los per satellite; the transposed rotations copied first (a contiguous operand
+        # makes the batched product several times faster, the same numbers)
+        enu = los @ np.ascontiguousarray(np.swapaxes(rot, -1, -2))
         el = np.arcsin(np.clip(enu[..., 2], -1.0, 1.0))
         # inside the earth (start from the centre): no mask, no atmosphere (el = 90 deg)
         deep = np.linalg.norm(rcv, axis=1) < 1e6
         el = np.where(deep[:, None], np.pi / 2.0, el)
-        return Geometry(rho, los, llh, rot, az, el, deep)
+        return Geometry(rho, los, llh, rot, enu, el, deep)
 
     def __call__(
         self, x: FloatArray, b: IntArray
@@ -69,7 +77,7 @@ class PseudorangeModel(Record):
         cfg, m = self.config, self.meas
         e = self.epochs[b]
         g = self.geometry(x, b)
-        el, az, llh, deep = g.el, g.az, g.llh, g.deep
+        el, llh, deep = g.el, g.llh, g.deep
         valid = self.usable[b] & (el >= math.radians(cfg.elmask_deg))
         lat = llh[:, 0:1]
         lon = llh[:, 1:2]
@@ -82,7 +90,7 @@ class PseudorangeModel(Record):
                 _cells(m.t_gps_s[e, None], atm),
                 _cells(lat, atm),
                 _cells(lon, atm),
-                az[atm],
+                g.azimuth(atm),
                 el[atm],
                 m.klobuchar,
             )
@@ -115,7 +123,7 @@ class PseudorangeModel(Record):
         )
         valid &= np.isfinite(v) & np.isfinite(var) & (var > 0)
         w = np.where(valid, 1.0 / np.where(valid, var, 1.0), 0.0)
-        J = np.where(valid[..., None], J, 0.0)
+        J[~valid] = 0.0
         return np.where(valid, v, 0.0), J, w, valid
 
 
