@@ -1,13 +1,13 @@
 """The read-only helper of the frozen value classes, and the record base class."""
 
-import dataclasses
 import pickle
 from dataclasses import dataclass
 
 import numpy as np
 import pytest
 
-from navtrack._frozen import Record, freeze_arrays, readonly_copy
+from navtrack._frozen import freeze_arrays, readonly_copy
+from navtrack._record import FrozenRecordError, Record
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -90,9 +90,9 @@ def test_record_refuses_wrong_arguments_as_a_dataclass_does():
 
 def test_record_is_frozen_and_replace_makes_a_checked_copy():
     p = _Point(1.0, 2.0)
-    with pytest.raises(dataclasses.FrozenInstanceError):
+    with pytest.raises(FrozenRecordError):
         p.x_m = 3.0  # type: ignore[misc]
-    with pytest.raises(dataclasses.FrozenInstanceError):
+    with pytest.raises(FrozenRecordError):
         del p.y_m
     q = p.replace(y_m=5.0)
     assert (q.x_m, q.y_m, p.y_m) == (1.0, 5.0, 2.0)

@@ -38,7 +38,7 @@ from collections.abc import Sequence
 from typing import Any, TextIO
 
 from navtrack import __version__
-from navtrack._frozen import Record
+from navtrack._record import Record
 from navtrack.errors import FileFormatError, NavtrackError
 
 

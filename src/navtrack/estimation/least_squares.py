@@ -32,7 +32,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from navtrack._frozen import Record, freeze_arrays
+from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
 
 ModelFn = Callable[[FloatArray, IntArray], tuple[FloatArray, FloatArray, FloatArray, BoolArray]]

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from navtrack._frozen import Record
+from navtrack._record import Record
 from navtrack._typing import ArrayLike
 
 __all__ = ["ErrorStats", "enu_error_stats", "error_stats"]

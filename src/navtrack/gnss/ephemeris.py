@@ -25,7 +25,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from navtrack._frozen import Record, freeze_arrays
+from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.geodesy import C_MPS
 from navtrack.timescale import SECONDS_PER_WEEK

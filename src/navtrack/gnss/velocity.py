@@ -21,7 +21,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from navtrack._frozen import Record, freeze_arrays
+from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray
 from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
 from navtrack.gnss.spp import (

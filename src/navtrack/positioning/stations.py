@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from navtrack._frozen import Record
+from navtrack._record import Record
 from navtrack.errors import FileFormatError
 from navtrack.gnss.rinex._io import read_bytes, sniff
 

@@ -7,7 +7,7 @@ import zlib
 from os import fspath
 from pathlib import Path
 
-from navtrack._frozen import Record
+from navtrack._record import Record
 from navtrack._typing import StrPath
 from navtrack.errors import FileFormatError, MissingDependencyError
 

@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from navtrack._frozen import Record
+from navtrack._record import Record
 from navtrack._typing import FloatArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import SkippedLine

@@ -26,7 +26,7 @@ from os import fspath
 
 import numpy as np
 
-from navtrack._frozen import Record
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import SYSTEMS, Event, Observations, ObsHeader, SkippedLine

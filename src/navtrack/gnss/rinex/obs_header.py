@@ -13,7 +13,7 @@ import re
 
 import numpy as np
 
-from navtrack._frozen import Record
+from navtrack._record import Record
 from navtrack._typing import FloatArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import SYSTEMS, ObsHeader

@@ -54,7 +54,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING
 
-from navtrack._frozen import Record
+from navtrack._record import Record
 from navtrack._typing import FloatArray
 from navtrack.gnss.spp.config import (
     CHUNK_EPOCHS,

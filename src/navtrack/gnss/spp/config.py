@@ -13,7 +13,7 @@ from enum import IntEnum
 from types import MappingProxyType
 from typing import Any
 
-from navtrack._frozen import Record
+from navtrack._record import Record
 
 __all__ = [
     "CHUNK_EPOCHS",

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from navtrack._frozen import Record
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.geodesy import ecef_to_geodetic, enu_rotation
 from navtrack.gnss.corrections import geometric_range, klobuchar_delay_m, saastamoinen_delay_m

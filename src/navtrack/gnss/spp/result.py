@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from navtrack._frozen import Record, freeze_arrays
+from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
 from navtrack.gnss.spp.config import STATUS_NAMES, SppStatus
 from navtrack.gnss.spp.estimate import PositionEstimate

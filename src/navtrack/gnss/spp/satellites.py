@@ -8,7 +8,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from navtrack._frozen import Record, freeze_arrays
+from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.gnss import ephemeris as eph
 from navtrack.gnss.corrections import FREQ_L1_HZ, frequency_hz, transmit_time
