@@ -148,7 +148,10 @@ def _indicator(c: np.ndarray) -> Int8Array:
 
 def field_matrix(data: list[bytes], lead: int) -> np.ndarray:
     """Data lines as an (n, lead + 16 k) uint8 matrix, blank-padded to whole fields."""
-    width = max(map(len, data), default=lead)
-    width = lead + FIELD_WIDTH * max(1, -(-(width - lead) // FIELD_WIDTH))
-    buf = b"".join([row.ljust(width) for row in data])
-    return np.frombuffer(buf, dtype=np.uint8).reshape(len(data), width)
+    lengths = np.fromiter(map(len, data), dtype=np.int64, count=len(data))
+    longest = int(lengths.max()) if lengths.size else lead
+    width = lead + FIELD_WIDTH * max(1, -(-(longest - lead) // FIELD_WIDTH))
+    # the lines' characters fill the rows in order, blanks the rest (no padded copy per line)
+    out = np.full((len(data), width), _SPACE, dtype=np.uint8)
+    out[np.arange(width) < lengths[:, None]] = np.frombuffer(b"".join(data), dtype=np.uint8)
+    return out
