@@ -53,7 +53,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -310,6 +310,48 @@ def bench_instructions(env: dict[str, str], repeat: int, tmp: Path) -> None:
     print(f"(ms: the fraction times numpy's median wall time of this run, {t_np.wall_s:.3f} s)")
 
 
+def _best_of(fn: Callable[[], object], repeat: int) -> float:
+    """Median wall time of ``repeat`` calls of ``fn`` after one untimed call, s."""
+    fn()
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def _count_lines(path: Path) -> int:
+    """The floor of any reader: read the file and count its lines."""
+    with path.open("rb") as f:
+        return f.read().count(b"\n")
+
+
+def bench_reader(paths: Sequence[Path], repeat: int) -> None:
+    """In-process read rate of ``read_obs`` against reading the file and counting its lines."""
+    from navtrack.gnss.rinex.obs import read_obs
+    from navtrack.gnss.spp import SppConfig, observation_codes
+
+    print("\nobservation reader (in process)      MB   read_obs s   MB/s  newline scan MB/s  ratio")
+    for path in paths:
+        mb = path.stat().st_size / 1e6
+        t_scan = _best_of(lambda p=path: _count_lines(p), repeat)
+        reads = (
+            ("C1C of G and E", lambda p=path: read_obs(p, systems="GE", codes=("C1C",))),
+            ("pos GEJ's codes", lambda p=path: read_obs(
+                p, systems="GEJ", codes=observation_codes(SppConfig(systems="GEJ"))
+            )),
+            ("everything", lambda p=path: read_obs(p)),
+        )  # fmt: skip
+        for label, read in reads:
+            t = _best_of(read, repeat)
+            print(
+                f"{path.name[:18]:<18} {label:<16} {mb:5.1f} {t:10.3f} {mb / t:8.0f} "
+                f"{mb / t_scan:13.0f} {t / t_scan:10.1f}",
+                flush=True,
+            )
+
+
 def accuracy(names: list[str]) -> None:
     import numpy as np
 
@@ -409,6 +451,7 @@ def main() -> None:
         if args.cuts and CASES[0].available():
             bench_cuts(CASES[0], args.cuts, env, args.repeat, Path(tmp))
         bench_import_floor(env, args.repeat)
+        bench_reader([p for p in (SEPT_OBS, *(args.day or [])[:1]) if p.is_file()], args.repeat)
         if args.instructions and shutil.which("valgrind") and SEPT_OBS.is_file():
             bench_instructions(env, args.repeat, Path(tmp))
 

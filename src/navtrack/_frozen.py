@@ -1,14 +1,20 @@
 """Read-only arrays for the frozen value classes (results, configurations, models)."""
 
+from __future__ import annotations
+
 import dataclasses
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import numpy.typing as npt
+
+from navtrack._record import Record
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 
 def freeze_arrays(value: Any) -> None:
-    """Make every NumPy array field of a dataclass instance read-only, in place.
+    """Make every NumPy array field of a dataclass or :class:`Record` instance read-only.
 
     Called from ``__post_init__`` of the frozen result classes, so that a result cannot be
     changed through its arrays after it was made. Fields holding something other than an
@@ -23,11 +29,15 @@ def freeze_arrays(value: Any) -> None:
 _FIELD_NAMES: dict[type, tuple[str, ...]] = {}
 
 
-def _field_names(cls: type) -> tuple[str, ...]:
+def _field_names(cls: Any) -> tuple[str, ...]:
     # dataclasses.fields costs microseconds per call; the trackers make several results per scan
     names = _FIELD_NAMES.get(cls)
     if names is None:
-        names = _FIELD_NAMES[cls] = tuple(f.name for f in dataclasses.fields(cls))
+        if issubclass(cls, Record):
+            names = cls.record_fields
+        else:
+            names = tuple(f.name for f in dataclasses.fields(cls))
+        _FIELD_NAMES[cls] = names
     return names
 
 

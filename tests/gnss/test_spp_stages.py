@@ -63,7 +63,7 @@ def test_chain_reproduces_the_single_function_solver() -> None:
     the single-function ``solve_spp`` of commit 8d888b4 gave them (printed to 0.1 mm), with
     that commit's default of no QZSS group delay."""
     obs, nav = _sample()
-    res = solve_spp(obs, [nav], config=replace(GEJ, tgd_systems="GECIR"))
+    res = solve_spp(obs, [nav], config=GEJ.replace(tgd_systems="GECIR"))
     expected = {
         0: ([-3962108.1457, 3381308.8644, 3668678.0399], -138137.4401, -0.1605, 1.894),
         60: ([-3962108.1224, 3381308.7226, 3668677.7205], -136559.2812, -0.1285, 1.3727),
@@ -133,10 +133,10 @@ def test_satellite_states_group_delays_follow_the_config() -> None:
         sv.group_delay_s[:, qzss], eph.group_delay_s(tables["J"], ref_j.eph_index)
     )
     assert np.any(sv.group_delay_s[:, qzss] != 0.0)
-    no_j = satellite_states(pr, [nav], config=replace(GEJ, tgd_systems="GECIR"))
+    no_j = satellite_states(pr, [nav], config=GEJ.replace(tgd_systems="GECIR"))
     assert np.all(no_j.group_delay_s[:, qzss] == 0.0)
     np.testing.assert_allclose(sv.iono_scale[sv.valid], 1.0)  # L1 / E1 only
-    no_tgd = satellite_states(pr, [nav], config=replace(GEJ, tgd_systems=""))
+    no_tgd = satellite_states(pr, [nav], config=GEJ.replace(tgd_systems=""))
     assert np.all(no_tgd.group_delay_s == 0.0)
     with pytest.raises(ValueError, match="no broadcast ephemerides"):
         satellite_states(pr, None, config=GEJ)
@@ -197,7 +197,7 @@ def test_residuals_change_by_minus_design_times_step() -> None:
     _, _, meas = _measurements(obs, nav)
     est = estimate_position(meas, GEJ)
     dx = np.array([1.5, -2.0, 0.7, 3.0, -1.0])
-    moved = estimate_position(meas, replace(GEJ, max_iter=0), x0_m=est.x + dx)
+    moved = estimate_position(meas, GEJ.replace(max_iter=0), x0_m=est.x + dx)
     np.testing.assert_array_equal(moved.x, est.x + dx)  # evaluated, not iterated
     assert np.all(moved.status == SppStatus.NO_CONVERGENCE)
     both = est.used & moved.used
@@ -221,7 +221,7 @@ def test_residuals_change_by_minus_design_times_step() -> None:
 @pytest.mark.parametrize("weighting", ["equal", "elevation", "cn0"])
 def test_weights_are_the_configured_model(weighting: str) -> None:
     obs, nav = _sample()
-    cfg = replace(GEJ, weighting=weighting)
+    cfg = GEJ.replace(weighting=weighting)
     _, _, meas = _measurements(obs, nav, cfg)
     est = estimate_position(meas, cfg)
     s0 = cfg.sigma0_m**2
@@ -281,8 +281,8 @@ def test_validation_then_exclusion_on_the_failed_epochs() -> None:
     with pytest.raises(ValueError, match="epochs"):
         merge_estimates(again, est)
     # the test can be switched off, and the GDOP limit is the other rule
-    assert np.all(validate(est, replace(GEJ, chi2_alpha=0.0)) == SppStatus.OK)
-    assert np.all(validate(est, replace(GEJ, chi2_alpha=0.0, max_gdop=1.0)) == SppStatus.HIGH_DOP)
+    assert np.all(validate(est, GEJ.replace(chi2_alpha=0.0)) == SppStatus.OK)
+    assert np.all(validate(est, GEJ.replace(chi2_alpha=0.0, max_gdop=1.0)) == SppStatus.HIGH_DOP)
 
 
 def test_result_refuses_a_partial_estimate() -> None:
@@ -320,7 +320,7 @@ def test_time_gps_is_rounded_to_the_millisecond(tmp_path) -> None:  # type: igno
     obs, nav = _sample()
     res = solve_spp(obs, [nav], config=GEJ)
     t0 = np.floor(res.t_gps_s[0] / 60.0) * 60.0 + 40.0006
-    shifted = replace(res, t_gps_s=t0 + np.arange(res.t_gps_s.size))
+    shifted = res.replace(t_gps_s=t0 + np.arange(res.t_gps_s.size))
     cols = solution_columns(solution_frame(shifted))
     assert cols["time_gps"][0] == "2021-03-19T12:00:40.001"
     assert cols["time_gps"][1] == "2021-03-19T12:00:41.001"

@@ -35,13 +35,14 @@ import importlib
 import os
 import sys
 from collections.abc import Sequence
-from typing import Any, NamedTuple, TextIO
+from typing import Any, TextIO
 
 from navtrack import __version__
+from navtrack._record import Record
 from navtrack.errors import FileFormatError, NavtrackError
 
 
-class Command(NamedTuple):
+class Command(Record):
     """A command of ``navtrack``: the module whose ``register(subparsers)`` adds its sub-parser,
     and the summary ``navtrack --help`` lists."""
 

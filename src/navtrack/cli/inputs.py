@@ -13,12 +13,27 @@ from pathlib import Path
 from navtrack.gnss.observations import Observations
 from navtrack.gnss.rinex.nav import NavData
 from navtrack.gnss.rinex.obs import read_obs
-from navtrack.gnss.ubx import is_ubx, read_ubx
+
+UBX_SYNC = b"\xb5\x62"
+"""The two bytes that start every UBX frame (u-blox interface description, "UBX frame
+structure"); RINEX text never holds them."""
 
 
 def is_raw_log(path: Path) -> bool:
-    """True for a u-blox UBX log (which may stand without a navigation file)."""
-    return path.is_file() and is_ubx(path)
+    """True for a u-blox UBX log (which may stand without a navigation file).
+
+    A file without the UBX frame start in its first 4 kB is not one; only a file that has it
+    is handed to the UBX reader's own test, so the UBX reader is loaded for UBX logs only.
+    """
+    if not path.is_file():
+        return False
+    with open(path, "rb") as f:
+        head = f.read(4096)
+    if UBX_SYNC not in head:
+        return False
+    from navtrack.gnss.ubx import is_ubx  # the UBX reader for UBX logs only (start-up)
+
+    return is_ubx(path)
 
 
 def read_observations(
@@ -27,6 +42,8 @@ def read_observations(
     """The observations of a RINEX file or a UBX log, and the log's navigation data (None for
     RINEX and for a log without a complete ephemeris)."""
     if is_raw_log(path):
+        from navtrack.gnss.ubx import read_ubx  # for UBX logs only (start-up)
+
         log = read_ubx(path)
         return log.obs, (log.nav if log.nav.tables else None)
     return read_obs(path, systems=systems, codes=codes), None

@@ -27,13 +27,13 @@ clock bias", ICCET 2010, V2-417 (Marquardt steps 1–6 with adaptive growth fact
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from enum import IntEnum
 from typing import NamedTuple
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
 
 ModelFn = Callable[[FloatArray, IntArray], tuple[FloatArray, FloatArray, FloatArray, BoolArray]]
@@ -49,8 +49,7 @@ class LsqStatus(IntEnum):
     NO_CONVERGENCE = 3
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class LsqResult:
+class LsqResult(Record):
     """Result of a batched least-squares solve.
 
     Attributes

@@ -13,17 +13,15 @@ Fan, "Sample quantiles in statistical packages", Am. Stat. 50(4), 1996, definiti
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from navtrack._record import Record
 from navtrack._typing import ArrayLike
 
 __all__ = ["ErrorStats", "enu_error_stats", "error_stats"]
 
 
-@dataclass(frozen=True, slots=True)
-class ErrorStats:
+class ErrorStats(Record, eq=True):
     """Statistics of one error quantity over the finite values of a series.
 
     Attributes

@@ -20,12 +20,13 @@ Precise orbits and clocks (SP3, RINEX clock) are evaluated by :mod:`navtrack.gns
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.geodesy import C_MPS
 from navtrack.timescale import SECONDS_PER_WEEK
@@ -106,8 +107,7 @@ GLONASS_FIELDS = (
 )
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class EphemerisTable:
+class EphemerisTable(Record):
     """The broadcast records of one system as plain arrays (one entry per record).
 
     Attributes
@@ -122,7 +122,7 @@ class EphemerisTable:
 
     system: str
     sat: np.ndarray
-    columns: Mapping[str, np.ndarray] = field(default_factory=dict)
+    columns: Mapping[str, np.ndarray] = MappingProxyType({})
 
     @classmethod
     def from_frame(cls, system: str, df: pd.DataFrame) -> EphemerisTable:
@@ -136,8 +136,7 @@ class EphemerisTable:
         return col
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class SatStates:
+class SatStates(Record):
     """Satellite states at signal transmission, per epoch and satellite.
 
     Attributes

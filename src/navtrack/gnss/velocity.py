@@ -17,12 +17,12 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray
 from navtrack.geodesy import C_MPS, ecef_to_geodetic, enu_rotation
 from navtrack.gnss.spp import (
@@ -48,8 +48,7 @@ _HALF_STEP_S = 0.5
 _N_UNKNOWNS = 4
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class DopplerVelocity:
+class DopplerVelocity(Record):
     """Receiver velocity of every epoch.
 
     Attributes

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from enum import IntEnum
 from types import MappingProxyType
 from typing import Literal, Protocol
@@ -539,8 +539,7 @@ class AraimMonitor:
         )
         used = estimate.used & ~res.excluded & res.in_model[None, :]
         v = np.nan_to_num(estimate.residuals_m) - (estimate.design @ res.dx[..., None])[..., 0]
-        est = replace(
-            estimate,
+        est = estimate.replace(
             x=estimate.x + res.dx,
             residuals_m=np.where(used, v, np.nan),
             used=used,
@@ -614,7 +613,7 @@ def monitor(
     """
     ism = raim.ism if raim.ism is not None else default_ism()
     est, integrity = MONITORS[raim.method](MonitorInput(meas, estimate, config, raim, ism))
-    spp_status = validate(est, replace(config, chi2_alpha=0.0))
+    spp_status = validate(est, config.replace(chi2_alpha=0.0))
     alert = (spp_status == SppStatus.OK) & (integrity.status == RaimStatus.ALERT)
     spp_status[alert] = SppStatus.REJECTED_VALIDITY
     return est, spp_status, integrity

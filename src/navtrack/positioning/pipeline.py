@@ -11,9 +11,7 @@ experiments call it.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -46,7 +44,6 @@ if TYPE_CHECKING:
 __all__ = ["PositionSolution", "solution_frame", "solve_positions"]
 
 
-@dataclass(frozen=True, slots=True, eq=False)
 class PositionSolution(SppResult):
     """Single point positions of all epochs (:class:`~navtrack.gnss.spp.SppResult`) with the
     integrity monitoring of every epoch.
@@ -117,7 +114,7 @@ def solve_positions(
     joined = None
     if integrity:
         joined = integrity[0] if len(integrity) == 1 else type(integrity[0]).concatenate(integrity)
-    fields = {f.name: getattr(result, f.name) for f in dataclasses.fields(SppResult)}
+    fields = {name: getattr(result, name) for name in SppResult.record_fields}
     return PositionSolution(**fields, integrity=joined)
 
 

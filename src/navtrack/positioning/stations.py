@@ -4,17 +4,16 @@ navigation data it is solved with (the files given, or those beside it)."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
+from navtrack._record import Record
 from navtrack.errors import FileFormatError
 from navtrack.gnss.rinex._io import read_bytes, sniff
 
 __all__ = ["StationJob", "file_kind", "station_jobs"]
 
 
-@dataclass(frozen=True, slots=True)
-class StationJob:
+class StationJob(Record, eq=True):
     """One station of a network job: a name (unique in the job), its observation file and the
     navigation files it is solved with."""
 

@@ -6,8 +6,8 @@ import importlib
 import zlib
 from os import fspath
 from pathlib import Path
-from typing import NamedTuple
 
+from navtrack._record import Record
 from navtrack._typing import StrPath
 from navtrack.errors import FileFormatError, MissingDependencyError
 
@@ -84,7 +84,7 @@ def _hatanaka_decompress(path: StrPath, raw: bytes) -> bytes:
         raise FileFormatError(path, None, f"cannot decompress ({exc})") from exc
 
 
-class FileKind(NamedTuple):
+class FileKind(Record, eq=True):
     """What a file is, from its first line (a named tuple: every reader imports it, and a
     dataclass compiles its methods at import, a cost every ``navtrack pos`` start would pay).
 

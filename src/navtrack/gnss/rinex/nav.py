@@ -27,13 +27,13 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from os import fspath
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from navtrack._record import Record
 from navtrack._typing import FloatArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import SkippedLine
@@ -141,8 +141,7 @@ _RINEX2_SYSTEM = {"N": "G", "G": "R", "H": "S", "E": "E"}
 _D_TO_E = str.maketrans("Dd", "Ee")
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class NavData:
+class NavData(Record):
     """Broadcast navigation data of one RINEX navigation file.
 
     Attributes
@@ -229,8 +228,8 @@ class NavData:
     leap_seconds: int | None
     tables: Mapping[str, Mapping[str, np.ndarray]]
     skipped: tuple[SkippedLine, ...] = ()
-    comments: tuple[str, ...] = field(default=())
-    records_not_read: Mapping[str, int] = field(default_factory=dict)
+    comments: tuple[str, ...] = ()
+    records_not_read: Mapping[str, int] = MappingProxyType({})
 
     def __post_init__(self) -> None:
         for arr in self.iono.values():
@@ -348,7 +347,7 @@ def read_nav(path: StrPath, *, systems: str | None = None, lenient: bool = False
     )
 
 
-class _Layout(NamedTuple):
+class _Layout(Record):
     """How the records of a file are read: RINEX 2 or later, the system of a single-system
     file, the systems asked for (None: all), lenient reading."""
 

@@ -23,10 +23,10 @@ from __future__ import annotations
 from collections.abc import Collection
 from dataclasses import replace
 from os import fspath
-from typing import NamedTuple
 
 import numpy as np
 
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import SYSTEMS, Event, Observations, ObsHeader, SkippedLine
@@ -133,7 +133,7 @@ def _last_line_cut(
 # ----------------------------------------------------------------------------- assembling
 
 
-class _Lines(NamedTuple):
+class _Lines(Record):
     """Where each data line belongs: its epoch, observation types (segment), file line, first
     field's position in its system's type list (``offset``; RINEX 2 records span lines of 5
     fields) and line within its satellite record (``part``)."""
@@ -182,7 +182,7 @@ class _Problems:
         return int(self.report_at.get(m, layout.line_no[m]))
 
 
-class _Satellites(NamedTuple):
+class _Satellites(Record):
     """The satellites of the data lines: ``names`` of the distinct ids written (None where
     malformed), ``inverse`` (id of each RINEX 3 line, of each RINEX 2 record), ``sats`` (sorted
     valid names), column of each line in ``sats`` (-1: malformed) and its system's index."""
@@ -263,7 +263,7 @@ def _code_table(
     return table, scale, declared
 
 
-class _Request(NamedTuple):
+class _Request(Record):
     """What the caller asked for: output codes (``kept`` maps the file's code index to the
     output's, -1 dropped, with a trailing -1 for "no code") and satellites (``out_col`` maps
     the column in ``sats`` to the output's likewise)."""
@@ -334,7 +334,7 @@ def _duplicates(layout: _Lines, sats: _Satellites) -> IntArray:
     return np.flatnonzero(later)
 
 
-class _Fields(NamedTuple):
+class _Fields(Record):
     """The decoded fields of the decoded lines (``decode``), shape (lines, fields), with the
     code of each field and the row of its line's (segment, system) in the code table."""
 

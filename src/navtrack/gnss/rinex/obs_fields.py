@@ -37,7 +37,8 @@ _PREFIX_HI = np.array([0, 0, 0, 0, 0, 0, 0, 0, 0, 0x01, 0x0101], _U8)
 _MINUS_LO = np.array([1 << (8 * s) if s < 8 else 0 for s in range(11)], _U8)
 _MINUS_HI = np.array([0] * 8 + [0x01, 0x0100, 0], _U8)
 _SPACE = 32
-_NUMBER = re.compile(rb"[+-]?(\d+\.?\d*|\.\d+)([eEdD][+-]?\d+)?")
+# compiled (and cached by `re`) on the first field off the F14.3 layout, which few files have
+_NUMBER = rb"[+-]?(\d+\.?\d*|\.\d+)([eEdD][+-]?\d+)?"
 
 
 def decode_fields(
@@ -107,7 +108,7 @@ def decode_fields(
     bad = np.zeros(n, dtype=bool)
     for k in np.flatnonzero(~std & ~value_blank).tolist():  # other layouts: float(), if a number
         text = f[k, :14].tobytes().strip()
-        if _NUMBER.fullmatch(text):
+        if re.fullmatch(_NUMBER, text):
             value[k] = float(text.replace(b"D", b"E").replace(b"d", b"e"))
         else:
             bad[k] = True
@@ -147,7 +148,10 @@ def _indicator(c: np.ndarray) -> Int8Array:
 
 def field_matrix(data: list[bytes], lead: int) -> np.ndarray:
     """Data lines as an (n, lead + 16 k) uint8 matrix, blank-padded to whole fields."""
-    width = max(map(len, data), default=lead)
-    width = lead + FIELD_WIDTH * max(1, -(-(width - lead) // FIELD_WIDTH))
-    buf = b"".join([row.ljust(width) for row in data])
-    return np.frombuffer(buf, dtype=np.uint8).reshape(len(data), width)
+    lengths = np.fromiter(map(len, data), dtype=np.int64, count=len(data))
+    longest = int(lengths.max()) if lengths.size else lead
+    width = lead + FIELD_WIDTH * max(1, -(-(longest - lead) // FIELD_WIDTH))
+    # the lines' characters fill the rows in order, blanks the rest (no padded copy per line)
+    out = np.full((len(data), width), _SPACE, dtype=np.uint8)
+    out[np.arange(width) < lengths[:, None]] = np.frombuffer(b"".join(data), dtype=np.uint8)
+    return out

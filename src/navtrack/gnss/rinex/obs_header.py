@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import itertools
 import re
-from typing import NamedTuple
 
 import numpy as np
 
+from navtrack._record import Record
 from navtrack._typing import FloatArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import SYSTEMS, ObsHeader
@@ -41,7 +41,7 @@ V2_EVENT_NO_TIME = re.compile(rb" {26}  [2-5][ \d]{2}\d")
 """A RINEX 2 event record (flags 2-5) whose time is blank."""
 
 
-class ObsTypes(NamedTuple):
+class ObsTypes(Record, eq=True):
     """Observation types in force for a stretch of epochs (header records may change them).
 
     Attributes

@@ -52,8 +52,9 @@ DOPs); J. Sanz Subirana et al., *GNSS Data Processing* vol. I, ESA TM-23, 2013, 
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING
 
+from navtrack._record import Record
 from navtrack._typing import FloatArray
 from navtrack.gnss.spp.config import (
     CHUNK_EPOCHS,
@@ -131,7 +132,7 @@ __all__ = [
 ]
 
 
-class EstimatedBlock(NamedTuple):
+class EstimatedBlock(Record):
     """Stages 1-4 of one block of epochs: its measurements, their estimate, and the number of
     epochs done with it (``done`` of ``total``)."""
 

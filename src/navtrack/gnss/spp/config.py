@@ -7,13 +7,13 @@ are named here; :func:`navtrack.gnss.spp.model.measurement_variance` combines th
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
 from enum import IntEnum
 from types import MappingProxyType
 from typing import Any
+
+from navtrack._record import Record
 
 __all__ = [
     "CHUNK_EPOCHS",
@@ -121,8 +121,7 @@ ProgressFn = Callable[[int, int], None]
 """``progress(epochs_done, epochs_total)``, called by :func:`solve_spp` after each block."""
 
 
-@dataclass(frozen=True, slots=True)
-class SppConfig:
+class SppConfig(Record, eq=True):
     """Options of :func:`solve_spp`; the defaults reproduce RTKLIB 2.4.3's single mode.
 
     Attributes
@@ -191,7 +190,7 @@ class SppConfig:
     max_age_s: Mapping[str, float] | None = None
     healthy_only: bool = True
     galileo_nav: str = "inav"
-    clock_groups: Mapping[str, str] = field(default_factory=lambda: dict(DEFAULT_CLOCK_GROUP))
+    clock_groups: Mapping[str, str] = DEFAULT_CLOCK_GROUP
     sigma0_m: float = 1.5
     max_ura_m: float = 300.0
     tgd_systems: str = "GECIRJ"
@@ -221,7 +220,7 @@ class SppConfig:
         """Pickled as its constructor's keywords (the read-only mappings as dicts), so that a
         configuration travels to Dask workers."""
         fields: dict[str, Any] = {
-            f.name: dict(v) if isinstance(v := getattr(self, f.name), Mapping) else v
-            for f in dataclasses.fields(self)
+            name: dict(v) if isinstance(v := getattr(self, name), Mapping) else v
+            for name in self.record_fields
         }
         return (functools.partial(type(self), **fields), ())

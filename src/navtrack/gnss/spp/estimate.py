@@ -3,11 +3,10 @@ and clocks (RTKLIB ``estpos``) and its validity tests (``valsol``)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
 from navtrack.estimation.chi2 import chi2_quantile
 from navtrack.estimation.least_squares import LsqStatus, gauss_newton
@@ -18,8 +17,7 @@ from navtrack.gnss.spp.model import PseudorangeModel
 __all__ = ["PositionEstimate", "dops", "estimate_position", "merge_estimates", "validate"]
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class PositionEstimate:
+class PositionEstimate(Record):
     """Weighted least-squares estimate of a batch of epochs with everything fault detection
     needs (RTKLIB ``estpos``).
 
@@ -123,7 +121,6 @@ def estimate_position(
     status = _estimation_status(meas, idx, usable, lsq.status)
 
     geo = model.geometry(lsq.x, np.arange(idx.size))
-    los_enu = geo.los @ np.swapaxes(geo.rot, -1, -2)
     return PositionEstimate(
         epochs=idx,
         x=lsq.x,
@@ -132,9 +129,9 @@ def estimate_position(
         design=lsq.jacobian,
         weights=lsq.weights,
         used=lsq.valid,
-        azel_rad=np.stack([geo.az, geo.el], axis=-1),
+        azel_rad=np.stack([geo.azimuth(), geo.el], axis=-1),
         enu_rotation=geo.rot,
-        dop=dops(los_enu, lsq.valid),
+        dop=dops(geo.los_enu, lsq.valid),
         chi2=lsq.cost,
         dof=lsq.dof,
         iterations=lsq.iterations,
@@ -229,7 +226,7 @@ def merge_estimates(estimate: PositionEstimate, update: PositionEstimate) -> Pos
     ):
         raise ValueError("update: epochs that estimate does not have")
     fields = {}
-    for name in PositionEstimate.__dataclass_fields__:
+    for name in PositionEstimate.record_fields:
         value = np.array(getattr(estimate, name))
         if name != "epochs":
             value[rows] = getattr(update, name)

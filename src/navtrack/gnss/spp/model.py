@@ -5,11 +5,10 @@ variance models (``varerr``)."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.geodesy import ecef_to_geodetic, enu_rotation
 from navtrack.gnss.corrections import geometric_range, klobuchar_delay_m, saastamoinen_delay_m
@@ -29,20 +28,26 @@ from navtrack.gnss.spp.measurements import Measurements
 __all__ = ["Geometry", "PseudorangeModel", "measurement_variance"]
 
 
-class Geometry(NamedTuple):
+class Geometry(Record):
     """Receiver-satellite geometry of a batch ``(b, S)`` at the receiver positions ``(b, 3)``."""
 
     rho: FloatArray  # (b, S) geometric range with Sagnac term, m
     los: FloatArray  # (b, S, 3) unit line of sight, ECEF
     llh: FloatArray  # (b, 3) receiver latitude, longitude (rad), height (m)
     rot: FloatArray  # (b, 3, 3) ECEF -> ENU
-    az: FloatArray  # (b, S) rad
+    los_enu: FloatArray  # (b, S, 3) unit line of sight, east / north / up
     el: FloatArray  # (b, S) rad; 90 deg for receivers inside the earth
     deep: BoolArray  # (b,) receiver inside the earth (start at the centre)
 
+    def azimuth(self, cells: BoolArray | None = None) -> FloatArray:
+        """Azimuth (rad) of every satellite, or of the selected ``cells`` only (1-D)."""
+        east, north = self.los_enu[..., 0], self.los_enu[..., 1]
+        if cells is not None:
+            east, north = east[cells], north[cells]
+        return np.mod(np.arctan2(east, north), 2.0 * np.pi)
 
-@dataclass(frozen=True, slots=True, eq=False)
-class PseudorangeModel:
+
+class PseudorangeModel(Record):
     """The per-epoch pseudorange model of a batch of epochs (the SPP kernel, RTKLIB ``rescode``):
     batch row ``b`` is measurement epoch ``epochs[b]``, candidates ``usable[b]``."""
 
@@ -57,13 +62,14 @@ class PseudorangeModel:
         rho, los = geometric_range(rs, rcv[:, None, :])
         llh = ecef_to_geodetic(rcv)
         rot = enu_rotation(llh[:, 0], llh[:, 1])  # (b, 3, 3)
-        enu = los @ np.swapaxes(rot, -1, -2)  # rot @ los per satellite
-        az = np.mod(np.arctan2(enu[..., 0], enu[..., 1]), 2.0 * np.pi)
+        # rot @ los per satellite; the transposed rotations copied first (a contiguous operand
+        # makes the batched product several times faster, the same numbers)
+        enu = los @ np.ascontiguousarray(np.swapaxes(rot, -1, -2))
         el = np.arcsin(np.clip(enu[..., 2], -1.0, 1.0))
         # inside the earth (start from the centre): no mask, no atmosphere (el = 90 deg)
         deep = np.linalg.norm(rcv, axis=1) < 1e6
         el = np.where(deep[:, None], np.pi / 2.0, el)
-        return Geometry(rho, los, llh, rot, az, el, deep)
+        return Geometry(rho, los, llh, rot, enu, el, deep)
 
     def __call__(
         self, x: FloatArray, b: IntArray
@@ -71,15 +77,23 @@ class PseudorangeModel:
         cfg, m = self.config, self.meas
         e = self.epochs[b]
         g = self.geometry(x, b)
-        el, az, llh, deep = g.el, g.az, g.llh, g.deep
+        el, llh, deep = g.el, g.llh, g.deep
         valid = self.usable[b] & (el >= math.radians(cfg.elmask_deg))
         lat = llh[:, 0:1]
         lon = llh[:, 1:2]
         h = llh[:, 2:3]
-        atm = ~deep[:, None]
+        # the atmosphere on the cells that count only (invalid cells get no weight), 0 elsewhere
+        atm = valid & ~deep[:, None]
         if cfg.iono == "klobuchar":
-            iono_l1 = klobuchar_delay_m(m.t_gps_s[e, None], lat, lon, az, el, m.klobuchar)
-            iono_l1 = np.where(atm, iono_l1, 0.0)
+            iono_l1 = np.zeros_like(el)
+            iono_l1[atm] = klobuchar_delay_m(
+                _cells(m.t_gps_s[e, None], atm),
+                _cells(lat, atm),
+                _cells(lon, atm),
+                g.azimuth(atm),
+                el[atm],
+                m.klobuchar,
+            )
             iono = iono_l1 * m.iono_scale[e]
             var_iono = (ERR_BRDCI * iono_l1) ** 2
         elif cfg.iono == "ionofree":
@@ -89,7 +103,8 @@ class PseudorangeModel:
             iono = np.zeros_like(el)
             var_iono = np.full_like(el, ERR_ION_M**2)
         if cfg.tropo == "saastamoinen":
-            trop = np.where(atm, saastamoinen_delay_m(lat, h, el), 0.0)
+            trop = np.zeros_like(el)
+            trop[atm] = saastamoinen_delay_m(_cells(lat, atm), _cells(h, atm), el[atm])
             var_trop = (ERR_SAAS_M / (np.sin(el) + 0.1)) ** 2
         else:
             trop = np.zeros_like(el)
@@ -108,8 +123,13 @@ class PseudorangeModel:
         )
         valid &= np.isfinite(v) & np.isfinite(var) & (var > 0)
         w = np.where(valid, 1.0 / np.where(valid, var, 1.0), 0.0)
-        J = np.where(valid[..., None], J, 0.0)
+        J[~valid] = 0.0
         return np.where(valid, v, 0.0), J, w, valid
+
+
+def _cells(per_epoch: FloatArray, cells: BoolArray) -> FloatArray:
+    """A per-epoch column ``(B, 1)`` at the selected cells of a ``(B, S)`` grid."""
+    return np.broadcast_to(per_epoch, cells.shape)[cells]
 
 
 def measurement_variance(

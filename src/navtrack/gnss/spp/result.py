@@ -3,11 +3,10 @@ and its solution frame (the columns ``pos --out`` writes)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
 from navtrack.gnss.spp.config import STATUS_NAMES, SppStatus
 from navtrack.gnss.spp.estimate import PositionEstimate
@@ -16,8 +15,7 @@ from navtrack.gnss.spp.measurements import Measurements
 __all__ = ["SppResult", "concatenate_results", "solution_frame", "spp_result"]
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class SppResult:
+class SppResult(Record):
     """Single point positions of all epochs.
 
     Attributes

@@ -4,12 +4,12 @@ delays at transmission (RTKLIB ``satposs`` with the group delays of ``prange``).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.gnss import ephemeris as eph
 from navtrack.gnss.corrections import FREQ_L1_HZ, frequency_hz, transmit_time
@@ -24,8 +24,7 @@ if TYPE_CHECKING:
 __all__ = ["SatelliteStates", "navigation_tables", "satellite_states"]
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class SatelliteStates:
+class SatelliteStates(Record):
     """Satellite states at signal transmission and the broadcast signal parameters (RTKLIB
     ``satposs`` with the group delays of ``prange``).
 
@@ -191,7 +190,7 @@ def _broadcast(
     )
 
 
-class _SignalParameters(NamedTuple):
+class _SignalParameters(Record):
     """Group delays, carrier frequencies, ionosphere scale and system error factors of the
     measured signals (fields as :class:`SatelliteStates`)."""
 
