@@ -205,18 +205,20 @@ def _sample():  # type: ignore[no-untyped-def]
 SEPT_REF = np.array([-3962108.673, 3381309.574, 3668678.638])
 
 
-def test_synthetic_pseudoranges_recover_position_and_clocks() -> None:
-    """Pseudoranges generated from the model itself at a known position, clock and ISB (no
-    noise) are inverted back to the millimetre: the solver and geometry loop are consistent."""
-    obs, nav = _sample()
-    cfg = SppConfig(systems="GEJ", iono="off", tropo="off", weighting="equal")
-    res = solve_spp(obs, [nav], config=cfg)
-    # build a perfect data set from the solution's own geometry at the reference
+TRUTH_CLOCK_M, TRUTH_ISB_E_M = 1234.5, -7.25
+
+
+def _synthetic_sample():  # type: ignore[no-untyped-def]
+    """The bundled sample's C1C replaced by pseudoranges generated from the model itself at
+    SEPT_REF with a known clock and Galileo ISB (no noise, no atmosphere)."""
+    from dataclasses import replace
+
     from navtrack.gnss import ephemeris as eph
     from navtrack.gnss.corrections import geometric_range
 
-    truth_clock, truth_isb = 1234.5, -7.25
-    sats = res.sats
+    obs, nav = _sample()
+    cfg = SppConfig(systems="GEJ", iono="off", tropo="off", weighting="equal")
+    sats = solve_spp(obs, [nav], config=cfg).sats
     tables = eph.ephemeris_tables(nav)
     pr = np.full((obs.t_gps_s.size, len(sats)), np.nan)
     rho0 = np.full_like(pr, 2.2e7)
@@ -228,23 +230,47 @@ def test_synthetic_pseudoranges_recover_position_and_clocks() -> None:
         for s in "GEJ":
             cols = [k for k, sat in enumerate(sats) if sat[0] == s]
             gd[:, cols] = eph.group_delay_s(tables[s], st.eph_index[:, cols])
-        isb = np.array([truth_isb if s[0] == "E" else 0.0 for s in sats])
-        pr = rho + truth_clock + isb - 299792458.0 * (st.clock_s - gd)
+        isb = np.array([TRUTH_ISB_E_M if s[0] == "E" else 0.0 for s in sats])
+        pr = rho + TRUTH_CLOCK_M + isb - 299792458.0 * (st.clock_s - gd)
         rho0 = pr
     values = np.array(obs.values)
     codes = list(obs.codes)
     for k, sat in enumerate(obs.sats):
         if sat in sats:
             values[:, k, codes.index("C1C")] = pr[:, sats.index(sat)]
-    from dataclasses import replace
+    return replace(obs, values=values), nav, cfg
 
-    synth = replace(obs, values=values)
+
+def test_synthetic_pseudoranges_recover_position_and_clocks() -> None:
+    """Pseudoranges generated from the model itself at a known position, clock and ISB (no
+    noise) are inverted back to the millimetre: the solver and geometry loop are consistent."""
+    synth, nav, cfg = _synthetic_sample()
     res = solve_spp(synth, [nav], config=cfg)
     assert np.all(res.status == SppStatus.OK)
     assert np.max(np.linalg.norm(res.pos_m - SEPT_REF, axis=1)) < 1e-3
-    np.testing.assert_allclose(res.clock_m, truth_clock, atol=1e-3)
-    np.testing.assert_allclose(res.isb_m[:, 0], truth_isb, atol=1e-3)
+    np.testing.assert_allclose(res.clock_m, TRUTH_CLOCK_M, atol=1e-3)
+    np.testing.assert_allclose(res.isb_m[:, 0], TRUTH_ISB_E_M, atol=1e-3)
     assert np.max(np.abs(res.residuals_m[np.isfinite(res.residuals_m)])) < 1e-3
+
+
+def test_epochs_without_the_first_clock_group_solve_on_the_next() -> None:
+    """Without GPS and QZSS (the first clock group) in some epochs, those epochs are solved on
+    Galileo alone, its clock as the receiver clock and its ISB not estimated, instead of being
+    called singular (a multi-GNSS rover whose GPS ephemerides start late)."""
+    from dataclasses import replace
+
+    synth, nav, cfg = _synthetic_sample()
+    values = np.array(synth.values)
+    gj = [k for k, sat in enumerate(synth.sats) if sat[0] in "GJ"]
+    values[:20, gj, :] = np.nan
+    res = solve_spp(replace(synth, values=values), [nav], config=cfg)
+    assert np.all(res.status == SppStatus.OK)
+    assert np.max(np.linalg.norm(res.pos_m - SEPT_REF, axis=1)) < 1e-3
+    np.testing.assert_allclose(res.clock_m[:20], TRUTH_CLOCK_M + TRUTH_ISB_E_M, atol=1e-3)
+    assert np.all(np.isnan(res.isb_m[:20, 0]))
+    np.testing.assert_allclose(res.clock_m[20:], TRUTH_CLOCK_M, atol=1e-3)
+    np.testing.assert_allclose(res.isb_m[20:, 0], TRUTH_ISB_E_M, atol=1e-3)
+    assert np.all(res.dof[:20] == res.used[:20].sum(axis=1) - 4)
 
 
 def test_sample_solution_columns_and_statuses() -> None:

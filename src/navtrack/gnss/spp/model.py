@@ -25,7 +25,7 @@ from navtrack.gnss.spp.config import (
 )
 from navtrack.gnss.spp.measurements import Measurements
 
-__all__ = ["Geometry", "PseudorangeModel", "measurement_variance"]
+__all__ = ["Geometry", "PseudorangeModel", "measurement_variance", "reference_group"]
 
 
 class Geometry(Record):
@@ -124,7 +124,19 @@ class PseudorangeModel(Record):
         valid &= np.isfinite(v) & np.isfinite(var) & (var > 0)
         w = np.where(valid, 1.0 / np.where(valid, var, 1.0), 0.0)
         J[~valid] = 0.0
+        # An epoch without a satellite of the first clock group: the clock column carries the
+        # first group that has one, whose bias column would repeat it (a singular system)
+        ref = reference_group(valid, m.group, n_groups)
+        rows = np.flatnonzero(ref > 0)
+        J[rows, :, 3 + ref[rows]] = 0.0
         return np.where(valid, v, 0.0), J, w, valid
+
+
+def reference_group(used: BoolArray, group: IntArray, n_groups: int) -> IntArray:
+    """Clock group of each epoch's receiver clock: the first group with a used satellite
+    (0 where the epoch has none at all). Its inter-system bias is not estimated."""
+    seen = np.stack([(used & (group == k)).any(axis=1) for k in range(n_groups)], axis=1)
+    return np.argmax(seen, axis=1)
 
 
 def _cells(per_epoch: FloatArray, cells: BoolArray) -> FloatArray:

@@ -11,6 +11,7 @@ from navtrack._typing import BoolArray, FloatArray, Int8Array, IntArray
 from navtrack.gnss.spp.config import STATUS_NAMES, SppStatus
 from navtrack.gnss.spp.estimate import PositionEstimate
 from navtrack.gnss.spp.measurements import Measurements
+from navtrack.gnss.spp.model import reference_group
 
 __all__ = ["SppResult", "concatenate_results", "solution_frame", "spp_result"]
 
@@ -29,7 +30,8 @@ class SppResult(Record):
     pos_m : ndarray, shape (E, 3)
         ECEF position (m); NaN where ``status`` is not ``ok`` and no estimate exists.
     clock_m : ndarray, shape (E,)
-        Receiver clock offset times c (m) of the first clock group.
+        Receiver clock offset times c (m) of the first clock group; in an epoch without a used
+        satellite of that group, of the first group that has one (whose ``isb_m`` is then NaN).
     isb_m : ndarray, shape (E, G-1)
         Inter-system biases (m) of the other clock groups (NaN where the group had no satellite).
     cov : ndarray, shape (E, 3+G, 3+G)
@@ -117,6 +119,12 @@ def spp_result(
     solved = np.isin(status, (SppStatus.OK, SppStatus.REJECTED_VALIDITY, SppStatus.HIGH_DOP))
     valid = estimate.used
     group_seen = np.stack([(valid & (meas.group == k)).any(axis=1) for k in range(n_groups)], 1)
+    # the clock of an epoch without the first group is that of its reference group (the
+    # group's bias, held at its start value, is added back; the bias itself is not estimated)
+    ref = reference_group(valid, meas.group, n_groups)
+    rows = np.arange(n_e)
+    clock = x[:, 3] + np.where(ref > 0, x[rows, 3 + ref], 0.0)
+    group_seen[rows, ref] &= ref == 0
     cov_enu = np.einsum("eij,ejk,elk->eil", rot, estimate.cov[:, :3, :3], rot)
     w = estimate.weights
     return SppResult(
@@ -124,7 +132,7 @@ def spp_result(
         sats=meas.sats,
         clock_groups=meas.clock_groups,
         pos_m=np.where(solved[:, None], x[:, :3], np.nan),
-        clock_m=np.where(solved, x[:, 3], np.nan),
+        clock_m=np.where(solved, clock, np.nan),
         isb_m=np.where(solved[:, None] & group_seen[:, 1:], x[:, 4:], np.nan),
         cov=estimate.cov,
         cov_enu_m2=np.where(solved[:, None, None], cov_enu, np.nan),
