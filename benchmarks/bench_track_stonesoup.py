@@ -90,8 +90,9 @@ SCAN_S = {"aircraft": 5.0, "ships": 1.0, "adsb": 1.0}
 EPOCH = dt.datetime(2000, 1, 1)
 
 
-def load(path: Path, fmt: str | None) -> dict[str, tuple]:
-    """First and second halves: (t, en, vel, ids) with stale repeats left out, the scoring
+def load(path: Path, fmt: str | None, split: bool = True) -> dict[str, tuple]:
+    """The file's first and second halves (``h1``, ``h2``; with ``split=False`` the whole
+    file as ``all``), each as (t, en, vel, ids) with stale repeats left out, the scoring
     truth (fresh reports within each id), and (t, en, vel) as read (``auto`` tunes on them,
     as ``navtrack track`` does)."""
     det = read_tracks(path, fmt)
@@ -101,8 +102,9 @@ def load(path: Path, fmt: str | None) -> dict[str, tuple]:
     use = ~stale_repeats(t, en, det.speed_mps)
     fresh = ~stale_repeats(t, en, det.speed_mps, ids)
     mid = 0.5 * (t[0] + t[-1])
+    parts = {"h1": t < mid, "h2": t >= mid} if split else {"all": np.ones(t.size, bool)}
     out = {}
-    for half, part in (("h1", t < mid), ("h2", t >= mid)):
+    for half, part in parts.items():
         k, f = part & use, part & fresh
         out[half] = (
             (t[k], en[k], vel[k], ids[k]),

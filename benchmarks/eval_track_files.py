@@ -105,13 +105,18 @@ def peer_cell(s: Scores) -> str:
     return f"{s.mota:.3f} / {s.hota:.3f} / {s.idf1:.3f} / {s.id_switches} / {s.n_tracks}:{s.n_ids}"
 
 
-def tuned_peer(path: Path, kind: str, associator: str) -> tuple[str, str, float]:
-    """Stone Soup tuned on the first half by HOTA and scored on the second: the cell, the
-    chosen setting with the first half's grid, and the second half's tracking time."""
-    halves = peer.load(path, None)
-    best, lines = peer.tune_on_first_half(halves["h1"], kind, associator)
+def tuned_peer(path: Path, h2: Path, kind: str, associator: str) -> tuple[str, str, float]:
+    """Stone Soup tuned on the first half of ``path`` by HOTA and scored on the second half
+    as written to ``h2`` (the file ``navtrack track`` reads, so that both see the same
+    reports and truth): the cell, the chosen setting with the first half's grid, and the
+    second half's tracking time."""
+    best, lines = peer.tune_on_first_half(peer.load(path, None)["h1"], kind, associator)
     scores, elapsed = peer.score_stonesoup(
-        halves["h2"], associator, best, peer.FIXED[kind], peer.SCAN_S[kind]
+        peer.load(h2, None, split=False)["all"],
+        associator,
+        best,
+        peer.FIXED[kind],
+        peer.SCAN_S[kind],
     )
     return peer_cell(scores), f"q={best['q']:g}, delete {best['delete_s']:g} s; {lines}", elapsed
 
@@ -128,7 +133,7 @@ def evaluate(name: str, path: Path, kind: str, associators: list[str], with_peer
                 f"  navtrack {a}: {row[f'navtrack {a}']}; h2 {row[f'navtrack {a} h2']}", flush=True
             )
             if with_peer:
-                cell, grid, elapsed = tuned_peer(path, kind, a)
+                cell, grid, elapsed = tuned_peer(path, h2, kind, a)
                 row[f"stonesoup {a} h2"], row[f"stonesoup {a} grid"] = cell, grid
                 row[f"stonesoup {a} h2 s"] = elapsed
                 print(f"  Stone Soup {a}: {cell} ({grid}; h2 {elapsed:.0f} s)", flush=True)
