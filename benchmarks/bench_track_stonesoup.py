@@ -73,7 +73,7 @@ FILES = {
 # per kind of file: ADS-B at ~10 s (aircraft), at 1-5 s (adsb), AIS (ships)
 GRID = {
     "aircraft": {"q": (30.0, 300.0, 3000.0), "delete_s": (30.0, 60.0)},
-    "ships": {"q": (1e-3, 1e-2, 1e-1), "delete_s": (300.0, 600.0)},
+    "ships": {"q": (1e-3, 1e-2, 1e-1), "delete_s": (600.0,)},
     "adsb": {"q": (3.0, 30.0, 300.0), "delete_s": (20.0, 60.0)},
 }
 FIXED = {

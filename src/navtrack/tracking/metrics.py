@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
+from scipy.spatial import ConvexHull, Delaunay, QhullError
 
 from navtrack._typing import ArrayLike, FloatArray, IntArray
 
@@ -603,8 +604,6 @@ def truth_gaps(
 def outside_coverage(points: ArrayLike, reports: ArrayLike) -> np.ndarray:
     """Which of ``points (P, 2)`` lie outside the convex hull of ``reports (N, 2)`` (the area
     a recording covers; all outside when the reports span no area)."""
-    from scipy.spatial import ConvexHull, Delaunay, QhullError
-
     p = np.asarray(points, dtype=float).reshape(-1, 2)
     r = np.unique(np.asarray(reports, dtype=float).reshape(-1, 2), axis=0)
     try:
