@@ -105,12 +105,17 @@ def peer_cell(s: Scores) -> str:
     return f"{s.mota:.3f} / {s.hota:.3f} / {s.idf1:.3f} / {s.id_switches} / {s.n_tracks}:{s.n_ids}"
 
 
-def tuned_peer(path: Path, h2: Path, kind: str, associator: str) -> tuple[str, str, float]:
-    """Stone Soup tuned on the first half of ``path`` by HOTA and scored on the second half
-    as written to ``h2`` (the file ``navtrack track`` reads, so that both see the same
-    reports and truth): the cell, the chosen setting with the first half's grid, and the
-    second half's tracking time."""
-    best, lines = peer.tune_on_first_half(peer.load(path, None)["h1"], kind, associator)
+def tuned_peer(
+    path: Path, h2: Path, kind: str, associator: str, setting: dict | None = None
+) -> tuple[str, str, float]:
+    """Stone Soup tuned on the first half of ``path`` by HOTA (or at ``setting``, not
+    searched) and scored on the second half as written to ``h2`` (the file ``navtrack
+    track`` reads, so that both see the same reports and truth): the cell, the chosen
+    setting with the first half's grid, and the second half's tracking time."""
+    if setting is None:
+        best, lines = peer.tune_on_first_half(peer.load(path, None)["h1"], kind, associator)
+    else:
+        best, lines = setting, "given with --peer-setting, not searched"
     scores, elapsed = peer.score_stonesoup(
         peer.load(h2, None, split=False)["all"],
         associator,
@@ -121,7 +126,14 @@ def tuned_peer(path: Path, h2: Path, kind: str, associator: str) -> tuple[str, s
     return peer_cell(scores), f"q={best['q']:g}, delete {best['delete_s']:g} s; {lines}", elapsed
 
 
-def evaluate(name: str, path: Path, kind: str, associators: list[str], with_peer: bool) -> dict:
+def evaluate(
+    name: str,
+    path: Path,
+    kind: str,
+    associators: list[str],
+    with_peer: bool,
+    setting: dict | None = None,
+) -> dict:
     """Every cell of one file."""
     row: dict = {"file": name, "kind": kind}
     with tempfile.TemporaryDirectory() as tmp:
@@ -133,7 +145,7 @@ def evaluate(name: str, path: Path, kind: str, associators: list[str], with_peer
                 f"  navtrack {a}: {row[f'navtrack {a}']}; h2 {row[f'navtrack {a} h2']}", flush=True
             )
             if with_peer:
-                cell, grid, elapsed = tuned_peer(path, h2, kind, a)
+                cell, grid, elapsed = tuned_peer(path, h2, kind, a, setting)
                 row[f"stonesoup {a} h2"], row[f"stonesoup {a} grid"] = cell, grid
                 row[f"stonesoup {a} h2 s"] = elapsed
                 print(f"  Stone Soup {a}: {cell} ({grid}; h2 {elapsed:.0f} s)", flush=True)
@@ -168,9 +180,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--associators", default="gnn,jpda")
     ap.add_argument("--no-peer", action="store_true", help="navtrack's cells only")
     ap.add_argument("--md", type=Path, help="also write the tables to this markdown file")
+    ap.add_argument(
+        "--peer-setting",
+        metavar="Q,DELETE_S",
+        help="run Stone Soup at this q (m^2/s^3) and deletion time (s) instead of searching "
+        "its grid on the first half",
+    )
     a = ap.parse_args(argv)
     associators = a.associators.split(",")
     with_peer = not a.no_peer and peer.stonesoup_installed()
+    setting = None
+    if a.peer_setting:
+        q, delete_s = (float(v) for v in a.peer_setting.split(","))
+        setting = {"q": q, "delete_s": delete_s}
     rows = []
     for item in a.files:
         if item in peer.FILES:
@@ -182,7 +204,7 @@ def main(argv: list[str] | None = None) -> int:
             path = Path(rest)
             kind = kind or kind_of(read_tracks(path))
         print(f"{path.name} ({kind})", flush=True)
-        rows.append(evaluate(path.name, path, kind, associators, with_peer))
+        rows.append(evaluate(path.name, path, kind, associators, with_peer, setting))
     text = tables(rows, associators, with_peer)
     print("\n" + text)
     if a.md:
