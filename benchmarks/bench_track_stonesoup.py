@@ -3,7 +3,9 @@
 Run: ``NAVTRACK_SHARED_DATA=../shared/data PYTHONPATH=src python
 benchmarks/bench_track_stonesoup.py [--files opensky,solent] [--reps 1]``; a file of another
 kind is given as ``KIND:PATH`` (``--files adsb:monterey.csv``; kinds: the keys of
-:data:`GRID`, ``adsb`` for ADS-B at fast report rates in any layout ``navtrack track`` reads).
+:data:`GRID`: ``aircraft`` for ADS-B at ~10 s, ``adsb`` at 1-5 s, ``ships`` for AIS, in any
+layout ``navtrack track`` reads). ``benchmarks/eval_track_files.py`` builds issue 32's table
+from the same functions.
 
 Each file is split in time at the middle of its span. Stone Soup (``stonesoup``, the
 ``compare`` extra) runs the tracker of its own tutorials: a nearly-constant-velocity model per
@@ -26,6 +28,20 @@ window holds one report of a target), each report keeping its own time stamp (St
 hypothesisers predict each track to each detection's time). Tracks are reported at the
 scoring frame times by the CV prediction of their last state, as navtrack reports its own.
 
+Speed without changing a track: Stone Soup's tracker hands every track and every report of a
+scan to its associator, whose hypothesiser predicts each track to each report's time, and
+appends a prediction to every track left without a report; its deleter and initiator then
+walk each track's whole history at every scan. On AIS with 1 s scans that cost 535 s per
+setting on a half of the Solent file. Here (:class:`GatedAssociator`,
+:class:`CandidateHypothesiser`, :class:`ScanTimeDeleter`) the associators see only the tracks
+with a report inside their own gate and, per track, only those reports; a track without
+one is left as it is (a CV prediction in two steps is the prediction in one), and
+``UpdateTimeDeleter``'s rule is asked at the scan time. The transition model is the same
+CV model with its matrices built in closed form (:func:`constant_velocity_2d`).
+``run_stonesoup(..., gated=False)`` runs Stone Soup's components as its tracker does; on the
+first 5 min of the Solent file both give the same tracks at every scan (positions within
+1e-6 m, GNN and JPDA).
+
 The printed times are the tracking alone (navtrack: ``auto``'s tuning separately), medians of
 ``--reps`` alternating runs of the two in one process.
 """
@@ -43,33 +59,40 @@ import numpy as np
 
 from navtrack.io.tracks import read_tracks, stale_repeats, to_local_enu, velocity_local_enu
 from navtrack.tracking.gating import chi2_threshold
-from navtrack.tracking.scoring import Scores, score_tracks, scoring_rule
+from navtrack.tracking.scoring import Scores, ScoringRule, score_tracks, scoring_rule
 from navtrack.tracking.trackers.autotune import auto_config
 from navtrack.tracking.trackers.tracker import TrackerConfig, run_tracker
 
 DATA = Path(os.environ.get("NAVTRACK_SHARED_DATA", "../shared/data")) / "tracking"
 FILES = {
-    "opensky": (DATA / "OpenSky_Plane_States.csv", "opensky"),
-    "solent": (DATA / "SolentAIS_20160112_130211.csv", "ais"),
+    "opensky": (DATA / "OpenSky_Plane_States.csv", "opensky", "aircraft"),
+    "solent": (DATA / "SolentAIS_20160112_130211.csv", "ais", "ships"),
 }
 # Stone Soup's parameters searched on the first half: q (m²/s³), deleter time (s); σ (m),
 # initial velocity standard deviation (m/s), P_D and λ (JPDA) fixed per kind.
+# per kind of file: ADS-B at ~10 s (aircraft), at 1-5 s (adsb), AIS (ships)
 GRID = {
-    "opensky": {"q": (30.0, 300.0, 3000.0), "delete_s": (30.0, 60.0)},
-    "solent": {"q": (1e-3, 1e-2, 1e-1), "delete_s": (300.0, 600.0)},
+    "aircraft": {"q": (30.0, 300.0, 3000.0), "delete_s": (30.0, 60.0)},
+    "ships": {"q": (1e-3, 1e-2, 1e-1), "delete_s": (600.0,)},
     "adsb": {"q": (3.0, 30.0, 300.0), "delete_s": (20.0, 60.0)},
 }
 FIXED = {
-    "opensky": {"sigma_m": 25.0, "v0_mps": 300.0, "pd": 0.9, "clutter": 1e-10},
-    "solent": {"sigma_m": 25.0, "v0_mps": 10.0, "pd": 0.9, "clutter": 1e-7},
+    "aircraft": {"sigma_m": 25.0, "v0_mps": 300.0, "pd": 0.9, "clutter": 1e-10},
+    "ships": {"sigma_m": 25.0, "v0_mps": 10.0, "pd": 0.9, "clutter": 1e-7},
     "adsb": {"sigma_m": 25.0, "v0_mps": 300.0, "pd": 0.9, "clutter": 1e-10},
 }
-SCAN_S = {"opensky": 5.0, "solent": 1.0, "adsb": 1.0}
+GATE_PROBABILITY = 0.9999
+"""Stone Soup's gates (GNN's Mahalanobis distance, JPDA's validation region): chi-square."""
+GATE_SLACK = 1.01
+"""The pre-gate of :class:`GatedAssociator` is this much wider (in squared distance) than
+the hypothesisers' own gate, so that rounding never drops a report they would keep."""
+SCAN_S = {"aircraft": 5.0, "ships": 1.0, "adsb": 1.0}
 EPOCH = dt.datetime(2000, 1, 1)
 
 
-def load(path: Path, fmt: str | None) -> dict[str, tuple]:
-    """First and second halves: (t, en, vel, ids) with stale repeats left out, the scoring
+def load(path: Path, fmt: str | None, split: bool = True) -> dict[str, tuple]:
+    """The file's first and second halves (``h1``, ``h2``; with ``split=False`` the whole
+    file as ``all``), each as (t, en, vel, ids) with stale repeats left out, the scoring
     truth (fresh reports within each id), and (t, en, vel) as read (``auto`` tunes on them,
     as ``navtrack track`` does)."""
     det = read_tracks(path, fmt)
@@ -79,8 +102,9 @@ def load(path: Path, fmt: str | None) -> dict[str, tuple]:
     use = ~stale_repeats(t, en, det.speed_mps)
     fresh = ~stale_repeats(t, en, det.speed_mps, ids)
     mid = 0.5 * (t[0] + t[-1])
+    parts = {"h1": t < mid, "h2": t >= mid} if split else {"all": np.ones(t.size, bool)}
     out = {}
-    for half, part in (("h1", t < mid), ("h2", t >= mid)):
+    for half, part in parts.items():
         k, f = part & use, part & fresh
         out[half] = (
             (t[k], en[k], vel[k], ids[k]),
@@ -90,11 +114,149 @@ def load(path: Path, fmt: str | None) -> dict[str, tuple]:
     return out
 
 
+class GatedAssociator:
+    """Stone Soup's associator over the tracks that can take a report of the scan.
+
+    Before the wrapped associator runs, each track's last state is predicted (same CV model)
+    to each report's time and the reports outside its Mahalanobis gate are found in one array
+    operation; only tracks with a report inside (``GATE_SLACK`` wider than the hypothesiser's
+    own gate) and those reports reach the associator. A track left out would have received
+    only the missed-detection hypothesis, i.e. its prediction to the scan time; since a CV
+    prediction to t1 then to t2 equals the prediction to t2, and the deleter is asked at the
+    scan time (:class:`ScanTimeDeleter`), leaving it untouched changes no track. For the same
+    reason a track whose GNN hypothesis is the missed detection is left out of the answer
+    (JPDA's mixture of a missed track still moves it, and is kept).
+    """
+
+    def __init__(self, associator, q: float, noise_covar: np.ndarray, gate2: float) -> None:
+        from stonesoup.types.multihypothesis import MultipleHypothesis
+
+        self.mixture = MultipleHypothesis
+
+        self.associator, self.q, self.R = associator, q, noise_covar
+        self.hypothesiser = CandidateHypothesiser(associator.hypothesiser)
+        associator.hypothesiser = self.hypothesiser
+        self.gate2 = gate2 * GATE_SLACK
+
+    def associate(self, tracks, detections, timestamp, **kwargs):
+        tracks, dets = list(tracks), list(detections)
+        if not tracks or not dets:
+            return self.associator.associate(set(tracks), set(dets), timestamp, **kwargs)
+        x = np.stack([np.asarray(tr.state_vector, dtype=float).ravel() for tr in tracks])
+        P = np.stack([np.asarray(tr.covar, dtype=float) for tr in tracks])
+        t0 = np.array([(tr.timestamp - EPOCH).total_seconds() for tr in tracks])
+        z = np.stack([np.asarray(d.state_vector, dtype=float).ravel() for d in dets])
+        tz = np.array([(d.timestamp - EPOCH).total_seconds() for d in dets])
+        dt = tz[None, :] - t0[:, None]  # (T, D)
+        G = np.zeros((*dt.shape, 2, 4))
+        G[..., 0, 0] = G[..., 1, 2] = 1.0
+        G[..., 0, 1] = G[..., 1, 3] = dt
+        S = np.einsum("tdij,tjk,tdlk->tdil", G, P, G) + self.R
+        S[..., 0, 0] += self.q * np.abs(dt) ** 3 / 3.0
+        S[..., 1, 1] += self.q * np.abs(dt) ** 3 / 3.0
+        e = z[None, :, :] - np.einsum("tdij,tj->tdi", G, x)
+        d2 = np.einsum("tdi,tdi->td", e, np.linalg.solve(S, e[..., None])[..., 0])
+        near = d2 <= self.gate2
+        keep_t, keep_d = near.any(axis=1), near.any(axis=0)
+        self.hypothesiser.candidates = {
+            tr: {d for d, k in zip(dets, row, strict=True) if k}
+            for tr, row in zip(tracks, near, strict=True)
+            if row.any()
+        }
+        out = self.associator.associate(
+            {tr for tr, k in zip(tracks, keep_t, strict=True) if k},
+            {d for d, k in zip(dets, keep_d, strict=True) if k},
+            timestamp,
+            **kwargs,
+        )
+        # a single missed-detection hypothesis (GNN) is the prediction alone: left out too
+        return {tr: h for tr, h in out.items() if isinstance(h, self.mixture) or h}
+
+
+class CandidateHypothesiser:
+    """Stone Soup's hypothesiser given, for each track, only the reports inside the track's
+    pre-gate (:class:`GatedAssociator`): the others would get no hypothesis from it."""
+
+    def __init__(self, hypothesiser) -> None:
+        self.hypothesiser = hypothesiser
+        self.candidates: dict = {}
+
+    def hypothesise(self, track, detections, timestamp, **kwargs):
+        own = self.candidates.get(track, set()) & set(detections)
+        return self.hypothesiser.hypothesise(track, own, timestamp, **kwargs)
+
+
+class ScanTimeDeleter:
+    """Stone Soup's deleter asked at the time of the scan (as its tracker does when every
+    track holds a state at the scan time), so that a track :class:`GatedAssociator` left
+    untouched is deleted when its last update is older than the deleter's time."""
+
+    def __init__(self, deleter, clock: list) -> None:
+        self.deleter, self.clock = deleter, clock
+
+    def delete_tracks(self, tracks, **kwargs):
+        """``UpdateTimeDeleter``'s rule (no update with a measurement within its time before
+        the scan time), read from the newest state back to that time: its own time slice of
+        a track looks at every state the track ever had."""
+        since = self.clock[0] - self.deleter.time_since_update
+        return {tr for tr in tracks if not _updated_since(tr.states, since)}
+
+
+def _updated_since(states: list, since: dt.datetime) -> bool:
+    from stonesoup.types.update import Update
+
+    for state in reversed(states):
+        if state.timestamp < since:
+            return False
+        if isinstance(state, Update) and state.hypothesis:
+            return True
+    return False
+
+
+def constant_velocity_2d(q: float):
+    """Stone Soup's ``CombinedLinearGaussianTransitionModel([ConstantVelocity(q)] * 2)`` as
+    one model with the same matrices (state x, vx, y, vy) built in closed form: the combined
+    model assembles them by ``scipy.linalg.block_diag`` at every prediction."""
+    from stonesoup.base import Property
+    from stonesoup.models.base import TimeVariantModel
+    from stonesoup.models.transition.linear import LinearGaussianTransitionModel
+    from stonesoup.types.array import CovarianceMatrix
+
+    class ConstantVelocity2D(LinearGaussianTransitionModel, TimeVariantModel):
+        noise_diff_coeff: float = Property(doc="q, m²/s³, on both axes")
+
+        @property
+        def ndim_state(self) -> int:
+            return 4
+
+        def matrix(self, time_interval, **kwargs):
+            F = np.eye(4)
+            F[0, 1] = F[2, 3] = time_interval.total_seconds()
+            return F
+
+        def covar(self, time_interval, **kwargs):
+            d = abs(time_interval.total_seconds())
+            b = self.noise_diff_coeff * np.array([[d**3 / 3, d**2 / 2], [d**2 / 2, d]])
+            Q = np.zeros((4, 4))
+            Q[:2, :2] = Q[2:, 2:] = b
+            return CovarianceMatrix(Q)
+
+    return ConstantVelocity2D(q)
+
+
 def run_stonesoup(
-    t: np.ndarray, en: np.ndarray, assoc: str, q: float, delete_s: float, fixed: dict, scan_s: float
+    t: np.ndarray,
+    en: np.ndarray,
+    assoc: str,
+    q: float,
+    delete_s: float,
+    fixed: dict,
+    scan_s: float,
+    gated: bool = True,
 ) -> tuple[list[float], list[list[tuple[int, float, np.ndarray]]]]:
     """Stone Soup over the reports; per scan: its time and the live tracks as (id, time of
-    last state, state)."""
+    last state, state). ``gated=False`` hands every track and report of a scan to Stone
+    Soup's associators as its tracker does (same tracks, slower)."""
     from stonesoup.dataassociator.neighbour import GNNWith2DAssignment
     from stonesoup.dataassociator.probability import JPDAwithEHM2
     from stonesoup.deleter.time import UpdateTimeDeleter
@@ -114,18 +276,32 @@ def run_stonesoup(
     from stonesoup.updater.kalman import KalmanUpdater
 
     s2 = fixed["sigma_m"] ** 2
-    transition = CombinedLinearGaussianTransitionModel([ConstantVelocity(q), ConstantVelocity(q)])
+    transition = (
+        constant_velocity_2d(q)
+        if gated
+        else CombinedLinearGaussianTransitionModel([ConstantVelocity(q), ConstantVelocity(q)])
+    )
     measurement = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.diag([s2, s2]))
     predictor = KalmanPredictor(transition)
     updater = KalmanUpdater(measurement)
-    gate = float(np.sqrt(chi2_threshold(0.9999, 2)))
-    gnn = GNNWith2DAssignment(DistanceHypothesiser(predictor, updater, Mahalanobis(), gate))
-    deleter = UpdateTimeDeleter(dt.timedelta(seconds=delete_s))
+    gate2 = chi2_threshold(GATE_PROBABILITY, 2)
+    clock = [EPOCH]
+
+    def gated_gnn():
+        hyp = DistanceHypothesiser(predictor, updater, Mahalanobis(), float(np.sqrt(gate2)))
+        associator = GNNWith2DAssignment(hyp)
+        return (
+            GatedAssociator(associator, q, measurement.noise_covar, gate2) if gated else associator
+        )
+
+    def deleter():
+        return ScanTimeDeleter(UpdateTimeDeleter(dt.timedelta(seconds=delete_s)), clock)
+
     v2 = fixed["v0_mps"] ** 2
     initiator = MultiMeasurementInitiator(
         GaussianState(np.zeros((4, 1)), np.diag([s2, v2, s2, v2])),
-        UpdateTimeDeleter(dt.timedelta(seconds=delete_s)),
-        GNNWith2DAssignment(DistanceHypothesiser(predictor, updater, Mahalanobis(), gate)),
+        deleter(),
+        gated_gnn(),
         updater,
         measurement,
         min_points=3,
@@ -144,7 +320,8 @@ def run_stonesoup(
                 )
                 for j in range(a, b)
             }
-            yield EPOCH + dt.timedelta(seconds=float(t[b - 1] - t[0])), dets
+            clock[0] = EPOCH + dt.timedelta(seconds=float(t[b - 1] - t[0]))
+            yield clock[0], dets
 
     class Reader:
         def __iter__(self):
@@ -155,13 +332,19 @@ def run_stonesoup(
             return set()
 
     if assoc == "gnn":
-        tracker = MultiTargetTracker(initiator, deleter, Reader(), gnn, updater)
+        tracker = MultiTargetTracker(initiator, deleter(), Reader(), gated_gnn(), updater)
     else:
         hyp = PDAHypothesiser(
-            predictor, updater, fixed["clutter"], prob_detect=fixed["pd"], prob_gate=0.9999
+            predictor,
+            updater,
+            fixed["clutter"],
+            prob_detect=fixed["pd"],
+            prob_gate=GATE_PROBABILITY,
         )
         jpda = JPDAwithEHM2(hyp)
-        tracker = MultiTargetMixtureTracker(initiator, deleter, Reader(), jpda, updater)
+        if gated:
+            jpda = GatedAssociator(jpda, q, measurement.noise_covar, gate2)
+        tracker = MultiTargetMixtureTracker(initiator, deleter(), Reader(), jpda, updater)
     times: list[float] = []
     live: list[list[tuple[int, float, np.ndarray]]] = []
     names: dict[int, int] = {}
@@ -202,10 +385,17 @@ def report(
     )
 
 
+def _grid(half: tuple) -> tuple[np.ndarray, ScoringRule]:
+    """The command's scoring frames and rule for a half: from the first report read, every
+    ``report_s`` (:mod:`navtrack.tracking.scoring`)."""
+    _use, (tf, _ef, idf), (t_read, _en, _vel) = half
+    rule = scoring_rule(tf, idf)
+    return t_read[0] + np.arange(0.0, t_read[-1] - t_read[0] + 1e-9, rule.report_s), rule
+
+
 def score_stonesoup(half: tuple, assoc: str, setting: dict, fixed: dict, scan_s: float) -> tuple:
     (t, en, _vel, _ids), (tf, ef, idf), _read = half
-    rule = scoring_rule(tf, idf)
-    grid = t[0] + np.arange(0.0, t[-1] - t[0] + 1e-9, rule.report_s)
+    grid, rule = _grid(half)
     clock = time.perf_counter()
     times, live = run_stonesoup(t, en, assoc, setting["q"], setting["delete_s"], fixed, scan_s)
     elapsed = time.perf_counter() - clock
@@ -214,8 +404,7 @@ def score_stonesoup(half: tuple, assoc: str, setting: dict, fixed: dict, scan_s:
 
 def score_navtrack(half: tuple, assoc: str, cfg: TrackerConfig) -> tuple[Scores, float]:
     (t, en, vel, _ids), (tf, ef, idf), _read = half
-    rule = scoring_rule(tf, idf)
-    grid = t[0] + np.arange(0.0, t[-1] - t[0] + 1e-9, rule.report_s)
+    grid, rule = _grid(half)
     clock = time.perf_counter()
     res = run_tracker(t, en, cfg, report_times=grid, velocity=vel)
     elapsed = time.perf_counter() - clock
@@ -223,9 +412,65 @@ def score_navtrack(half: tuple, assoc: str, cfg: TrackerConfig) -> tuple[Scores,
     return score_tracks(grid, tf, ef, idf, *args), elapsed
 
 
+def tune_on_first_half(h1: tuple, kind: str, assoc: str) -> tuple[dict, str]:
+    """Stone Soup's best setting of ``GRID[kind]`` on the first half by HOTA, and its grid
+    as text (HOTA per setting)."""
+    best, best_h, lines = {}, -np.inf, []
+    for q in GRID[kind]["q"]:
+        for d in GRID[kind]["delete_s"]:
+            st = {"q": q, "delete_s": d}
+            sc, el = score_stonesoup(h1, assoc, st, FIXED[kind], SCAN_S[kind])
+            print(
+                f"  h1 q={q:g} delete={d:g} s: HOTA {sc.hota:.3f} / MOTA {sc.mota:.3f} / "
+                f"IDF1 {sc.idf1:.3f} / {sc.id_switches} switches ({el:.1f} s)",
+                flush=True,
+            )
+            lines.append(f"{q:g}/{d:g} s {sc.hota:.3f}")
+            if sc.hota > best_h:
+                best, best_h = st, sc.hota
+    return best, "h1 HOTA by q/delete: " + ", ".join(lines)
+
+
+def stonesoup_installed() -> bool:
+    try:
+        import stonesoup  # noqa: F401
+    except ImportError:
+        print("Stone Soup is not installed (pip install -e '.[compare]'): nothing to compare")
+        return False
+    return True
+
+
 def _row(name: str, s: Scores, confirmed: str) -> str:
     return (
         f"| {name} | {s.hota:.3f} | {s.mota:.3f} | {s.idf1:.3f} | {s.id_switches} | {confirmed} |"
+    )
+
+
+def compare(halves: dict, kind: str, assoc: str, reps: int) -> None:
+    """Stone Soup tuned on h1 beside navtrack (``auto`` on h2 without its ids) on h2."""
+    best, _grid_text = tune_on_first_half(halves["h1"], kind, assoc)
+    h2 = halves["h2"]
+    clock = time.perf_counter()
+    t2, en2, vel2 = h2[2]
+    cfg = auto_config(t2, en2, vel2, assoc).config
+    tune_s = time.perf_counter() - clock
+    t_ss, t_nt = [], []
+    for _ in range(reps):
+        ss, el = score_stonesoup(h2, assoc, best, FIXED[kind], SCAN_S[kind])
+        t_ss.append(el)
+        nt, el = score_navtrack(h2, assoc, cfg)
+        t_nt.append(el)
+    print(f"\nh2, {assoc} (Stone Soup: q={best['q']:g}, delete {best['delete_s']:g} s)")
+    print("| tracker | HOTA | MOTA | IDF1 | id switches | tracks / ids |")
+    print("|---|---|---|---|---|---|")
+    print(_row("Stone Soup, tuned on h1", ss, f"{ss.n_tracks} / {ss.n_ids}"))
+    print(_row("navtrack, no flags", nt, f"{nt.n_tracks} / {nt.n_ids}"))
+    med_ss, med_nt = float(np.median(t_ss)), float(np.median(t_nt))
+    print(
+        f"tracking time (s): Stone Soup {med_ss:.2f}, navtrack {med_nt:.2f} "
+        f"(+ {tune_s:.2f} auto tuning); ratio Stone Soup / navtrack {med_ss / med_nt:.1f}, "
+        f"with navtrack's tuning {med_ss / (med_nt + tune_s):.1f}",
+        flush=True,
     )
 
 
@@ -235,56 +480,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--associators", default="gnn,jpda")
     ap.add_argument("--reps", type=int, default=1)
     a = ap.parse_args(argv)
-    try:
-        import stonesoup  # noqa: F401
-    except ImportError:
-        print("Stone Soup is not installed (pip install -e '.[compare]'): nothing to compare")
+    if not stonesoup_installed():
         return 0
     for item in a.files.split(","):
-        name, _, path = item.partition(":")
-        halves = load(Path(path), None) if path else load(*FILES[name])
-        fixed, scan_s = FIXED[name], SCAN_S[name]
-        settings = [
-            {"q": q, "delete_s": d} for q in GRID[name]["q"] for d in GRID[name]["delete_s"]
-        ]
+        kind, _, path = item.partition(":")
+        if path:
+            halves = load(Path(path), None)
+        else:
+            path_, fmt, kind = FILES[item]
+            halves = load(path_, fmt)
         for assoc in a.associators.split(","):
-            print(f"\n{item}, {assoc}: Stone Soup's grid on h1 (HOTA / MOTA / IDF1 / switches)")
-            best, best_h = settings[0], -np.inf
-            for st in settings:
-                sc, el = score_stonesoup(halves["h1"], assoc, st, fixed, scan_s)
-                print(
-                    f"  q={st['q']:g} delete={st['delete_s']:g} s: {sc.hota:.3f} / "
-                    f"{sc.mota:.3f} / {sc.idf1:.3f} / {sc.id_switches} ({el:.1f} s)",
-                    flush=True,
-                )
-                if sc.hota > best_h:
-                    best, best_h = st, sc.hota
-            h2 = halves["h2"]
-            clock = time.perf_counter()
-            t2, en2, vel2 = h2[2]
-            cfg = auto_config(t2, en2, vel2, assoc).config
-            tune_s = time.perf_counter() - clock
-            t_ss, t_nt = [], []
-            for _ in range(a.reps):
-                ss, el = score_stonesoup(h2, assoc, best, fixed, scan_s)
-                t_ss.append(el)
-                nt, el = score_navtrack(h2, assoc, cfg)
-                t_nt.append(el)
-            n_ids = nt.n_ids
-            print(
-                f"\n{name} h2, {assoc} (Stone Soup: q={best['q']:g}, delete {best['delete_s']:g} s)"
-            )
-            print("| tracker | HOTA | MOTA | IDF1 | id switches | tracks / ids |")
-            print("|---|---|---|---|---|---|")
-            print(_row("Stone Soup, tuned on h1", ss, f"{ss.n_tracks} / {n_ids}"))
-            print(_row("navtrack, no flags", nt, f"{nt.n_tracks} / {n_ids}"))
-            med_ss, med_nt = float(np.median(t_ss)), float(np.median(t_nt))
-            print(
-                f"tracking time (s): Stone Soup {med_ss:.2f}, navtrack {med_nt:.2f} "
-                f"(+ {tune_s:.2f} auto tuning); ratio Stone Soup / navtrack {med_ss / med_nt:.1f}, "
-                f"with navtrack's tuning {med_ss / (med_nt + tune_s):.1f}",
-                flush=True,
-            )
+            print(f"\n{item}, {assoc} ({kind}): Stone Soup's grid on h1", flush=True)
+            compare(halves, kind, assoc, a.reps)
     return 0
 
 

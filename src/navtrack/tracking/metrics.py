@@ -17,10 +17,12 @@ References
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
+from scipy.spatial import ConvexHull, Delaunay, QhullError
 
 from navtrack._typing import ArrayLike, FloatArray, IntArray
 
@@ -34,9 +36,12 @@ __all__ = [
     "gospa_sequence",
     "hota",
     "id_scores",
+    "ignored_hypotheses",
     "interpolate_truth",
     "ospa",
+    "outside_coverage",
     "rmse",
+    "truth_gaps",
 ]
 
 
@@ -502,6 +507,55 @@ def id_scores(
     )
 
 
+def _bracket(
+    ft: FloatArray, tk: FloatArray, pk: FloatArray
+) -> tuple[np.ndarray, np.ndarray, FloatArray, FloatArray]:
+    """For frame times ``ft`` and one id's sorted report times ``tk`` / positions ``pk``:
+    whether a report falls on the frame time, whether two reports bracket it, the length of
+    that bracket (s) and the linear interpolation in it."""
+    j = np.searchsorted(tk, ft, side="right")  # tk[j-1] <= ft < tk[j]
+    exact = (j >= 1) & (tk[np.clip(j - 1, 0, None)] == ft)
+    inside = (j >= 1) & (j < tk.size)
+    lo = np.clip(j - 1, 0, tk.size - 1)
+    hi = np.clip(j, 0, tk.size - 1)
+    gap = tk[hi] - tk[lo]
+    w = np.where(gap > 0, (ft - tk[lo]) / np.where(gap > 0, gap, 1.0), 0.0)
+    w = np.where(exact, 0.0, w)[:, None]
+    return exact, inside, gap, (1 - w) * pk[lo] + w * pk[hi]
+
+
+def _per_id(
+    frame_times: ArrayLike,
+    t: ArrayLike,
+    ids: ArrayLike,
+    pos: ArrayLike,
+    present: Callable[[np.ndarray, np.ndarray, FloatArray], np.ndarray],
+) -> tuple[IntArray, np.ndarray, FloatArray]:
+    """Interpolated positions of each id at the frame times where ``present(exact, inside,
+    gap)`` holds (:func:`_bracket`), flat over (frame, id) pairs."""
+    ft = np.asarray(frame_times, dtype=float)
+    t = np.asarray(t, dtype=float)
+    ids = np.asarray(ids)
+    pos = np.asarray(pos, dtype=float)
+    out_f: list[IntArray] = []
+    out_i: list[np.ndarray] = []
+    out_p: list[FloatArray] = []
+    for u in np.unique(ids):
+        k = np.flatnonzero(ids == u)
+        k = k[np.argsort(t[k], kind="stable")]
+        exact, inside, gap, p = _bracket(ft, t[k], pos[k])
+        ok = present(exact, inside, gap)
+        if not ok.any():
+            continue
+        f = np.flatnonzero(ok)
+        out_f.append(f)
+        out_i.append(np.full(f.size, u, dtype=ids.dtype))
+        out_p.append(p[ok])
+    if not out_f:
+        return np.zeros(0, np.int64), np.zeros(0, ids.dtype), np.zeros((0, pos.shape[-1]))
+    return (np.concatenate(out_f).astype(np.int64), np.concatenate(out_i), np.concatenate(out_p))
+
+
 def interpolate_truth(
     frame_times: ArrayLike, t: ArrayLike, ids: ArrayLike, pos: ArrayLike, max_gap_s: float
 ) -> tuple[IntArray, np.ndarray, FloatArray]:
@@ -518,33 +572,87 @@ def interpolate_truth(
     -------
     frame (K,) int, id (K,), position (K, d), flat over (frame, id) pairs present
     """
-    ft = np.asarray(frame_times, dtype=float)
-    t = np.asarray(t, dtype=float)
-    ids = np.asarray(ids)
-    pos = np.asarray(pos, dtype=float)
-    out_f: list[IntArray] = []
-    out_i: list[np.ndarray] = []
-    out_p: list[FloatArray] = []
-    for u in np.unique(ids):
-        k = np.flatnonzero(ids == u)
-        k = k[np.argsort(t[k], kind="stable")]
-        tk, pk = t[k], pos[k]
-        j = np.searchsorted(tk, ft, side="right")  # tk[j-1] <= ft < tk[j]
-        exact = (j >= 1) & (tk[np.clip(j - 1, 0, None)] == ft)
-        inside = (j >= 1) & (j < tk.size)
-        lo = np.clip(j - 1, 0, tk.size - 1)
-        hi = np.clip(j, 0, tk.size - 1)
-        gap = tk[hi] - tk[lo]
-        ok = exact | (inside & (gap <= max_gap_s))
-        if not ok.any():
+    return _per_id(
+        frame_times,
+        t,
+        ids,
+        pos,
+        lambda exact, inside, gap: exact | (inside & (gap <= max_gap_s)),
+    )
+
+
+def truth_gaps(
+    frame_times: ArrayLike,
+    t: ArrayLike,
+    ids: ArrayLike,
+    pos: ArrayLike,
+    max_gap_s: float,
+    longest_gap_s: float,
+) -> tuple[IntArray, np.ndarray, FloatArray]:
+    """Where each id was between two of its reports more than ``max_gap_s`` and at most
+    ``longest_gap_s`` apart (linear between them): the frames :func:`interpolate_truth` leaves
+    out inside the id's own reporting gaps. Same arguments and returns."""
+    return _per_id(
+        frame_times,
+        t,
+        ids,
+        pos,
+        lambda exact, inside, gap: ~exact & inside & (gap > max_gap_s) & (gap <= longest_gap_s),
+    )
+
+
+def outside_coverage(points: ArrayLike, reports: ArrayLike) -> np.ndarray:
+    """Which of ``points (P, 2)`` lie outside the convex hull of ``reports (N, 2)`` (the area
+    a recording covers; all outside when the reports span no area)."""
+    p = np.asarray(points, dtype=float).reshape(-1, 2)
+    r = np.unique(np.asarray(reports, dtype=float).reshape(-1, 2), axis=0)
+    try:
+        hull = Delaunay(r[ConvexHull(r).vertices])
+    except (QhullError, ValueError, IndexError):
+        return np.ones(p.shape[0], dtype=bool)
+    return np.asarray(hull.find_simplex(p) < 0)
+
+
+def ignored_hypotheses(
+    tf: ArrayLike,
+    tpos: ArrayLike,
+    gf: ArrayLike,
+    gpos: ArrayLike,
+    hf: ArrayLike,
+    hpos: ArrayLike,
+    threshold: float,
+    outside: ArrayLike | None = None,
+) -> np.ndarray:
+    """Hypotheses left out of the scores: those that match an ignored true position (a
+    don't-care object, as TrackEval removes tracker boxes on MOTChallenge's distractors
+    before scoring), and those flagged ``outside`` that match no true position.
+
+    In each frame the hypotheses ``hf, hpos`` are matched one-to-one to the true positions
+    ``tf, tpos`` and the ignored ones ``gf, gpos`` together (fewest total distance among the
+    assignments with the most pairs within ``threshold``).
+
+    Returns
+    -------
+    (H,) bool, True for the hypotheses to leave out of the scores
+    """
+    tf, gf, hf = (np.asarray(a, dtype=np.int64) for a in (tf, gf, hf))
+    tpos, gpos, hpos = (np.asarray(a, dtype=float) for a in (tpos, gpos, hpos))
+    out = np.zeros(hf.size, dtype=bool) if outside is None else np.asarray(outside, dtype=bool)
+    out = out.copy()
+    frames = np.intersect1d(np.union1d(gf, hf[out]), hf)
+    if frames.size == 0:
+        return out
+    allf = np.r_[tf, gf]
+    allpos = np.concatenate([tpos.reshape(-1, hpos.shape[-1]), gpos], axis=0)
+    for rows, hyp in _frame_rows(allf, hf, frames):
+        if rows.size == 0:
             continue
-        w = np.where(gap > 0, (ft - tk[lo]) / np.where(gap > 0, gap, 1.0), 0.0)
-        w = np.where(exact, 0.0, w)[:, None]
-        p = (1 - w) * pk[lo] + w * pk[hi]
-        f = np.flatnonzero(ok)
-        out_f.append(f)
-        out_i.append(np.full(f.size, u, dtype=ids.dtype))
-        out_p.append(p[ok])
-    if not out_f:
-        return np.zeros(0, np.int64), np.zeros(0, ids.dtype), np.zeros((0, pos.shape[-1]))
-    return (np.concatenate(out_f).astype(np.int64), np.concatenate(out_i), np.concatenate(out_p))
+        d = _dist(allpos[rows], hpos[hyp])
+        ok = d <= threshold
+        # a pair within the threshold always beats leaving both unmatched
+        cost = np.where(ok, d, threshold * (1.0 + d.size))
+        r, c = linear_sum_assignment(cost)
+        r, c = r[ok[r, c]], c[ok[r, c]]
+        out[hyp[c[rows[r] < tf.size]]] = False  # matched to a true position: scored
+        out[hyp[c[rows[r] >= tf.size]]] = True
+    return out

@@ -8,6 +8,22 @@ between two reports at most ``max_gap_s`` apart
 Confirmed tracks predicted to the same frame times are scored against it by CLEAR-MOT,
 HOTA and the identity scores IDF1 / IDP / IDR, all with one match threshold.
 
+Between two reports of an id more than ``max_gap_s`` apart the target is in view of nobody's
+truth: the file does not say where it was. A tracker that coasts a track through such a gap
+is neither right nor wrong there, so at those frames the id is a don't-care object at the
+straight line between the two reports (:func:`~navtrack.tracking.metrics.truth_gaps`), for
+gaps up to ``ignore_gap_s``: a track matched to it (within the threshold, one-to-one with
+the true positions of the frame, :func:`~navtrack.tracking.metrics.ignored_hypotheses`) is
+left out of every score, as TrackEval leaves out tracker boxes on MOTChallenge's
+distractors. A longer silence is a target gone (landed, moored out of range, out of
+coverage), and a track there counts as false.
+
+Likewise a file covers an area (a receiver's range, a region cut out of a larger feed, such
+as a circle around an airport): outside the convex hull of all its reports nothing says
+whether a target is there. A track position outside that hull which matches no true
+position is left out of every score (:func:`~navtrack.tracking.metrics.outside_coverage`);
+inside it, an unmatched track is false.
+
 The grid, the gap and the threshold come from the data, not from the layout
 (:func:`scoring_rule`): the frame interval is the median over the ids of their median
 interval between reports, the largest gap twice the 95 % point of those intervals (at least
@@ -23,9 +39,25 @@ from dataclasses import dataclass
 import numpy as np
 
 from navtrack._typing import ArrayLike, FloatArray
-from navtrack.tracking.metrics import clear_mot, hota, id_scores, interpolate_truth
+from navtrack.tracking.metrics import (
+    clear_mot,
+    hota,
+    id_scores,
+    ignored_hypotheses,
+    interpolate_truth,
+    outside_coverage,
+    truth_gaps,
+)
 
-__all__ = ["MATCH_M", "MIN_GAP_S", "Scores", "ScoringRule", "score_tracks", "scoring_rule"]
+__all__ = [
+    "IGNORE_GAP_S",
+    "MATCH_M",
+    "MIN_GAP_S",
+    "Scores",
+    "ScoringRule",
+    "score_tracks",
+    "scoring_rule",
+]
 
 MATCH_M = 500.0
 """Match threshold (m): a confirmed track within it of a true position may match it."""
@@ -33,15 +65,22 @@ MIN_GAP_S = 60.0
 """The truth is interpolated over gaps of at least this long (s)."""
 MAX_FRAME_S = 60.0
 """The frame interval is at most this long (s), and at least 1 s."""
+IGNORE_GAP_S = 600.0
+"""Longest reporting gap of an id (s) inside which a track on its straight line is not scored
+(docs/tracking.md, "The scoring rule": chosen on the readsb traces of KWVI and Monterey)."""
 
 
 @dataclass(frozen=True, slots=True)
 class ScoringRule:
-    """Frame interval, largest interpolated truth gap (s) and match threshold (m)."""
+    """Frame interval, largest interpolated truth gap (s), match threshold (m), longest gap
+    (s) in which a track on the id's straight line is ignored, and whether tracks outside the
+    area the reports cover are ignored (when they match no true position)."""
 
     report_s: float
     max_gap_s: float
     match_m: float
+    ignore_gap_s: float = IGNORE_GAP_S
+    coverage: bool = True
 
 
 def scoring_rule(t_s: ArrayLike, ids: ArrayLike) -> ScoringRule:
@@ -73,6 +112,8 @@ class Scores:
     idf1, idp, idr : identity scores (:func:`~navtrack.tracking.metrics.id_scores`)
     n_ids : distinct true ids
     n_tracks : distinct track ids reported at the frames (confirmed tracks)
+    n_ignored : track positions left out (on an id inside its reporting gap, or outside the
+        area the reports cover)
     """
 
     mota: float
@@ -92,6 +133,7 @@ class Scores:
     idr: float
     n_ids: int
     n_tracks: int
+    n_ignored: int
 
 
 def score_tracks(
@@ -107,8 +149,13 @@ def score_tracks(
     """Score confirmed tracks at ``frame_times`` (``TrackerResult.report_*``) against the
     truth interpolated from the reports ``t_s, pos (N, 2), ids`` (stale repeats left out)."""
     ids = np.asarray(ids)
+    hf, hid = np.asarray(report_frame), np.asarray(report_id)
+    hxy = np.asarray(report_xy, dtype=float)
     tf, tid, tpos = interpolate_truth(frame_times, t_s, ids, pos, rule.max_gap_s)
-    args = (tf, tid, tpos, report_frame, report_id, report_xy, rule.match_m)
+    gap = truth_gaps(frame_times, t_s, ids, pos, rule.max_gap_s, rule.ignore_gap_s)
+    outside = outside_coverage(hxy, pos) if rule.coverage else None
+    drop = ignored_hypotheses(tf, tpos, gap[0], gap[2], hf, hxy, rule.match_m, outside)
+    args = (tf, tid, tpos, hf[~drop], hid[~drop], hxy[~drop], rule.match_m)
     mot = clear_mot(*args)
     hot = hota(*args)
     ids_ = id_scores(*args)
@@ -129,5 +176,6 @@ def score_tracks(
         idp=ids_.idp,
         idr=ids_.idr,
         n_ids=int(np.unique(ids).size),
-        n_tracks=mot.n_tracks,
+        n_tracks=int(np.unique(hid).size),
+        n_ignored=int(drop.sum()),
     )
