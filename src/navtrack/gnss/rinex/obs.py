@@ -22,7 +22,7 @@ RINEX 4.00 (IGS/RTCM-SC104, 2021), observation tables (same data section as 3.05
 
 from __future__ import annotations
 
-from collections.abc import Collection
+from collections.abc import Collection, Sequence
 from dataclasses import replace
 from os import fspath
 
@@ -39,10 +39,9 @@ from navtrack.gnss.rinex.obs_fields import (
     decode_some,
     field_matrix,
     gather_columns,
-    line_spans,
 )
 from navtrack.gnss.rinex.obs_header import V2_EPOCH, ObsTypes, parse_header, sat_id, to_gps_rinex
-from navtrack.gnss.rinex.obs_scan import EpochScan, scan_v2, scan_v3
+from navtrack.gnss.rinex.obs_scan import EpochScan, TextLines, scan_v2, scan_v3
 
 __all__ = ["read_obs"]
 
@@ -109,19 +108,24 @@ def read_obs(
         )
     if b"\r" in data:
         data = data.replace(b"\r\n", b"\n")
-    lines = data.split(b"\n")
+    v3 = kind.version >= 3
+    text = TextLines(data) if v3 else None  # RINEX 3: lines made only where read
+    lines: Sequence[bytes] = data.split(b"\n") if text is None else text
     end = len(lines)
     while end > 0 and not lines[end - 1].strip():
         end -= 1
-    v3 = kind.version >= 3
     header, types, body = parse_header(path, lines, end, kind.version, kind.system)
-    scan = EpochScan()
-    if _last_line_cut(path, data, lines[end - 1] if end > body else b"", end, v3, lenient):
+    selecting = systems is not None or codes is not None
+    scan = EpochScan(keep_data=text is None or not selecting)
+    cut = _last_line_cut(path, data, lines[end - 1] if end > body else b"", end, v3, lenient)
+    if cut:
         scan.skipped.append(SkippedLine(line=end, reason=_CUT_FIELD))
-        del lines[end - 1 :]
         end -= 1
-    (scan_v3 if v3 else scan_v2)(path, lines, body, end, types, scan, lenient)
-    return _assemble(path, header, types, scan, v3, lenient, data, systems, codes)
+    if text is not None:
+        scan_v3(path, text, body, end, types, scan, lenient)
+    else:  # the RINEX 2 walk reads past `end`: blank lines may close the last record
+        scan_v2(path, lines[:end] if cut else lines, body, end, types, scan, lenient)
+    return _assemble(path, header, types, scan, v3, lenient, text, systems, codes)
 
 
 def _last_line_cut(
@@ -156,7 +160,7 @@ class _Lines(Record):
 
 
 def _line_layout(scan: EpochScan, v3: bool) -> _Lines:
-    n_lines = len(scan.data)
+    n_lines = sum(scan.n_lines)
     per_epoch = np.asarray(scan.n_lines, dtype=np.int64)
     epoch = np.repeat(np.arange(len(scan.t_cal_s)), per_epoch)
     segment = np.repeat(np.asarray(scan.segment, dtype=np.int64), per_epoch)
@@ -303,10 +307,10 @@ class _Text(Record):
     length: IntArray
 
 
-def _text(data: bytes, layout: _Lines) -> _Text:
-    start, length = line_spans(data)
+def _text(lines: TextLines, layout: _Lines) -> _Text:
     at = layout.line_no - 1
-    return _Text(data, np.frombuffer(data, dtype=np.uint8), start[at], length[at])
+    buf = np.frombuffer(lines.data, dtype=np.uint8)
+    return _Text(lines.data, buf, lines.start[at], lines.length[at])
 
 
 def _too_long(text: _Text, n_types: IntArray, lead: int) -> BoolArray:
@@ -418,7 +422,7 @@ def _assemble(
     scan: EpochScan,
     v3: bool,
     lenient: bool,
-    data: bytes,
+    lines: TextLines | None,
     want_systems: str | None = None,
     want_codes: Collection[str] | None = None,
 ) -> Observations:
@@ -429,7 +433,7 @@ def _assemble(
     lead = 3 if v3 else 0
     selecting = want_systems is not None or want_codes is not None
     layout = _line_layout(scan, v3)
-    text = _text(data, layout) if v3 and selecting else None
+    text = _text(lines, layout) if lines is not None and selecting else None
     full = None if text is not None else field_matrix(scan.data, lead)
     problems = _Problems()
     sats = _satellites(_raw_ids(scan, v3, full, text), scan, v3, layout, problems)
@@ -453,7 +457,7 @@ def _assemble(
     for m in _duplicates(layout, sats).tolist():
         problems.add(m, f"satellite {sats.sats[sats.of_line[m]]} appears twice in one epoch")
     skipped = list(scan.skipped)
-    usable = np.ones(len(scan.data), dtype=bool)
+    usable = np.ones(len(layout.epoch), dtype=bool)
     if problems.why:
         if not lenient:
             m = min(problems.why, key=lambda j: problems.line(j, layout))

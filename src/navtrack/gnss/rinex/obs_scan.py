@@ -8,9 +8,15 @@ events, and those that redefine the observation types start new :class:`ObsTypes
 
 from __future__ import annotations
 
-from navtrack._typing import StrPath
+from collections.abc import Sequence
+from typing import overload
+
+import numpy as np
+
+from navtrack._typing import IntArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import Event, SkippedLine
+from navtrack.gnss.rinex.obs_fields import line_spans
 from navtrack.gnss.rinex.obs_header import (
     V2_EPOCH,
     V2_EVENT_NO_TIME,
@@ -19,11 +25,43 @@ from navtrack.gnss.rinex.obs_header import (
 )
 from navtrack.timescale import calendar_gps_seconds
 
-__all__ = ["EpochScan", "scan_v2", "scan_v3"]
+__all__ = ["EpochScan", "TextLines", "scan_v2", "scan_v3"]
 
 _NAN = float("nan")
 _DATA_FLAGS = (0, 1, 6)  # epoch flags whose records hold observations (6: cycle slips)
 _INCOMPLETE = "incomplete record at the end of the file"
+
+
+class TextLines(Sequence[bytes]):
+    """The lines of a file's text, ``data.split(b"\\n")``, each made only when asked for: a
+    RINEX 3 walk reads its epoch records, a read of selected codes its data lines' fields by
+    column (``start``, ``length``: every line's offset in ``data`` and its length)."""
+
+    __slots__ = ("data", "length", "start")
+
+    def __init__(self, data: bytes) -> None:
+        self.data = data
+        self.start, self.length = line_spans(data)
+
+    def __len__(self) -> int:
+        return len(self.start)
+
+    @overload
+    def __getitem__(self, i: int) -> bytes: ...
+    @overload
+    def __getitem__(self, i: slice) -> list[bytes]: ...
+    def __getitem__(self, i: int | slice) -> bytes | list[bytes]:
+        if isinstance(i, slice):
+            spans = zip(self.start[i].tolist(), self.length[i].tolist(), strict=True)
+            return [self.data[a : a + n] for a, n in spans]
+        first = int(self.start[i])
+        return self.data[first : first + int(self.length[i])]
+
+    def starting_with(self, char: bytes, first: int, stop: int) -> IntArray:
+        """Indices of the lines ``first`` to ``stop - 1`` whose first character is ``char``."""
+        start, length = self.start[first:stop], self.length[first:stop]
+        head = np.frombuffer(self.data, dtype=np.uint8)[np.minimum(start, len(self.data) - 1)]
+        return np.flatnonzero((head == ord(char)) & (length > 0)) + first
 
 
 class EpochScan:
@@ -32,18 +70,20 @@ class EpochScan:
     Per epoch: ``t_cal_s`` (calendar seconds since 1980-01-06 in the file's time system),
     ``flag``, ``clock_s``, ``segment`` (index of its :class:`ObsTypes`), ``n_lines`` (data
     lines), ``line_no`` (1-based line of its first data line) and ``epoch_line`` (of its
-    record). ``data`` holds all data lines in file order; RINEX 2 also gives the satellite of
+    record). ``data`` holds all data lines in file order (unless ``keep_data`` is False: a
+    read that takes its fields from the text by column); RINEX 2 also gives the satellite of
     every satellite record (``rec_sat``) and its line count (``rec_lines``). A plain class, not
     a dataclass: a dataclass compiles its methods when the module is imported, a cost every
     ``navtrack pos`` start would pay.
     """
 
     __slots__ = (
-        "clock_s", "data", "epoch_line", "event_t_cal_s", "events", "flag", "line_no",
+        "clock_s", "data", "epoch_line", "event_t_cal_s", "events", "flag", "keep_data", "line_no",
         "n_lines", "rec_lines", "rec_sat", "segment", "skipped", "t_cal_s",
     )  # fmt: skip
 
-    def __init__(self) -> None:
+    def __init__(self, keep_data: bool = True) -> None:
+        self.keep_data = keep_data
         self.t_cal_s: list[float] = []
         self.flag: list[int] = []
         self.clock_s: list[float] = []
@@ -59,19 +99,26 @@ class EpochScan:
         self.skipped: list[SkippedLine] = []
 
     def add_epoch(
-        self, record: tuple[float, int, float], segment: int, j: int, first: int, data: list[bytes]
+        self,
+        record: tuple[float, int, float],
+        segment: int,
+        j: int,
+        lines: Sequence[bytes],
+        span: tuple[int, int],
     ) -> None:
-        """An epoch of ``record`` (time, flag, clock) at line ``j`` whose data lines ``data``
-        start at line ``first`` (0-based)."""
+        """An epoch of ``record`` (time, flag, clock) at line ``j`` whose data lines are
+        ``lines[first:stop]`` (``span``, 0-based)."""
+        first, stop = span
         t_cal, flag, clock_s = record
         self.t_cal_s.append(t_cal)
         self.flag.append(flag)
         self.clock_s.append(clock_s)
         self.segment.append(segment)
-        self.n_lines.append(len(data))
+        self.n_lines.append(stop - first)
         self.line_no.append(first + 1)
         self.epoch_line.append(j + 1)
-        self.data.extend(data)
+        if self.keep_data:
+            self.data.extend(lines[first:stop])
 
     def skip(self, first: int, stop: int, reason: str) -> None:
         """Record lines ``first`` to ``stop - 1`` (0-based) as skipped."""
@@ -102,7 +149,7 @@ def _epoch_time_s(rec: bytes, start: int, stop: int, days: dict[bytes, float]) -
 
 def _event(
     path: StrPath,
-    lines: list[bytes],
+    lines: Sequence[bytes],
     i: int,
     flag: int,
     count: int,
@@ -171,7 +218,7 @@ def _v3_data_lines(
 
 def scan_v3(
     path: StrPath,
-    lines: list[bytes],
+    lines: TextLines,
     body: int,
     end: int,
     segments: list[ObsTypes],
@@ -179,8 +226,7 @@ def scan_v3(
     lenient: bool,
 ) -> None:
     """Walk the RINEX 3 epoch records (``>`` lines) of ``lines[body:end]``."""
-    starts = [j for j in range(body, end) if lines[j][:1] == b">"]
-    starts.append(end)
+    starts = [*lines.starting_with(b">", body, end).tolist(), end]
     seg = len(segments) - 1
     days: dict[bytes, float] = {}
     last: tuple[int, int, int] | None = None  # last data epoch: record line, count, end
@@ -211,7 +257,7 @@ def scan_v3(
             continue
         if flag in _DATA_FLAGS:
             take = _v3_data_lines(path, j, count, nxt, end, scan, lenient)
-            scan.add_epoch((t_cal, flag, clock_s), seg, j, j + 1, lines[j + 1 : j + 1 + take])
+            scan.add_epoch((t_cal, flag, clock_s), seg, j, lines, (j + 1, j + 1 + take))
             i = j + 1 + take
             last = (j, count, i)
             continue
@@ -246,7 +292,9 @@ def _v2_record(rec: bytes, days: dict[bytes, float]) -> tuple[float, int, int]:
     return t_cal, flag, count
 
 
-def _v2_satellites(path: StrPath, lines: list[bytes], i: int, end: int, count: int) -> list[bytes]:
+def _v2_satellites(
+    path: StrPath, lines: Sequence[bytes], i: int, end: int, count: int
+) -> list[bytes]:
     """The satellite list of the epoch record at line ``i`` (12 per line, then continuation
     lines blank up to column 32)."""
     n_list = max(1, (count + 11) // 12)
@@ -293,7 +341,7 @@ class _V2Walk:
     def __init__(
         self,
         path: StrPath,
-        lines: list[bytes],
+        lines: Sequence[bytes],
         end: int,
         segments: list[ObsTypes],
         scan: EpochScan,
@@ -358,8 +406,8 @@ class _V2Walk:
                 self.scan.skipped.append(SkippedLine(line=i + 1, reason=reason))
                 self.scan.skip(i + 1, intruder, "data line of a dropped epoch")
                 return intruder
-        data = self.lines[first : first + take * self.per_sat]
-        self.scan.add_epoch((t_cal, flag, clock_s), self.seg, i, first, data)
+        span = (first, first + take * self.per_sat)
+        self.scan.add_epoch((t_cal, flag, clock_s), self.seg, i, self.lines, span)
         self.scan.rec_sat.extend(sats[:take])
         self.scan.rec_lines.extend([self.per_sat] * take)
         self.previous = (i, count, first, stop)
@@ -368,7 +416,7 @@ class _V2Walk:
 
 def scan_v2(
     path: StrPath,
-    lines: list[bytes],
+    lines: Sequence[bytes],
     body: int,
     end: int,
     segments: list[ObsTypes],
@@ -397,7 +445,7 @@ def scan_v2(
 
 
 def _missing_v2_data_line(
-    path: StrPath, lines: list[bytes], previous: tuple[int, int, int, int]
+    path: StrPath, lines: Sequence[bytes], previous: tuple[int, int, int, int]
 ) -> None:
     """Explain a malformed epoch record by a data line missing from the epoch before it."""
     rec, count, first, stop = previous
