@@ -109,23 +109,27 @@ def read_obs(
     if b"\r" in data:
         data = data.replace(b"\r\n", b"\n")
     v3 = kind.version >= 3
-    text = TextLines(data) if v3 else None  # RINEX 3: lines made only where read
-    lines: Sequence[bytes] = data.split(b"\n") if text is None else text
+    text = TextLines(data) if v3 else None
+    selective = text is not None and (systems is not None or codes is not None)
+    # a selective RINEX 3 read makes only the lines it reads
+    lines: Sequence[bytes] = text if selective and text is not None else data.split(b"\n")
     end = len(lines)
     while end > 0 and not lines[end - 1].strip():
         end -= 1
     header, types, body = parse_header(path, lines, end, kind.version, kind.system)
-    selecting = systems is not None or codes is not None
-    scan = EpochScan(keep_data=text is None or not selecting)
+    scan = EpochScan(keep_data=not selective)
     cut = _last_line_cut(path, data, lines[end - 1] if end > body else b"", end, v3, lenient)
     if cut:
         scan.skipped.append(SkippedLine(line=end, reason=_CUT_FIELD))
         end -= 1
     if text is not None:
-        scan_v3(path, text, body, end, types, scan, lenient)
+        records = text.starting_with(b">", body, end).tolist()
+        scan_v3(path, lines, (body, records, end), types, scan, lenient)
     else:  # the RINEX 2 walk reads past `end`: blank lines may close the last record
         scan_v2(path, lines[:end] if cut else lines, body, end, types, scan, lenient)
-    return _assemble(path, header, types, scan, v3, lenient, text, systems, codes)
+    return _assemble(
+        path, header, types, scan, v3, lenient, text if selective else None, systems, codes
+    )
 
 
 def _last_line_cut(
@@ -433,7 +437,7 @@ def _assemble(
     lead = 3 if v3 else 0
     selecting = want_systems is not None or want_codes is not None
     layout = _line_layout(scan, v3)
-    text = _text(lines, layout) if lines is not None and selecting else None
+    text = None if lines is None else _text(lines, layout)
     full = None if text is not None else field_matrix(scan.data, lead)
     problems = _Problems()
     sats = _satellites(_raw_ids(scan, v3, full, text), scan, v3, layout, problems)
@@ -441,11 +445,11 @@ def _assemble(
     n_f = 0 if full is None else (full.shape[1] - lead) // FIELD_WIDTH
     table, scale, declared = _code_table(segments, {c: k for k, c in enumerate(codes)}, n_f)
     row = layout.segment * len(SYSTEMS) + sats.sys_of_line
-    if text is not None:
+    if full is None:
+        assert text is not None
         picked = _some_fields(text, lead, sats, req, (table, row), problems)
         surplus = _too_long(text, (table >= 0).sum(axis=1)[row], lead)
     else:
-        assert full is not None
         tables = (table, row, selecting)
         picked, surplus = _all_fields(full, lead, layout, sats, req, tables, problems)
     for m in np.flatnonzero(surplus & declared[row]).tolist():

@@ -152,11 +152,16 @@ def _indicator(c: np.ndarray) -> Int8Array:
 def field_matrix(data: list[bytes], lead: int) -> np.ndarray:
     """Data lines as an (n, lead + 16 k) uint8 matrix, blank-padded to whole fields."""
     lengths = np.fromiter(map(len, data), dtype=np.int64, count=len(data))
+    return _matrix(np.frombuffer(b"".join(data), dtype=np.uint8), lengths, lead)
+
+
+def _matrix(chars: np.ndarray, lengths: IntArray, lead: int) -> np.ndarray:
+    """The lines whose characters, one after the other, are ``chars`` as a blank-padded matrix."""
     longest = int(lengths.max()) if lengths.size else lead
     width = lead + FIELD_WIDTH * max(1, -(-(longest - lead) // FIELD_WIDTH))
     # the lines' characters fill the rows in order, blanks the rest (no padded copy per line)
-    out = np.full((len(data), width), _SPACE, dtype=np.uint8)
-    out[np.arange(width) < lengths[:, None]] = np.frombuffer(b"".join(data), dtype=np.uint8)
+    out = np.full((len(lengths), width), _SPACE, dtype=np.uint8)
+    out[np.arange(width) < lengths[:, None]] = chars
     return out
 
 

@@ -218,15 +218,16 @@ def _v3_data_lines(
 
 def scan_v3(
     path: StrPath,
-    lines: TextLines,
-    body: int,
-    end: int,
+    lines: Sequence[bytes],
+    where: tuple[int, list[int], int],
     segments: list[ObsTypes],
     scan: EpochScan,
     lenient: bool,
 ) -> None:
-    """Walk the RINEX 3 epoch records (``>`` lines) of ``lines[body:end]``."""
-    starts = [*lines.starting_with(b">", body, end).tolist(), end]
+    """Walk the RINEX 3 epoch records of ``lines[body:end]``; ``where`` is ``body``, the lines
+    starting with ``>`` among them and ``end``."""
+    body, records, end = where
+    starts = [*records, end]
     seg = len(segments) - 1
     days: dict[bytes, float] = {}
     last: tuple[int, int, int] | None = None  # last data epoch: record line, count, end
