@@ -177,8 +177,13 @@ def gather_columns(
 ) -> np.ndarray:
     """The ``width`` characters from 0-based ``column`` of each line (``start``, ``length`` in
     the uint8 buffer ``buf``) as an (n, width) uint8 matrix, blank past the line's end."""
-    at = column[:, None] + np.arange(width)
-    inside = at < length[:, None]
-    out = buf[np.where(inside, start[:, None] + at, 0)]
-    out[~inside] = _SPACE
+    at = start + column
+    if len(at) and int(at.max()) > len(buf) - width:  # a field at the very end of the text
+        buf = np.concatenate((buf, np.full(width, _SPACE, dtype=np.uint8)))
+    # every run of `width` characters of the text as a row: a field is one row
+    out = np.lib.stride_tricks.sliding_window_view(buf, width)[at]
+    short = np.flatnonzero(length < column + width)
+    if len(short):
+        past = np.arange(width) >= (length[short] - column[short])[:, None]
+        out[short[:, None], np.arange(width)] = np.where(past, _SPACE, out[short])
     return out
