@@ -177,7 +177,7 @@ def gather_columns(
 ) -> np.ndarray:
     """The ``width`` characters from 0-based ``column`` of each line (``start``, ``length`` in
     the uint8 buffer ``buf``) as an (n, width) uint8 matrix, blank past the line's end."""
-    at = start + column
+    at = np.minimum(start + column, len(buf))  # fields past the text's end: blanked below
     if len(at) and int(at.max()) > len(buf) - width:  # a field at the very end of the text
         buf = np.concatenate((buf, np.full(width, _SPACE, dtype=np.uint8)))
     # every run of `width` characters of the text as a row: a field is one row
