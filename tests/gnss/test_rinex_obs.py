@@ -1254,6 +1254,38 @@ def test_a_read_of_every_code_by_column_equals_the_full_read_on_damaged_files(
     assert by_column.codes == tuple(c for c in full.codes if c in every)
     assert by_column.sats == full.sats
     assert [s.line for s in by_column.skipped] == [s.line for s in full.skipped]
-    for attr in ("values", "lli", "ssi"):
+    for attr in ("values", "lli", "ssi", "t_gps_s", "epoch_flag", "clock_offset_s"):
         np.testing.assert_array_equal(getattr(by_column, attr), getattr(full, attr))
-    np.testing.assert_array_equal(by_column.t_gps_s, full.t_gps_s)
+
+
+@pytest.mark.parametrize(
+    "record",
+    [
+        "> 2021 03 19 12 00  0.0000000  0 23       0.000123456789",  # clock offset
+        "> 2021 03 19  9  5 59.9999999  0 23",  # blank-padded hour and minute
+        "> 2021 03 19 12 00  0.0000000  0 23       0.0001",  # clock cut short
+        "> 2021 03 19 12 00  0.0000000  1 23",  # epoch flag 1
+        "> 2021 03 19 12 00   .0000000  0 23",  # no digit before the point
+        "> 2021 03 19 12 00  0.0000000  0 24",  # one satellite more than its lines
+        "> 2021 3 19 12 00  0.0000000  0 23",  # date out of its columns
+    ],
+)
+def test_a_read_by_column_reads_epoch_records_as_the_full_read(tmp_path: Path, record: str) -> None:
+    """Epoch records the read by column takes at once (regular ones) or walks one by one:
+    times, flags and clock offsets as the full read's, or the same line named."""
+    lines = _lines("SEPT078M_120.21O")
+    k = next(i for i, ln in enumerate(lines) if ln.startswith(">"))
+    path = tmp_path / "record.21O"
+    path.write_text("\n".join([*lines[:k], record, *lines[k + 1 :]]) + "\n")
+    every = {
+        c
+        for types in read_obs(sample_path("SEPT078M_120.21O")).header.obs_types.values()
+        for c in types
+    }
+    full = _read_or_error(path, False, None)
+    by_column = _read_or_error(path, False, every)
+    if isinstance(full, int) or isinstance(by_column, int):
+        assert by_column == full
+        return
+    for attr in ("values", "t_gps_s", "epoch_flag", "clock_offset_s"):
+        np.testing.assert_array_equal(getattr(by_column, attr), getattr(full, attr))

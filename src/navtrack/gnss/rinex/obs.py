@@ -41,7 +41,13 @@ from navtrack.gnss.rinex.obs_fields import (
     gather_columns,
 )
 from navtrack.gnss.rinex.obs_header import V2_EPOCH, ObsTypes, parse_header, sat_id, to_gps_rinex
-from navtrack.gnss.rinex.obs_scan import EpochScan, TextLines, scan_v2, scan_v3
+from navtrack.gnss.rinex.obs_scan import (
+    EpochScan,
+    TextLines,
+    scan_v2,
+    scan_v3,
+    scan_v3_regular,
+)
 
 __all__ = ["read_obs"]
 
@@ -108,28 +114,35 @@ def read_obs(
         )
     if b"\r" in data:
         data = data.replace(b"\r\n", b"\n")
-    v3 = kind.version >= 3
+    selective = kind.version >= 3 and (systems is not None or codes is not None)
+    header, types, scan, text = _walk(path, data, kind.version, kind.system, lenient, selective)
+    return _assemble(path, header, types, scan, kind.version >= 3, lenient, text, systems, codes)
+
+
+def _walk(
+    path: StrPath, data: bytes, version: float, system: str, lenient: bool, selective: bool
+) -> tuple[ObsHeader, list[ObsTypes], EpochScan, TextLines | None]:
+    """The header, observation types and epoch walk of the file's text ``data``, and its
+    lines when the read is ``selective`` (RINEX 3 only: the lines made only where read)."""
+    v3 = version >= 3
     text = TextLines(data) if v3 else None
-    selective = text is not None and (systems is not None or codes is not None)
-    # a selective RINEX 3 read makes only the lines it reads
     lines: Sequence[bytes] = text if selective and text is not None else data.split(b"\n")
     end = len(lines)
     while end > 0 and not lines[end - 1].strip():
         end -= 1
-    header, types, body = parse_header(path, lines, end, kind.version, kind.system)
+    header, types, body = parse_header(path, lines, end, version, system)
     scan = EpochScan(keep_data=not selective)
     cut = _last_line_cut(path, data, lines[end - 1] if end > body else b"", end, v3, lenient)
     if cut:
         scan.skipped.append(SkippedLine(line=end, reason=_CUT_FIELD))
         end -= 1
     if text is not None:
-        records = text.starting_with(b">", body, end).tolist()
-        scan_v3(path, lines, (body, records, end), types, scan, lenient)
+        where = (body, text.starting_with(b">", body, end).tolist(), end)
+        if not scan_v3_regular(text, where, len(types) - 1, scan):
+            scan_v3(path, lines, where, types, scan, lenient)
     else:  # the RINEX 2 walk reads past `end`: blank lines may close the last record
         scan_v2(path, lines[:end] if cut else lines, body, end, types, scan, lenient)
-    return _assemble(
-        path, header, types, scan, v3, lenient, text if selective else None, systems, codes
-    )
+    return header, types, scan, text if selective else None
 
 
 def _last_line_cut(

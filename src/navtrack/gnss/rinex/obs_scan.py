@@ -13,10 +13,10 @@ from typing import overload
 
 import numpy as np
 
-from navtrack._typing import IntArray, StrPath
+from navtrack._typing import FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import Event, SkippedLine
-from navtrack.gnss.rinex.obs_fields import line_spans
+from navtrack.gnss.rinex.obs_fields import gather_columns, line_spans
 from navtrack.gnss.rinex.obs_header import (
     V2_EPOCH,
     V2_EVENT_NO_TIME,
@@ -25,7 +25,7 @@ from navtrack.gnss.rinex.obs_header import (
 )
 from navtrack.timescale import calendar_gps_seconds
 
-__all__ = ["EpochScan", "TextLines", "scan_v2", "scan_v3"]
+__all__ = ["EpochScan", "TextLines", "scan_v2", "scan_v3", "scan_v3_regular"]
 
 _NAN = float("nan")
 _DATA_FLAGS = (0, 1, 6)  # epoch flags whose records hold observations (6: cycle slips)
@@ -125,6 +125,17 @@ class EpochScan:
         self.skipped.extend(SkippedLine(line=j + 1, reason=reason) for j in range(first, stop))
 
 
+def _midnight_s(key: bytes, days: dict[bytes, float]) -> float:
+    """Calendar seconds of the midnight of the date ``key`` (see :func:`_epoch_time_s`)."""
+    day_s = days.get(key)
+    if day_s is None:
+        year = int(key[:-6])
+        if len(key) == 8:
+            year += 1900 if year >= 80 else 2000
+        day_s = days[key] = calendar_gps_seconds(year, int(key[-5:-3]), int(key[-2:]), 0, 0, 0.0)
+    return day_s
+
+
 def _epoch_time_s(rec: bytes, start: int, stop: int, days: dict[bytes, float]) -> float:
     """Calendar seconds since 1980-01-06 of the date and time of an epoch record.
 
@@ -133,14 +144,7 @@ def _epoch_time_s(rec: bytes, start: int, stop: int, days: dict[bytes, float]) -
     both versions. ``days`` caches the seconds of each date's midnight: a file has few dates but
     one record per epoch, and ``datetime.date`` is the costly part.
     """
-    key = rec[start:stop]
-    day_s = days.get(key)
-    if day_s is None:
-        year = int(key[:-6])
-        if stop - start == 8:
-            year += 1900 if year >= 80 else 2000
-        day_s = days[key] = calendar_gps_seconds(year, int(key[-5:-3]), int(key[-2:]), 0, 0, 0.0)
-    return day_s + (
+    return _midnight_s(rec[start:stop], days) + (
         int(rec[stop + 1 : stop + 3]) * 3600.0
         + int(rec[stop + 4 : stop + 6]) * 60.0
         + float(rec[stop + 6 : stop + 17])
@@ -275,6 +279,74 @@ def scan_v3(
         if not lenient:
             raise FileFormatError(path, i + 1, "line outside any epoch record")
         scan.skip(i, end, "line outside any epoch record")
+
+
+def _right_aligned(chars: np.ndarray) -> tuple[np.ndarray, IntArray]:
+    """Whether each row of ``chars`` is digits after blanks (as ``int()`` reads them, at least
+    one digit), and its value."""
+    digit = (chars >= 48) & (chars <= 57)
+    blank = chars == 32
+    ok = digit[:, -1] & (digit | blank).all(axis=1) & ~(digit[:, :-1] & blank[:, 1:]).any(axis=1)
+    value = ((chars - 48) * digit).astype(np.int64) @ 10 ** np.arange(chars.shape[1] - 1, -1, -1)
+    return ok, value
+
+
+def _regular_times(m: np.ndarray) -> tuple[bool, FloatArray, IntArray]:
+    """Whether the RINEX 3 epoch records whose first 35 characters are the rows of ``m`` all
+    hold epoch flag 0, a time in digits (``hh mm sss.sssssss``) and a satellite count; their
+    seconds of the day and counts."""
+    ok_h, hour = _right_aligned(m[:, 13:15])
+    ok_m, minute = _right_aligned(m[:, 16:18])
+    ok_s, whole = _right_aligned(m[:, 18:21])
+    ok_n, count = _right_aligned(m[:, 32:35])
+    frac = m[:, 22:29].astype(np.int64) - 48
+    ok = ok_h & ok_m & ok_s & ok_n & (m[:, 21] == 46) & (m[:, 31] == 48)
+    ok &= ((frac >= 0) & (frac <= 9)).all(axis=1)
+    # the integer number of 1e-7 s over 1e7: exact operands, correctly rounded, as float()
+    seconds = (whole * 10_000_000 + frac @ 10 ** np.arange(6, -1, -1)) / 1e7
+    return bool(ok.all()), hour * 3600.0 + minute * 60.0 + seconds, count
+
+
+def scan_v3_regular(
+    text: TextLines, where: tuple[int, list[int], int], segment: int, scan: EpochScan
+) -> bool:
+    """:func:`scan_v3` at once, for a file whose epoch records are all regular: epoch flag 0,
+    time in digits, clock offset a number or blank, each followed by exactly the data lines it
+    announces, no other line. Returns False, recording nothing, for any other file (its walk
+    then finds what is irregular); only for reads that keep no data lines."""
+    body, records, end = where
+    if not records or records[0] != body or scan.keep_data:
+        return False
+    at = np.asarray(records, dtype=np.int64)
+    start, length = text.start[at], text.length[at]
+    buf = np.frombuffer(text.data, dtype=np.uint8)
+    m = gather_columns(buf, start, length, np.zeros(len(at), dtype=np.int64), 35)
+    ok, of_day_s, count = _regular_times(m)
+    if not ok or (count != np.append(at[1:], end) - at - 1).any():
+        return False
+    days: dict[bytes, float] = {}
+    midnight: list[float] = []
+    clock_s: list[float] = []
+    data = text.data
+    try:
+        for first, n in zip(start.tolist(), length.tolist(), strict=True):
+            rec = data[first : first + n]
+            midnight.append(_midnight_s(rec[2:12], days))
+            clock = rec[41:56]
+            if clock.strip() and len(rec.rstrip()) < 56:
+                return False
+            clock_s.append(float(clock) if clock.strip() else _NAN)
+    except ValueError:
+        return False
+    n_e = len(at)
+    scan.t_cal_s.extend((np.asarray(midnight) + of_day_s).tolist())
+    scan.flag.extend([0] * n_e)
+    scan.clock_s.extend(clock_s)
+    scan.segment.extend([segment] * n_e)
+    scan.n_lines.extend(count.tolist())
+    scan.line_no.extend((at + 2).tolist())
+    scan.epoch_line.extend((at + 1).tolist())
+    return True
 
 
 def _v2_record(rec: bytes, days: dict[bytes, float]) -> tuple[float, int, int]:
