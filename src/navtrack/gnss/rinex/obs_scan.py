@@ -3,7 +3,10 @@
 Python visits the epoch records only (RINEX 3: the ``>`` lines; RINEX 2: the records with their
 satellite lists); the data lines of each epoch are gathered, in file order, for the vectorised
 field decoding of :mod:`navtrack.gnss.rinex.obs_fields`. Special records (epoch flags 2-5) become
-events, and those that redefine the observation types start new :class:`ObsTypes`.
+events, and those that redefine the observation types start new :class:`ObsTypes`. A selective
+RINEX 3 read whose epoch records are all regular (epoch flag 0, each followed by exactly the data
+lines it announces) reads them at once with numpy (:func:`scan_v3_regular`); any other file is
+walked record by record, which finds and names what is irregular.
 """
 
 from __future__ import annotations
