@@ -403,8 +403,9 @@ def _all_fields(
         at = lead + FIELD_WIDTH * first
         problems.add(m, _field_problem(first, mat[m, at : at + FIELD_WIDTH].tobytes()))
     present = np.logical_not(blank)
-    i, k = np.nonzero(wanted & present)
-    picked = _Picked(i, col[i, k], code[i, k], value[i, k], lli[i, k], ssi[i, k])
+    put = wanted & present
+    line = np.broadcast_to(np.arange(n_lines)[:, None], shape)[put]
+    picked = _Picked(line, col[put], code[put], value[put], lli[put], ssi[put])
     return picked, np.asarray((present & (code < 0)).any(axis=1))
 
 
