@@ -1204,3 +1204,88 @@ def test_a_selective_read_skips_unread_fields_but_not_the_structure(tmp_path: Pa
     twice.write_text("\n".join([*lines[:k], lines[k], lines[k], *lines[k + 2 :]]) + "\n")
     with pytest.raises(FileFormatError, match="appears twice in one epoch"):
         read_obs(twice, systems="E")
+
+
+def _read_or_error(path: Path, lenient: bool, codes: set[str] | None) -> Observations | int:
+    """The observations read, or the line named by the error."""
+    try:
+        return read_obs(path, lenient=lenient, codes=codes)
+    except FileFormatError as exc:
+        line = exc.line
+    assert line is not None
+    return line
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)  # the one file in tmp_path is rewritten by every example
+@given(
+    st.lists(
+        st.tuples(st.floats(0, 1, exclude_max=True), st.sampled_from(list(b" 0123456789.-x\n>G"))),
+        min_size=1,
+        max_size=4,
+    ),
+    st.floats(0, 1),
+    st.booleans(),
+)
+def test_a_read_of_every_code_by_column_equals_the_full_read_on_damaged_files(
+    tmp_path: Path, damage: list[tuple[float, int]], keep: float, lenient: bool
+) -> None:
+    """Asking for every code takes the fields from the text by column (RINEX 3) instead of the
+    byte matrix of the full read: both find the same damaged line (their messages may differ
+    for a line that is damaged twice over) or read the same values."""
+    original = sample_path("SEPT078M_120.21O").read_bytes()
+    body = original.index(b"END OF HEADER") + 14
+    text = bytearray(original)
+    for where, byte in damage:
+        text[body + int(where * (len(text) - body))] = byte
+    path = tmp_path / "damaged.21O"
+    path.write_bytes(bytes(text[: body + int(keep * (len(text) - body))]))
+    every = {
+        c
+        for types in read_obs(sample_path("SEPT078M_120.21O")).header.obs_types.values()
+        for c in types
+    }
+    full = _read_or_error(path, lenient, None)
+    by_column = _read_or_error(path, lenient, every)
+    if isinstance(full, int) or isinstance(by_column, int):
+        assert by_column == full
+        return
+    assert by_column.codes == tuple(c for c in full.codes if c in every)
+    assert by_column.sats == full.sats
+    assert [s.line for s in by_column.skipped] == [s.line for s in full.skipped]
+    for attr in ("values", "lli", "ssi", "t_gps_s", "epoch_flag", "clock_offset_s"):
+        np.testing.assert_array_equal(getattr(by_column, attr), getattr(full, attr))
+
+
+@pytest.mark.parametrize(
+    "record",
+    [
+        "> 2021 03 19 12 00  0.0000000  0 23       0.000123456789",  # clock offset
+        "> 2021 03 19  9  5 59.9999999  0 23",  # blank-padded hour and minute
+        "> 2021 03 19 12 00  0.0000000  0 23       0.0001",  # clock cut short
+        "> 2021 03 19 12 00  0.0000000  1 23",  # epoch flag 1
+        "> 2021 03 19 12 00   .0000000  0 23",  # no digit before the point
+        "> 2021 03 19 12 00  0.0000000  0 24",  # one satellite more than its lines
+        "> 2021 3 19 12 00  0.0000000  0 23",  # date out of its columns
+    ],
+)
+def test_a_read_by_column_reads_epoch_records_as_the_full_read(tmp_path: Path, record: str) -> None:
+    """Epoch records the read by column takes at once (regular ones) or walks one by one:
+    times, flags and clock offsets as the full read's, or the same line named."""
+    lines = _lines("SEPT078M_120.21O")
+    k = next(i for i, ln in enumerate(lines) if ln.startswith(">"))
+    path = tmp_path / "record.21O"
+    path.write_text("\n".join([*lines[:k], record, *lines[k + 1 :]]) + "\n")
+    every = {
+        c
+        for types in read_obs(sample_path("SEPT078M_120.21O")).header.obs_types.values()
+        for c in types
+    }
+    full = _read_or_error(path, False, None)
+    by_column = _read_or_error(path, False, every)
+    if isinstance(full, int) or isinstance(by_column, int):
+        assert by_column == full
+        return
+    for attr in ("values", "t_gps_s", "epoch_flag", "clock_offset_s"):
+        np.testing.assert_array_equal(getattr(by_column, attr), getattr(full, attr))

@@ -44,7 +44,7 @@ def read_bytes(path: StrPath) -> bytes:
             break
     if raw[60:71] == b"CRINEX VERS":
         raw = _hatanaka_decompress(path, raw)
-    if not raw.strip():
+    if not raw or raw.isspace():  # all whitespace, tested without a copy of the file
         raise FileFormatError(path, 1, "empty file")
     return raw
 
@@ -114,7 +114,8 @@ def sniff(path: StrPath, data: bytes) -> FileKind:
     FileFormatError
         When the first line is neither a ``RINEX VERSION / TYPE`` record nor an SP3 header.
     """
-    first = data.split(b"\n", 1)[0].rstrip(b"\r").decode("ascii", "replace")
+    newline = data.find(b"\n")  # the first line without a copy of the rest of the file
+    first = data[: newline if newline >= 0 else None].rstrip(b"\r").decode("ascii", "replace")
     if first.startswith("#") and len(first) > 2 and first[1] in "abcd":
         return FileKind("sp3", float("abcd".index(first[1]) + 1), first[1], "")
     if first[60:].startswith("RINEX VERSION / TYPE"):

@@ -3,10 +3,12 @@
 Design (for speed): Python walks over the *epoch records only*
 (:mod:`~navtrack.gnss.rinex.obs_scan`); the data lines of all epochs are gathered into one
 fixed-width byte matrix and every ``F14.3,I1,I1`` field (value, LLI, signal strength) is decoded at
-once by vectorised digit arithmetic (:mod:`~navtrack.gnss.rinex.obs_fields`), or only the fields
-of the systems and codes asked for. This module checks the structure of the data lines
-(satellite ids, types declared, surplus fields, duplicates) and places the values in the
-epoch x satellite x code arrays.
+once by vectorised digit arithmetic (:mod:`~navtrack.gnss.rinex.obs_fields`). A RINEX 3 read of
+selected systems or codes builds no matrix: it finds every line's start in the file's text and
+takes only the fields asked for, at their columns, for decoding; the satellite ids and the line
+lengths are read for all lines. This module checks the structure of the data lines (satellite
+ids, types declared, surplus fields, duplicates) and places the values in the epoch x satellite
+x code arrays.
 
 Its intermediate records are named tuples and plain classes: a dataclass compiles its methods
 when its module is imported, a cost every ``navtrack pos`` start would pay.
@@ -20,7 +22,7 @@ RINEX 4.00 (IGS/RTCM-SC104, 2021), observation tables (same data section as 3.05
 
 from __future__ import annotations
 
-from collections.abc import Collection
+from collections.abc import Collection, Sequence
 from dataclasses import replace
 from os import fspath
 
@@ -31,9 +33,21 @@ from navtrack._typing import BoolArray, FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import SYSTEMS, Event, Observations, ObsHeader, SkippedLine
 from navtrack.gnss.rinex._io import ends_inside_field, read_bytes, sniff
-from navtrack.gnss.rinex.obs_fields import FIELD_WIDTH, decode_fields, decode_some, field_matrix
+from navtrack.gnss.rinex.obs_fields import (
+    FIELD_WIDTH,
+    decode_fields,
+    decode_some,
+    field_matrix,
+    gather_columns,
+)
 from navtrack.gnss.rinex.obs_header import V2_EPOCH, ObsTypes, parse_header, sat_id, to_gps_rinex
-from navtrack.gnss.rinex.obs_scan import EpochScan, scan_v2, scan_v3
+from navtrack.gnss.rinex.obs_scan import (
+    EpochScan,
+    TextLines,
+    scan_v2,
+    scan_v3,
+    scan_v3_regular,
+)
 
 __all__ = ["read_obs"]
 
@@ -100,19 +114,35 @@ def read_obs(
         )
     if b"\r" in data:
         data = data.replace(b"\r\n", b"\n")
-    lines = data.split(b"\n")
+    selective = kind.version >= 3 and (systems is not None or codes is not None)
+    header, types, scan, text = _walk(path, data, kind.version, kind.system, lenient, selective)
+    return _assemble(path, header, types, scan, kind.version >= 3, lenient, text, systems, codes)
+
+
+def _walk(
+    path: StrPath, data: bytes, version: float, system: str, lenient: bool, selective: bool
+) -> tuple[ObsHeader, list[ObsTypes], EpochScan, TextLines | None]:
+    """The header, observation types and epoch walk of the file's text ``data``, and its
+    lines when the read is ``selective`` (RINEX 3 only: the lines made only where read)."""
+    v3 = version >= 3
+    text = TextLines(data) if v3 else None
+    lines: Sequence[bytes] = text if selective and text is not None else data.split(b"\n")
     end = len(lines)
     while end > 0 and not lines[end - 1].strip():
         end -= 1
-    v3 = kind.version >= 3
-    header, types, body = parse_header(path, lines, end, kind.version, kind.system)
-    scan = EpochScan()
-    if _last_line_cut(path, data, lines[end - 1] if end > body else b"", end, v3, lenient):
+    header, types, body = parse_header(path, lines, end, version, system)
+    scan = EpochScan(keep_data=not selective)
+    cut = _last_line_cut(path, data, lines[end - 1] if end > body else b"", end, v3, lenient)
+    if cut:
         scan.skipped.append(SkippedLine(line=end, reason=_CUT_FIELD))
-        del lines[end - 1 :]
         end -= 1
-    (scan_v3 if v3 else scan_v2)(path, lines, body, end, types, scan, lenient)
-    return _assemble(path, header, types, scan, v3, lenient, systems, codes)
+    if text is not None:
+        where = (body, text.starting_with(b">", body, end).tolist(), end)
+        if not scan_v3_regular(text, where, len(types) - 1, scan):
+            scan_v3(path, lines, where, types, scan, lenient)
+    else:  # the RINEX 2 walk reads past `end`: blank lines may close the last record
+        scan_v2(path, lines[:end] if cut else lines, body, end, types, scan, lenient)
+    return header, types, scan, text if selective else None
 
 
 def _last_line_cut(
@@ -147,7 +177,7 @@ class _Lines(Record):
 
 
 def _line_layout(scan: EpochScan, v3: bool) -> _Lines:
-    n_lines = len(scan.data)
+    n_lines = sum(scan.n_lines)
     per_epoch = np.asarray(scan.n_lines, dtype=np.int64)
     epoch = np.repeat(np.arange(len(scan.t_cal_s)), per_epoch)
     segment = np.repeat(np.asarray(scan.segment, dtype=np.int64), per_epoch)
@@ -194,16 +224,15 @@ class _Satellites(Record):
     sys_of_line: IntArray
 
 
-def _raw_ids(scan: EpochScan, v3: bool, full: np.ndarray | None) -> np.ndarray:
+def _raw_ids(scan: EpochScan, v3: bool, full: np.ndarray | None, text: _Text | None) -> np.ndarray:
     """The satellite id written for each RINEX 3 line / each RINEX 2 record, as ``S3``."""
     if not v3:
         return np.array(scan.rec_sat, dtype="S3")
     if full is not None:
         return np.ascontiguousarray(full[:, :3]).view("S3").ravel()
-    heads = b"".join([row[:3] for row in scan.data])
-    if len(heads) != 3 * len(scan.data):  # a line shorter than its satellite id
-        heads = b"".join([row[:3].ljust(3) for row in scan.data])
-    return np.frombuffer(heads, dtype="S3")
+    assert text is not None
+    zero = np.zeros(len(text.start), dtype=np.int64)
+    return gather_columns(text.buf, text.start, text.length, zero, 3).view("S3").ravel()
 
 
 def _satellites(
@@ -285,40 +314,31 @@ def _request(
     return _Request(systems, out_codes, kept, out_sats, out_col)
 
 
-def _decoded_lines(
-    scan: EpochScan, raw_ids: np.ndarray, full: np.ndarray | None, systems: str | None, lead: int
-) -> tuple[IntArray, np.ndarray]:
-    """Indices of the data lines whose fields are decoded, and their field matrix: RINEX 3
-    lines of other systems than those asked for are not decoded (their satellite and length
-    are still checked)."""
-    if full is not None:
-        return np.arange(len(scan.data)), full
-    letter = raw_ids.view(np.uint8).reshape(-1, 3)[:, 0]
-    other = np.isin(letter, np.frombuffer(SYSTEMS.encode(), np.uint8)) & ~np.isin(
-        letter, np.frombuffer(str(systems).upper().encode(), np.uint8)
-    )
-    decode = np.flatnonzero(~other)
-    return decode, field_matrix([scan.data[i] for i in decode.tolist()], lead)
+class _Text(Record):
+    """The file's text as a uint8 buffer and, for each data line, its start and length (RINEX 3
+    reads of selected systems or codes take their fields from it)."""
+
+    data: bytes
+    buf: np.ndarray
+    start: IntArray
+    length: IntArray
 
 
-def _too_long(
-    scan: EpochScan, decode: IntArray, surplus: BoolArray, n_types: IntArray, lead: int
-) -> BoolArray:
-    """Data lines with text beyond their system's last field: ``surplus`` for the decoded
-    lines, the line length (trailing blanks aside) for the others."""
-    n_lines = len(scan.data)
-    not_decoded = np.ones(n_lines, dtype=bool)
-    not_decoded[decode] = False
-    rows = np.flatnonzero(not_decoded)
-    limit = lead + FIELD_WIDTH * n_types[rows]
-    length = np.fromiter(map(len, map(scan.data.__getitem__, rows.tolist())), np.int64)
-    beyond = length > limit
-    for k in np.flatnonzero(beyond).tolist():  # trailing blanks do not count
-        beyond[k] = len(scan.data[int(rows[k])].rstrip(b" ")) > limit[k]
-    too_long = np.zeros(n_lines, dtype=bool)
-    too_long[decode] = surplus
-    too_long[rows] = beyond
-    return too_long
+def _text(lines: TextLines, layout: _Lines) -> _Text:
+    at = layout.line_no - 1
+    buf = np.frombuffer(lines.data, dtype=np.uint8)
+    return _Text(lines.data, buf, lines.start[at], lines.length[at])
+
+
+def _too_long(text: _Text, n_types: IntArray, lead: int) -> BoolArray:
+    """Data lines with text beyond their system's last field (trailing blanks aside)."""
+    limit = lead + FIELD_WIDTH * n_types
+    beyond = text.length > limit
+    for m in np.flatnonzero(beyond).tolist():
+        first = int(text.start[m])
+        line = text.data[first : first + int(text.length[m])]
+        beyond[m] = len(line.rstrip(b" ")) > limit[m]
+    return beyond
 
 
 def _duplicates(layout: _Lines, sats: _Satellites) -> IntArray:
@@ -334,63 +354,83 @@ def _duplicates(layout: _Lines, sats: _Satellites) -> IntArray:
     return np.flatnonzero(later)
 
 
-class _Fields(Record):
-    """The decoded fields of the decoded lines (``decode``), shape (lines, fields), with the
-    code of each field and the row of its line's (segment, system) in the code table."""
+class _Picked(Record):
+    """The decoded fields that are not blank, of the satellites and codes asked for: data line,
+    field position in its system's type list (``col``), file code index, value, LLI, SSI."""
 
-    decode: IntArray
-    mat: np.ndarray
+    line: IntArray
+    col: IntArray
+    code: IntArray
     value: FloatArray
     lli: np.ndarray
     ssi: np.ndarray
-    blank: BoolArray
-    bad: BoolArray
-    code: IntArray
-    row: IntArray
-    col: IntArray
 
 
-def _decode_fields(
+def _field_problem(k: int, text: bytes) -> str:
+    return f"malformed observation field {k + 1}: {text.decode('ascii', 'replace')!r}"
+
+
+def _all_fields(
     mat: np.ndarray,
-    decode: IntArray,
     lead: int,
-    row: IntArray,
-    col: IntArray,
-    code: IntArray,
-    wanted: BoolArray | None,
-) -> _Fields:
-    """Decode every field of the matrix, or only the ``wanted`` ones (blanks of all: they
-    check the structure)."""
-    n_dec = mat.shape[0]
+    layout: _Lines,
+    sats: _Satellites,
+    req: _Request,
+    tables: tuple[IntArray, IntArray, bool],
+    problems: _Problems,
+) -> tuple[_Picked, BoolArray]:
+    """Fields of the byte matrix of all data lines: every one decoded, or only those asked
+    for when ``selecting`` (blanks of all: they check the structure); and the lines with
+    fields beyond their system's types."""
+    table, row, selecting = tables
+    n_lines = mat.shape[0]
     n_f = (mat.shape[1] - lead) // FIELD_WIDTH
-    fields = mat[:, lead:].reshape(n_dec * n_f, FIELD_WIDTH)
-    if wanted is None:
-        value, lli, ssi, blank, bad = decode_fields(fields)
+    col = layout.offset[:, None] + np.arange(n_f)
+    code = table[row[:, None], col]
+    if lead == 0:
+        code[:, 5:] = -1  # RINEX 2 lines hold 5 fields (80 columns)
+    wanted = (req.kept[code] >= 0) & (req.out_col[sats.of_line] >= 0)[:, None]
+    fields = mat[:, lead:].reshape(n_lines * n_f, FIELD_WIDTH)
+    if selecting:
+        decoded = decode_some(fields, np.flatnonzero(wanted.ravel()))
     else:
-        value, lli, ssi, blank, bad = decode_some(fields, np.flatnonzero(wanted.ravel()))
-    value = value.reshape(n_dec, n_f)
+        decoded = decode_fields(fields)
+    shape = (n_lines, n_f)
+    value, lli, ssi, blank, bad = (a.reshape(shape) for a in decoded)
     value[value == 0.0] = np.nan  # "missing observations are written as 0.0 or blanks"
-    shape = (n_dec, n_f)
-    return _Fields(
-        decode,
-        mat,
-        value,
-        lli.reshape(shape),
-        ssi.reshape(shape),
-        blank.reshape(shape),
-        bad.reshape(shape),
-        code,
-        row,
-        col,
-    )
+    for m in np.flatnonzero(bad.any(axis=1)).tolist():
+        first = int(np.argmax(bad[m]))
+        at = lead + FIELD_WIDTH * first
+        problems.add(m, _field_problem(first, mat[m, at : at + FIELD_WIDTH].tobytes()))
+    present = np.logical_not(blank)
+    put = wanted & present
+    line = np.broadcast_to(np.arange(n_lines)[:, None], shape)[put]
+    picked = _Picked(line, col[put], code[put], value[put], lli[put], ssi[put])
+    return picked, np.asarray((present & (code < 0)).any(axis=1))
 
 
-def _field_problems(f: _Fields, lead: int, problems: _Problems) -> None:
-    for m in np.flatnonzero(f.bad.any(axis=1)).tolist():
-        k = int(np.argmax(f.bad[m]))
-        text = f.mat[m, lead + FIELD_WIDTH * k : lead + FIELD_WIDTH * (k + 1)].tobytes()
-        why = f"malformed observation field {k + 1}: {text.decode('ascii', 'replace')!r}"
-        problems.add(int(f.decode[m]), why)
+def _some_fields(
+    text: _Text,
+    lead: int,
+    sats: _Satellites,
+    req: _Request,
+    tables: tuple[IntArray, IntArray],
+    problems: _Problems,
+) -> _Picked:
+    """The fields asked for, taken from the text of their lines and decoded (RINEX 3)."""
+    table, row = tables
+    lines = np.flatnonzero(req.out_col[sats.of_line] >= 0)
+    i, k = np.nonzero((req.kept[table] >= 0)[row[lines]])
+    m = lines[i]
+    column = lead + FIELD_WIDTH * k
+    fields = gather_columns(text.buf, text.start[m], text.length[m], column, FIELD_WIDTH)
+    value, lli, ssi, blank, bad = decode_fields(fields)
+    value[value == 0.0] = np.nan  # "missing observations are written as 0.0 or blanks"
+    for j in np.flatnonzero(bad).tolist():  # in line order, then field order
+        problems.add(int(m[j]), _field_problem(int(k[j]), fields[j].tobytes()))
+    keep = ~blank
+    m, k = m[keep], k[keep]
+    return _Picked(m, k, table[row[m], k], value[keep], lli[keep], ssi[keep])
 
 
 def _assemble(
@@ -400,6 +440,7 @@ def _assemble(
     scan: EpochScan,
     v3: bool,
     lenient: bool,
+    lines: TextLines | None,
     want_systems: str | None = None,
     want_codes: Collection[str] | None = None,
 ) -> Observations:
@@ -408,28 +449,23 @@ def _assemble(
         for types in seg.obs_types.values():
             codes.extend(c for c in types if c not in codes)
     lead = 3 if v3 else 0
-    full = None if v3 and want_systems is not None else field_matrix(scan.data, lead)
+    selecting = want_systems is not None or want_codes is not None
     layout = _line_layout(scan, v3)
+    text = None if lines is None else _text(lines, layout)
+    full = None if text is not None else field_matrix(scan.data, lead)
     problems = _Problems()
-    raw_ids = _raw_ids(scan, v3, full)
-    sats = _satellites(raw_ids, scan, v3, layout, problems)
+    sats = _satellites(_raw_ids(scan, v3, full, text), scan, v3, layout, problems)
     req = _request(codes, sats.sats, want_systems, want_codes)
-    decode, mat = _decoded_lines(scan, raw_ids, full, want_systems, lead)
-    n_f = (mat.shape[1] - lead) // FIELD_WIDTH
+    n_f = 0 if full is None else (full.shape[1] - lead) // FIELD_WIDTH
     table, scale, declared = _code_table(segments, {c: k for k, c in enumerate(codes)}, n_f)
     row = layout.segment * len(SYSTEMS) + sats.sys_of_line
-    col = layout.offset[decode, None] + np.arange(n_f)
-    code = table[row[decode, None], col]
-    if not v3:
-        code[:, 5:] = -1  # RINEX 2 lines hold 5 fields (80 columns)
-    wanted = None
-    if want_systems is not None or want_codes is not None:
-        wanted = (req.kept[code] >= 0) & (req.out_col[sats.of_line[decode]] >= 0)[:, None]
-    f = _decode_fields(mat, decode, lead, row, col, code, wanted)
-    _field_problems(f, lead, problems)
-    surplus = (~f.blank & (code < 0)).any(axis=1)
-    if len(decode) < len(scan.data):
-        surplus = _too_long(scan, decode, surplus, (table >= 0).sum(axis=1)[row], lead)
+    if full is None:
+        assert text is not None
+        picked = _some_fields(text, lead, sats, req, (table, row), problems)
+        surplus = _too_long(text, (table >= 0).sum(axis=1)[row], lead)
+    else:
+        tables = (table, row, selecting)
+        picked, surplus = _all_fields(full, lead, layout, sats, req, tables, problems)
     for m in np.flatnonzero(surplus & declared[row]).tolist():
         why = " (or data beyond column 80)" if not v3 else ""
         problems.add(m, "more observations than observation types" + why)
@@ -439,7 +475,7 @@ def _assemble(
     for m in _duplicates(layout, sats).tolist():
         problems.add(m, f"satellite {sats.sats[sats.of_line[m]]} appears twice in one epoch")
     skipped = list(scan.skipped)
-    usable = np.ones(len(scan.data), dtype=bool)
+    usable = np.ones(len(layout.epoch), dtype=bool)
     if problems.why:
         if not lenient:
             m = min(problems.why, key=lambda j: problems.line(j, layout))
@@ -447,36 +483,36 @@ def _assemble(
         for m, reason in problems.why.items():
             usable[m] = False
             skipped.append(SkippedLine(line=int(layout.line_no[m]), reason=reason))
-    values, lli, ssi = _scatter(f, scale, layout, sats, req, usable, len(scan.t_cal_s))
-    return _observations(
-        path, header, segments, scan, v3, req, sats.sats, (values, lli, ssi), skipped
-    )
+    n_e = len(scan.t_cal_s)
+    arrays = _scatter(picked, scale, (layout, row), sats, req, usable, n_e)
+    return _observations(path, header, segments, scan, v3, req, sats.sats, arrays, skipped)
 
 
 def _scatter(
-    f: _Fields,
+    p: _Picked,
     scale: FloatArray,
-    layout: _Lines,
+    where: tuple[_Lines, IntArray],
     sats: _Satellites,
     req: _Request,
     usable: BoolArray,
     n_e: int,
 ) -> tuple[FloatArray, np.ndarray, np.ndarray]:
     """The epoch x satellite x code arrays of the values, LLI and SSI asked for."""
+    layout, row = where
     n_s, n_c = len(req.sats), len(req.codes)
     values = np.full((n_e, n_s, n_c), np.nan)
     lli_out = np.full((n_e, n_s, n_c), -1, dtype=np.int8)
     ssi_out = np.full((n_e, n_s, n_c), -1, dtype=np.int8)
-    out_sat = req.out_col[sats.of_line[f.decode]]
-    out_code = req.kept[f.code]
-    put = (out_code >= 0) & (out_sat >= 0)[:, None] & ~f.blank & usable[f.decode, None]
-    target = ((layout.epoch[f.decode] * n_s + out_sat)[:, None] * n_c + out_code)[put]
-    value = f.value
+    keep = usable[p.line]
+    line = p.line[keep]
+    out_sat = req.out_col[sats.of_line[line]]
+    target = (layout.epoch[line] * n_s + out_sat) * n_c + req.kept[p.code[keep]]
+    value = p.value[keep]
     if (scale != 1.0).any():
-        value = value / scale[f.row[f.decode, None], f.col]
-    values.reshape(-1)[target] = value[put]
-    lli_out.reshape(-1)[target] = f.lli[put]
-    ssi_out.reshape(-1)[target] = f.ssi[put]
+        value = value / scale[row[line], p.col[keep]]
+    values.reshape(-1)[target] = value
+    lli_out.reshape(-1)[target] = p.lli[keep]
+    ssi_out.reshape(-1)[target] = p.ssi[keep]
     return values, lli_out, ssi_out
 
 

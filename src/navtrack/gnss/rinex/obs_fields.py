@@ -2,12 +2,13 @@
 
 A data line is the satellite id (RINEX 3: 3 characters) followed by ``F14.3,I1,I1`` fields (value,
 loss-of-lock indicator, signal strength), 16 characters each. The lines of a file are gathered
-into one fixed-width byte matrix (:func:`field_matrix`) and every field is decoded by vectorised
-digit arithmetic (:func:`decode_fields`). A value written in the standard layout (decimal point
-in column 11 of the field, three decimals) is read as an integer number of thousandths and
-divided by 1000: both are exact binary numbers and IEEE division is correctly rounded, so the
-result equals Python's ``float(text)``. Fields in any other layout fall back to ``float()``;
-fields that are not numbers are flagged ``bad``.
+into one fixed-width byte matrix (:func:`field_matrix`), or the fields wanted are taken from the
+file's text at their columns (:func:`line_spans`, :func:`gather_columns`), and the fields are
+decoded by vectorised digit arithmetic (:func:`decode_fields`). A value written in the standard
+layout (decimal point in column 11 of the field, three decimals) is read as an integer number
+of thousandths and divided by 1000: both are exact binary numbers and IEEE division is correctly
+rounded, so the result equals Python's ``float(text)``. Fields in any other layout fall back to
+``float()``; fields that are not numbers are flagged ``bad``.
 """
 
 from __future__ import annotations
@@ -16,9 +17,11 @@ import re
 
 import numpy as np
 
-from navtrack._typing import FloatArray, Int8Array
+from navtrack._typing import FloatArray, Int8Array, IntArray
 
-__all__ = ["FIELD_WIDTH", "decode_fields", "decode_some", "field_matrix"]
+__all__ = [
+    "FIELD_WIDTH", "decode_fields", "decode_some", "field_matrix", "gather_columns", "line_spans",
+]  # fmt: skip
 
 FIELD_WIDTH = 16
 """Characters of one ``F14.3,I1,I1`` field: value, LLI, signal strength."""
@@ -149,9 +152,38 @@ def _indicator(c: np.ndarray) -> Int8Array:
 def field_matrix(data: list[bytes], lead: int) -> np.ndarray:
     """Data lines as an (n, lead + 16 k) uint8 matrix, blank-padded to whole fields."""
     lengths = np.fromiter(map(len, data), dtype=np.int64, count=len(data))
+    return _matrix(np.frombuffer(b"".join(data), dtype=np.uint8), lengths, lead)
+
+
+def _matrix(chars: np.ndarray, lengths: IntArray, lead: int) -> np.ndarray:
+    """The lines whose characters, one after the other, are ``chars`` as a blank-padded matrix."""
     longest = int(lengths.max()) if lengths.size else lead
     width = lead + FIELD_WIDTH * max(1, -(-(longest - lead) // FIELD_WIDTH))
     # the lines' characters fill the rows in order, blanks the rest (no padded copy per line)
-    out = np.full((len(data), width), _SPACE, dtype=np.uint8)
-    out[np.arange(width) < lengths[:, None]] = np.frombuffer(b"".join(data), dtype=np.uint8)
+    out = np.full((len(lengths), width), _SPACE, dtype=np.uint8)
+    out[np.arange(width) < lengths[:, None]] = chars
+    return out
+
+
+def line_spans(data: bytes) -> tuple[IntArray, IntArray]:
+    """Start offset and length of every line of ``data``, the lines of ``data.split(b"\\n")``."""
+    newline = np.flatnonzero(np.frombuffer(data, dtype=np.uint8) == 10)
+    start = np.concatenate((np.zeros(1, dtype=np.int64), newline + 1))
+    return start, np.append(newline, len(data)) - start
+
+
+def gather_columns(
+    buf: np.ndarray, start: IntArray, length: IntArray, column: IntArray, width: int
+) -> np.ndarray:
+    """The ``width`` characters from 0-based ``column`` of each line (``start``, ``length`` in
+    the uint8 buffer ``buf``) as an (n, width) uint8 matrix, blank past the line's end."""
+    at = np.minimum(start + column, len(buf))  # fields past the text's end: blanked below
+    if len(at) and int(at.max()) > len(buf) - width:  # a field at the very end of the text
+        buf = np.concatenate((buf, np.full(width, _SPACE, dtype=np.uint8)))
+    # every run of `width` characters of the text as a row: a field is one row
+    out = np.lib.stride_tricks.sliding_window_view(buf, width)[at]
+    short = np.flatnonzero(length < column + width)
+    if len(short):
+        past = np.arange(width) >= (length[short] - column[short])[:, None]
+        out[short[:, None], np.arange(width)] = np.where(past, _SPACE, out[short])
     return out

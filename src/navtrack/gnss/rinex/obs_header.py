@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import itertools
 import re
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -129,7 +130,7 @@ class _HeaderParse:
 
 
 def parse_header(
-    path: StrPath, lines: list[bytes], end: int, version: float, file_system: str
+    path: StrPath, lines: Sequence[bytes], end: int, version: float, file_system: str
 ) -> tuple[ObsHeader, list[ObsTypes], int]:
     """Parse the header; returns it, the initial observation types and the first data line.
 
@@ -253,7 +254,7 @@ def _check_counts(
 
 
 def redefined_types(
-    path: StrPath, records: list[bytes], first_line: int, types: ObsTypes, v3: bool
+    path: StrPath, records: Sequence[bytes], first_line: int, types: ObsTypes, v3: bool
 ) -> ObsTypes | None:
     """Observation types redefined by the header records of an epoch flag 3/4 record (None
     when they leave them as they are)."""

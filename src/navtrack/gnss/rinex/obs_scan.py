@@ -3,14 +3,23 @@
 Python visits the epoch records only (RINEX 3: the ``>`` lines; RINEX 2: the records with their
 satellite lists); the data lines of each epoch are gathered, in file order, for the vectorised
 field decoding of :mod:`navtrack.gnss.rinex.obs_fields`. Special records (epoch flags 2-5) become
-events, and those that redefine the observation types start new :class:`ObsTypes`.
+events, and those that redefine the observation types start new :class:`ObsTypes`. A selective
+RINEX 3 read whose epoch records are all regular (epoch flag 0, each followed by exactly the data
+lines it announces) reads them at once with numpy (:func:`scan_v3_regular`); any other file is
+walked record by record, which finds and names what is irregular.
 """
 
 from __future__ import annotations
 
-from navtrack._typing import StrPath
+from collections.abc import Sequence
+from typing import overload
+
+import numpy as np
+
+from navtrack._typing import FloatArray, IntArray, StrPath
 from navtrack.errors import FileFormatError
 from navtrack.gnss.observations import Event, SkippedLine
+from navtrack.gnss.rinex.obs_fields import gather_columns, line_spans
 from navtrack.gnss.rinex.obs_header import (
     V2_EPOCH,
     V2_EVENT_NO_TIME,
@@ -19,11 +28,43 @@ from navtrack.gnss.rinex.obs_header import (
 )
 from navtrack.timescale import calendar_gps_seconds
 
-__all__ = ["EpochScan", "scan_v2", "scan_v3"]
+__all__ = ["EpochScan", "TextLines", "scan_v2", "scan_v3", "scan_v3_regular"]
 
 _NAN = float("nan")
 _DATA_FLAGS = (0, 1, 6)  # epoch flags whose records hold observations (6: cycle slips)
 _INCOMPLETE = "incomplete record at the end of the file"
+
+
+class TextLines(Sequence[bytes]):
+    """The lines of a file's text, ``data.split(b"\\n")``, each made only when asked for: a
+    RINEX 3 walk reads its epoch records, a read of selected codes its data lines' fields by
+    column (``start``, ``length``: every line's offset in ``data`` and its length)."""
+
+    __slots__ = ("data", "length", "start")
+
+    def __init__(self, data: bytes) -> None:
+        self.data = data
+        self.start, self.length = line_spans(data)
+
+    def __len__(self) -> int:
+        return len(self.start)
+
+    @overload
+    def __getitem__(self, i: int) -> bytes: ...
+    @overload
+    def __getitem__(self, i: slice) -> list[bytes]: ...
+    def __getitem__(self, i: int | slice) -> bytes | list[bytes]:
+        if isinstance(i, slice):
+            spans = zip(self.start[i].tolist(), self.length[i].tolist(), strict=True)
+            return [self.data[a : a + n] for a, n in spans]
+        first = int(self.start[i])
+        return self.data[first : first + int(self.length[i])]
+
+    def starting_with(self, char: bytes, first: int, stop: int) -> IntArray:
+        """Indices of the lines ``first`` to ``stop - 1`` whose first character is ``char``."""
+        start, length = self.start[first:stop], self.length[first:stop]
+        head = np.frombuffer(self.data, dtype=np.uint8)[np.minimum(start, len(self.data) - 1)]
+        return np.flatnonzero((head == ord(char)) & (length > 0)) + first
 
 
 class EpochScan:
@@ -32,18 +73,20 @@ class EpochScan:
     Per epoch: ``t_cal_s`` (calendar seconds since 1980-01-06 in the file's time system),
     ``flag``, ``clock_s``, ``segment`` (index of its :class:`ObsTypes`), ``n_lines`` (data
     lines), ``line_no`` (1-based line of its first data line) and ``epoch_line`` (of its
-    record). ``data`` holds all data lines in file order; RINEX 2 also gives the satellite of
+    record). ``data`` holds all data lines in file order (unless ``keep_data`` is False: a
+    read that takes its fields from the text by column); RINEX 2 also gives the satellite of
     every satellite record (``rec_sat``) and its line count (``rec_lines``). A plain class, not
     a dataclass: a dataclass compiles its methods when the module is imported, a cost every
     ``navtrack pos`` start would pay.
     """
 
     __slots__ = (
-        "clock_s", "data", "epoch_line", "event_t_cal_s", "events", "flag", "line_no",
+        "clock_s", "data", "epoch_line", "event_t_cal_s", "events", "flag", "keep_data", "line_no",
         "n_lines", "rec_lines", "rec_sat", "segment", "skipped", "t_cal_s",
     )  # fmt: skip
 
-    def __init__(self) -> None:
+    def __init__(self, keep_data: bool = True) -> None:
+        self.keep_data = keep_data
         self.t_cal_s: list[float] = []
         self.flag: list[int] = []
         self.clock_s: list[float] = []
@@ -59,23 +102,41 @@ class EpochScan:
         self.skipped: list[SkippedLine] = []
 
     def add_epoch(
-        self, record: tuple[float, int, float], segment: int, j: int, first: int, data: list[bytes]
+        self,
+        record: tuple[float, int, float],
+        segment: int,
+        j: int,
+        lines: Sequence[bytes],
+        span: tuple[int, int],
     ) -> None:
-        """An epoch of ``record`` (time, flag, clock) at line ``j`` whose data lines ``data``
-        start at line ``first`` (0-based)."""
+        """An epoch of ``record`` (time, flag, clock) at line ``j`` whose data lines are
+        ``lines[first:stop]`` (``span``, 0-based)."""
+        first, stop = span
         t_cal, flag, clock_s = record
         self.t_cal_s.append(t_cal)
         self.flag.append(flag)
         self.clock_s.append(clock_s)
         self.segment.append(segment)
-        self.n_lines.append(len(data))
+        self.n_lines.append(stop - first)
         self.line_no.append(first + 1)
         self.epoch_line.append(j + 1)
-        self.data.extend(data)
+        if self.keep_data:
+            self.data.extend(lines[first:stop])
 
     def skip(self, first: int, stop: int, reason: str) -> None:
         """Record lines ``first`` to ``stop - 1`` (0-based) as skipped."""
         self.skipped.extend(SkippedLine(line=j + 1, reason=reason) for j in range(first, stop))
+
+
+def _midnight_s(key: bytes, days: dict[bytes, float]) -> float:
+    """Calendar seconds of the midnight of the date ``key`` (see :func:`_epoch_time_s`)."""
+    day_s = days.get(key)
+    if day_s is None:
+        year = int(key[:-6])
+        if len(key) == 8:
+            year += 1900 if year >= 80 else 2000
+        day_s = days[key] = calendar_gps_seconds(year, int(key[-5:-3]), int(key[-2:]), 0, 0, 0.0)
+    return day_s
 
 
 def _epoch_time_s(rec: bytes, start: int, stop: int, days: dict[bytes, float]) -> float:
@@ -86,14 +147,7 @@ def _epoch_time_s(rec: bytes, start: int, stop: int, days: dict[bytes, float]) -
     both versions. ``days`` caches the seconds of each date's midnight: a file has few dates but
     one record per epoch, and ``datetime.date`` is the costly part.
     """
-    key = rec[start:stop]
-    day_s = days.get(key)
-    if day_s is None:
-        year = int(key[:-6])
-        if stop - start == 8:
-            year += 1900 if year >= 80 else 2000
-        day_s = days[key] = calendar_gps_seconds(year, int(key[-5:-3]), int(key[-2:]), 0, 0, 0.0)
-    return day_s + (
+    return _midnight_s(rec[start:stop], days) + (
         int(rec[stop + 1 : stop + 3]) * 3600.0
         + int(rec[stop + 4 : stop + 6]) * 60.0
         + float(rec[stop + 6 : stop + 17])
@@ -102,7 +156,7 @@ def _epoch_time_s(rec: bytes, start: int, stop: int, days: dict[bytes, float]) -
 
 def _event(
     path: StrPath,
-    lines: list[bytes],
+    lines: Sequence[bytes],
     i: int,
     flag: int,
     count: int,
@@ -171,16 +225,16 @@ def _v3_data_lines(
 
 def scan_v3(
     path: StrPath,
-    lines: list[bytes],
-    body: int,
-    end: int,
+    lines: Sequence[bytes],
+    where: tuple[int, list[int], int],
     segments: list[ObsTypes],
     scan: EpochScan,
     lenient: bool,
 ) -> None:
-    """Walk the RINEX 3 epoch records (``>`` lines) of ``lines[body:end]``."""
-    starts = [j for j in range(body, end) if lines[j][:1] == b">"]
-    starts.append(end)
+    """Walk the RINEX 3 epoch records of ``lines[body:end]``; ``where`` is ``body``, the lines
+    starting with ``>`` among them and ``end``."""
+    body, records, end = where
+    starts = [*records, end]
     seg = len(segments) - 1
     days: dict[bytes, float] = {}
     last: tuple[int, int, int] | None = None  # last data epoch: record line, count, end
@@ -211,7 +265,7 @@ def scan_v3(
             continue
         if flag in _DATA_FLAGS:
             take = _v3_data_lines(path, j, count, nxt, end, scan, lenient)
-            scan.add_epoch((t_cal, flag, clock_s), seg, j, j + 1, lines[j + 1 : j + 1 + take])
+            scan.add_epoch((t_cal, flag, clock_s), seg, j, lines, (j + 1, j + 1 + take))
             i = j + 1 + take
             last = (j, count, i)
             continue
@@ -230,6 +284,74 @@ def scan_v3(
         scan.skip(i, end, "line outside any epoch record")
 
 
+def _right_aligned(chars: np.ndarray) -> tuple[np.ndarray, IntArray]:
+    """Whether each row of ``chars`` is digits after blanks (as ``int()`` reads them, at least
+    one digit), and its value."""
+    digit = (chars >= 48) & (chars <= 57)
+    blank = chars == 32
+    ok = digit[:, -1] & (digit | blank).all(axis=1) & ~(digit[:, :-1] & blank[:, 1:]).any(axis=1)
+    value = ((chars - 48) * digit).astype(np.int64) @ 10 ** np.arange(chars.shape[1] - 1, -1, -1)
+    return ok, value
+
+
+def _regular_times(m: np.ndarray) -> tuple[bool, FloatArray, IntArray]:
+    """Whether the RINEX 3 epoch records whose first 35 characters are the rows of ``m`` all
+    hold epoch flag 0, a time in digits (``hh mm sss.sssssss``) and a satellite count; their
+    seconds of the day and counts."""
+    ok_h, hour = _right_aligned(m[:, 13:15])
+    ok_m, minute = _right_aligned(m[:, 16:18])
+    ok_s, whole = _right_aligned(m[:, 18:21])
+    ok_n, count = _right_aligned(m[:, 32:35])
+    frac = m[:, 22:29].astype(np.int64) - 48
+    ok = ok_h & ok_m & ok_s & ok_n & (m[:, 21] == 46) & (m[:, 31] == 48)
+    ok &= ((frac >= 0) & (frac <= 9)).all(axis=1)
+    # the integer number of 1e-7 s over 1e7: exact operands, correctly rounded, as float()
+    seconds = (whole * 10_000_000 + frac @ 10 ** np.arange(6, -1, -1)) / 1e7
+    return bool(ok.all()), hour * 3600.0 + minute * 60.0 + seconds, count
+
+
+def scan_v3_regular(
+    text: TextLines, where: tuple[int, list[int], int], segment: int, scan: EpochScan
+) -> bool:
+    """:func:`scan_v3` at once, for a file whose epoch records are all regular: epoch flag 0,
+    time in digits, clock offset a number or blank, each followed by exactly the data lines it
+    announces, no other line. Returns False, recording nothing, for any other file (its walk
+    then finds what is irregular); only for reads that keep no data lines."""
+    body, records, end = where
+    if not records or records[0] != body or scan.keep_data:
+        return False
+    at = np.asarray(records, dtype=np.int64)
+    start, length = text.start[at], text.length[at]
+    buf = np.frombuffer(text.data, dtype=np.uint8)
+    m = gather_columns(buf, start, length, np.zeros(len(at), dtype=np.int64), 35)
+    ok, of_day_s, count = _regular_times(m)
+    if not ok or (count != np.append(at[1:], end) - at - 1).any():
+        return False
+    days: dict[bytes, float] = {}
+    midnight: list[float] = []
+    clock_s: list[float] = []
+    data = text.data
+    try:
+        for first, n in zip(start.tolist(), length.tolist(), strict=True):
+            rec = data[first : first + n]
+            midnight.append(_midnight_s(rec[2:12], days))
+            clock = rec[41:56]
+            if clock.strip() and len(rec.rstrip()) < 56:
+                return False
+            clock_s.append(float(clock) if clock.strip() else _NAN)
+    except ValueError:
+        return False
+    n_e = len(at)
+    scan.t_cal_s.extend((np.asarray(midnight) + of_day_s).tolist())
+    scan.flag.extend([0] * n_e)
+    scan.clock_s.extend(clock_s)
+    scan.segment.extend([segment] * n_e)
+    scan.n_lines.extend(count.tolist())
+    scan.line_no.extend((at + 2).tolist())
+    scan.epoch_line.extend((at + 1).tolist())
+    return True
+
+
 def _v2_record(rec: bytes, days: dict[bytes, float]) -> tuple[float, int, int]:
     """Time, flag and satellite count of a RINEX 2 epoch record
     (1X,I2.2,4(1X,I2),F11.7,2X,I1,I3,12(A1,I2),F12.9); ValueError if malformed."""
@@ -246,7 +368,9 @@ def _v2_record(rec: bytes, days: dict[bytes, float]) -> tuple[float, int, int]:
     return t_cal, flag, count
 
 
-def _v2_satellites(path: StrPath, lines: list[bytes], i: int, end: int, count: int) -> list[bytes]:
+def _v2_satellites(
+    path: StrPath, lines: Sequence[bytes], i: int, end: int, count: int
+) -> list[bytes]:
     """The satellite list of the epoch record at line ``i`` (12 per line, then continuation
     lines blank up to column 32)."""
     n_list = max(1, (count + 11) // 12)
@@ -293,7 +417,7 @@ class _V2Walk:
     def __init__(
         self,
         path: StrPath,
-        lines: list[bytes],
+        lines: Sequence[bytes],
         end: int,
         segments: list[ObsTypes],
         scan: EpochScan,
@@ -358,8 +482,8 @@ class _V2Walk:
                 self.scan.skipped.append(SkippedLine(line=i + 1, reason=reason))
                 self.scan.skip(i + 1, intruder, "data line of a dropped epoch")
                 return intruder
-        data = self.lines[first : first + take * self.per_sat]
-        self.scan.add_epoch((t_cal, flag, clock_s), self.seg, i, first, data)
+        span = (first, first + take * self.per_sat)
+        self.scan.add_epoch((t_cal, flag, clock_s), self.seg, i, self.lines, span)
         self.scan.rec_sat.extend(sats[:take])
         self.scan.rec_lines.extend([self.per_sat] * take)
         self.previous = (i, count, first, stop)
@@ -368,7 +492,7 @@ class _V2Walk:
 
 def scan_v2(
     path: StrPath,
-    lines: list[bytes],
+    lines: Sequence[bytes],
     body: int,
     end: int,
     segments: list[ObsTypes],
@@ -397,7 +521,7 @@ def scan_v2(
 
 
 def _missing_v2_data_line(
-    path: StrPath, lines: list[bytes], previous: tuple[int, int, int, int]
+    path: StrPath, lines: Sequence[bytes], previous: tuple[int, int, int, int]
 ) -> None:
     """Explain a malformed epoch record by a data line missing from the epoch before it."""
     rec, count, first, stop = previous
