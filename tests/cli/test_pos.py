@@ -151,6 +151,27 @@ def test_nav_not_matching_exits_nonzero(capsys: pytest.CaptureFixture[str]) -> N
     assert "NAV file matches the observation day" in captured.err
 
 
+def test_lenient_skips_a_damaged_data_line_and_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A pseudorange field turned to letters stops a strict run with the file and line named;
+    with --lenient that line is skipped, counted in a warning, and the rest solved."""
+    lines = sample_path("SEPT078M_120.21O").read_text().splitlines(keepends=True)
+    first_epoch = next(i for i, line in enumerate(lines) if line.startswith(">"))
+    row = first_epoch + 1  # the first satellite's data line (0-based)
+    lines[row] = lines[row][:3] + "   X.XXX ABC " + lines[row][15:]
+    damaged = tmp_path / "damaged.21O"
+    damaged.write_text("".join(lines))
+    nav = str(sample_path("SEPT078M.21P"))
+    assert main(["pos", str(damaged), nav]) == 2
+    assert f"{damaged}:{row + 1}: malformed observation field" in capsys.readouterr().err
+    assert main(["pos", str(damaged), nav, "--lenient", "--out", str(tmp_path / "x.csv")]) == 0
+    err = capsys.readouterr().err
+    assert f"1 damaged data lines skipped (first: line {row + 1}," in err
+    solved = read_obs(damaged, lenient=True)
+    assert solved.t_gps_s.size == 120
+
+
 def _refused(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
     """The error line of a command refused as bad input (exit 2, no traceback)."""
     with pytest.raises(SystemExit) as info:

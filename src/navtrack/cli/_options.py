@@ -12,6 +12,7 @@ from navtrack.geodesy import check_near_surface, geodetic_to_ecef
 
 __all__ = [
     "add_elmask_option",
+    "add_lenient_option",
     "add_out_option",
     "add_reference_options",
     "add_systems_option",
@@ -43,6 +44,16 @@ def add_elmask_option(
         default=default,
         metavar="DEG",
         help=f"elevation mask in degrees (default {shown:g})",
+    )
+
+
+def add_lenient_option(p: argparse.ArgumentParser) -> None:
+    """``--lenient``: damaged observation lines or messages are skipped and counted."""
+    p.add_argument(
+        "--lenient",
+        action="store_true",
+        help="skip damaged data lines of a RINEX observation file and damaged messages of a "
+        "UBX log (counted in a warning, the first named) instead of stopping",
     )
 
 

@@ -7,10 +7,11 @@ ephemerides (RXM-SFRBX), used beside any navigation files given.
 
 from __future__ import annotations
 
-from collections.abc import Collection
+import sys
+from collections.abc import Collection, Sequence
 from pathlib import Path
 
-from navtrack.gnss.observations import Observations
+from navtrack.gnss.observations import Observations, SkippedLine
 from navtrack.gnss.rinex.nav import NavData
 from navtrack.gnss.rinex.obs import read_obs
 
@@ -37,13 +38,32 @@ def is_raw_log(path: Path) -> bool:
 
 
 def read_observations(
-    path: Path, *, systems: str | None = None, codes: Collection[str] | None = None
+    path: Path,
+    *,
+    lenient: bool = False,
+    systems: str | None = None,
+    codes: Collection[str] | None = None,
 ) -> tuple[Observations, NavData | None]:
     """The observations of a RINEX file or a UBX log, and the log's navigation data (None for
-    RINEX and for a log without a complete ephemeris)."""
+    RINEX and for a log without a complete ephemeris). With ``lenient`` damaged data lines or
+    messages are skipped; their count and the first of them are printed as a warning."""
     if is_raw_log(path):
         from navtrack.gnss.ubx import read_ubx  # for UBX logs only (start-up)
 
-        log = read_ubx(path)
+        log = read_ubx(path, lenient=lenient)
+        _warn_skipped(path, log.skipped, "messages")
         return log.obs, (log.nav if log.nav.tables else None)
-    return read_obs(path, systems=systems, codes=codes), None
+    obs = read_obs(path, lenient=lenient, systems=systems, codes=codes)
+    _warn_skipped(path, obs.skipped, "data lines")
+    return obs, None
+
+
+def _warn_skipped(path: Path, skipped: Sequence[SkippedLine], what: str) -> None:
+    if skipped:
+        first = skipped[0]
+        where = f"line {first.line}, " if what == "data lines" else ""
+        print(
+            f"warning        {path}: {len(skipped)} damaged {what} skipped "
+            f"(first: {where}{first.reason})",
+            file=sys.stderr,
+        )

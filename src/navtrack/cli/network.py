@@ -32,6 +32,8 @@ def run_network(args: argparse.Namespace, jobs: list[StationJob], config: SppCon
     for option in ("ref", "ref_llh", "plot", "sp3"):
         if getattr(args, option, None) is not None:
             raise SystemExit(f"navtrack pos: --{option.replace('_', '-')} is for one station")
+    if args.lenient:
+        raise SystemExit("navtrack pos: --lenient is for one station (a network reads strictly)")
     clock = time.perf_counter()
     result = solve_network(
         jobs,

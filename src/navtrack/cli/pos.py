@@ -22,6 +22,7 @@ from typing import Any
 
 from navtrack.cli._options import (
     add_elmask_option,
+    add_lenient_option,
     add_out_option,
     add_reference_options,
     add_systems_option,
@@ -73,6 +74,7 @@ def _add_model_options(p: argparse.ArgumentParser) -> None:
     """Systems, elevation mask, weighting, ionosphere, RTKLIB option file and compatibility."""
     add_systems_option(p, None, f"{DEFAULT_SYSTEMS}: all present")
     add_elmask_option(p, None, DEFAULT_ELMASK_DEG)
+    add_lenient_option(p)
     p.add_argument(
         "--weighting",
         choices=WEIGHTINGS,

@@ -175,7 +175,10 @@ def _read_inputs(
         obs = read_gnsslogger(args.obs)
     else:
         obs, log_nav = read_observations(
-            args.obs, systems=config.systems, codes=observation_codes(config)
+            args.obs,
+            lenient=args.lenient,
+            systems=config.systems,
+            codes=observation_codes(config),
         )
         if log_nav is not None:
             navs.insert(0, log_nav)

@@ -19,6 +19,7 @@ import numpy as np
 
 from navtrack.cli._options import (
     add_elmask_option,
+    add_lenient_option,
     add_out_option,
     add_reference_options,
     add_systems_option,
@@ -72,6 +73,7 @@ def register(subparsers: Any) -> None:
     )
     add_systems_option(q, "G")
     add_elmask_option(q, 15.0)
+    add_lenient_option(q)
     add_reference_options(q, trajectory=True)
     add_out_option(q, "write the solution (.csv, .parquet, .nmea, .kml, .gpx)")
     q.add_argument(
@@ -132,7 +134,7 @@ def run_ppp(args: argparse.Namespace) -> int:
         config = PppConfig(systems=args.systems.upper(), elmask_deg=args.elmask)
     except ValueError as exc:
         raise SystemExit(f"navtrack ppp: {exc}") from None
-    obs, log_nav = read_observations(args.obs)
+    obs, log_nav = read_observations(args.obs, lenient=args.lenient)
     navs = [read_nav(p) for p in args.nav] + ([log_nav] if log_nav is not None else [])
     sp3 = _precise_products(args, obs.t_gps_s)
     antex = read_antex(args.antex) if args.antex is not None else None

@@ -22,6 +22,7 @@ from tqdm import tqdm
 
 from navtrack.cli._options import (
     add_elmask_option,
+    add_lenient_option,
     add_out_option,
     add_reference_options,
     add_systems_option,
@@ -91,6 +92,7 @@ def register(subparsers: Any) -> None:
         "--freq", type=int, choices=(1, 2), default=1, help="frequencies: 1 (L1) or 2 (L1+L2)"
     )
     add_elmask_option(p, 15.0)
+    add_lenient_option(p)
     _add_fix_options(p)
     p.add_argument("--sp3", type=Path, help="precise orbits/clocks (SP3) instead of broadcast")
     add_reference_options(p, trajectory=True)
@@ -246,7 +248,7 @@ def _read_inputs(
 ) -> tuple[Observations, Observations, list[NavData], Sp3 | None, FloatArray, str]:
     """Rover, base, navigation data, SP3 and the base position with its source."""
     base_xyz, base_src = _base_position(args)
-    rover, rover_nav = read_observations(args.rover)
+    rover, rover_nav = read_observations(args.rover, lenient=args.lenient)
     base_nav = None
     if args.base.is_file() and is_rtcm3(args.base):
         log = read_rtcm(args.base, float(np.median(rover.t_gps_s)))
@@ -255,7 +257,7 @@ def _read_inputs(
             base_xyz = log.station_xyz_m
             base_src = f"RTCM 1005/1006 of {args.base} (give --base-pos for a surveyed one)"
     else:
-        base, base_nav = read_observations(args.base)
+        base, base_nav = read_observations(args.base, lenient=args.lenient)
     if base_src == "header":
         if base.header.approx_xyz_m is None:
             raise SystemExit(
