@@ -2,7 +2,7 @@
 
 A *target* is a reader (or an in-process command) with the seed file whose damaged copies it
 is given. :func:`run_mutant` writes one mutant next to the others (same suffix, so the format
-follows) and runs the target on it in a worker process limited in memory
+follows) and runs the target on it in a worker process limited in added memory
 (:data:`MEMORY_LIMIT_BYTES`) and time (:data:`TIME_LIMIT_S`); the outcome is one of
 
 * ``error_line`` / ``error_file`` -- a :class:`~navtrack.errors.NavtrackError` (or a command's
@@ -33,7 +33,7 @@ from navtrack.data import sample_path
 
 REPO = Path(__file__).resolve().parents[2]
 TEST_DATA = REPO / "tests" / "data"
-MEMORY_LIMIT_BYTES = 3 * 2**30  # address space of the worker
+MEMORY_LIMIT_BYTES = 3 * 2**30  # address space the worker may add to what it inherits
 TIME_LIMIT_S = 30.0
 FAILURES = ("unnamed", "crash", "hang", "memory")
 OUTCOMES = ("error_line", "error_file", "ok_counted", "ok", *FAILURES)
@@ -272,7 +272,19 @@ def mutate(seed: bytes, header: int, operator: str, seed_value: int) -> tuple[by
 
 
 def _limit_worker() -> None:
-    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT_BYTES, MEMORY_LIMIT_BYTES))
+    # the forked worker starts with the test process's address space (every library the
+    # session has loaded), so the limit is counted from there, not from zero
+    limit = _address_space_bytes() + MEMORY_LIMIT_BYTES
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+
+def _address_space_bytes() -> int:
+    """This process's virtual memory size (``VmSize`` of ``/proc/self/status``), 0 if unknown."""
+    with contextlib.suppress(OSError):
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmSize:"):
+                return int(line.split()[1]) * 1024
+    return 0
 
 
 def _classify(target: str, path: str) -> tuple[str, str]:
