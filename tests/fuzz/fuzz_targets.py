@@ -228,10 +228,10 @@ TARGETS: dict[str, Target] = {
             _read_sp3,
             _until(b"*"),
         ),
-        Target("android", _test_file("pixel7_gnsslogger_v3_cut.txt"), _read_android, _comments),
+        Target("android", _test_file("pixel10_gnsslogger_v3_cut.txt"), _read_android, _comments),
         Target(
             "android_lenient",
-            _test_file("pixel7_gnsslogger_v3_cut.txt"),
+            _test_file("pixel10_gnsslogger_v3_cut.txt"),
             _read_android_lenient,
             _comments,
         ),

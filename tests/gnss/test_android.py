@@ -23,7 +23,7 @@ from navtrack.timescale import calendar_gps_seconds
 
 LOG = "google_gnsslogger/pseudoranges_log_2016_08_22_14_45_50.txt"
 BUNDLED = "pseudoranges_log_2016_08_22_14_45_50.txt"
-PIXEL7 = Path(__file__).resolve().parents[1] / "data" / "pixel7_gnsslogger_v3_cut.txt"
+PIXEL10 = Path(__file__).resolve().parents[1] / "data" / "pixel10_gnsslogger_v3_cut.txt"
 C = 299792458.0
 WEEK_NS = 604800 * 10**9
 _SYSTEM = {"1": "G", "3": "R", "5": "C", "6": "E", "4": "J"}
@@ -168,15 +168,16 @@ def test_bundled_copy_reads() -> None:
 
 
 def test_new_column_set_dual_frequency() -> None:
-    # Pixel 7, GnssLogger v3.0.6.4 (gnss_lib_py test log): CarrierFrequencyHz and CodeType
-    # logged; GLONASS with orbital slots and FDMA frequencies; GPS/Galileo L5/E5a
-    obs = read_gnsslogger(PIXEL7)
-    rows = _raw_rows(PIXEL7)
-    col = _columns(PIXEL7)
+    # Pixel 10, GnssLogger v3.1.1.3 (Google's gps-measurement-tools sample): CarrierFrequencyHz,
+    # CodeType and the satellite-state columns logged; GPS L1/L5, GLONASS FDMA, Galileo E1/E5a
+    obs = read_gnsslogger(PIXEL10)
+    rows = _raw_rows(PIXEL10)
+    col = _columns(PIXEL10)
     assert obs.t_gps_s.shape == (1,)
     assert set(obs.codes) == {f"{t}{s}" for s in ("1C", "5Q") for t in "CLDS"}
-    # three L5/E5a rows have State 16384 with uncertainty 1e9 ns
-    assert skipped_counts(obs) == {"satellite time uncertainty too large": 3}
+    # seven rows keep the millisecond ambiguity bit of State (0x10) set: G10 (State 23), R15 (115),
+    # the Galileo E1 rows (3088) and E5a rows (65557), E27/E05 E5a with 5.3 ms uncertainty too
+    assert skipped_counts(obs) == {"millisecond ambiguity": 7}
     assert len(obs.skipped) + int(np.isfinite(obs.values[:, :, 0::4]).sum()) == len(rows)
     for lineno, f in rows.items():
         if lineno in {s.line for s in obs.skipped}:
@@ -187,7 +188,7 @@ def test_new_column_set_dual_frequency() -> None:
         band = "5" if abs(f_hz - 1176.45e6) < 1e6 else "1"
         code = band + f[col["CodeType"]]
         if sys_letter == "R":
-            # GLONASS time of day in UTC(SU) + 3 h; 18 leap seconds in 2023 (IERS)
+            # GLONASS time of day in UTC(SU) + 3 h; 18 leap seconds in 2026 (IERS)
             expected = _expected_pr(f, col, 86400 * 10**9, (3 * 3600 - 18) * 10**9)
         else:
             expected = _expected_pr(f, col, WEEK_NS, 0)
@@ -206,7 +207,7 @@ def test_bad_input(tmp_path: Path) -> None:
     no_header.write_text("Fix,gps,37.4,-122.0,0,0,4,1471902355999\n")
     with pytest.raises(FileFormatError, match=r"nohdr\.txt: not a GnssLogger log"):
         read_gnsslogger(no_header)
-    lines = PIXEL7.read_text().splitlines(keepends=True)
+    lines = PIXEL10.read_text().splitlines(keepends=True)
     k = next(i for i, ln in enumerate(lines) if ln.startswith("Raw,"))
     bad = lines.copy()
     bad[k] = "Raw,1699400594000,garbage,,,\n"
@@ -230,7 +231,7 @@ def test_bad_input(tmp_path: Path) -> None:
 def test_garbage_and_malformed_unused_fields_are_counted(tmp_path: Path) -> None:
     # issue 9, failure 11: a garbage line and a malformed value in a column navtrack does not
     # use (MultipathIndicator) were accepted without a word
-    lines = PIXEL7.read_text().splitlines(keepends=True)
+    lines = PIXEL10.read_text().splitlines(keepends=True)
     col = {
         n: k for k, n in enumerate(next(ln for ln in lines if ln.startswith("# Raw")).split(","))
     }
@@ -247,7 +248,7 @@ def test_garbage_and_malformed_unused_fields_are_counted(tmp_path: Path) -> None
         read_gnsslogger(path)
     bad.insert(raw[5], "%%garbage: 12 34\n")
     path.write_text("".join(bad))
-    good = read_gnsslogger(PIXEL7)
+    good = read_gnsslogger(PIXEL10)
     lenient = read_gnsslogger(path, lenient=True)
     counts = skipped_counts(lenient)
     assert counts["unreadable row"] == 1
@@ -267,7 +268,7 @@ def test_garbage_and_malformed_unused_fields_are_counted(tmp_path: Path) -> None
 
 def test_last_row_cut_by_the_end_of_the_file(tmp_path: Path) -> None:
     # issue 9, failure 10: a last Raw row cut mid-line was read with its cut value as data
-    text = PIXEL7.read_text()
+    text = PIXEL10.read_text()
     last_raw = text.rstrip("\n").rsplit("\n", 1)[1]
     assert last_raw.startswith("Raw,")
     n_lines = len(text.rstrip("\n").split("\n"))
@@ -282,7 +283,7 @@ def test_last_row_cut_by_the_end_of_the_file(tmp_path: Path) -> None:
 def test_infinite_integer_field_is_unreadable(tmp_path: Path) -> None:
     # found by the fuzz suite (bad_number, seed 606): "inf" in an integer column raised
     # OverflowError from int(float("inf"))
-    lines = PIXEL7.read_text().splitlines(keepends=True)
+    lines = PIXEL10.read_text().splitlines(keepends=True)
     header = next(ln for ln in lines if ln.startswith("# Raw"))
     col = {n: k for k, n in enumerate(header.split(","))}
     k = next(i for i, ln in enumerate(lines) if ln.startswith("Raw,"))
