@@ -53,6 +53,12 @@ class DayStation:
 #: References: IGS weekly SINEX igs10P1565 (2010-01-02..11, in RTKLIB's ``data/``), markers
 #: NIST 49507M002 and TLSE 10003M009; TLSE's antenna height 1.053 m (header) added along up.
 #: Plate motion since 2010 (0.2-0.3 m) is not applied (docs/integrity.md).
+#: BELE (Belem, 2024-01-10) and DGAR (Diego Garcia, the same day; RINEX 2.11, GPS + Galileo +
+#: GLONASS): github.com/eureka-0/pygnss-tec (MIT), ``data/rinex_obs_v3``, ``rinex_obs_v2`` and
+#: ``rinex_nav_v3``; references from the IGS daily SINEX IGS0OPSSNX_20240350000_01D_01D_CRD
+#: (estimates) plus the antenna height of the SINEX eccentricity along up. BOR1 (Borowiec,
+#: 2024-02-04, GPS only: its navigation file holds GPS alone), the SINEX and the navigation
+#: file from github.com/HJpierzchala/GNX ``sample_data`` (the observations at commit 1e2c3d87).
 DAY_STATIONS: dict[str, DayStation] = {
     "NIST": DayStation(
         "NIST00USA_R_20230010000_01D_30S_MO.crx.gz",
@@ -65,6 +71,24 @@ DAY_STATIONS: dict[str, DayStation] = {
         "BRDC00IGS_R_20220010000_01D_MN.rnx",
         "G",
         (4627852.5368, 119640.1371, 4372994.3357),
+    ),
+    "BELE": DayStation(
+        "BELE00BRA_R_20240100000_01D_30S_MO.crx.gz",
+        "BRDC00IGS_R_20240100000_01D_MN.rnx.gz",
+        "GEC",
+        (4228138.9799, -4772752.1624, -155761.0691),
+    ),
+    "DGAR": DayStation(
+        "dgar0100.24o.gz",
+        "BRDC00IGS_R_20240100000_01D_MN.rnx.gz",
+        "GE",
+        (1916268.6168, 6029977.8816, -801719.2937),
+    ),
+    "BOR1": DayStation(
+        "BOR100POL_R_20240350000_01D_30S_MO.crx.gz",
+        "BRDC00CNE_R_20240350000_01D_GN.rnx",
+        "G",
+        (3738358.1695, 1148174.0200, 5021815.9830),
     ),
 }
 
