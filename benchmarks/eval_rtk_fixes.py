@@ -22,6 +22,10 @@ Cases (all in ``shared/data/gnss``):
 * ``ublox``: the geofis/ppk pair of two u-blox ZED-F9P receivers (static rover 1.2 km from
   the base, 15 s, 4 h, GPS/Galileo/BeiDou/QZSS), L1 and L1+L2. Reference: RTKLIB's static
   solution of the whole session against the same base position.
+* ``decimated``: a 1 Hz rover against a real geodetic base decimated to CORS rates (no public
+  CORS file overlapping a public u-blox rover log was found): the MatRTKLIB 2018 rover against
+  its Trimble NetR9 base at 1, 5 and 30 s (L1), and the ZED-F9P pair with its base thinned from
+  15 to 30 s (L1+L2); both programs read the same decimated file.
 * ``glonass``: on the three low-cost pairs, the GLONASS code inter-frequency bias between the
   receivers (:func:`glonass_code_bias`), GLONASS alone in the float solution, and the other
   systems without and with GLONASS beside RTKLIB.
@@ -415,6 +419,41 @@ def _ublox(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
         )
 
 
+def _decimated(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
+    """A 1 Hz rover against a real geodetic base thinned to CORS rates (decimated here, not a
+    CORS file): the MatRTKLIB 2018 rover against its Trimble NetR9 base at 1, 5 and 30 s,
+    GPS + Galileo + BeiDou + QZSS L1 (the pair fixes at L1 alone); and the u-blox F9P pair
+    (15 s) with its base thinned to 30 s, L1+L2. Both programs read the same thinned file and
+    use base observations up to 30 s old (RTKLIB ``maxage``, navtrack ``max_age_s``)."""
+    d = data / MOSAIC_2018
+    if d.is_dir():
+        rover, base, nav = d / "rover_1Hz.obs", d / "base.obs", d / "base.nav"
+        base_xyz, ref = llh_file(d / "base_position.txt"), llh_file(d / "rover_mean_position.txt")
+        for step in (1, 5, 30):
+            thinned = base if step == 1 else thin_rinex3(base, tmp / f"netr9_{step}s.obs", step)
+            _case(
+                f"2018 pair L1, NetR9 {step} s" + (" (decim.)" if step > 1 else ""),
+                (rover, thinned, nav, base_xyz),
+                dataclasses.replace(base_cfg, frequencies=1),
+                ["-p", "2", "-f", "1", "-sys", "G,E,J,C"],
+                ref,
+                wrong_m,
+                tmp,
+            )
+    files = _ublox_files(data)
+    if files is not None:
+        thinned = thin_rinex3(files[1], tmp / "f9p_base_30s.obs", 30)
+        _case(
+            "u-blox F9P pair L1+L2, 30 s base (decim.)",
+            (files[0], thinned, files[2], UBLOX_BASE),
+            dataclasses.replace(base_cfg, frequencies=2),
+            ["-p", "2", "-f", "2", "-sys", "G,E,C,J"],
+            _ublox_reference(files, tmp),
+            wrong_m,
+            tmp,
+        )
+
+
 def _pairs(data: Path, tmp: Path) -> list[tuple[str, tuple[Path, Path, Path], Any, Any, int]]:
     """The low-cost pairs with GLONASS L1/L2: name, files, base position, rover reference and
     the frequencies at which the other four systems fix (the 2018 pair: L1 alone)."""
@@ -580,7 +619,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--data", type=Path, default=EXTRA, help="folder of the MatRTKLIB pairs")
     ap.add_argument(
         "--only",
-        choices=("yamatogawa", "gsi0759", "mosaic", "ublox", "glonass", "rtcm"),
+        choices=("yamatogawa", "gsi0759", "mosaic", "ublox", "decimated", "glonass", "rtcm"),
         help="one group of cases",
     )
     args = ap.parse_args(argv)
@@ -602,6 +641,8 @@ def main(argv: list[str] | None = None) -> int:
             _mosaic(base_cfg, args.wrong_m, tmp, args.data)
         if args.only in (None, "ublox"):
             _ublox(base_cfg, args.wrong_m, tmp, args.data)
+        if args.only in (None, "decimated"):
+            _decimated(base_cfg, args.wrong_m, tmp, args.data)
         if args.only in (None, "glonass"):
             _glonass(base_cfg, args.wrong_m, tmp, args.data)
         if args.only in (None, "rtcm"):
