@@ -5,9 +5,10 @@ The cut in ``tests/data/rtk`` (MatRTKLIB 2018 pair, MIT): the rover's first 120 
 its Trimble NetR9 base decimated to 30 s over the same 2 minutes (4 epochs). The longer runs
 need the data folder of ``benchmarks/eval_rtk_fixes.py`` (``NAVTRACK_RTK_DATA``, default
 ``../data_r30``) and skip without it. Reference numbers: RTKLIB 2.4.3 b34 ``rnx2rtkp -p 2 -f 1
--m 15 -e`` with ``pos1-navsys=57`` (GPS, Galileo, QZSS, BeiDou) and ``pos2-maxage=30`` on the
-same files and base position (``eval_rtk_fixes.py --only decimated``); the rover coordinate
-published with the data for the wrong-fix check.
+-m 15 -e -r BASE_XYZ`` with ``pos1-navsys=57`` (GPS, Galileo, QZSS, BeiDou) and
+``pos2-maxage=30`` on the same files and base position (the cut: run on the two cut files; the
+whole runs: ``eval_rtk_fixes.py --only decimated``); the rover coordinate published with the
+data for the wrong-fix check.
 """
 
 from __future__ import annotations
