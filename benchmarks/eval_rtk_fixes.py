@@ -22,6 +22,10 @@ Cases (all in ``shared/data/gnss``):
 * ``ublox``: the geofis/ppk pair of two u-blox ZED-F9P receivers (static rover 1.2 km from
   the base, 15 s, 4 h, GPS/Galileo/BeiDou/QZSS), L1 and L1+L2. Reference: RTKLIB's static
   solution of the whole session against the same base position.
+* ``decimated``: a 1 Hz rover against a real geodetic base decimated to CORS rates (no public
+  CORS file overlapping a public u-blox rover log was found): the MatRTKLIB 2018 rover against
+  its Trimble NetR9 base at 1, 5 and 30 s (L1), and the ZED-F9P pair with its base thinned from
+  15 to 30 s (L1+L2); both programs read the same decimated file.
 * ``glonass``: on the three low-cost pairs, the GLONASS code inter-frequency bias between the
   receivers (:func:`glonass_code_bias`), GLONASS alone in the float solution, and the other
   systems without and with GLONASS beside RTKLIB.
@@ -199,9 +203,10 @@ def _case(
     ref: Any,
     wrong_m: float,
     tmp: Path,
-) -> None:
+) -> tuple[Any, np.ndarray]:
     """One baseline through both programs: ``files`` are rover, base, navigation and the base
-    position; ``ref`` a reference point or RTKLIB solution."""
+    position; ``ref`` a reference point or RTKLIB solution. Returns navtrack's result and the
+    distance of each of its epochs from the reference."""
     rover, base, nav, base_xyz = files
     res = solve_relative(
         read_obs(rover), read_obs(base), [read_nav(nav)], np.asarray(base_xyz), cfg
@@ -225,6 +230,26 @@ def _case(
     err_r, q_r = _ref_errors(tr, pos[["x_m", "y_m", "z_m"]].to_numpy(), ref)
     fixed_r = pos["q"].to_numpy() == 1
     print(f"{'':<34} RTKLIB   {_stats(tr, fixed_r, err_r, q_r, wrong_m)}")
+    return res, err
+
+
+def _by_age(res: Any, err: np.ndarray) -> None:
+    """navtrack's fixes grouped by the age of the base observations: count and 3-D error
+    median / 95 % / max."""
+    fixed = res.status == RtkStatus.FIX
+    for lo, hi, label in (
+        (0, 0.5, "0 s"),
+        (0.5, 10.5, "1-10 s"),
+        (10.5, 20.5, "11-20 s"),
+        (20.5, 30, "21-29 s"),
+    ):
+        m = fixed & (res.age_s >= lo) & (res.age_s < hi)
+        if m.any():
+            e = err[m]
+            print(
+                f"{'':<34}   base age {label:>7}: {int(m.sum()):4d} fixes, error "
+                f"{np.median(e):.3f} / {np.percentile(e, 95):.3f} / {e.max():.3f} m"
+            )
 
 
 def evidence_055954() -> None:
@@ -352,7 +377,7 @@ def _mosaic(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
             base = (
                 files[1] if step == 1 else thin_rinex3(files[1], tmp / f"mosaic_{step}s.obs", step)
             )
-            _case(
+            res, err = _case(
                 f"mosaic-X5 pair {step} s base",
                 (files[0], base, files[2], base_xyz),
                 cfg,
@@ -361,6 +386,8 @@ def _mosaic(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
                 wrong_m,
                 tmp,
             )
+            if step == 30:
+                _by_age(res, err)
     d = data / MOSAIC_2018
     if d.is_dir():
         files = (d / "rover_1Hz.obs", d / "base.obs", d / "base.nav")
@@ -412,6 +439,45 @@ def _ublox(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
             ref,
             wrong_m,
             tmp,
+        )
+
+
+def _decimated(base_cfg: RtkConfig, wrong_m: float, tmp: Path, data: Path) -> None:
+    """A 1 Hz rover against a real geodetic base thinned to CORS rates (decimated here, not a
+    CORS file): the MatRTKLIB 2018 rover against its Trimble NetR9 base at 1, 5 and 30 s,
+    GPS + Galileo + BeiDou + QZSS L1 (the pair fixes at L1 alone); and the u-blox F9P pair
+    (15 s) with its base thinned to 30 s, L1+L2. Both programs read the same thinned file and
+    use base observations up to 30 s old (RTKLIB ``maxage``, navtrack ``max_age_s``)."""
+    d = data / MOSAIC_2018
+    if d.is_dir():
+        rover, base, nav = d / "rover_1Hz.obs", d / "base.obs", d / "base.nav"
+        base_xyz, ref = llh_file(d / "base_position.txt"), llh_file(d / "rover_mean_position.txt")
+        for step in (1, 5, 30):
+            thinned = base if step == 1 else thin_rinex3(base, tmp / f"netr9_{step}s.obs", step)
+            res, err = _case(
+                f"2018 pair L1, NetR9 {step} s" + (" (decim.)" if step > 1 else ""),
+                (rover, thinned, nav, base_xyz),
+                dataclasses.replace(base_cfg, frequencies=1),
+                ["-p", "2", "-f", "1", "-sys", "G,E,J,C"],
+                ref,
+                wrong_m,
+                tmp,
+            )
+            if step == 30:
+                _by_age(res, err)
+    files = _ublox_files(data)
+    if files is not None:
+        thinned = thin_rinex3(files[1], tmp / "f9p_base_30s.obs", 30)
+        _by_age(
+            *_case(
+                "u-blox F9P pair L1+L2, 30 s base (decim.)",
+                (files[0], thinned, files[2], UBLOX_BASE),
+                dataclasses.replace(base_cfg, frequencies=2),
+                ["-p", "2", "-f", "2", "-sys", "G,E,C,J"],
+                _ublox_reference(files, tmp),
+                wrong_m,
+                tmp,
+            )
         )
 
 
@@ -580,7 +646,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--data", type=Path, default=EXTRA, help="folder of the MatRTKLIB pairs")
     ap.add_argument(
         "--only",
-        choices=("yamatogawa", "gsi0759", "mosaic", "ublox", "glonass", "rtcm"),
+        choices=("yamatogawa", "gsi0759", "mosaic", "ublox", "decimated", "glonass", "rtcm"),
         help="one group of cases",
     )
     args = ap.parse_args(argv)
@@ -602,6 +668,8 @@ def main(argv: list[str] | None = None) -> int:
             _mosaic(base_cfg, args.wrong_m, tmp, args.data)
         if args.only in (None, "ublox"):
             _ublox(base_cfg, args.wrong_m, tmp, args.data)
+        if args.only in (None, "decimated"):
+            _decimated(base_cfg, args.wrong_m, tmp, args.data)
         if args.only in (None, "glonass"):
             _glonass(base_cfg, args.wrong_m, tmp, args.data)
         if args.only in (None, "rtcm"):

@@ -546,15 +546,17 @@ def test_kinematic_fixes_with_and_without_hold_are_right(geonet) -> None:  # typ
         assert err.max() < 0.11
 
 
-def test_an_old_base_is_not_used_for_fixing(geonet) -> None:  # type: ignore[no-untyped-def]
-    """3040 thinned to 60 s serves the 30 s rover epochs in between 30 s old: those stay float
-    (reason ``base_age``), the others fix, all within 11 cm of the station."""
+def test_a_base_older_than_max_age_ar_is_not_used_for_fixing(geonet) -> None:  # type: ignore[no-untyped-def]
+    """3040 thinned to 60 s serves the 30 s rover epochs in between 30 s old: with
+    ``max_age_ar_s`` 10 those stay float (reason ``base_age``), the others fix, all within 11 cm
+    of the station."""
     from navtrack.gnss.spp import subset_epochs
 
     rover, base, nav, base_xyz = geonet
     every60 = np.flatnonzero(np.round(base.t_gps_s) % 60 < 1)
     thin = subset_epochs(base, every60)
-    res = solve_relative(rover, thin, nav, base_xyz, RtkConfig(frequencies=2, max_age_s=60.0))
+    cfg = RtkConfig(frequencies=2, max_age_s=60.0, max_age_ar_s=10.0)
+    res = solve_relative(rover, thin, nav, base_xyz, cfg)
     old = res.age_s > 10.0
     assert old.sum() >= 55
     assert not (res.status[old] == RtkStatus.FIX).any()
