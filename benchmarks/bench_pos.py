@@ -13,7 +13,9 @@ Printed, all from timings of this run (median of ``--repeat`` runs after one war
 * per case: navtrack s, RTKLIB s, ratio navtrack / RTKLIB, for the wall time and, beside it, the
   CPU time (user + system) of the processes, which a busy machine disturbs less;
 * fixed cost + per-epoch cost of both, the intercept and slope of a least-squares line through
-  the medians at cuts of the 900-epoch SEPT file (``--cuts``);
+  the medians at cuts of the 900-epoch SEPT file (``--cuts``), and navtrack's fixed cost less
+  the time of ``python -c "import numpy"`` run in turn with both programs at every cut (the
+  issue's bar is numpy's import + 40 ms);
 * the import floor: ``python -c "import numpy"`` and ``python -c "import navtrack.gnss.spp"``.
 
 Needs ``rnx2rtkp`` on the PATH (``apt-get install rtklib``) and the shared data
@@ -168,22 +170,28 @@ def _time_once(cmd: Sequence[str], env: dict[str, str]) -> tuple[float, float]:
 def time_pair(
     a: Sequence[str], b: Sequence[str], env: dict[str, str], repeat: int
 ) -> tuple[Timing, Timing]:
-    """Median times of two commands run alternately.
+    """Median times of two commands run alternately (:func:`time_alternating`)."""
+    ta, tb = time_alternating([a, b], env, repeat)
+    return ta, tb
 
-    One untimed warm-up run of each (disk cache), then ``repeat`` rounds; the order inside a
-    round swaps every round so that neither command always runs right after the other.
+
+def time_alternating(
+    cmds: Sequence[Sequence[str]], env: dict[str, str], repeat: int
+) -> list[Timing]:
+    """Median times of commands run in turn.
+
+    One untimed warm-up run of each (disk cache), then ``repeat`` rounds of one run of each;
+    the order inside a round is reversed every other round, so that no command always runs
+    right after the same other one.
     """
-    _time_once(a, env)
-    _time_once(b, env)
-    ta, tb = [], []
+    for cmd in cmds:
+        _time_once(cmd, env)
+    runs: list[list[tuple[float, float]]] = [[] for _ in cmds]
+    order = list(range(len(cmds)))
     for k in range(repeat):
-        if k % 2:
-            tb.append(_time_once(b, env))
-            ta.append(_time_once(a, env))
-        else:
-            ta.append(_time_once(a, env))
-            tb.append(_time_once(b, env))
-    return _median(ta), _median(tb)
+        for i in order if k % 2 == 0 else order[::-1]:
+            runs[i].append(_time_once(cmds[i], env))
+    return [_median(r) for r in runs]
 
 
 def _median(runs: Sequence[tuple[float, float]]) -> Timing:
@@ -248,26 +256,43 @@ def bench_cases(cases: Sequence[Case], env: dict[str, str], repeat: int, tmp: Pa
 def bench_cuts(
     case: Case, cuts: Sequence[int], env: dict[str, str], repeat: int, tmp: Path
 ) -> None:
+    """Fixed cost + cost per epoch of both programs (a least-squares line through the medians
+    at the cuts), and navtrack's fixed cost beyond ``python -c "import numpy"``, which runs in
+    turn with the two programs at every cut (issue 33's bar: numpy's import + 40 ms)."""
     print(f"\nfixed cost + per epoch: {case.name} cut to the first N epochs")
-    print(f"{'N':>6} {HEAD}")
-    t_nt, t_rtk = [], []
+    print(f"{'N':>6} {HEAD}   import numpy s")
+    numpy = [sys.executable, "-c", "import numpy"]
+    t_nt, t_rtk, t_np = [], [], []
     for n in cuts:
         obs = tmp / f"cut_{n}.21O"
         cut_rinex3(case.obs, n, obs)
-        a, b = time_pair(
-            case.navtrack(tmp / "cut.csv", obs), case.rtklib(tmp / "cut.pos", obs), env, repeat
+        a, b, c = time_alternating(
+            [case.navtrack(tmp / "cut.csv", obs), case.rtklib(tmp / "cut.pos", obs), numpy],
+            env,
+            repeat,
         )
         t_nt.append(a)
         t_rtk.append(b)
-        print(f"{n:>6} {_row(a, b)}", flush=True)
+        t_np.append(c)
+        print(f"{n:>6} {_row(a, b)}   {c.wall_s:8.3f}", flush=True)
+    fixed = {}
     for label, t in (("navtrack", t_nt), ("RTKLIB", t_rtk)):
         # least-squares line: intercept = fixed cost, slope = cost per epoch
         w1, w0 = statistics.linear_regression(cuts, [v.wall_s for v in t])
         c1, c0 = statistics.linear_regression(cuts, [v.cpu_s for v in t])
+        fixed[label] = (w0, c0)
         print(
             f"{label:<9} wall: fixed {w0 * 1e3:7.1f} ms + {w1 * 1e6:6.1f} us per epoch; "
             f"cpu: fixed {c0 * 1e3:7.1f} ms + {c1 * 1e6:6.1f} us per epoch"
         )
+    np_wall = statistics.median(v.wall_s for v in t_np)
+    np_cpu = statistics.median(v.cpu_s for v in t_np)
+    w0, c0 = fixed["navtrack"]
+    print(
+        f'navtrack fixed cost beyond python -c "import numpy" ({np_wall * 1e3:.1f} ms wall, '
+        f"{np_cpu * 1e3:.1f} ms cpu; median over the cuts): wall {(w0 - np_wall) * 1e3:+.1f} ms, "
+        f"cpu {(c0 - np_cpu) * 1e3:+.1f} ms (bar: +40 ms)"
+    )
 
 
 def bench_import_floor(env: dict[str, str], repeat: int) -> None:
