@@ -13,7 +13,9 @@ Printed, all from timings of this run (median of ``--repeat`` runs after one war
 * per case: navtrack s, RTKLIB s, ratio navtrack / RTKLIB, for the wall time and, beside it, the
   CPU time (user + system) of the processes, which a busy machine disturbs less;
 * fixed cost + per-epoch cost of both, the intercept and slope of a least-squares line through
-  the medians at cuts of the 900-epoch SEPT file (``--cuts``);
+  the medians at cuts of the 900-epoch SEPT file (``--cuts``), and navtrack's fixed cost less
+  the time of ``python -c "import numpy"`` run in turn with both programs at every cut (the
+  issue's bar is numpy's import + 40 ms);
 * the import floor: ``python -c "import numpy"`` and ``python -c "import navtrack.gnss.spp"``.
 
 Needs ``rnx2rtkp`` on the PATH (``apt-get install rtklib``) and the shared data
@@ -28,6 +30,11 @@ Usage::
 
     PYTHONPATH=src python benchmarks/bench_pos.py [--repeat 7] [--only sept078_gej ...]
         [--cuts 50 100 200 450 900] [--threads 1] [--accuracy] [--day OBS NAV]
+        [--instructions] [--compare TREE]
+
+``--compare TREE`` runs the ``navtrack pos`` of another source tree (e.g. ``git worktree add
+/tmp/before COMMIT``) in the same rounds as this one's at the cuts, and prints its line too:
+the fixed cost before and after a change, measured under the same load.
 
 ``--accuracy`` also prints, per run, the epochs solved and 3D RMS against the reference next to
 RTKLIB's, and the median / max per-epoch distance to RTKLIB's own solution (in-process).
@@ -168,22 +175,28 @@ def _time_once(cmd: Sequence[str], env: dict[str, str]) -> tuple[float, float]:
 def time_pair(
     a: Sequence[str], b: Sequence[str], env: dict[str, str], repeat: int
 ) -> tuple[Timing, Timing]:
-    """Median times of two commands run alternately.
+    """Median times of two commands run alternately (:func:`time_alternating`)."""
+    ta, tb = time_alternating([(a, env), (b, env)], repeat)
+    return ta, tb
 
-    One untimed warm-up run of each (disk cache), then ``repeat`` rounds; the order inside a
-    round swaps every round so that neither command always runs right after the other.
+
+def time_alternating(
+    runs: Sequence[tuple[Sequence[str], dict[str, str]]], repeat: int
+) -> list[Timing]:
+    """Median times of commands (each with its environment) run in turn.
+
+    One untimed warm-up run of each (disk cache), then ``repeat`` rounds of one run of each;
+    the order inside a round is reversed every other round, so that no command always runs
+    right after the same other one.
     """
-    _time_once(a, env)
-    _time_once(b, env)
-    ta, tb = [], []
+    for cmd, env in runs:
+        _time_once(cmd, env)
+    times: list[list[tuple[float, float]]] = [[] for _ in runs]
+    order = list(range(len(runs)))
     for k in range(repeat):
-        if k % 2:
-            tb.append(_time_once(b, env))
-            ta.append(_time_once(a, env))
-        else:
-            ta.append(_time_once(a, env))
-            tb.append(_time_once(b, env))
-    return _median(ta), _median(tb)
+        for i in order if k % 2 == 0 else order[::-1]:
+            times[i].append(_time_once(*runs[i]))
+    return [_median(t) for t in times]
 
 
 def _median(runs: Sequence[tuple[float, float]]) -> Timing:
@@ -246,21 +259,46 @@ def bench_cases(cases: Sequence[Case], env: dict[str, str], repeat: int, tmp: Pa
 
 
 def bench_cuts(
-    case: Case, cuts: Sequence[int], env: dict[str, str], repeat: int, tmp: Path
+    case: Case,
+    cuts: Sequence[int],
+    env: dict[str, str],
+    repeat: int,
+    tmp: Path,
+    compare: Path | None = None,
 ) -> None:
+    """Fixed cost + cost per epoch of both programs (a least-squares line through the medians
+    at the cuts), and navtrack's fixed cost beyond ``python -c "import numpy"``, which runs in
+    turn with the two programs at every cut (issue 33's bar: numpy's import + 40 ms). With
+    ``compare`` (another source tree, e.g. a checkout of an earlier commit), its ``navtrack
+    pos`` runs in the same rounds and gets the same line."""
     print(f"\nfixed cost + per epoch: {case.name} cut to the first N epochs")
-    print(f"{'N':>6} {HEAD}")
-    t_nt, t_rtk = [], []
+    print(f"{'N':>6} {HEAD}   import numpy s" + ("   compare s" if compare else ""))
+    numpy = [sys.executable, "-c", "import numpy"]
+    other = None if compare is None else dict(env, PYTHONPATH=str(compare / "src"))
+    lines: dict[str, list[Timing]] = {"navtrack": [], "RTKLIB": [], "numpy": [], "compare": []}
     for n in cuts:
         obs = tmp / f"cut_{n}.21O"
         cut_rinex3(case.obs, n, obs)
-        a, b = time_pair(
-            case.navtrack(tmp / "cut.csv", obs), case.rtklib(tmp / "cut.pos", obs), env, repeat
+        runs = [
+            (case.navtrack(tmp / "cut.csv", obs), env),
+            (case.rtklib(tmp / "cut.pos", obs), env),
+            (numpy, env),
+        ]
+        if other is not None:
+            runs.append((case.navtrack(tmp / "cut_compare.csv", obs), other))
+        timings = time_alternating(runs, repeat)
+        for key, timing in zip(lines, timings, strict=False):
+            lines[key].append(timing)
+        extra = f"   {timings[3].wall_s:9.3f}" if other is not None else ""
+        print(
+            f"{n:>6} {_row(timings[0], timings[1])}   {timings[2].wall_s:8.3f}{extra}", flush=True
         )
-        t_nt.append(a)
-        t_rtk.append(b)
-        print(f"{n:>6} {_row(a, b)}", flush=True)
-    for label, t in (("navtrack", t_nt), ("RTKLIB", t_rtk)):
+    np_wall = statistics.median(v.wall_s for v in lines["numpy"])
+    np_cpu = statistics.median(v.cpu_s for v in lines["numpy"])
+    for label in ("navtrack", "RTKLIB", "compare"):
+        t = lines[label]
+        if not t:
+            continue
         # least-squares line: intercept = fixed cost, slope = cost per epoch
         w1, w0 = statistics.linear_regression(cuts, [v.wall_s for v in t])
         c1, c0 = statistics.linear_regression(cuts, [v.cpu_s for v in t])
@@ -268,6 +306,12 @@ def bench_cuts(
             f"{label:<9} wall: fixed {w0 * 1e3:7.1f} ms + {w1 * 1e6:6.1f} us per epoch; "
             f"cpu: fixed {c0 * 1e3:7.1f} ms + {c1 * 1e6:6.1f} us per epoch"
         )
+        if label != "RTKLIB":
+            print(
+                f'{"":<9} fixed cost beyond python -c "import numpy" ({np_wall * 1e3:.1f} ms '
+                f"wall, {np_cpu * 1e3:.1f} ms cpu; median over the cuts): wall "
+                f"{(w0 - np_wall) * 1e3:+.1f} ms, cpu {(c0 - np_cpu) * 1e3:+.1f} ms (bar: +40 ms)"
+            )
 
 
 def bench_import_floor(env: dict[str, str], repeat: int) -> None:
@@ -412,6 +456,13 @@ def main() -> None:
     ap.add_argument(
         "--instructions", action="store_true", help="also the fixed cost in instructions"
     )
+    ap.add_argument(
+        "--compare",
+        type=Path,
+        metavar="TREE",
+        help="another source tree (e.g. a checkout of an earlier commit) whose navtrack pos "
+        "runs in turn with this one at the cuts",
+    )
     args = ap.parse_args()
     if args.accuracy:
         accuracy(args.only or list(REFERENCE["runs"]))
@@ -420,7 +471,8 @@ def main() -> None:
         sys.exit("rnx2rtkp not found: apt-get install rtklib (see benchmarks/README.md)")
     # byte-compiled as pip leaves an installed package: where PYTHONDONTWRITEBYTECODE is set, a
     # source tree is otherwise compiled again by every process (~80 ms of the fixed cost here)
-    compileall.compile_dir(REPO / "src" / "navtrack", quiet=1)
+    for tree in (REPO, *([args.compare] if args.compare else [])):
+        compileall.compile_dir(tree / "src" / "navtrack", quiet=1)
     env = dict(os.environ, PYTHONPATH=str(REPO / "src"))
     env.update(dict.fromkeys(THREAD_VARS, args.threads))
     version = subprocess.run(
@@ -449,7 +501,7 @@ def main() -> None:
             print(f"skipped (inputs not found): {', '.join(missing)}")
         bench_cases([c for c in cases if c.available()], env, args.repeat, Path(tmp))
         if args.cuts and CASES[0].available():
-            bench_cuts(CASES[0], args.cuts, env, args.repeat, Path(tmp))
+            bench_cuts(CASES[0], args.cuts, env, args.repeat, Path(tmp), args.compare)
         bench_import_floor(env, args.repeat)
         bench_reader([p for p in (SEPT_OBS, *(args.day or [])[:1]) if p.is_file()], args.repeat)
         if args.instructions and shutil.which("valgrind") and SEPT_OBS.is_file():

@@ -22,7 +22,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
 import statistics
 import time
@@ -84,7 +83,7 @@ def main() -> None:
     for e in range(y.shape[0]):
         cols = np.flatnonzero(clean.used[e])
         y[e, rng.choice(cols, 2, replace=False)] += 20.0
-    faulty = dataclasses.replace(meas, y_m=y)
+    faulty = meas.replace(y_m=y)
     est = estimate_position(faulty, cfg)
     g, yw, used = whitened(est)
     g, yw = g / np.sqrt(s2), yw / np.sqrt(s2)
@@ -157,7 +156,7 @@ def main() -> None:
     for e in range(values.shape[0]):
         have = np.flatnonzero(np.isfinite(values[e, :, c1c]))
         values[e, rng.choice(have, 2, replace=False), c1c] += 20.0
-    bad = dataclasses.replace(obs, values=values)
+    bad = obs.replace(values=values)
     # the variance factor of the clean file: estimated from a file faulty in every epoch it
     # would absorb the faults
     fcm_clean = RaimConfig("fcm", variance_factor=s2)

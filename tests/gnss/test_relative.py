@@ -126,7 +126,7 @@ def _shifted_copy(obs, nav, rover_xyz: np.ndarray, base_xyz: np.ndarray, seed: i
         return rho + saastamoinen_delay_m(llh[0], llh[2], np.arcsin(up))
 
     delta = slant(base_xyz, sv.pos_m) - slant(rover_xyz, sv.pos_m)
-    sv_b = spp.satellite_states(dataclasses.replace(pr, pr_m=pr.pr_m + delta), nav, config=cfg)
+    sv_b = spp.satellite_states(pr.replace(pr_m=pr.pr_m + delta), nav, config=cfg)
     delta = slant(base_xyz, sv_b.pos_m) - slant(rover_xyz, sv.pos_m)
     rng = np.random.default_rng(seed)
     values = np.array(obs.values)
@@ -145,8 +145,8 @@ def _shifted_copy(obs, nav, rover_xyz: np.ndarray, base_xyz: np.ndarray, seed: i
                 + rng.normal(scale=0.003 / w, size=v.shape)
             )
         values[:, cols, k] = v
-    header = dataclasses.replace(obs.header, approx_xyz_m=base_xyz, marker="SHIFTED")
-    return dataclasses.replace(obs, path="shifted copy", header=header, values=values)
+    header = obs.header.replace(approx_xyz_m=base_xyz, marker="SHIFTED")
+    return obs.replace(path="shifted copy", header=header, values=values)
 
 
 @pytest.mark.parametrize("frequencies", [2, 1])
@@ -320,7 +320,7 @@ def test_yamatogawa_forward_matches_live_rnx2rtkp(yamatogawa, tmp_path: Path) ->
 # ----------------------------------------------------------------------- bad input
 def test_no_common_epochs_is_refused(yamatogawa) -> None:  # type: ignore[no-untyped-def]
     rover, base, nav, _ = yamatogawa
-    late = dataclasses.replace(base, t_gps_s=base.t_gps_s + 3600.5)
+    late = base.replace(t_gps_s=base.t_gps_s + 3600.5)
     with pytest.raises(RelativeInputError, match="no common epochs"):
         solve_relative(rover, late, nav, YAMA_BASE)
 
@@ -343,7 +343,7 @@ def test_missing_carrier_is_warned_and_code_only(yamatogawa) -> None:  # type: i
     rover, base, nav, _ = yamatogawa
     values = np.array(base.values)
     values[:, :, base.codes.index("L1")] = np.nan
-    no_phase = dataclasses.replace(base, values=values)
+    no_phase = base.replace(values=values)
     res = solve_relative(rover, no_phase, nav, YAMA_BASE)
     assert any("no carrier phase in the base" in w for w in res.warnings)
     counts = res.status_counts()

@@ -211,8 +211,6 @@ TRUTH_CLOCK_M, TRUTH_ISB_E_M = 1234.5, -7.25
 def _synthetic_sample():  # type: ignore[no-untyped-def]
     """The bundled sample's C1C replaced by pseudoranges generated from the model itself at
     SEPT_REF with a known clock and Galileo ISB (no noise, no atmosphere)."""
-    from dataclasses import replace
-
     from navtrack.gnss import ephemeris as eph
     from navtrack.gnss.corrections import geometric_range
 
@@ -238,7 +236,7 @@ def _synthetic_sample():  # type: ignore[no-untyped-def]
     for k, sat in enumerate(obs.sats):
         if sat in sats:
             values[:, k, codes.index("C1C")] = pr[:, sats.index(sat)]
-    return replace(obs, values=values), nav, cfg
+    return obs.replace(values=values), nav, cfg
 
 
 def test_synthetic_pseudoranges_recover_position_and_clocks() -> None:
@@ -257,13 +255,11 @@ def test_epochs_without_the_first_clock_group_solve_on_the_next() -> None:
     """Without GPS and QZSS (the first clock group) in some epochs, those epochs are solved on
     Galileo alone, its clock as the receiver clock and its ISB not estimated, instead of being
     called singular (a multi-GNSS rover whose GPS ephemerides start late)."""
-    from dataclasses import replace
-
     synth, nav, cfg = _synthetic_sample()
     values = np.array(synth.values)
     gj = [k for k, sat in enumerate(synth.sats) if sat[0] in "GJ"]
     values[:20, gj, :] = np.nan
-    res = solve_spp(replace(synth, values=values), [nav], config=cfg)
+    res = solve_spp(synth.replace(values=values), [nav], config=cfg)
     assert np.all(res.status == SppStatus.OK)
     assert np.max(np.linalg.norm(res.pos_m - SEPT_REF, axis=1)) < 1e-3
     np.testing.assert_allclose(res.clock_m[:20], TRUTH_CLOCK_M + TRUTH_ISB_E_M, atol=1e-3)
@@ -359,15 +355,13 @@ def test_nav_of_another_day_gives_no_ephemeris() -> None:
 def test_few_satellites_status_and_rest_solved() -> None:
     """Epochs left with 3 GPS satellites are too_few_sats; with an ISB, 4 satellites of two
     systems are too few as well; the other epochs still solve."""
-    from dataclasses import replace
-
     obs, nav = _sample()
     values = np.array(obs.values)
     keep = {"G03", "G04", "G09"}
     for k, sat in enumerate(obs.sats):
         if sat not in keep:
             values[:10, k, :] = np.nan
-    res = solve_spp(replace(obs, values=values), [nav], config=SppConfig(systems="GEJ"))
+    res = solve_spp(obs.replace(values=values), [nav], config=SppConfig(systems="GEJ"))
     assert np.all(res.status[:10] == SppStatus.TOO_FEW_SATS)
     assert np.all(res.status[10:] == SppStatus.OK)
     values2 = np.array(obs.values)
@@ -375,7 +369,7 @@ def test_few_satellites_status_and_rest_solved() -> None:
     for k, sat in enumerate(obs.sats):
         if sat not in keep2:
             values2[:5, k, :] = np.nan
-    res2 = solve_spp(replace(obs, values=values2), [nav], config=SppConfig(systems="GEJ"))
+    res2 = solve_spp(obs.replace(values=values2), [nav], config=SppConfig(systems="GEJ"))
     assert np.all(res2.status[:5] == SppStatus.TOO_FEW_SATS)
     assert np.all(res2.status[5:] == SppStatus.OK)
 
@@ -406,13 +400,11 @@ def test_config_validation() -> None:
 
 def test_chi2_validity_rejects_a_large_fault() -> None:
     """A 100 m error on one satellite makes the weighted residuals fail the chi-square test."""
-    from dataclasses import replace
-
     obs, nav = _sample()
     values = np.array(obs.values)
     k = obs.sats.index("G03")
     values[:5, k, obs.codes.index("C1C")] += 100.0
-    res = solve_spp(replace(obs, values=values), [nav], config=SppConfig(systems="GEJ"))
+    res = solve_spp(obs.replace(values=values), [nav], config=SppConfig(systems="GEJ"))
     assert np.all(res.status[:5] == SppStatus.REJECTED_VALIDITY)
     assert np.all(res.status[5:] == SppStatus.OK)
     assert np.all(np.isfinite(res.pos_m[:5]))

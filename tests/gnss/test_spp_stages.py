@@ -7,7 +7,6 @@ The bundled sample is SEPT078M_120.21O + SEPT078M.21P (120 epochs, GPS + Galileo
 
 from __future__ import annotations
 
-from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
@@ -54,7 +53,7 @@ def _measurements(obs: Observations, nav: NavData, cfg: SppConfig = GEJ):  # typ
 def _with_fault(obs: Observations, sat: str, epochs: slice, bias_m: float) -> Observations:
     values = np.array(obs.values)
     values[epochs, obs.sats.index(sat), obs.codes.index("C1C")] += bias_m
-    return replace(obs, values=values)
+    return obs.replace(values=values)
 
 
 # --------------------------------------------------------------------------- the chain
@@ -167,7 +166,7 @@ def test_exclusion_equals_deleting_the_observations() -> None:
     excluded = estimate_position(meas, GEJ, exclude=exclude)
     values = np.array(obs.values)
     values[:, obs.sats.index("G03"), :] = np.nan
-    _, _, meas_del = _measurements(replace(obs, values=values), nav)
+    _, _, meas_del = _measurements(obs.replace(values=values), nav)
     deleted = estimate_position(meas_del, GEJ)
     assert not excluded.used[:, j].any()
     np.testing.assert_array_equal(excluded.used, deleted.used)

@@ -50,7 +50,7 @@ def _sample_with_g28_fault() -> Observations:
     obs = read_obs(sample_path("SEPT078M_120.21O"))
     values = np.array(obs.values)
     values[20:40, obs.sats.index("G28"), obs.codes.index("C1C")] += 40.0
-    return replace(obs, values=values)
+    return obs.replace(values=values)
 
 
 @pytest.mark.parametrize("case", range(4))

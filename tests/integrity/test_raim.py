@@ -3,7 +3,6 @@ least squares as oracles, injected faults on the bundled SEPT sample, bad input.
 
 from __future__ import annotations
 
-import dataclasses
 from functools import lru_cache
 
 import numpy as np
@@ -123,7 +122,7 @@ def _faulty(sats: list[str], bias_m: float, epochs: slice):  # type: ignore[no-u
     fault = np.zeros(meas.y_m.shape, dtype=bool)
     for s in sats:
         fault[epochs, meas.sats.index(s)] = True
-    return dataclasses.replace(meas, y_m=meas.y_m + bias_m * fault), fault, cfg
+    return meas.replace(y_m=meas.y_m + bias_m * fault), fault, cfg
 
 
 @pytest.mark.parametrize("method", ["loo", "fde", "ss", "fcm"])

@@ -179,7 +179,7 @@ def read_gnsslogger(
     if not log.garbage:
         return obs
     skipped = tuple(sorted((*obs.skipped, *log.garbage), key=lambda sk: sk.line))
-    return dataclasses.replace(obs, skipped=skipped)
+    return obs.replace(skipped=skipped)
 
 
 @dataclasses.dataclass(slots=True)

@@ -8,13 +8,13 @@ vectorises over epochs and satellites with a ``valid`` mask instead of ragged li
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, NamedTuple
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import FloatArray, Int8Array
 from navtrack.timescale import GPS_EPOCH, to_datetime64
 
@@ -54,8 +54,7 @@ class SkippedLine(NamedTuple):
     reason: str
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class ObsHeader:
+class ObsHeader(Record):
     """Header metadata of an observation file.
 
     Attributes
@@ -109,12 +108,12 @@ class ObsHeader:
     antenna_delta_hen_m: FloatArray | None = None
     interval_s: float | None = None
     time_system: str = "GPS"
-    obs_types: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    obs_types: Mapping[str, tuple[str, ...]] = MappingProxyType({})
     leap_seconds: int | None = None
     comments: tuple[str, ...] = ()
     first_obs_gps_s: float | None = None
     last_obs_gps_s: float | None = None
-    glonass_fcn: Mapping[str, int] = field(default_factory=dict)
+    glonass_fcn: Mapping[str, int] = MappingProxyType({})
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "obs_types", MappingProxyType(dict(self.obs_types)))
@@ -122,8 +121,7 @@ class ObsHeader:
         freeze_arrays(self)
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class Observations:
+class Observations(Record):
     """Observations of one receiver, as fixed ``(epochs, satellites, codes)`` arrays.
 
     Attributes

@@ -15,7 +15,6 @@ section 2.5.2 (velocity from Doppler); IS-GPS-200N 20.3.3.4.3 (satellite velocit
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
@@ -127,7 +126,7 @@ def doppler_velocity(
         )
     shifted = [
         satellite_states(
-            dataclasses.replace(pr, t_gps_s=pr.t_gps_s + dt),
+            pr.replace(t_gps_s=pr.t_gps_s + dt),
             nav,
             sp3=sp3,
             config=cfg,

@@ -30,7 +30,6 @@ import csv
 import io
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from os import fspath
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -38,6 +37,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from navtrack import geodesy, timescale
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, StrPath
 from navtrack.errors import FileFormatError
 
@@ -243,8 +243,7 @@ def read_pos(path: StrPath) -> pd.DataFrame:
     return df
 
 
-@dataclass(frozen=True, slots=True)
-class _SolutionText:
+class _SolutionText(Record):
     """The lines of a ``.pos`` file: its header, the column header and the solution lines."""
 
     header: list[str]

@@ -12,7 +12,6 @@ RTKLIB-like baseline: leave-one-out on RTKLIB's own variances (factor 1), RTKLIB
 
 from __future__ import annotations
 
-import dataclasses
 import shutil
 import subprocess
 from collections.abc import Sequence
@@ -263,7 +262,7 @@ def injection_run(params: RaimFcmParams, rng: np.random.Generator, gnss_dir: str
                 sign[i, pick] = rng.choice([-1.0, 1.0], size=pick.size)
             y = np.array(meas.y_m)
             y[ep] += b * sign
-            mf = dataclasses.replace(meas, y_m=y)
+            mf = meas.replace(y_m=y)
             est = estimate_position(mf, data.config, epochs=ep, x0_m=clean.x[ep])
             key = "clean" if k == 0 else f"k{k}_b{b:g}"
             st[key] = {
@@ -448,7 +447,7 @@ def _fde_rows(
     meas, n_e = data.meas, data.meas.y_m.shape[0]
     fault = np.zeros(meas.y_m.shape, dtype=bool)
     fault[np.arange(n_e), pick] = True
-    mf = dataclasses.replace(meas, y_m=np.array(meas.y_m) + bias_m[:, None] * fault)
+    mf = meas.replace(y_m=np.array(meas.y_m) + bias_m[:, None] * fault)
     est = estimate_position(mf, data.config, x0_m=data.clean.x)
     cfg = raim_config(params, "fde", data.variance_factor)
     final, _, integ = monitor(mf, est, data.config, cfg)

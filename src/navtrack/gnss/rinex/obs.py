@@ -10,8 +10,9 @@ lengths are read for all lines. This module checks the structure of the data lin
 ids, types declared, surplus fields, duplicates) and places the values in the epoch x satellite
 x code arrays.
 
-Its intermediate records are named tuples and plain classes: a dataclass compiles its methods
-when its module is imported, a cost every ``navtrack pos`` start would pay.
+Its intermediate records are :class:`~navtrack._record.Record` classes and plain classes: a
+dataclass compiles its methods when its module is imported, a cost every ``navtrack pos`` start
+would pay.
 
 References
 ----------
@@ -23,7 +24,6 @@ RINEX 4.00 (IGS/RTCM-SC104, 2021), observation tables (same data section as 3.05
 from __future__ import annotations
 
 from collections.abc import Collection, Sequence
-from dataclasses import replace
 from os import fspath
 
 import numpy as np
@@ -536,7 +536,7 @@ def _observations(
     if not v3:  # RINEX 2: one list of types for every system in the file
         present = {s[0] for s in sats} or {header.system if header.system in SYSTEMS else "G"}
         types = segments[0].obs_types["G"]
-        header = replace(header, obs_types={s: types for s in SYSTEMS if s in present})
+        header = header.replace(obs_types={s: types for s in SYSTEMS if s in present})
     values, lli, ssi = arrays
     return Observations(
         path=fspath(path),

@@ -3,11 +3,10 @@ depend on the receiver position (RTKLIB ``prange``), usability masks and clock g
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.geodesy import C_MPS
 from navtrack.gnss.corrections import ionofree
@@ -18,8 +17,7 @@ from navtrack.gnss.spp.signals import Pseudoranges
 __all__ = ["Measurements", "corrected_measurements"]
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class Measurements:
+class Measurements(Record):
     """Pseudoranges corrected for everything that does not depend on the receiver position, the
     inputs of the position-dependent model, and the masks (RTKLIB ``prange`` and the
     satellite-side terms of ``rescode``).

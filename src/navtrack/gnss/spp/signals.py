@@ -5,11 +5,11 @@ position."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
 
 import numpy as np
 
 from navtrack._frozen import freeze_arrays
+from navtrack._record import Record
 from navtrack._typing import BoolArray, FloatArray, IntArray
 from navtrack.gnss.observations import Observations
 from navtrack.gnss.spp.config import CODE_PRIORITY, IONOFREE_BANDS, PRIMARY_BAND, SppConfig
@@ -85,8 +85,7 @@ def observation_codes(config: SppConfig | None = None) -> frozenset[str]:
     return frozenset(codes)
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class Pseudoranges:
+class Pseudoranges(Record):
     """Code pseudoranges of the configured signals (the selection part of RTKLIB's ``prange``).
 
     Attributes
